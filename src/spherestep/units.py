@@ -1,0 +1,52 @@
+"""Lengths with units, converted once at the boundary to SI metres.
+
+Accepted: a number (metres) or a string ``"<number> <unit>"`` with unit one of m, cm, mm, um, in, ft
+(also ``"12in"``, ``'12"'``).
+"""
+
+from __future__ import annotations
+
+import math
+import re
+
+from .errors import bad_value
+
+METRES_PER_UNIT: dict[str, float] = {
+    "m": 1.0,
+    "cm": 1e-2,
+    "mm": 1e-3,
+    "um": 1e-6,
+    "in": 0.0254,
+    '"': 0.0254,
+    "inch": 0.0254,
+    "ft": 0.3048,
+}
+
+_UNIT_NAMES = ", ".join(u for u in METRES_PER_UNIT if u != '"')
+_LENGTH = re.compile(r"^\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*([a-zA-Z\"]*)\s*$")
+
+
+def length(value: float | str, name: str = "length", *, allow_zero: bool = False) -> float:
+    """Return ``value`` in metres; raise an InputError naming ``name`` when it is not a finite positive length."""
+    if isinstance(value, bool):
+        raise bad_value(name, "a length such as 0.3 (metres) or \"12 in\"", value)
+    if isinstance(value, (int, float)):
+        metres = float(value)
+    elif isinstance(value, str):
+        match = _LENGTH.match(value)
+        unit = match.group(2).lower() if match else ""
+        if not match or (unit and unit not in METRES_PER_UNIT):
+            raise bad_value(name, f"a length like '12 in' with unit one of {_UNIT_NAMES}", value)
+        metres = float(match.group(1)) * METRES_PER_UNIT[unit or "m"]
+    else:
+        raise bad_value(name, "a length such as 0.3 (metres) or \"12 in\"", value)
+    if not math.isfinite(metres) or metres < 0 or (metres == 0 and not allow_zero):
+        raise bad_value(name, "a finite positive length", value)
+    return metres
+
+
+def in_unit(metres, unit: str):
+    """Convert metres to ``unit`` (one of :data:`METRES_PER_UNIT`)."""
+    if unit not in METRES_PER_UNIT:
+        raise bad_value("unit", f"one of {', '.join(sorted(METRES_PER_UNIT))}", unit)
+    return metres / METRES_PER_UNIT[unit]
