@@ -1,0 +1,51 @@
+"""The ``spherestep`` command: thin, parses and prints, calls the library.
+
+Errors a user can cause (:class:`~spherestep.errors.SpherestepError`, bad options) print one line on stderr
+and exit with status 2; a failed computation exits 1; ``--debug`` shows the traceback instead.
+"""
+
+from __future__ import annotations
+
+import sys
+
+import click
+import typer
+
+from ..errors import ComputationError, SpherestepError
+from . import packings  # noqa: F401  (registers commands)
+from .app import app
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Entry point of the console script; returns (and exits with) the status code."""
+    args = list(sys.argv[1:] if argv is None else argv)
+    debug = "--debug" in args
+    if debug:
+        args.remove("--debug")
+    command = typer.main.get_command(app)
+    try:
+        command.main(args=args, prog_name="spherestep", standalone_mode=False)
+        code = 0
+    except click.exceptions.Exit as exc:
+        code = exc.exit_code
+    except click.UsageError as exc:
+        if debug:
+            raise
+        print(f"spherestep: error: {exc.format_message()}", file=sys.stderr)
+        code = 2
+    except ComputationError as exc:
+        if debug:
+            raise
+        print(f"spherestep: failed: {exc}", file=sys.stderr)
+        code = 1
+    except SpherestepError as exc:
+        if debug:
+            raise
+        print(f"spherestep: error: {exc}", file=sys.stderr)
+        code = 2
+    except (KeyboardInterrupt, click.exceptions.Abort):
+        print("spherestep: interrupted", file=sys.stderr)
+        code = 130
+    if argv is None:
+        sys.exit(code)
+    return code
