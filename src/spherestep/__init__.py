@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from . import errors, so3, units
+from . import errors, packing, so3, sphere, units
 
-__all__ = ["errors", "so3", "units"]
+__all__ = ["errors", "packing", "so3", "sphere", "units"]
 __version__ = "0.1.0"

@@ -1,0 +1,27 @@
+"""Circle packings on the sphere: Platonic, the 21 semiregular ones, recursive refinement (Sec. II-B)."""
+
+from ..errors import bad_value
+from .congruence import aligning_rotations, congruent, distinct, symmetry_rotations
+from .core import Packing
+from .platonic import PLATONIC, platonic
+from .refine import fill_holes, holes, refine
+from .wythoff import CONSTRUCTIONS, NAMES, fundamental_triangle, reflection_group, semiregular, wythoff
+
+__all__ = [
+    "CONSTRUCTIONS", "NAMES", "PLATONIC", "Packing", "aligning_rotations", "by_name", "congruent", "distinct",
+    "fill_holes", "fundamental_triangle", "holes", "names", "platonic", "reflection_group", "refine",
+    "semiregular", "symmetry_rotations", "wythoff",
+]
+
+
+def names() -> list[str]:
+    """Names of the 21 base packings, families T, O, I in turn."""
+    return [n for f in ("T", "O", "I") for n in NAMES[f]]
+
+
+def by_name(name: str) -> Packing:
+    """One of the 21 base packings by its name (see :func:`names`)."""
+    for family, family_names in NAMES.items():
+        if name in family_names:
+            return wythoff(family, CONSTRUCTIONS[family_names.index(name)])
+    raise bad_value("packing name", f"one of {', '.join(names())}", name)

@@ -1,0 +1,263 @@
+"""Points, arcs, great circles and caps on the unit sphere, and the inscribed-cap constructions (Sec. II).
+
+Conventions
+-----------
+Points are unit 3-vectors, arrays of shape ``(..., 3)``. ``point(φ, θ) = (cos φ sin θ, sin φ sin θ, cos θ)``
+with θ the polar and φ the azimuthal angle (the paper's footnote 1). A cap (a "circle" of the paper) is a
+centre and an angular radius ``r`` measured on the sphere; two caps *kiss* when the arc between their
+centres equals the sum of their radii. Every function is vectorised over leading axes.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .errors import bad_value
+
+UNIT_TOL = 1e-9
+
+
+def _as_points(u, name: str, *, min_ndim: int = 1) -> np.ndarray:
+    """Check that ``u`` holds finite unit 3-vectors; raise a ValueError saying which check failed."""
+    u = np.asarray(u, dtype=float)
+    if u.ndim < min_ndim or u.shape[-1:] != (3,):
+        raise bad_value(name, "unit 3-vectors of shape (..., 3)", f"an array of shape {u.shape}")
+    if not np.all(np.isfinite(u)):
+        raise bad_value(name, "finite unit 3-vectors", "NaN or infinite entries")
+    norm = np.linalg.norm(u, axis=-1)
+    if np.any(norm == 0):
+        raise bad_value(name, "unit 3-vectors", "a zero vector")
+    if np.any(np.abs(norm - 1.0) > UNIT_TOL):
+        worst = norm.flat[np.argmax(np.abs(norm - 1.0))]
+        raise bad_value(name, f"unit 3-vectors (|u| = 1 within {UNIT_TOL:g}; divide by the norm)",
+                        f"a vector of norm {worst:.12g}")
+    return u
+
+
+def _as_radii(r, name: str = "radius") -> np.ndarray:
+    r = np.asarray(r, dtype=float)
+    if not np.all(np.isfinite(r)) or np.any(r < 0) or np.any(r > np.pi):
+        raise bad_value(name, "finite angular radii in [0, π] radians", r.tolist())
+    return r
+
+
+def normalize(v) -> np.ndarray:
+    """``v / |v|`` along the last axis; raises when a vector is zero or not finite."""
+    v = np.asarray(v, dtype=float)
+    norm = np.linalg.norm(v, axis=-1, keepdims=True)
+    if not np.all(np.isfinite(v)) or np.any(norm == 0):
+        raise bad_value("v", "finite non-zero 3-vectors", "a zero or non-finite vector")
+    return v / norm
+
+
+def point(phi, theta) -> np.ndarray:
+    """``u(φ, θ) = (cos φ sin θ, sin φ sin θ, cos θ)``, shape ``broadcast(φ, θ).shape + (3,)``."""
+    phi = np.asarray(phi, dtype=float)
+    theta = np.asarray(theta, dtype=float)
+    if not (np.all(np.isfinite(phi)) and np.all(np.isfinite(theta))):
+        raise bad_value("phi, theta", "finite angles in radians", "NaN or infinite angles")
+    s = np.sin(theta)
+    return np.stack(np.broadcast_arrays(np.cos(phi) * s, np.sin(phi) * s, np.cos(theta)), axis=-1)
+
+
+def angles(u) -> tuple[np.ndarray, np.ndarray]:
+    """Inverse of :func:`point`: ``(φ ∈ (−π, π], θ ∈ [0, π])``; at the poles φ = 0."""
+    u = _as_points(u, "u")
+    theta = np.arctan2(np.hypot(u[..., 0], u[..., 1]), u[..., 2])
+    phi = np.arctan2(u[..., 1], u[..., 0])
+    return phi, theta
+
+
+def arc_distance(u1, u2) -> np.ndarray:
+    """Great-arc distance of eq. (1), ``d = cos⁻¹(u1·u2) ∈ [0, π]``.
+
+    Evaluated as ``atan2(|u1 × u2|, u1 · u2)``, which keeps full precision for nearly equal and nearly
+    antipodal points where ``arccos`` loses half the digits.
+    """
+    u1 = _as_points(u1, "u1")
+    u2 = _as_points(u2, "u2")
+    return np.arctan2(np.linalg.norm(np.cross(u1, u2), axis=-1), np.sum(u1 * u2, axis=-1))
+
+
+def great_circle_normal(p, q) -> np.ndarray:
+    """Unit normal ``n = p × q / |p × q|`` of the great circle through ``p`` and ``q``."""
+    p = _as_points(p, "p")
+    q = _as_points(q, "q")
+    cross = np.cross(p, q)
+    norm = np.linalg.norm(cross, axis=-1, keepdims=True)
+    if np.any(norm < 1e-12):
+        raise bad_value("p, q", "two distinct, non-antipodal points (they define no unique great circle)",
+                        "equal or antipodal points")
+    return cross / norm
+
+
+def distance_to_great_circle(r, n) -> np.ndarray:
+    """``d2(r, n) = cos⁻¹ √(1 − (r·n)²) = sin⁻¹ |r·n|``: arc from ``r`` to the great circle with normal ``n``."""
+    r = _as_points(r, "r")
+    n = _as_points(n, "n")
+    return np.arctan2(np.abs(np.sum(r * n, axis=-1)), np.linalg.norm(np.cross(r, n), axis=-1))
+
+
+def cap_area(radius) -> np.ndarray:
+    """Area ``2π(1 − cos r)`` of a cap of angular radius ``r`` on the unit sphere."""
+    r = _as_radii(radius)
+    return 4.0 * np.pi * np.sin(0.5 * r) ** 2
+
+
+def _inward_normals(vertices: np.ndarray) -> np.ndarray:
+    """Unit normals of the sides of a convex spherical polygon ``(..., k, 3)``, pointing inside.
+
+    Side ``i`` joins vertex ``i`` and ``i+1``. Raises when two consecutive vertices coincide or a vertex
+    lies on the great circle of a side (a degenerate polygon).
+    """
+    nxt = np.roll(vertices, -1, axis=-2)
+    cross = np.cross(vertices, nxt)
+    norm = np.linalg.norm(cross, axis=-1, keepdims=True)
+    if np.any(norm < 1e-12):
+        raise bad_value("vertices", "distinct, non-antipodal consecutive vertices", "a degenerate side")
+    normals = cross / norm
+    centroid = np.sum(vertices, axis=-2, keepdims=True)
+    side = np.sum(normals * centroid, axis=-1, keepdims=True)
+    # every vertex not on side i must lie strictly on one side of its great circle
+    heights = np.einsum("...ic,...jc->...ij", normals, vertices)
+    k = vertices.shape[-2]
+    off = ~(np.eye(k, dtype=bool) | np.roll(np.eye(k, dtype=bool), 1, axis=1))
+    if np.any(np.abs(heights[..., off]) < 1e-12):
+        raise bad_value("vertices", "a non-degenerate spherical polygon", "collinear vertices (on one great circle)")
+    return np.where(side < 0, -normals, normals)
+
+
+def triangle_incircle(p, q, r) -> tuple[np.ndarray, np.ndarray]:
+    """Cap inscribed in the spherical triangle ``p, q, r`` (Sec. II-B-1): ``(center (..., 3), radius (...))``.
+
+    The centre is equidistant from the three side great circles: with side normals ``n1, n2, n3`` all
+    pointing into the triangle, ``(n1 − n2)·x = (n3 − n2)·x = 0``, so ``x ∝ (n1 − n2) × (n3 − n2)``, the
+    sign chosen to put ``x`` inside (the paper's smaller of the two complementary caps). The radius is
+    ``d2(x, n1) = sin⁻¹(x·n1)``. (The paper writes ``n2 = n(p, r)`` and ``n3 = n(r, q)``; orienting all three
+    normals inwards is what makes the equidistance equations hold with equal signs.)
+    """
+    p = _as_points(p, "p")
+    q = _as_points(q, "q")
+    r = _as_points(r, "r")
+    p, q, r = np.broadcast_arrays(p, q, r)
+    n = _inward_normals(np.stack([p, q, r], axis=-2))
+    x = np.cross(n[..., 0, :] - n[..., 1, :], n[..., 2, :] - n[..., 1, :])
+    norm = np.linalg.norm(x, axis=-1, keepdims=True)
+    x = x / norm
+    x = np.where(np.sum(x * n[..., 0, :], axis=-1, keepdims=True) < 0, -x, x)
+    return x, np.arcsin(np.clip(np.sum(x * n[..., 0, :], axis=-1), 0.0, 1.0))
+
+
+def polygon_incircle(vertices, tol: float = 1e-9) -> tuple[np.ndarray, np.ndarray]:
+    """Cap inscribed in a tangential convex spherical polygon ``(..., k, 3)`` (vertices in order).
+
+    Used for the symmetric spherical quadrilateral of Sec. II-B-2 (a kite or rhombus, any polygon with
+    an incircle). The centre solves ``(n_i − n_0)·x = 0`` for the inward side normals (least squares by
+    SVD); the polygon has an incircle when the residual vanishes, otherwise an error is raised.
+    """
+    v = _as_points(vertices, "vertices", min_ndim=2)
+    if v.shape[-2] < 3:
+        raise bad_value("vertices", "at least three vertices", f"{v.shape[-2]}")
+    n = _inward_normals(v)
+    diffs = n[..., 1:, :] - n[..., :1, :]
+    _, s, vt = np.linalg.svd(diffs)
+    x = vt[..., -1, :]
+    x = np.where(np.sum(x * n[..., 0, :], axis=-1, keepdims=True) < 0, -x, x)
+    heights = np.einsum("...kc,...c->...k", n, x)
+    if np.any(np.ptp(heights, axis=-1) > tol) or np.any(heights <= 0):
+        raise bad_value("vertices", "a polygon with an inscribed circle (e.g. a symmetric quadrilateral)",
+                        f"sides at distances differing by {np.ptp(heights, axis=-1).max():.3g}")
+    return x, np.arcsin(np.clip(heights.mean(axis=-1), 0.0, 1.0))
+
+
+def circle_in_gap(centers, radii) -> tuple[np.ndarray, np.ndarray]:
+    """Cap kissing three caps from outside, in the gap between them (eqs. (2)–(3)).
+
+    ``centers (..., 3, 3)`` (rows ``p_i``), ``radii (..., 3)``. Taking the cosine of ``d(x, p_i) = r + r_i``
+    gives ``P x = A (cos r, sin r)ᵀ`` with ``A_i = (cos r_i, −sin r_i)``; with ``M = P⁻¹A`` and
+    ``B = MᵀM``, ``|x| = 1`` reads ``b11 cos² r + 2 b12 sin r cos r + b22 sin² r = 1``, which the
+    substitutions of the paper (equivalently, dividing by ``cos² r``) turn into the quadratic
+    ``(b22 − 1) z² + 2 b12 z + (b11 − 1) = 0`` in ``z = tan r``. The smallest positive root gives the radius
+    of the cap in the gap on the side where the three caps bound a small region; back-substitution gives
+    ``x``. Returns ``(center (..., 3), radius (...))``.
+    """
+    P = _as_points(centers, "centers", min_ndim=2)
+    if P.shape[-2:] != (3, 3):
+        raise bad_value("centers", "three centres, shape (..., 3, 3)", f"shape {P.shape}")
+    r = _as_radii(radii, "radii")
+    if r.shape[-1:] != (3,):
+        raise bad_value("radii", "three radii, shape (..., 3)", f"shape {r.shape}")
+    det = np.linalg.det(P)
+    if np.any(np.abs(det) < 1e-12):
+        raise bad_value("centers", "three centres not on one great circle", "collinear centres (det ≈ 0)")
+    A = np.stack([np.cos(r), -np.sin(r)], axis=-1)
+    M = np.linalg.solve(P, A)  # x = M (cos r, sin r)
+    B = np.swapaxes(M, -1, -2) @ M
+    a2, a1, a0 = B[..., 1, 1] - 1.0, 2.0 * B[..., 0, 1], B[..., 0, 0] - 1.0
+    disc = a1 * a1 - 4.0 * a2 * a0
+    if np.any(disc < -1e-12):
+        raise bad_value("centers, radii", "three caps with a gap between them", "caps that leave no gap")
+    sq = np.sqrt(np.maximum(disc, 0.0))
+    # numerically stable roots of a2 z² + a1 z + a0
+    qq = -0.5 * (a1 + np.copysign(sq, a1))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        z1 = np.where(a2 != 0, qq / a2, -a0 / a1)
+        z2 = np.where(qq != 0, a0 / qq, np.inf)
+    z = np.stack([z1, z2], axis=-1)
+    z = np.where(z > 0, z, np.inf)
+    zmin = z.min(axis=-1)
+    if np.any(~np.isfinite(zmin)):
+        raise bad_value("centers, radii", "three caps with a gap between them", "no positive root")
+    rad = np.arctan(zmin)
+    x = np.einsum("...ij,...j->...i", M, np.stack([np.cos(rad), np.sin(rad)], axis=-1))
+    return x / np.linalg.norm(x, axis=-1, keepdims=True), rad
+
+
+def circle_in_ring(centers, radii, tol: float = 1e-9) -> tuple[np.ndarray, np.ndarray]:
+    """Cap inscribed in a hole ringed by ``k ≥ 3`` caps with rotational symmetry (Sec. II-B-2).
+
+    ``centers (..., k, 3)``, ``radii (..., k)``. A ring with a k-fold (or any non-trivial) rotational
+    symmetry has its axis along the sum of its centres, so the inscribed cap is centred there with radius
+    ``d(x, p_i) − r_i``; the caps must all be tangent to it within ``tol`` (else the ring is not symmetric
+    and a ValueError is raised: use :func:`circle_in_gap` on three of them).
+    """
+    P = _as_points(centers, "centers", min_ndim=2)
+    r = _as_radii(radii, "radii")
+    if P.shape[-2] < 3 or r.shape != P.shape[:-1]:
+        raise bad_value("centers, radii", "k >= 3 centres (..., k, 3) and k radii (..., k)",
+                        f"shapes {P.shape} and {r.shape}")
+    s = P.sum(axis=-2)
+    norm = np.linalg.norm(s, axis=-1, keepdims=True)
+    if np.any(norm < 1e-12):
+        raise bad_value("centers", "a ring of caps around a hole (centres not summing to zero)",
+                        "centres spread over the whole sphere")
+    x = s / norm
+    gaps = np.arctan2(np.linalg.norm(np.cross(x[..., None, :], P), axis=-1), np.einsum("...c,...kc->...k", x, P)) - r
+    if np.any(np.ptp(gaps, axis=-1) > tol):
+        raise bad_value("centers, radii", "a rotationally symmetric ring (all caps tangent to the inscribed cap)",
+                        f"distances differing by {np.ptp(gaps, axis=-1).max():.3g} rad")
+    if np.any(gaps.min(axis=-1) <= 0):
+        raise bad_value("centers, radii", "a ring that leaves a hole", "caps that cover the ring's axis")
+    return x, gaps.mean(axis=-1)
+
+
+def circle_in_corner(p, q, r) -> tuple[np.ndarray, np.ndarray]:
+    """Cap in the corner ``p`` of triangle ``p, q, r``, tangent to both sides at ``p`` and to the incircle.
+
+    The third construction the paper says "follows similarly" (Sec. II-B-2). The cap's centre lies on the
+    bisector from ``p`` to the incentre ``I`` at arc ``t`` from ``p``; a right spherical triangle gives its
+    radius ``ρ`` from ``sin ρ = sin t sin(A/2)`` and ``sin(A/2) = sin r_in / sin t_I``; tangency to the incircle,
+    ``t_I − t = ρ + r_in``, solves in closed form as ``tan t = sin D / (cos D + sin(A/2))`` with ``D = t_I − r_in``.
+    """
+    inc, r_in = triangle_incircle(p, q, r)
+    p = np.broadcast_to(_as_points(p, "p"), inc.shape)
+    t_i = arc_distance(p, inc)
+    half = np.sin(r_in) / np.sin(t_i)
+    D = t_i - r_in
+    t = np.arctan2(np.sin(D), np.cos(D) + half)
+    rho = np.arcsin(np.sin(t) * half)
+    # walk from p towards the incentre by arc t
+    tangent = inc - np.sum(inc * p, axis=-1, keepdims=True) * p
+    tangent /= np.linalg.norm(tangent, axis=-1, keepdims=True)
+    center = np.cos(t)[..., None] * p + np.sin(t)[..., None] * tangent
+    return center, rho
