@@ -28,21 +28,27 @@ _LENGTH = re.compile(r"^\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*([a-zA-
 
 def length(value: float | str, name: str = "length", *, allow_zero: bool = False) -> float:
     """Return ``value`` in metres; raise an InputError naming ``name`` when it is not a finite positive length."""
+    return length_and_unit(value, name, allow_zero=allow_zero)[0]
+
+
+def length_and_unit(value: float | str, name: str = "length", *, allow_zero: bool = False) -> tuple[float, str]:
+    """``(metres, unit)`` of ``value``; the unit is the one written (``"m"`` for a bare number)."""
     if isinstance(value, bool):
         raise bad_value(name, "a length such as 0.3 (metres) or \"12 in\"", value)
     if isinstance(value, (int, float)):
-        metres = float(value)
+        metres, unit = float(value), "m"
     elif isinstance(value, str):
         match = _LENGTH.match(value)
         unit = match.group(2).lower() if match else ""
         if not match or (unit and unit not in METRES_PER_UNIT):
             raise bad_value(name, f"a length like '12 in' with unit one of {_UNIT_NAMES}", value)
-        metres = float(match.group(1)) * METRES_PER_UNIT[unit or "m"]
+        unit = {'"': "in", "inch": "in"}.get(unit, unit or "m")
+        metres = float(match.group(1)) * METRES_PER_UNIT[unit]
     else:
         raise bad_value(name, "a length such as 0.3 (metres) or \"12 in\"", value)
     if not math.isfinite(metres) or metres < 0 or (metres == 0 and not allow_zero):
         raise bad_value(name, "a finite positive length", value)
-    return metres
+    return metres, unit
 
 
 def in_unit(metres, unit: str):

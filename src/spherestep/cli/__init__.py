@@ -8,8 +8,8 @@ from __future__ import annotations
 
 import sys
 
-import click
 import typer
+from typer.exceptions import TyperException
 
 from ..errors import ComputationError, SpherestepError
 from . import packings  # noqa: F401  (registers commands)
@@ -26,13 +26,13 @@ def main(argv: list[str] | None = None) -> int:
     try:
         command.main(args=args, prog_name="spherestep", standalone_mode=False)
         code = 0
-    except click.exceptions.Exit as exc:
+    except typer.Exit as exc:
         code = exc.exit_code
-    except click.UsageError as exc:
+    except TyperException as exc:  # bad usage (exit_code 2) and Typer's own errors
         if debug:
             raise
         print(f"spherestep: error: {exc.format_message()}", file=sys.stderr)
-        code = 2
+        code = exc.exit_code
     except ComputationError as exc:
         if debug:
             raise
@@ -43,7 +43,7 @@ def main(argv: list[str] | None = None) -> int:
             raise
         print(f"spherestep: error: {exc}", file=sys.stderr)
         code = 2
-    except (KeyboardInterrupt, click.exceptions.Abort):
+    except (KeyboardInterrupt, typer.Abort):
         print("spherestep: interrupted", file=sys.stderr)
         code = 130
     if argv is None:

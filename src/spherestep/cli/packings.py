@@ -1,0 +1,76 @@
+"""``spherestep packings`` (the table of distinct packings) and ``spherestep packing NAME`` (export one)."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import typer
+from rich.table import Table
+
+from .. import packing as pk
+from ..atomic import write_text
+from ..errors import bad_value
+from ..sphere import angles
+from ..units import in_unit, length_and_unit
+from .app import app
+from .common import console, print_json
+
+
+@app.command()
+def packings(
+    all_: bool = typer.Option(False, "--all", help="List all 21 constructions, redundant ones too."),
+    as_json: bool = typer.Option(False, "--json", help="Print JSON instead of a table."),
+) -> None:
+    """Table of the distinct packings of congruent kissing caps (Sec. II-B-3).
+
+    Example: [bold]spherestep packings --json[/bold]
+    """
+    base = pk.semiregular()
+    rows = base if all_ else sorted(pk.distinct(base), key=lambda p: ("TOI".index(p.family), len(p)))
+    data = [p.summary() for p in rows]
+    if as_json:
+        print_json({"count": len(rows), "constructions": len(base), "packings": data})
+        return
+    table = Table(title=f"{len(rows)} distinct packings of {len(base)} constructions" if not all_ else "21 constructions")
+    table.add_column("name", no_wrap=True)
+    for col in ("family", "caps", "radius°", "density", "min sep°", "sym"):
+        table.add_column(col, justify="left" if col == "family" else "right", no_wrap=True)
+    for d in data:
+        table.add_row(d["name"], d["family"], str(d["caps"]), f"{d['radius_max_deg']:.4f}", f"{d['density']:.4f}",
+                      f"{d['min_separation_deg']:.4f}", str(d["symmetry_order"]))
+    console.print(table)
+
+
+@app.command()
+def packing(
+    name: str = typer.Argument(..., help="A packing name, e.g. truncated-icosahedron (see `spherestep packings --all`)."),
+    refine: int = typer.Option(None, "--refine", min=0, help="Refinement levels (fill every hole K times)."),
+    target: int = typer.Option(None, "--target", min=1, help="Refine until at least N caps."),
+    radius: str = typer.Option("1 m", "--radius", help='Sphere radius with unit, e.g. "6 in"; x, y, z use its unit.'),
+    out: Path = typer.Option(..., "--out", help="Output file, .csv or .json."),
+) -> None:
+    """Export one packing's cap centres: φ, θ (degrees), x, y, z (in the radius' unit) and angular radius.
+
+    Example: [bold]spherestep packing truncated-icosahedron --refine 1 --radius "6 in" --out rotor.csv[/bold]
+    """
+    if refine is not None and target is not None:
+        raise bad_value("--refine/--target", "only one of the two", "both")
+    if out.suffix.lower() not in (".csv", ".json"):
+        raise bad_value("--out", "a file name ending in .csv or .json", str(out))
+    metres, unit = length_and_unit(radius, "--radius")
+    p = pk.by_name(name)
+    if refine is not None or target is not None:
+        p = pk.refine(p, levels=refine, target=target)
+    phi, theta = angles(p.centers)
+    xyz = in_unit(metres, unit) * p.centers
+    rows = np.column_stack([np.degrees(np.mod(phi, 2 * np.pi)), np.degrees(theta), xyz, np.degrees(p.radii)])
+    if out.suffix.lower() == ".csv":
+        lines = [f"phi_deg,theta_deg,x_{unit},y_{unit},z_{unit},radius_deg"]
+        lines += [",".join(f"{v:.12g}" for v in row) for row in rows]
+        write_text(out, "\n".join(lines) + "\n")
+    else:
+        write_text(out, json.dumps({"name": p.label, "family": p.family, "unit": unit, "caps": [
+            dict(zip(("phi_deg", "theta_deg", "x", "y", "z", "radius_deg"), map(float, row))) for row in rows]}, indent=1))
+    console.print(f"wrote {len(p)} caps of {p.label} to {out}")
