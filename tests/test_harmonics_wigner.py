@@ -82,6 +82,15 @@ def test_zyz_form_eq9(l):
     assert np.max(np.abs(wigner_U_zyz(l, zyz[:, 0], zyz[:, 1], zyz[:, 2]) - wigner_U(l, R))) < 1e-11
 
 
+@pytest.mark.parametrize("l", [1, 5, 20])
+def test_euler_forms_accept_any_real_angles(l):
+    """β outside [0, π] (and α, γ outside (−π, π]) still give U^l of the rotation the angles describe."""
+    angles = np.random.default_rng(l).uniform(-7, 7, (40, 3))
+    a, b, g = angles.T
+    assert np.max(np.abs(wigner_U_zxz(l, a, b, g) - wigner_U(l, so3.from_euler_zxz(angles)))) < 1e-12
+    assert np.max(np.abs(wigner_U_zyz(l, a, b, g) - wigner_U(l, so3.from_euler_zyz(angles)))) < 1e-12
+
+
 @pytest.mark.parametrize("l", [1, 3, 8, 32])
 def test_character_is_the_dirichlet_kernel(l):
     R = so3.random(50, np.random.default_rng(l + 7))

@@ -24,10 +24,10 @@ def sph_harm(l, m, theta, phi) -> np.ndarray:
     ``P_l^(−m) = (−1)^m (l−m)!/(l+m)! P_l^m``. This is exactly ``scipy.special.sph_harm_y(l, m, θ, φ)`` (it is
     computed by it), gives ``Y_l^(−m) = (−1)^m conj(Y_l^m)``, and is the only phase with which the relations
     printed before eq. (15) hold (see docs/harmonics.md). In the paper's notation
-    ``P_l^n = [(l+n)!/(l−n)!]^½ P^l_(−n),0`` for every ``n`` (footnote 3's ``(−1)^m`` is the convention *without*
-    the Condon–Shortley phase).
+    ``P_l^n = [(l+n)!/(l−n)!]^½ P^l_(−n),0`` for every ``n`` (the printed ``C_n = (−1)^n`` for ``n < 0`` would
+    contradict those relations). Footnote 3's other convention, ``(−1)^m Y_l^m``, is the one without the phase.
 
-    >>> round(float(sph_harm(1, 0, 0.0, 0.0).real), 12) == round(float(np.sqrt(3 / (4 * np.pi))), 12)
+    >>> bool(np.isclose(sph_harm(1, 0, 0.0, 0.0), np.sqrt(3 / (4 * np.pi))))
     True
     """
     l = _checks.degrees(l)

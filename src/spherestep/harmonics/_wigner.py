@@ -8,7 +8,6 @@ holds for eq. (8) with ``P^l_mn`` of eq. (10); in terms of the physicists' Wigne
 from __future__ import annotations
 
 import numpy as np
-
 from scipy.spatial.transform import Rotation
 
 from . import _checks
@@ -35,7 +34,9 @@ def wigner_U(l, R) -> np.ndarray:
 def wigner_U_zxz(l, alpha, beta, gamma) -> np.ndarray:
     """Eq. (8): ``U^l_mn(R3(α) R1(β) R3(γ)) = i^(m−n) e^(−i(mα + nγ)) P^l_mn(cos β)``.
 
-    The angles broadcast together; the result is ``shape + (2l+1, 2l+1)``.
+    The angles broadcast together; the result is ``shape + (2l+1, 2l+1)``. Any real ``β`` is accepted: outside
+    ``[0, π]`` the factor ``P^l_mn(cos β)`` is continued in ``β`` (``P^l(cos β)`` is analytic in ``β``), so the
+    result is still ``U^l`` of the rotation ``R3(α) R1(β) R3(γ)``.
     """
     l = _checks.degree(l)
     alpha, beta, gamma = np.broadcast_arrays(
@@ -46,7 +47,8 @@ def wigner_U_zxz(l, alpha, beta, gamma) -> np.ndarray:
 def wigner_U_zyz(l, alpha, beta, gamma) -> np.ndarray:
     """Eq. (9): ``U^l_mn(R3(α) R2(β) R3(γ)) = e^(−imα) P^l_mn(cos β) e^(−inγ)``.
 
-    Same matrix function as :func:`wigner_U_zxz`, read through ``R_ZYZ(α, β, γ) = R_ZXZ(α + π/2, β, γ − π/2)``.
+    Same matrix function as :func:`wigner_U_zxz`, read through ``R_ZYZ(α, β, γ) = R_ZXZ(α + π/2, β, γ − π/2)``;
+    any real angles.
     """
     l = _checks.degree(l)
     alpha, beta, gamma = np.broadcast_arrays(
