@@ -210,7 +210,12 @@ def test_the_three_printed_recurrences(l):
     assert np.max(np.abs(sin_b * (-0.5 * c(m) * down - 0.5 * c(-m) * up) - (n - m * x) * here)) < 1e-12
 
 
-def test_half_pi_matrix_stays_orthogonal_beyond_64():
+def test_half_pi_matrix_is_P_at_zero_and_stays_orthogonal_beyond_64():
+    for l in (0, 1, 4, 7):
+        exact = [[float(rodrigues_exact(l, m, n, Fraction(0))) for n in range(-l, l + 1)] for m in range(-l, l + 1)]
+        assert np.max(np.abs(half_pi_matrix(l) - np.array(exact))) < 1e-14
+    m, n = np.meshgrid(np.arange(-64, 65), np.arange(-64, 65), indexing="ij")
+    assert np.max(np.abs(half_pi_matrix(64) - legendre_P(64, m, n, 0.0))) < 1e-12
     for l in (64, 128, 200):
         pi_mat = half_pi_matrix(l)
         assert np.max(np.abs(pi_mat @ pi_mat.T - np.eye(2 * l + 1))) < 1e-12
