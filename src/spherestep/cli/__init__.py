@@ -13,6 +13,7 @@ from typer.exceptions import TyperException
 
 from ..errors import ComputationError, SpherestepError
 from . import packings  # noqa: F401  (registers commands)
+from . import run  # noqa: F401
 from .app import app
 
 

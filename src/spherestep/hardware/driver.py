@@ -1,0 +1,154 @@
+"""The coil driver: stator coil states through a back end, within thermal limits, always ending all off.
+
+Coil ``k`` is switched by relay channels ``channel_map[k] = (enable, polarity)`` exactly as in
+:meth:`spherestep.commutation.Step.masks`: energised coils set their enable bit, coils driven with polarity
+−1 also set their polarity bit. Used as a context manager the driver opens the back end, refuses a channel
+map the device cannot carry, and on leaving (normally, on an error or on Ctrl-C) switches every coil off
+before closing.
+"""
+
+from __future__ import annotations
+
+import signal
+import threading
+from collections.abc import Mapping
+from contextlib import contextmanager
+
+import numpy as np
+
+from ..commutation import Step
+from ..errors import InputError, bad_value
+from .backend import Backend, DeviceInfo, LinkError
+from .limits import ThermalGuard, ThermalLimitError, ThermalLimits
+
+
+def coil_masks(coils: Mapping[int, int], channel_map: np.ndarray) -> tuple[int, int]:
+    """``(enable_mask, polarity_mask)`` of a coil → ±1 map, the convention of :meth:`Step.masks`."""
+    enable = polarity = 0
+    for coil, sign in coils.items():
+        enable |= 1 << int(channel_map[coil, 0])
+        if sign < 0:
+            polarity |= 1 << int(channel_map[coil, 1])
+    return enable, polarity
+
+
+@contextmanager
+def _ctrl_c_ignored():
+    """Ignore SIGINT (in the main thread) while the coils are being switched off."""
+    previous = signal.getsignal(signal.SIGINT) if threading.current_thread() is threading.main_thread() else None
+    if previous is not None:
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        yield
+    finally:
+        if previous is not None:
+            signal.signal(signal.SIGINT, previous)
+
+
+class CoilDriver:
+    """Drive stator coils through ``backend`` with the ``(N, 2)`` ``channel_map`` under ``limits``.
+
+    ``jitter`` seconds of scheduling slack are allowed on the thermal limits at run time (the plan itself is
+    checked exactly by :meth:`ThermalLimits.check_plan`). ``coils`` is the state now driven.
+
+    >>> from spherestep.commutation import default_channel_map
+    >>> from spherestep.hardware import CoilDriver, DryRun
+    >>> with CoilDriver(DryRun(), default_channel_map(4)) as driver:
+    ...     driver.apply({0: +1, 2: -1}, duration=0.1)
+    ...     driver.hold(0.1)
+    >>> [(s.enable, s.polarity) for s in driver.backend.sent]
+    [(5, 64), (0, 0)]
+    """
+
+    def __init__(self, backend: Backend, channel_map, limits: ThermalLimits | None = None, jitter: float = 0.010):
+        cmap = np.asarray(channel_map)
+        if (cmap.ndim != 2 or cmap.shape[1] != 2 or cmap.shape[0] < 1 or not np.issubdtype(cmap.dtype, np.integer)
+                or cmap.min() < 0):
+            raise bad_value("channel_map", "an (N, 2) array of non-negative integer (enable, polarity) channels",
+                            cmap.tolist() if cmap.size < 20 else f"array of shape {cmap.shape}")
+        if np.unique(cmap).size != cmap.size:
+            raise bad_value("channel_map", "distinct channels (no relay shared by two coils or two roles)",
+                            cmap.tolist() if cmap.size < 20 else f"array of shape {cmap.shape}")
+        self.backend = backend
+        self.channel_map = cmap.astype(int)
+        self.limits = limits if limits is not None else ThermalLimits()
+        self.guard = ThermalGuard(self.limits, tolerance=jitter)
+        self.coils: dict[int, int] = {}
+        self.info: DeviceInfo | None = None
+
+    def __enter__(self) -> CoilDriver:
+        self.open()
+        return self
+
+    def __exit__(self, exc_type, exc, tb) -> None:
+        try:
+            self.close()
+        except LinkError as off_failed:
+            if isinstance(exc, LinkError):
+                raise LinkError(f"{exc}; {off_failed}") from exc
+            if exc is None:
+                raise
+            exc.add_note(str(off_failed))
+
+    def open(self) -> DeviceInfo:
+        """Open the back end (all off) and check that the device has every channel of the map."""
+        self.info = self.backend.open()
+        top = int(self.channel_map.max())
+        if top >= self.info.channels:
+            self.backend.close()
+            raise InputError(f"the plan's channel map uses relay channel {top}, but device {self.info.name!r} has "
+                             f"{self.info.channels} channels (0..{self.info.channels - 1}); use a controller with "
+                             "more channels or a plan for fewer coils")
+        return self.info
+
+    def close(self) -> None:
+        """Switch every coil off, then close the back end (even if switching off failed)."""
+        try:
+            self.all_off()
+        finally:
+            self.backend.close()
+
+    def apply(self, coils: Step | Mapping[int, int], duration: float = 0.0) -> None:
+        """Energise exactly ``coils`` (a :class:`Step` or coil → ±1), to be held for ``duration`` seconds.
+
+        Raises :class:`ThermalLimitError` (with every coil switched off) if that would break a limit.
+        """
+        state = dict(coils.coils if isinstance(coils, Step) else coils)
+        for coil, sign in state.items():
+            if not (isinstance(coil, (int, np.integer)) and 0 <= coil < len(self.channel_map) and sign in (-1, 1)):
+                raise bad_value("coils", f"a map from coil index 0..{len(self.channel_map) - 1} to polarity +1 or -1",
+                                state)
+        state = {int(k): int(v) for k, v in state.items()}
+        self._check(state, duration)
+        enable, polarity = coil_masks(state, self.channel_map)
+        now = self.backend.clock()
+        self.backend.write(enable, polarity, state)
+        self.guard.record(state, now)
+        self.coils = state
+
+    def hold(self, seconds: float) -> None:
+        """Keep the present coils on for ``seconds`` (checked against the limits first)."""
+        self._check(self.coils, seconds)
+        self.backend.hold(seconds)
+
+    def all_off(self) -> None:
+        """Switch every coil off; Ctrl-C cannot interrupt it. A failure raises :class:`LinkError` saying
+        that the device's watchdog (if it has one) takes over."""
+        with _ctrl_c_ignored():
+            self.coils = {}
+            self.guard.record({}, self.backend.clock())
+            try:
+                self.backend.off()
+            except LinkError as exc:
+                watchdog = self.info.watchdog if self.info is not None else None
+                fallback = (f"the device's watchdog opens every relay within {watchdog:g} s" if watchdog
+                            else "check that the coils are unpowered")
+                raise LinkError(f"switching the coils off failed too ({exc}); {fallback}") from exc
+
+    def _check(self, coils: Mapping[int, int], duration: float) -> None:
+        now = self.backend.clock()
+        try:
+            self.guard.check(coils, now, duration, f"the state applied at t = {now:.3f} s")
+        except ThermalLimitError:
+            self.all_off()
+            raise

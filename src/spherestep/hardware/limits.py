@@ -1,0 +1,108 @@
+"""Thermal limits of the stator coils: maximum continuous on-time and maximum duty cycle.
+
+An energised electromagnet heats with I²R whatever its polarity, so both limits count a coil as on while its
+enable relay is closed. A coil may stay on for at most ``max_on`` seconds without a break, and be on for at
+most ``max_duty × window`` seconds of any sliding window of ``window`` seconds (time before the first step
+counts as off). :meth:`ThermalLimits.check_plan` checks a whole plan at a given step rate before anything is
+switched; :class:`ThermalGuard` checks each step again as it is driven.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import deque
+from collections.abc import Iterable
+from dataclasses import dataclass
+
+from ..errors import InputError, bad_value
+
+
+class ThermalLimitError(InputError):
+    """Driving a coil as asked would exceed its on-time or duty-cycle limit."""
+
+
+@dataclass(frozen=True)
+class ThermalLimits:
+    """``max_on`` seconds continuously on, at most ``max_duty`` (0–1] of any ``window`` seconds.
+
+    The defaults (5 s, 0.5 over 30 s) are a cautious start for coils without a datasheet; set them from the
+    coil's rated continuous power at the supply voltage (24 V in Sec. IV-B).
+    """
+
+    max_on: float = 5.0
+    max_duty: float = 0.5
+    window: float = 30.0
+
+    def __post_init__(self):
+        if not (isinstance(self.max_on, (int, float)) and math.isfinite(self.max_on) and self.max_on > 0):
+            raise bad_value("max_on", "a positive number of seconds", self.max_on)
+        if not (isinstance(self.max_duty, (int, float)) and 0 < self.max_duty <= 1):
+            raise bad_value("max_duty", "a fraction in (0, 1]", self.max_duty)
+        if not (isinstance(self.window, (int, float)) and math.isfinite(self.window) and self.window > 0):
+            raise bad_value("window", "a positive number of seconds", self.window)
+
+    def check_plan(self, plan, rate: float) -> None:
+        """Raise :class:`ThermalLimitError` naming the first step and coil that a run at ``rate`` Hz would
+        overheat; step ``i`` is driven from ``i / rate`` to ``(i + 1) / rate`` and all coils are off after."""
+        if not (isinstance(rate, (int, float)) and math.isfinite(rate) and rate > 0):
+            raise bad_value("rate", "a positive step rate in Hz, such as 10", rate)
+        guard = ThermalGuard(self)
+        period = 1.0 / rate
+        for i, step in enumerate(plan.steps):
+            guard.check(step.coils, i * period, period, f"step {step.index}")
+            guard.record(step.coils, i * period)
+
+
+class ThermalGuard:
+    """Per-coil on/off history against :class:`ThermalLimits`, on any clock (seconds).
+
+    :meth:`check` tests a coil set about to be held from ``t`` for ``duration`` seconds; :meth:`record`
+    notes that the set was switched at ``t``. ``tolerance`` seconds absorb scheduling jitter.
+    """
+
+    def __init__(self, limits: ThermalLimits, tolerance: float = 1e-9):
+        self.limits = limits
+        self.tolerance = tolerance
+        self._since: dict[int, float] = {}
+        self._history: dict[int, deque[tuple[float, float]]] = {}
+
+    def on_since(self, coil: int) -> float | None:
+        """Time the coil was switched on if it is on now, else None."""
+        return self._since.get(coil)
+
+    def on_time(self, coil: int, start: float, end: float) -> float:
+        """Seconds the coil was on within ``[start, end]`` according to the record."""
+        spans = list(self._history.get(coil, ()))
+        if coil in self._since:
+            spans.append((self._since[coil], end))
+        return sum(max(0.0, min(b, end) - max(a, start)) for a, b in spans)
+
+    def check(self, coils: Iterable[int], t: float, duration: float, where: str) -> None:
+        """Raise :class:`ThermalLimitError` if holding ``coils`` from ``t`` for ``duration`` s breaks a limit."""
+        lim = self.limits
+        end = t + duration
+        for coil in sorted(coils):
+            run = end - self._since.get(coil, t)
+            if run > lim.max_on + self.tolerance:
+                raise ThermalLimitError(
+                    f"coil {coil} would stay on for {run:.3f} s without a break (to the end of {where}), over max_on = "
+                    f"{lim.max_on:g} s; use a plan that rests the coil, a higher step rate, or a larger max_on "
+                    "if the coil's rating allows")
+            used = self.on_time(coil, end - lim.window, t) + duration
+            if used > lim.max_duty * lim.window + self.tolerance:
+                raise ThermalLimitError(
+                    f"coil {coil} would be on for {used:.3f} s of the {lim.window:g} s before the end of {where} "
+                    f"(duty {used / lim.window:.3f}), over max_duty = {lim.max_duty:g}; use a plan that "
+                    "rests the coil or a larger max_duty if the coil's rating allows")
+
+    def record(self, coils: Iterable[int], t: float) -> None:
+        """Note that exactly ``coils`` are on from time ``t``; forget spans older than one window."""
+        now_on = set(coils)
+        for coil in [c for c in self._since if c not in now_on]:
+            self._history.setdefault(coil, deque()).append((self._since.pop(coil), t))
+        for coil in now_on:
+            self._since.setdefault(coil, t)
+        horizon = t - self.limits.window
+        for spans in self._history.values():
+            while spans and spans[0][1] < horizon:
+                spans.popleft()

@@ -1,0 +1,48 @@
+"""Streaming a commutation plan: each step driven for one period at a fixed step rate, then all off."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from ..commutation import Plan
+from ..errors import bad_value
+from .backend import Backend, DeviceInfo
+from .driver import CoilDriver
+from .limits import ThermalLimits
+
+
+@dataclass(frozen=True)
+class PlayReport:
+    """What a finished run did: steps driven, rate (Hz), elapsed seconds, worst lateness of a step (s)."""
+
+    steps: int
+    rate: float
+    elapsed: float
+    max_lag: float
+    device: DeviceInfo
+
+
+def play(plan: Plan, backend: Backend, rate: float, limits: ThermalLimits | None = None) -> PlayReport:
+    """Drive ``plan`` through ``backend`` at ``rate`` steps per second.
+
+    Step ``i`` is applied at ``t0 + i / rate`` and held until ``t0 + (i + 1) / rate`` on the back end's clock
+    (a late step is held only to its scheduled end, so lateness never accumulates); every coil is off after
+    the last step, on any error and on Ctrl-C. The whole plan is checked against ``limits`` before anything is
+    switched.
+    """
+    if not plan.steps:
+        raise bad_value("plan.steps", "at least one step", [])
+    limits = limits if limits is not None else ThermalLimits()
+    limits.check_plan(plan, rate)
+    period = 1.0 / rate
+    with CoilDriver(backend, plan.channel_map, limits) as driver:
+        t0 = backend.clock()
+        max_lag = 0.0
+        for i, step in enumerate(plan.steps):
+            start, end = t0 + i * period, t0 + (i + 1) * period
+            now = backend.clock()
+            max_lag = max(max_lag, now - start)
+            driver.apply(step, duration=max(0.0, end - now))
+            driver.hold(max(0.0, end - backend.clock()))
+        elapsed = backend.clock() - t0
+    return PlayReport(steps=len(plan.steps), rate=rate, elapsed=elapsed, max_lag=max_lag, device=driver.info)

@@ -1,0 +1,53 @@
+"""The reference firmware, built with the host's g++ and run: its protocol core against the shared vectors
+(the same ones the Python emulator passes) and the sketch itself against a recording Arduino stand-in."""
+
+from __future__ import annotations
+
+import re
+import shutil
+import subprocess
+from pathlib import Path
+
+import pytest
+
+FIRMWARE = Path(__file__).resolve().parents[1] / "firmware"
+GXX = shutil.which("g++")
+
+pytestmark = pytest.mark.skipif(GXX is None, reason="g++ is not installed: the firmware harness cannot be built")
+
+
+def build_and_run(tmp_path: Path, source: str, *args: str) -> tuple[int, str]:
+    exe = tmp_path / Path(source).stem
+    build = subprocess.run(
+        [GXX, "-std=c++11", "-Wall", "-Wextra", "-Werror", "-pedantic", "-I", str(FIRMWARE / "spherestep"),
+         "-I", str(FIRMWARE / "test" / "arduino"), str(FIRMWARE / "test" / source),
+         str(FIRMWARE / "spherestep" / "protocol.cpp"), "-o", str(exe)],
+        capture_output=True, text=True, timeout=120)
+    assert build.returncode == 0, build.stderr
+    run = subprocess.run([str(exe), *args], capture_output=True, text=True, timeout=60)
+    return run.returncode, run.stdout
+
+
+def test_protocol_core_passes_the_vectors(tmp_path):
+    code, out = build_and_run(tmp_path, "test_protocol.cpp", str(FIRMWARE / "test" / "vectors.txt"))
+    assert code == 0, out
+    passed, failed = map(int, re.search(r"^(\d+) passed, (\d+) failed$", out, re.M).groups())
+    assert failed == 0 and passed >= 130, out
+
+
+def test_sketch_runs_on_the_host(tmp_path):
+    code, out = build_and_run(tmp_path, "test_sketch.cpp")
+    assert code == 0, out
+    assert re.search(r"^10 passed, 0 failed$", out, re.M), out
+
+
+@pytest.mark.skipif(shutil.which("avr-g++") is None,
+                    reason="avr-g++ is not installed (Debian: gcc-avr avr-libc); the AVR cross-build is optional")
+def test_firmware_cross_compiles_for_the_mega(tmp_path):
+    """protocol.cpp and the sketch build for the ATmega2560 with the flags of the Arduino IDE (no STL, no heap)."""
+    flags = ["-mmcu=atmega2560", "-Os", "-std=gnu++11", "-fno-exceptions", "-fno-threadsafe-statics", "-Wall",
+             "-Wextra", "-Werror", "-I", str(FIRMWARE / "spherestep"), "-I", str(FIRMWARE / "test" / "arduino")]
+    for source, lang in (("protocol.cpp", []), ("spherestep.ino", ["-x", "c++"])):
+        build = subprocess.run(["avr-g++", *flags, *lang, "-c", str(FIRMWARE / "spherestep" / source),
+                                "-o", str(tmp_path / f"{source}.o")], capture_output=True, text=True, timeout=120)
+        assert build.returncode == 0, build.stderr
