@@ -261,3 +261,46 @@ def circle_in_corner(p, q, r) -> tuple[np.ndarray, np.ndarray]:
     tangent /= np.linalg.norm(tangent, axis=-1, keepdims=True)
     center = np.cos(t)[..., None] * p + np.sin(t)[..., None] * tangent
     return center, rho
+
+
+class NearestPointGrid:
+    """Which of a fixed set of well-separated points lies within ``tol`` of a query point, in O(1).
+
+    Space around the sphere is cut into cubic voxels of side ``h`` and each voxel stores the point nearest
+    its centre's projection on the sphere. A unit query within ``tol`` of point ``p`` is at most ``tol + ρ``
+    from that projection (``ρ ≈ √3 h / 2`` the voxel's angular radius, bounded with margin below) and every
+    other point at least ``s − tol − ρ`` (``s`` the smallest separation), so the stored point is ``p``
+    whenever ``ρ < s/2 − tol``; ``h`` is chosen so. Requires ``tol < s/2``.
+    """
+
+    def __init__(self, points, tol: float):
+        from scipy.spatial import cKDTree
+
+        self.points = _as_points(points, "points", min_ndim=2)
+        self.tol = float(tol)
+        tree = cKDTree(self.points)
+        dist, _ = tree.query(self.points, k=2)
+        separation = 2.0 * np.arcsin(min(1.0, 0.5 * dist[:, 1].min()))
+        margin = 0.5 * separation - self.tol
+        if margin <= 0:
+            raise bad_value("tol", f"under half the points' separation ({np.degrees(separation) / 2:.4g}°)",
+                            f"{np.degrees(self.tol):.4g}°")
+        # angular radius of a voxel seen from the sphere: half-diagonal √3h/2 over the distance >= 1 − √3h/2
+        self.n = int(np.ceil(2.0 / (0.8 * margin / np.sqrt(3.0))))
+        h = 2.0 / self.n
+        ticks = -1.0 + (np.arange(self.n) + 0.5) * h
+        centres = np.stack(np.meshgrid(ticks, ticks, ticks, indexing="ij"), axis=-1).reshape(-1, 3)
+        norm = np.linalg.norm(centres, axis=1, keepdims=True)
+        _, self.cell_point = tree.query(centres / np.maximum(norm, 1e-12))
+        self.cos_tol = np.cos(self.tol)
+
+    def cell(self, q: np.ndarray) -> np.ndarray:
+        """Voxel index of each query ``q (..., 3)`` inside the cube ``[−1, 1]³``."""
+        i = np.clip(((q + 1.0) * (0.5 * self.n)).astype(np.int64), 0, self.n - 1)
+        return (i[..., 0] * self.n + i[..., 1]) * self.n + i[..., 2]
+
+    def match(self, q: np.ndarray) -> np.ndarray:
+        """Index of the point within ``tol`` of each unit query ``q (..., 3)``, or −1 where there is none."""
+        idx = self.cell_point[self.cell(q)]
+        hit = np.einsum("...c,...c->...", q, self.points[idx]) >= self.cos_tol
+        return np.where(hit, idx, -1)

@@ -10,7 +10,7 @@ from rich.console import Console
 
 from ..errors import bad_value
 
-console = Console()
+console = Console(width=None if sys.stdout.isatty() else 120)
 
 
 def parse_vector(text: str, name: str) -> np.ndarray:

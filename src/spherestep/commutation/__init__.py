@@ -1,5 +1,6 @@
 """Commutation: trajectories, the :class:`Plan`, and the planners (Sec. III)."""
 
-from .plan import Plan, Step, default_channel_map
+from ..motor.design import default_channel_map
+from .plan import Plan, Step
 
 __all__ = ["Plan", "Step", "default_channel_map"]

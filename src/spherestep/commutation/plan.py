@@ -27,12 +27,6 @@ FORMAT = "spherestep-plan"
 VERSION = 1
 
 
-def default_channel_map(coil_count: int) -> np.ndarray:
-    """Coil ``k`` → enable channel ``k``, polarity channel ``coil_count + k`` (shape ``(N, 2)``)."""
-    k = np.arange(coil_count)
-    return np.stack([k, coil_count + k], axis=1)
-
-
 @dataclass
 class Step:
     """One commutation step.

@@ -1,0 +1,115 @@
+"""Design metrics: how finely and how far the motor moves (Sec. II-B-3, III-A).
+
+* ``resolution_*``: Park distance from uniformly random orientations to the nearest stepper state.
+* ``range_fraction``: the fraction of random orientations with a state within one step (``max_step``);
+  with ``state_graph_components == 1`` (states linked when one step apart) and a fraction of 1, every
+  orientation is reachable: unbounded rotation about any axis.
+* ``escape_violations``: states from which some direction has no next state, i.e. the axes of the steps
+  to neighbouring states (relative rotations ``R_aᵀ R_b``, body frame) leave a cone of half-angle 45°
+  empty: the largest empty cone is found exactly from the convex hull of the step axes.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import connected_components
+
+from .. import so3
+
+ESCAPE_CONE = math.radians(45.0)
+
+
+def rotor_symmetries(design) -> np.ndarray:
+    """Rotations ``g`` of the rotor's packing that also keep every pole's polarity (``(G, 3, 3)``)."""
+    from ..packing import symmetry_rotations
+
+    rotor = design.rotor
+    group = symmetry_rotations(rotor)
+    keep = []
+    for g in group:
+        _, image = rotor.tree.query(rotor.centers @ g.T)
+        keep.append(np.array_equal(design.polarity[image], design.polarity))
+    return group[np.array(keep, dtype=bool)]
+
+
+def orbit_representatives(rotations: np.ndarray, group: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Group states ``R`` into orbits ``{R g}``: the representative ``R g*`` with ``g* = argmax tr(R g)``.
+
+    Returns ``(rep_index (K,), unique representative indices)``, where ``rep_index[i]`` is the index of the
+    state that represents state ``i``'s orbit (the first state whose representative coincides).
+    """
+    traces = np.einsum("kij,gji->kg", rotations, group)
+    best = group[np.argmax(traces, axis=1)]
+    reps = rotations @ best
+    keys = np.round(reps.reshape(len(reps), -1), 6)
+    _, first, inverse = np.unique(keys, axis=0, return_index=True, return_inverse=True)
+    return first[inverse.ravel()], np.unique(first)
+
+
+def largest_empty_cone(axes: np.ndarray) -> float:
+    """Half-angle (rad) of the largest cone about any direction that contains none of ``axes (P, 3)``.
+
+    With the origin inside the convex hull of the unit axes, the largest empty cap is the circumcircle of
+    a hull facet: ``acos(−b)`` for facet plane ``n·x + b = 0``. Otherwise a whole hemisphere is empty (≥ 90°).
+    """
+    from scipy.spatial import ConvexHull, QhullError
+
+    if len(axes) < 4:
+        return math.pi
+    try:
+        hull = ConvexHull(axes)
+    except QhullError:
+        return math.pi
+    offsets = hull.equations[:, 3]
+    if np.any(offsets >= 0):
+        return math.pi / 2 + float(np.arcsin(np.clip(offsets.max(), 0.0, 1.0)))
+    return float(np.arccos(np.clip(-offsets, -1.0, 1.0)).max())
+
+
+def escape_violations(design, states, cone: float = ESCAPE_CONE) -> np.ndarray:
+    """Indices of states from which some direction has no next state within ``max_step`` (see module).
+
+    The answer is the same for every state of an orbit ``{R g}`` under the rotor's symmetries (steps
+    from ``R g`` are the steps from ``R`` with axes turned by ``gᵀ``), so it is computed once per orbit.
+    """
+    if len(states) == 0:
+        return np.zeros(0, dtype=np.int64)
+    rep_of, reps = orbit_representatives(states.rotations, rotor_symmetries(design))
+    bad = np.zeros(len(states), dtype=bool)
+    for r in reps:
+        near = states.within(states.rotations[r], design.max_step)
+        near = near[near != r]
+        axes, _ = so3.axis_angle(states.rotations[r].T @ states.rotations[near]) if len(near) else (np.zeros((0, 3)), None)
+        bad[r] = largest_empty_cone(axes) > cone
+    return np.flatnonzero(bad[rep_of])
+
+
+def design_metrics(design, samples: int = 20_000, seed: int = 0) -> dict:
+    """The metrics of ``design`` as a dict (radians for angles; see the module docstring)."""
+    states = design.states()
+    rng = np.random.default_rng(seed)
+    out = {"states": len(states), "max_step": design.max_step, "samples": samples}
+    if len(states) == 0:
+        out.update(resolution_median=math.inf, resolution_p95=math.inf, resolution_max=math.inf,
+                   range_fraction=0.0, state_graph_components=0, escape_violations=[], reaches_all=False)
+        return out
+    dist, _ = states.nearest(so3.random(samples, rng))
+    dist = dist[:, 0]
+    pairs = states.neighbour_pairs(design.max_step)
+    graph = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(len(states),) * 2)
+    components, _ = connected_components(graph, directed=False)
+    violators = escape_violations(design, states)
+    out.update(
+        resolution_median=float(np.median(dist)),
+        resolution_p95=float(np.quantile(dist, 0.95)),
+        resolution_max=float(dist.max()),
+        range_fraction=float(np.mean(dist <= design.max_step)),
+        state_graph_components=int(components),
+        escape_violations=violators.tolist(),
+        reaches_all=bool(np.all(dist <= design.max_step) and components == 1),
+        held_pairs_histogram=np.bincount(states.counts).tolist(),
+    )
+    return out

@@ -1,0 +1,240 @@
+"""Stepper states: orientations at which at least two rotor poles sit on stator coils (Sec. II-B-3, III-A).
+
+Enumeration. Two poles on two coils fix the rotor (footnote 2). For every pair of working coils
+``(k1, k2)`` at arc ``s`` and every ordered pair of rotor poles ``(j1, j2)`` at arc ``a`` with
+``|a − s| <= 2 tol``, the rotation that aligns the pair symmetrically (the pole pair's bisector onto the
+coil pair's, and their difference directions likewise: the least-squares fit of two equal-weight pairs)
+leaves each pole within ``|a − s|/2 <= tol`` of its coil. Each candidate's full set of held pairs — every
+``(j, k)`` with ``d(R u_j, v_k) <= tol`` — is found by one batched product, candidates with the same set
+are merged, and the rotation is refitted to all of its pairs (Kabsch). Everything is vectorised over
+candidates in chunks.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import cached_property
+
+import numpy as np
+from scipy.spatial import cKDTree
+from scipy.spatial.transform import Rotation
+
+from ..errors import bad_value
+from ..sphere import NearestPointGrid
+
+CHUNK = 2048
+
+
+def _pair_frames(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Frames (columns) ``[m, n, m × n]`` with ``m ∝ a + b`` and ``n ∝ a − b`` for unit ``a ≠ ±b``."""
+    m = a + b
+    m /= np.linalg.norm(m, axis=-1, keepdims=True)
+    n = a - b
+    n /= np.linalg.norm(n, axis=-1, keepdims=True)
+    return np.stack([m, n, np.cross(m, n)], axis=-1)
+
+
+def kabsch(state: np.ndarray, pole: np.ndarray, coil: np.ndarray, count: int, u: np.ndarray,
+           v: np.ndarray) -> np.ndarray:
+    """Rotations ``(count, 3, 3)`` minimising ``Σ |R u_j − v_k|²`` over each state's pairs.
+
+    ``state``, ``pole``, ``coil`` list the pairs; ``H_s = Σ v_k u_jᵀ``, ``R = U diag(1, 1, det) Vᵀ`` from the SVD.
+    """
+    outer = (v[coil][:, :, None] * u[pole][:, None, :]).reshape(-1, 9)
+    H = np.stack([np.bincount(state, weights=outer[:, c], minlength=count) for c in range(9)], axis=1)
+    U, _, Vt = np.linalg.svd(H.reshape(-1, 3, 3))
+    D = np.ones((count, 3))
+    D[:, 2] = np.sign(np.linalg.det(U @ Vt))
+    return (U * D[:, None, :]) @ Vt
+
+
+def quaternion_tree(rotations: np.ndarray) -> tuple[cKDTree, int]:
+    """KD-tree on ``±q`` of each rotation: the nearest point in chord distance is the nearest rotation in
+    Park's metric, since ``θ = 2 acos|q1·q2|`` and ``|q1 ∓ q2|² = 2 ∓ 2 q1·q2``."""
+    q = Rotation.from_matrix(rotations).as_quat()
+    return cKDTree(np.vstack([q, -q])), len(q)
+
+
+def chord_of_park(theta) -> np.ndarray:
+    """Quaternion chord ``|q1 − q2|`` at Park distance ``θ``: ``2 sin(θ/4)``."""
+    return 2.0 * np.sin(0.25 * np.asarray(theta))
+
+
+def park_of_chord(chord) -> np.ndarray:
+    """Inverse of :func:`chord_of_park`."""
+    return 4.0 * np.arcsin(np.clip(0.5 * np.asarray(chord), 0.0, 1.0))
+
+
+@dataclass(frozen=True, eq=False)
+class StepperStates:
+    """``rotations (K, 3, 3)`` with their held pairs: ``pairs[offsets[i]:offsets[i+1]]`` are the
+    ``(rotor pole, coil)`` pairs of state ``i``; ``polarity`` is the rotor's, to give each coil its sign."""
+
+    rotations: np.ndarray
+    pairs: np.ndarray
+    offsets: np.ndarray
+    polarity: np.ndarray
+    tol: float
+
+    def __len__(self) -> int:
+        return len(self.rotations)
+
+    def held(self, i: int) -> list[tuple[int, int]]:
+        """``(rotor pole, coil)`` pairs holding state ``i``."""
+        return [(int(j), int(k)) for j, k in self.pairs[self.offsets[i]:self.offsets[i + 1]]]
+
+    def coils(self, i: int) -> dict[int, int]:
+        """Coils to energise for state ``i``, each with the polarity of the pole it holds."""
+        return {k: int(self.polarity[j]) for j, k in self.held(i)}
+
+    @cached_property
+    def counts(self) -> np.ndarray:
+        """Number of held pairs per state."""
+        return np.diff(self.offsets)
+
+    @cached_property
+    def _tree(self) -> tuple[cKDTree, int]:
+        return quaternion_tree(self.rotations)
+
+    def nearest(self, R, k: int = 1) -> tuple[np.ndarray, np.ndarray]:
+        """Park distances ``(..., k)`` and indices of the ``k`` states nearest to each rotation ``R (..., 3, 3)``."""
+        R = np.asarray(R, dtype=float)
+        if len(self) == 0:
+            raise bad_value("design", "a design with at least one stepper state", "none")
+        tree, n = self._tree
+        q = Rotation.from_matrix(R.reshape(-1, 3, 3)).as_quat()
+        k_eff = min(k, n)
+        if k_eff == 1:
+            chord, idx = tree.query(q)
+            return park_of_chord(chord).reshape(R.shape[:-2] + (1,)), (idx % n).reshape(R.shape[:-2] + (1,))
+        chord, idx = tree.query(q, k=2 * k_eff)  # a state can appear as +q and −q; keep distinct ones
+        out_d = np.empty((len(q), k_eff))
+        out_i = np.empty((len(q), k_eff), dtype=np.int64)
+        for row in range(len(q)):
+            _, first = np.unique(idx[row] % n, return_index=True)
+            first = np.sort(first)[:k_eff]
+            out_d[row], out_i[row] = park_of_chord(chord[row, first]), idx[row, first] % n
+        shape = R.shape[:-2] + (k_eff,)
+        return out_d.reshape(shape), out_i.reshape(shape)
+
+    def within(self, R, radius: float) -> np.ndarray:
+        """Indices of the states within Park distance ``radius`` of the single rotation ``R``."""
+        tree, n = self._tree
+        q = Rotation.from_matrix(np.asarray(R, dtype=float)).as_quat()
+        hits = tree.query_ball_point(q, chord_of_park(radius))
+        return np.unique(np.asarray(hits, dtype=np.int64) % n)
+
+    def neighbour_pairs(self, radius: float) -> np.ndarray:
+        """All pairs ``(a, b)``, ``a < b``, of states within Park distance ``radius`` of each other.
+
+        The tree holds ``+q`` (indices ``< n``) and ``−q``; a pair of states shows up as ``(a, b)`` among the
+        ``+q`` or as both ``(a, b + n)`` and ``(b, a + n)``, so one of each is kept.
+        """
+        tree, n = self._tree
+        raw = tree.query_pairs(chord_of_park(radius), output_type="ndarray")
+        i, j = raw[:, 0], raw[:, 1]
+        keep = (i < n) & ((j < n) | (i < j - n))
+        pairs = np.stack([i[keep], j[keep] % n], axis=1)
+        return np.sort(pairs, axis=1)
+
+
+def held_pairs(R: np.ndarray, u: np.ndarray, v: np.ndarray, tol: float,
+               grid: NearestPointGrid | None = None) -> tuple[np.ndarray, ...]:
+    """Triples ``(state, pole, coil)`` with ``d(R_s u_j, v_k) <= tol``.
+
+    Each coil is taken into the body frame (``R_sᵀ v_k``) and the rotor pole within ``tol`` of it, if any, is
+    read from a :class:`~spherestep.sphere.NearestPointGrid` on the poles: ``O(K N)`` work, not ``O(K M N)``.
+    """
+    grid = NearestPointGrid(u, tol) if grid is None else grid
+    out = []
+    for start in range(0, len(R), CHUNK):
+        Rc = R[start:start + CHUNK]
+        # coils in the body frame, R_sᵀ v_k, as one matrix product: (N, 3) @ (3, c·3)
+        body = (v @ np.transpose(Rc, (1, 0, 2)).reshape(3, -1)).reshape(len(v), len(Rc), 3).transpose(1, 0, 2)
+        pole = grid.match(body)
+        s_idx, k_idx = np.nonzero(pole >= 0)
+        out.append(np.stack([start + s_idx, pole[s_idx, k_idx], k_idx]))
+    state, pole, coil = np.hstack(out) if out else np.zeros((3, 0), dtype=np.int64)
+    return state, pole, coil
+
+
+def _keys(state: np.ndarray, pole: np.ndarray, coil: np.ndarray, count: int, n_coils: int) -> np.ndarray:
+    """A 64-bit hash per state of its set of pairs (sum of random weights per pair, wrapping mod 2⁶⁴)."""
+    weights = np.random.default_rng(12345).integers(0, 2**63, size=(int(pole.max(initial=0)) + 1) * n_coils,
+                                                    dtype=np.uint64)
+    keys = np.zeros(count, dtype=np.uint64)
+    np.add.at(keys, state, weights[pole * n_coils + coil])
+    return keys
+
+
+def find_states(design, tol: float) -> StepperStates:
+    """Enumerate the stepper states of ``design`` at tolerance ``tol`` (radians); see the module docstring."""
+    u = design.rotor.centers
+    coils = design.active_coils
+    v = design.stator.centers[coils]
+    M, N = len(u), len(v)
+    empty = StepperStates(np.zeros((0, 3, 3)), np.zeros((0, 2), int), np.zeros(1, int), design.polarity, tol)
+    if N < 2:
+        return empty
+    k1, k2 = np.triu_indices(N, 1)
+    s = np.arccos(np.clip(np.sum(v[k1] * v[k2], axis=1), -1, 1))
+    j1, j2 = np.nonzero(~np.eye(M, dtype=bool))
+    a = np.arccos(np.clip(np.sum(u[j1] * u[j2], axis=1), -1, 1))
+    order = np.argsort(a)
+    lo = np.searchsorted(a[order], s - 2 * tol, "left")
+    hi = np.searchsorted(a[order], s + 2 * tol, "right")
+    counts = hi - lo
+    if counts.sum() == 0:
+        return empty
+    coil_pair = np.repeat(np.arange(len(s)), counts)
+    pole_pair = order[np.arange(counts.sum()) + np.repeat(lo - np.concatenate([[0], np.cumsum(counts)[:-1]]), counts)]
+    R = _pair_frames(v[k1], v[k2])[coil_pair] @ np.swapaxes(_pair_frames(u[j1], u[j2])[pole_pair], -1, -2)
+    grid = NearestPointGrid(u, tol)
+    for _ in range(2):  # keep one candidate per set of held pairs; refit those holding three or more
+        state, pole, coil = held_pairs(R, u, v, tol, grid)
+        _, first = np.unique(_keys(state, pole, coil, len(R), N), return_index=True)
+        n_pairs = np.bincount(state, minlength=len(R))
+        keep = first[n_pairs[first] >= 2]
+        refit = keep[n_pairs[keep] >= 3]  # two pairs: the symmetric alignment already is the least-squares fit
+        remap = np.full(len(R), -1)
+        remap[refit] = np.arange(len(refit))
+        mine = remap[state] >= 0
+        R[refit] = kabsch(remap[state[mine]], pole[mine], coil[mine], len(refit), u, v)
+        R = R[keep]
+    state, pole, coil = held_pairs(R, u, v, tol, grid)
+    n_pairs = np.bincount(state, minlength=len(R))
+    per_pole = np.zeros((len(R), M), dtype=np.int64)
+    np.add.at(per_pole, (state, pole), 1)
+    per_coil = np.zeros((len(R), N), dtype=np.int64)
+    np.add.at(per_coil, (state, coil), 1)
+    ok = (n_pairs >= 2) & (per_pole.max(axis=1) <= 1) & (per_coil.max(axis=1) <= 1)
+    keys = _keys(state, pole, coil, len(R), N)
+    _, first = np.unique(keys, return_index=True)
+    unique = np.zeros(len(R), dtype=bool)
+    unique[first] = True
+    good = ok & unique
+    R, n_pairs = R[good], n_pairs[good]
+    R, n_pairs = _merge_close(R, n_pairs, 0.05 * tol)
+    angle = np.arccos(np.clip((np.trace(R, axis1=1, axis2=2) - 1) / 2, -1, 1))
+    order = np.lexsort((angle, -n_pairs))  # canonical order: most pairs first, then by rotation angle
+    R = R[order]
+    state, pole, coil = held_pairs(R, u, v, tol, grid)
+    pairs = np.stack([pole, coils[coil]], axis=1)
+    offsets = np.concatenate([[0], np.cumsum(np.bincount(state, minlength=len(R)))])
+    return StepperStates(R, pairs, offsets, design.polarity, tol)
+
+
+def _merge_close(R: np.ndarray, strength: np.ndarray, radius: float) -> tuple[np.ndarray, np.ndarray]:
+    """Drop states within Park distance ``radius`` of a state holding at least as many pairs."""
+    if len(R) < 2:
+        return R, strength
+    tree, n = quaternion_tree(R)
+    pairs = tree.query_pairs(chord_of_park(radius), output_type="ndarray") % n
+    pairs = pairs[pairs[:, 0] != pairs[:, 1]]
+    if not len(pairs):
+        return R, strength
+    a, b = pairs[:, 0], pairs[:, 1]
+    loser = np.where((strength[a] > strength[b]) | ((strength[a] == strength[b]) & (a < b)), b, a)
+    keep = np.ones(len(R), dtype=bool)
+    keep[loser] = False
+    return R[keep], strength[keep]
