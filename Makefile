@@ -18,7 +18,7 @@ $(VENV)/.installed-test: pyproject.toml | $(BIN)/python
 	touch $@
 
 demo: $(VENV)/.installed
-	$(BIN)/spherestep packings
+	$(BIN)/spherestep demo
 
 test: $(VENV)/.installed-test
 	$(BIN)/python -m pytest -q

@@ -1,6 +1,8 @@
 """Commutation: trajectories, the :class:`Plan`, and the planners (Sec. III)."""
 
 from ..motor.design import default_channel_map
+from .geometric import plan_geometric
 from .plan import Plan, Step
+from .trajectory import about_axis, steps_for, through
 
-__all__ = ["Plan", "Step", "default_channel_map"]
+__all__ = ["Plan", "Step", "about_axis", "default_channel_map", "plan_geometric", "steps_for", "through"]

@@ -34,7 +34,8 @@ class Step:
     ``target``/``achieved``: desired ``R_i`` and the stepper state ``R̃_i`` (3×3); ``error``: Park distance
     between them (radians); ``coils``: stator index → polarity ±1 (energised coils); ``held``: (rotor pole,
     stator coil) pairs that hold ``R̃_i``; ``next_pole``: the rotor pole to be attracted next (hatched in
-    Fig. 10), or None; ``status``: ``"ok"`` or why no move was possible at this step.
+    Fig. 10), or None; ``status``: ``"ok"`` (moved), ``"hold"`` (stays: the previous state is still the
+    best) or ``"blocked: <why>"`` (no reachable state).
     """
 
     index: int
@@ -83,8 +84,8 @@ class Plan:
 
     @property
     def failures(self) -> list[tuple[int, str]]:
-        """Steps at which the planner could not move, with the reason."""
-        return [(s.index, s.status) for s in self.steps if s.status != "ok"]
+        """Steps at which the planner could not move as the target required (status ``blocked: …``)."""
+        return [(s.index, s.status) for s in self.steps if s.status.startswith("blocked")]
 
     def to_dict(self) -> dict:
         """The JSON-ready form (see the module docstring)."""

@@ -1,0 +1,110 @@
+"""The geometric planner of Sec. III-A.
+
+At each desired orientation ``R_i`` the candidate matchings are the stepper states nearest ``R_i`` (each
+a set of at least two rotor poles sitting on coils: the pole–coil pairs with the smallest
+``d_jk(i) = cos⁻¹((R_i u_j)·v_k)``). Candidates farther than ``max_step`` (Park) from the previous
+achieved state ``R̃_{i−1}`` are dropped; of the rest the one minimising the axis cost
+``c = cos⁻¹(n(R̃_{i−1}ᵀ R̃^(m)) · n(R̃_{i−1}ᵀ R_i))`` is chosen, so the step turns the rotor about the axis
+the desired motion needs. Two refinements the text leaves open, stated here:
+
+* the rotor stays (status ``"hold"``) while the previous state is still nearer ``R_i`` than every other
+  reachable candidate — a step that moves away from the path is never taken to satisfy the axis cost;
+* at the last step the nearest reachable candidate is taken (the motion ends; only the pose matters);
+* when the rotor lags and no candidate is within reach, it moves to the reachable state nearest ``R_i``
+  (status ``"detour: …"``); when no reachable state is nearer ``R_i`` than where it is, it is held and the
+  step recorded as ``"blocked: …"``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .. import so3
+from ..errors import bad_value
+from .plan import Plan, Step
+
+DEFAULT_CANDIDATES = 8
+DETOUR = "detour: the states nearest the target are out of reach; moved to the reachable state nearest it"
+BLOCKED = "blocked: no state within one step of the current one is nearer the target"
+
+
+def _axis(R: np.ndarray) -> np.ndarray:
+    axis, _ = so3.axis_angle(R)
+    return axis
+
+
+def start_state(states, R0) -> int:
+    """Index of the stepper state nearest ``R0`` (where the rotor rests before the plan)."""
+    _, idx = states.nearest(R0)
+    return int(idx.ravel()[0])
+
+
+def plan_geometric(design, targets, *, candidates: int = DEFAULT_CANDIDATES, max_step: float | None = None,
+                   start: int | None = None) -> Plan:
+    """Commutate ``targets (n+1, 3, 3)`` on ``design`` (a :class:`~spherestep.motor.MotorDesign`).
+
+    ``candidates``: how many nearest states of each ``R_i`` are considered; ``max_step``: reach of one
+    step (default the design's); ``start``: index of the state the rotor rests in (default: nearest
+    ``R_0``). Returns a :class:`Plan` whose step 0 is the starting state.
+    """
+    targets = np.asarray(targets, dtype=float)
+    if targets.ndim != 3 or targets.shape[1:] != (3, 3) or len(targets) < 2:
+        raise bad_value("targets", "at least two rotations, shape (n+1, 3, 3)", f"shape {targets.shape}")
+    if isinstance(candidates, bool) or not isinstance(candidates, (int, np.integer)) or candidates < 1:
+        raise bad_value("candidates", "a positive integer", candidates)
+    states = design.states()
+    if len(states) == 0:
+        raise bad_value("design", "a design with stepper states (at least two poles can sit on coils)", "none")
+    reach = design.max_step if max_step is None else float(max_step)
+    current = start_state(states, targets[0]) if start is None else int(start)
+    _, near = states.nearest(targets, k=candidates)  # (n+1, k) candidate states per target
+    chosen = [current]
+    status = ["ok"]
+    n = len(targets) - 1
+    for i in range(1, n + 1):
+        prev_R = states.rotations[current]
+        cand = near[i]
+        step_d = so3.distance(prev_R, states.rotations[cand])
+        ok = (step_d <= reach) & (cand != current)
+        to_target = so3.distance(states.rotations[cand], targets[i])
+        stay_d = float(so3.distance(prev_R, targets[i]))
+        if not np.any(ok & (to_target < stay_d)):
+            # none of the nearest candidates helps: take the reachable state nearest the target, if it helps
+            around = states.within(prev_R, reach)
+            around_d = so3.distance(states.rotations[around], targets[i])
+            best = int(np.argmin(around_d)) if len(around) else -1
+            if best >= 0 and around_d[best] < stay_d - 1e-12:
+                current = int(around[best])
+                status.append("ok" if ok.any() or i == n else DETOUR)
+            else:
+                status.append("hold" if stay_d <= to_target.min() + 1e-12 else BLOCKED)
+        elif i == n:
+            current = int(cand[np.argmin(np.where(ok, to_target, np.inf))])
+            status.append("ok")
+        else:
+            moving = ok & (to_target < stay_d)
+            want = _axis(prev_R.T @ targets[i])
+            have = _axis(prev_R.T @ states.rotations[cand[moving]])
+            cost = np.arccos(np.clip(have @ want, -1.0, 1.0))
+            current = int(cand[moving][np.argmin(cost)])
+            status.append("ok")
+        chosen.append(current)
+    return _build_plan(design, states, targets, chosen, status, "geometric")
+
+
+def _build_plan(design, states, targets, chosen, status, planner: str) -> Plan:
+    """Assemble the :class:`Plan`: coils, held pairs, errors and the next pole to be attracted."""
+    achieved = states.rotations[np.array(chosen)]
+    errors = so3.distance(achieved, targets)
+    steps = []
+    for i, s in enumerate(chosen):
+        held = states.held(s)
+        next_pole = None
+        if i + 1 < len(chosen):
+            mine = {j for j, _ in held}
+            new = [j for j, _ in states.held(chosen[i + 1]) if j not in mine]
+            next_pole = new[0] if new else None
+        steps.append(Step(index=i, target=targets[i], achieved=achieved[i], error=float(errors[i]),
+                          coils=states.coils(s), held=held, next_pole=next_pole, status=status[i]))
+    return Plan(steps=steps, coil_count=len(design.stator), channel_map=design.channel_map,
+                design=design.name, planner=planner)

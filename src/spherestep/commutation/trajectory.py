@@ -1,0 +1,42 @@
+"""Desired motions as rotations sampled at equal Park distance (Sec. III-A).
+
+A trajectory is an array ``(n + 1, 3, 3)`` of desired orientations ``R_0 … R_n`` with
+``D(R_{i−1}, R_i)`` the same for every ``i`` (:func:`spherestep.so3.resample`). Rotations about an axis
+act in the fixed (stator) frame: ``R(t) = ROT[n, t·angle] R_0``.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .. import so3
+from ..errors import bad_value
+
+KEY_SPACING = math.pi / 2  # keys of a long turn are at most 90° apart, well inside the geodesic's uniqueness
+
+
+def steps_for(length: float, step: float) -> int:
+    """Number of equal steps of at most ``step`` radians covering ``length`` radians (at least one)."""
+    if not (math.isfinite(step) and step > 0):
+        raise bad_value("step", "a positive angle", step)
+    return max(1, math.ceil(length / step - 1e-9))
+
+
+def about_axis(axis, angle: float, steps: int, start=None) -> np.ndarray:
+    """``steps + 1`` orientations turning ``angle`` radians (any size, sign gives the sense) about the
+    fixed-frame ``axis`` from ``start`` (default identity), equally spaced."""
+    if not math.isfinite(angle):
+        raise bad_value("angle", "a finite angle", angle)
+    start = np.eye(3) if start is None else np.asarray(start, dtype=float)
+    pieces = max(1, math.ceil(abs(angle) / KEY_SPACING))
+    keys = so3.rot(axis, np.linspace(0.0, angle, pieces + 1)) @ start
+    if angle == 0:
+        return np.repeat(start[None], steps + 1, axis=0)
+    return so3.resample(keys, steps)
+
+
+def through(keys, steps: int) -> np.ndarray:
+    """``steps + 1`` orientations on the piecewise geodesic through ``keys (m, 3, 3)``, equally spaced."""
+    return so3.resample(keys, steps)

@@ -1,0 +1,140 @@
+"""Figures (matplotlib, no GUI backend): the Fig. 10 view of commutation steps, a 3-D view of the motor,
+and a plan's tracking error.
+
+Fig. 10 view: everything is projected orthographically on the plane normal to the rotation axis (the axis
+points out of the page). Large outlines are the stator coils (the caps their faces cover), small ones the
+rotor magnets that take part: filled when held by an energised coil, hatched for the next pole to be
+attracted. A line fixed in the rotor, perpendicular to the axis, marks how far the rotor has turned.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+from matplotlib.figure import Figure
+from matplotlib.patches import Polygon
+
+from .atomic import atomic_path
+
+POLARITY_COLOUR = {1: "#c0392b", -1: "#2c6fbb"}
+
+
+def plane_basis(axis) -> np.ndarray:
+    """Rows ``e1, e2, n``: an orthonormal frame with ``n`` along ``axis`` (the page is ``e1, e2``)."""
+    n = np.asarray(axis, dtype=float)
+    n = n / np.linalg.norm(n)
+    helper = np.array([1.0, 0.0, 0.0]) if abs(n[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
+    e1 = np.cross(helper, n)
+    e1 /= np.linalg.norm(e1)
+    return np.array([e1, np.cross(n, e1), n])
+
+
+def cap_outline(center, radius: float, points: int = 64) -> np.ndarray:
+    """``(points, 3)`` points of the circle bounding the cap of angular ``radius`` about unit ``center``."""
+    c = np.asarray(center, dtype=float)
+    a = plane_basis(c)
+    t = np.linspace(0.0, 2 * np.pi, points, endpoint=False)
+    return np.cos(radius) * c + np.sin(radius) * (np.outer(np.cos(t), a[0]) + np.outer(np.sin(t), a[1]))
+
+
+def draw_step(ax, design, plan, i: int, axis) -> None:
+    """Draw step ``i`` of ``plan`` in the Fig. 10 view about ``axis`` on matplotlib axes ``ax``."""
+    basis = plane_basis(axis)
+    step = plan.steps[i]
+    R = step.achieved
+    for k, v in enumerate(design.stator.centers):
+        ring = cap_outline(v, design.coil_angle) @ basis[:2].T
+        energised = step.coils.get(k)
+        face = "none" if energised is None else POLARITY_COLOUR[energised]
+        ax.add_patch(Polygon(ring, closed=True, facecolor=face, alpha=0.25 if energised else 1.0,
+                             edgecolor="0.35", lw=0.8))
+        if k in step.coils:
+            ax.text(*(v @ basis[:2].T), str(k), ha="center", va="center", fontsize=6, color="0.2")
+    held_poles = {j for j, _ in step.held}
+    shown = sorted(held_poles | ({step.next_pole} if step.next_pole is not None else set()))
+    for j in shown:
+        u = R @ design.rotor.centers[j]
+        ring = cap_outline(u, design.magnet_angle) @ basis[:2].T
+        colour = POLARITY_COLOUR[int(design.polarity[j])]
+        if j in held_poles:
+            ax.add_patch(Polygon(ring, closed=True, facecolor=colour, edgecolor="k", lw=0.8))
+        else:
+            ax.add_patch(Polygon(ring, closed=True, facecolor="white", edgecolor=colour, hatch="////", lw=0.8))
+    # marker fixed in the rotor, perpendicular to the axis at the start
+    start = plan.steps[0].achieved
+    marker_body = start.T @ basis[0]
+    tip = (R @ marker_body) @ basis[:2].T
+    ax.plot([0, 1.15 * tip[0]], [0, 1.15 * tip[1]], color="k", lw=1.2)
+    ax.plot(0, 0, marker="o", color="k", ms=3)
+    ax.add_patch(Polygon(np.column_stack([np.cos(np.linspace(0, 2 * np.pi, 128)),
+                                          np.sin(np.linspace(0, 2 * np.pi, 128))]),
+                         closed=True, fill=False, edgecolor="0.8", lw=0.6))
+    ax.set_xlim(-1.25, 1.25)
+    ax.set_ylim(-1.25, 1.25)
+    ax.set_aspect("equal")
+    ax.set_xticks([])
+    ax.set_yticks([])
+    ax.set_title(f"step {i}: error {np.degrees(step.error):.2f}°", fontsize=9)
+
+
+def figure_steps(design, plan, axis, steps=None) -> Figure:
+    """A row of Fig. 10 panels (default: three consecutive steps from the first move)."""
+    if steps is None:
+        first = next((s.index for s in plan.steps[1:] if s.status == "ok"), 0)
+        steps = [i for i in (first - 1, first, first + 1) if 0 <= i < len(plan.steps)]
+    fig = Figure(figsize=(3.2 * len(steps), 3.4))
+    for col, i in enumerate(steps):
+        draw_step(fig.add_subplot(1, len(steps), col + 1), design, plan, i, axis)
+    fig.suptitle(f"{design.name}: commutation about ({', '.join(f'{a:.2f}' for a in np.asarray(axis) / np.linalg.norm(axis))})"
+                 " — filled: held poles, hatched: next pole", fontsize=9)
+    fig.tight_layout()
+    return fig
+
+
+def figure_motor_3d(design, R=None) -> Figure:
+    """3-D view: rotor magnets at orientation ``R`` (red north-out, blue south-out) and stator coils."""
+    R = np.eye(3) if R is None else np.asarray(R)
+    fig = Figure(figsize=(6, 6))
+    ax = fig.add_subplot(projection="3d")
+    t = np.linspace(0, np.pi, 25)
+    p = np.linspace(0, 2 * np.pi, 49)
+    ax.plot_wireframe(np.outer(np.sin(t), np.cos(p)), np.outer(np.sin(t), np.sin(p)),
+                      np.outer(np.cos(t), np.ones_like(p)), color="0.85", lw=0.4)
+    for j, u in enumerate(design.rotor.centers @ R.T):
+        ring = cap_outline(u, design.magnet_angle, 24)
+        ax.plot(*ring.T, color=POLARITY_COLOUR[int(design.polarity[j])], lw=1.0)
+    scale = 1.0 + design.air_gap / design.radius + 0.02
+    for v in design.stator.centers:
+        ring = cap_outline(v, design.coil_angle, 32) * scale
+        ax.plot(*ring.T, color="0.2", lw=1.6)
+    ax.set_box_aspect((1, 1, 1))
+    ax.set_axis_off()
+    ax.set_title(f"{design.name}: {len(design.rotor)} magnets, {len(design.stator)} coils", fontsize=10)
+    return fig
+
+
+def figure_plan_error(plan) -> Figure:
+    """Tracking error (degrees) per step, with holds and blocked steps marked."""
+    fig = Figure(figsize=(7, 3))
+    ax = fig.add_subplot()
+    err = np.degrees(plan.errors)
+    ax.plot(err, color="k", lw=1.0, label="error D(R̃ᵢ, Rᵢ)")
+    hold = [s.index for s in plan.steps if s.status == "hold"]
+    bad = [s.index for s in plan.steps if s.status not in ("ok", "hold")]
+    ax.plot(hold, err[hold], "o", ms=3, color="0.6", label="hold")
+    if bad:
+        ax.plot(bad, err[bad], "x", ms=5, color="#c0392b", label="detour / blocked")
+    ax.set_xlabel("step")
+    ax.set_ylabel("error (°)")
+    ax.legend(fontsize=7)
+    fig.tight_layout()
+    return fig
+
+
+def save_figure(fig: Figure, path: str | Path, dpi: int = 130) -> Path:
+    """Write ``fig`` to ``path`` atomically (format from the suffix)."""
+    path = Path(path)
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, format=path.suffix.lstrip(".") or "png", dpi=dpi)
+    return path
