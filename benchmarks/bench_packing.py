@@ -1,0 +1,99 @@
+"""Timings of spherestep.packing (medians of repeats, time.perf_counter), with a brute-force baseline
+measured in the same run.
+
+Run: ``.venv/bin/python benchmarks/bench_packing.py [--quick]``.
+
+* refine the truncated icosahedron (60 caps) until it has at least 10,000 caps (level 6: 21,872 caps);
+* ``validate()`` and ``min_separation()`` on that packing (KD-tree neighbourhoods);
+* ``symmetry_order()`` on that packing and on the 120-cap truncated icosidodecahedron;
+* ``semiregular()``: building all 21 base packings;
+* baseline: the smallest separation by a brute-force N² scan (the Gram matrix by BLAS, in row blocks) on the
+  3,242-cap level-4 rhombicosidodecahedron, against ``min_separation()`` on the same packing.
+"""
+
+from __future__ import annotations
+
+import argparse
+import datetime
+import os
+import platform
+import time
+
+import numpy as np
+import scipy
+
+from spherestep.packing import by_name, refine, semiregular
+
+
+def median_seconds(func, repeats: int) -> float:
+    func()  # warm caches
+    times = []
+    for _ in range(repeats):
+        start = time.perf_counter()
+        func()
+        times.append(time.perf_counter() - start)
+    return float(np.median(times))
+
+
+def brute_min_separation(centers: np.ndarray, block: int = 1024) -> float:
+    """Smallest arc between two centres by scanning all N² pairs: the largest off-diagonal entry of the Gram
+    matrix C Cᵀ (BLAS, row blocks of ``block``), then the arc ``2 asin(½ √(2 − 2 c·c'))``."""
+    best = -np.inf
+    n = len(centers)
+    for start in range(0, n, block):
+        gram = centers[start:start + block] @ centers.T
+        idx = np.arange(start, min(start + block, n))
+        gram[idx - start, idx] = -np.inf
+        best = max(best, float(gram.max()))
+    return float(2.0 * np.arcsin(0.5 * np.sqrt(max(0.0, 2.0 - 2.0 * best))))
+
+
+def fmt(seconds: float) -> str:
+    return f"{seconds * 1e3:10.2f} ms" if seconds < 10 else f"{seconds:10.2f} s "
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--quick", action="store_true", help="fewer repeats")
+    args = parser.parse_args()
+    few, many = (2, 3) if args.quick else (5, 15)
+
+    print("# spherestep.packing benchmark")
+    print(f"date: {datetime.datetime.now().astimezone().isoformat(timespec='seconds')}")
+    print(f"machine: {platform.platform()}, {platform.machine()}, os.cpu_count() = {os.cpu_count()}")
+    print(f"python {platform.python_version()}, numpy {np.__version__}, scipy {scipy.__version__}")
+    print()
+
+    ti = by_name("truncated-icosahedron")
+    big = refine(ti, target=10_000)
+    rows = []
+    rows.append((f"refine(truncated-icosahedron, target=10000) -> {len(big)} caps (L{big.level})",
+                 median_seconds(lambda: refine(ti, target=10_000), few), few))
+    rows.append((f"validate() on {len(big)} caps", median_seconds(big.validate, many), many))
+    rows.append((f"min_separation() on {len(big)} caps", median_seconds(big.min_separation, many), many))
+    rows.append((f"symmetry_order() on {len(big)} caps -> {big.symmetry_order()}",
+                 median_seconds(big.symmetry_order, few), few))
+    tid = by_name("truncated-icosidodecahedron")
+    rows.append((f"symmetry_order() on {len(tid)} caps -> {tid.symmetry_order()}",
+                 median_seconds(tid.symmetry_order, many), many))
+    rows.append(("semiregular(): the 21 base packings", median_seconds(semiregular, few), few))
+
+    mid = refine(by_name("rhombicosidodecahedron"), levels=4)
+    kd = median_seconds(mid.min_separation, many)
+    brute = median_seconds(lambda: brute_min_separation(mid.centers), few)
+    agree = abs(mid.min_separation() - brute_min_separation(mid.centers))
+    rows.append((f"min_separation() on {len(mid)} caps (KD-tree)", kd, many))
+    rows.append((f"brute-force N² min separation on {len(mid)} caps (baseline)", brute, few))
+
+    width = max(len(r[0]) for r in rows)
+    print(f"| {'operation':<{width}} | {'median':>13} | repeats |")
+    print(f"|{'-' * (width + 2)}|{'-' * 15}|---------|")
+    for label, seconds, repeats in rows:
+        print(f"| {label:<{width}} | {fmt(seconds)} | {repeats:7d} |")
+    print()
+    print(f"brute-force N² / KD-tree min separation on {len(mid)} caps: {brute / kd:.1f}x "
+          f"(results agree to {agree:.1e} rad)")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,156 @@
+"""Generate the documentation figures into ``docs/figures/`` (PNG, matplotlib's Agg backend).
+
+Usage::
+
+    python docs/make_figures.py            # every figure
+    python docs/make_figures.py packings   # only the named ones
+    python docs/make_figures.py --list     # the names
+
+Each figure is a function ``(outdir: Path) -> Path`` registered in :data:`FIGURES` with the :func:`figure`
+decorator; add new ones the same way. Files are written whole or not at all (temporary file, then rename).
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+from typing import Callable
+
+import matplotlib
+
+matplotlib.use("Agg")
+
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+from matplotlib.patches import Circle, Polygon  # noqa: E402
+
+from spherestep.atomic import atomic_path  # noqa: E402
+from spherestep.packing import CONSTRUCTIONS, NAMES, by_name, congruent  # noqa: E402
+
+OUTDIR = Path(__file__).resolve().parent / "figures"
+FIGURES: dict[str, Callable[[Path], Path]] = {}
+
+
+def figure(name: str):
+    """Register a figure function under ``name``."""
+    def register(func):
+        FIGURES[name] = func
+        return func
+    return register
+
+
+def save(fig, path: Path, dpi: int = 110) -> Path:
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, dpi=dpi, format="png", bbox_inches="tight", facecolor="white")
+        tmp.chmod(0o644)  # mkstemp creates 0600
+    plt.close(fig)
+    return path
+
+
+# --- orthographic views of caps ----------------------------------------------------------------------
+def view_basis(azimuth_deg: float = 25.0, elevation_deg: float = 20.0) -> np.ndarray:
+    """Rows ``(right, up, towards the viewer)`` of an orthographic camera looking at the origin."""
+    az, el = np.radians(azimuth_deg), np.radians(elevation_deg)
+    toward = np.array([np.cos(el) * np.cos(az), np.cos(el) * np.sin(az), np.sin(el)])
+    right = np.array([-np.sin(az), np.cos(az), 0.0])
+    up = np.cross(toward, right)
+    return np.array([right, up, toward])
+
+
+def cap_boundaries(centers: np.ndarray, radii: np.ndarray, samples: int = 96) -> np.ndarray:
+    """Points ``(N, samples, 3)`` on each cap's boundary circle ``cos r c + sin r (cos t e1 + sin t e2)``."""
+    helper = np.where(np.abs(centers[:, 2:3]) < 0.9, [[0.0, 0.0, 1.0]], [[1.0, 0.0, 0.0]])
+    e1 = np.cross(centers, helper)
+    e1 /= np.linalg.norm(e1, axis=1, keepdims=True)
+    e2 = np.cross(centers, e1)
+    t = np.linspace(0.0, 2.0 * np.pi, samples)
+    ring = np.cos(t)[None, :, None] * e1[:, None, :] + np.sin(t)[None, :, None] * e2[:, None, :]
+    return np.cos(radii)[:, None, None] * centers[:, None, :] + np.sin(radii)[:, None, None] * ring
+
+
+def draw_caps(ax, centers, radii, colour, basis=None, edge="#1f1f1f"):
+    """Draw caps on the unit sphere seen from ``basis[2]``: the visible part of each cap filled, its
+    boundary drawn on the front hemisphere only (hidden points are pushed radially onto the limb)."""
+    basis = view_basis() if basis is None else basis
+    ax.add_patch(Circle((0, 0), 1.0, facecolor="#f4f4f4", edgecolor="#808080", lw=0.8, zorder=0))
+    pts = cap_boundaries(centers, radii) @ basis.T  # (N, S, 3): x, y, depth
+    depth_order = np.argsort(centers @ basis[2])
+    for k in depth_order:
+        xy, depth = pts[k, :, :2], pts[k, :, 2]
+        if np.all(depth < 0):
+            continue
+        shade = 0.55 + 0.45 * max(0.0, float(centers[k] @ basis[2]))  # darker towards the limb
+        face = np.clip(np.array(matplotlib.colors.to_rgb(colour)) * shade + (1 - shade), 0, 1)
+        clipped = xy.copy()
+        hidden = depth < 0
+        clipped[hidden] /= np.linalg.norm(clipped[hidden], axis=1, keepdims=True)
+        ax.add_patch(Polygon(clipped, closed=True, facecolor=face, edgecolor="none", zorder=1))
+        visible = np.where(hidden[:, None], np.nan, xy)  # NaN breaks the line where the circle goes behind
+        ax.plot(visible[:, 0], visible[:, 1], color=edge, lw=0.6, zorder=2)
+    ax.add_patch(Circle((0, 0), 1.0, facecolor="none", edgecolor="#606060", lw=0.9, zorder=3))  # the limb
+    ax.set_xlim(-1.06, 1.06)
+    ax.set_ylim(-1.06, 1.06)
+    ax.set_aspect("equal")
+    ax.axis("off")
+
+
+@figure("packings")
+def packings(outdir: Path) -> Path:
+    """The 3 × 7 base packings (Sec. II-B-3): rows T, O, I; columns the seven Wythoff constructions."""
+    family_colour = {"T": "#3b75af", "O": "#d9822b", "I": "#3a923a"}
+    family_label = {"T": "tetrahedral (T)", "O": "octahedral (O)", "I": "icosahedral (I)"}
+    construction_label = {"P": "P: solid vertex", "Q": "Q: face centre", "R": "R: edge midpoint",
+                          "PR": "on side PR", "QR": "on side QR", "PQ": "on side PQ", "PQR": "PQR: incentre"}
+    kept = {}  # T packings congruent to another one, for the "≅" notes
+    o_family = [by_name(n) for n in NAMES["O"]]
+    fig, axes = plt.subplots(3, 7, figsize=(17.5, 8.6))
+    for row, family in enumerate(("T", "O", "I")):
+        for col, construction in enumerate(CONSTRUCTIONS):
+            name = NAMES[family][col]
+            p = by_name(name)
+            ax = axes[row, col]
+            draw_caps(ax, p.centers, p.radii, family_colour[family])
+            label = name.replace("tetrahedral-", "tetrahedral-\n") if len(name) > 22 else name
+            ax.set_title(f"{label}\n{len(p)} caps, r = {np.degrees(p.radii[0]):.2f}°", fontsize=9.5, pad=3)
+            if family == "T":  # note the copies: congruent to an octahedral one or to an earlier T one
+                earlier = o_family + [by_name(n) for n in NAMES["T"][:col]]
+                twin = next((q.name for q in earlier if congruent(p, q)), None)
+                if twin:
+                    kept[name] = twin
+                    ax.text(0.5, -0.04, f"≅ {twin}", transform=ax.transAxes, ha="center", va="top",
+                            fontsize=8.5, style="italic", color="#555555")
+            if row == 0:
+                ax.text(0.5, 1.32, construction_label[construction], transform=ax.transAxes, ha="center",
+                        va="bottom", fontsize=10, weight="bold")
+        axes[row, 0].text(-0.16, 0.5, family_label[family], transform=axes[row, 0].transAxes, rotation=90,
+                          ha="right", va="center", fontsize=11, weight="bold", color=family_colour[family])
+    fig.suptitle("The 21 packings of congruent kissing caps: the primary circle at a corner, on a side or "
+                 f"inside the fundamental triangle PQR ({21 - len(kept)} distinct up to rotation)",
+                 fontsize=12.5, y=1.0)
+    fig.subplots_adjust(wspace=0.08, hspace=0.42)
+    return save(fig, outdir / "packings.png")
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("names", nargs="*", help=f"figures to make (default all): {', '.join(FIGURES)}")
+    parser.add_argument("--outdir", type=Path, default=OUTDIR)
+    parser.add_argument("--list", action="store_true", help="print the figure names and exit")
+    args = parser.parse_args(argv)
+    if args.list:
+        print("\n".join(FIGURES))
+        return 0
+    unknown = [n for n in args.names if n not in FIGURES]
+    if unknown:
+        print(f"make_figures: unknown figure(s) {', '.join(unknown)}; choose from {', '.join(FIGURES)}",
+              file=sys.stderr)
+        return 2
+    for name in args.names or list(FIGURES):
+        path = FIGURES[name](args.outdir)
+        print(path)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
