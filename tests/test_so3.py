@@ -464,3 +464,12 @@ def test_rot_rejects_zero_or_nan_axis_and_nan_angle():
         so3.rot([0, 0, 1.0], np.inf)
     with pytest.raises(ValueError, match=r"^angles must be finite Euler angles"):
         so3.from_euler_zxz([0.0, np.nan, 0.0])
+
+
+@pytest.mark.xfail(strict=True, reason="doubtful: so3.exp does not check its input: NaN gives a NaN matrix "
+                                       "silently and shape (2,) a NumPy reshape error, not an InputError "
+                                       "naming rotvec")
+@pytest.mark.parametrize("bad", [[np.nan, 0.0, 0.0], [1.0, 0.0]])
+def test_exp_rejects_bad_rotation_vectors(bad):
+    with pytest.raises(InputError, match=r"^rotvec must be "):
+        so3.exp(bad)
