@@ -143,7 +143,8 @@ def test_both_algorithms_against_exact_values_at_high_degree(l):
         x = float(c * c - s * s)
         matrix = legendre_P_matrix(l, x)
         m, n = rng.integers(-l, l + 1, (2, 60))
-        exact = np.array([parity(i - j) * float(wigner_d_exact(l, int(i), int(j), c, s)) for i, j in zip(m, n)])
+        exact = np.array([parity(i - j) * float(wigner_d_exact(l, int(i), int(j), c, s))
+                          for i, j in zip(m, n, strict=True)])
         assert np.max(np.abs(matrix[m + l, n + l] - exact)) < 1e-12
         assert np.max(np.abs(legendre_P(l, m, n, x) - exact)) < 1e-12
 

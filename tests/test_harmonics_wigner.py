@@ -44,7 +44,8 @@ def test_homomorphism_and_unitarity(l):
 @given(st.integers(0, 2**32 - 1), st.integers(0, 16))
 def test_homomorphism_property_based(seed, l):
     R = so3.random(3, np.random.default_rng(seed))
-    assert np.max(np.abs(wigner_U(l, R[0] @ R[1] @ R[2]) - wigner_U(l, R[0]) @ wigner_U(l, R[1]) @ wigner_U(l, R[2]))) < 1e-11
+    product = wigner_U(l, R[0]) @ wigner_U(l, R[1]) @ wigner_U(l, R[2])
+    assert np.max(np.abs(wigner_U(l, R[0] @ R[1] @ R[2]) - product)) < 1e-11
 
 
 def test_near_gimbal_lock_and_special_rotations():

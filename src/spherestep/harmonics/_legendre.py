@@ -124,7 +124,7 @@ def _fourier_coefficients(l: int) -> np.ndarray:
     idx = np.arange(-l, l + 1)
     p = idx[:, None] - idx[None, :]
     even = p % 2 == 0
-    sign = np.where(even, (-1.0) ** (p // 2), (-1.0) ** ((p - 1) // 2))
+    sign = (-1.0) ** (p // 2)  # (−1)^(p/2) for even p, (−1)^((p−1)/2) for odd p
     weight = np.full(l + 1, 2.0)
     weight[0] = 1.0
     coef = (weight[:, None, None] * pi_mat[:, :, None] * pi_mat[:, None, :] * sign).reshape(l + 1, -1)

@@ -126,7 +126,7 @@ def s2_rotate(flm, R) -> np.ndarray:
     ``Y_l^n(Rᵀ u) = Σ_m D^l_mn(R) Y_l^m(u)``. ``R`` ``(..., 3, 3)`` broadcasts against ``flm``'s leading axes.
     """
     flm, lmax = _checks.coefficients_s2(flm)
-    R = np.asarray(R, dtype=float)
+    R = _checks.rotations(R)
     lead = np.broadcast_shapes(flm.shape[:-2], R.shape[:-2])
     out = np.zeros(lead + flm.shape[-2:], dtype=complex)
     for l in range(lmax + 1):

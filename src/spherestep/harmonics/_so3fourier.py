@@ -89,12 +89,12 @@ def so3_inverse(fhat) -> np.ndarray:
 def so3_evaluate(fhat, R) -> np.ndarray:
     """Eq. (13) at rotations ``R`` ``(K..., 3, 3)``: ``f(R) = Σ_l (2l+1) Σ_mn f̂^l_nm U^l_mn(R)``, ``(B..., K...)``."""
     fhat, lmax = _checks.coefficients_so3(fhat)
-    R = np.asarray(R, dtype=float)
+    R = _checks.rotations(R)
     out = 0.0
     for l in range(lmax + 1):
         block = slice(lmax - l, lmax + l + 1)
-        U = wigner_U(l, R)
-        out = out + (2 * l + 1) * np.einsum("...nm,kmn->...k", fhat[..., l, block, block], U.reshape(-1, 2 * l + 1, 2 * l + 1))
+        U = wigner_U(l, R).reshape(-1, 2 * l + 1, 2 * l + 1)
+        out = out + (2 * l + 1) * np.einsum("...nm,kmn->...k", fhat[..., l, block, block], U)
     return np.asarray(out).reshape(fhat.shape[:-3] + R.shape[:-2])
 
 
