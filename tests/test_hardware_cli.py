@@ -135,5 +135,6 @@ def test_ctrl_c_switches_every_coil_off(tmp_path):
     assert proc.returncode == 130
     assert one_error_line(err) == "spherestep: interrupted"
     assert state == (0, 0) and trips == 0 and trace[-2:] == [("enable", 0), ("polarity", 0)]
-    last = log.read_text().splitlines()[-2:]
-    assert ",OFF*" in last[0] and ",ACK,OFF,0,0*" in last[1]
+    lines = log.read_text().splitlines()
+    last_tx = max(i for i, line in enumerate(lines) if " TX " in line)
+    assert ",OFF*" in lines[last_tx] and any(",ACK,OFF,0,0*" in line for line in lines[last_tx:])
