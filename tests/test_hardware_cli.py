@@ -78,8 +78,18 @@ def test_malformed_plan_is_one_line_and_exit_2(tmp_path, capsys, content, messag
     assert message in one_error_line(capsys.readouterr().err)
 
 
+def test_dry_run_stands_in_for_the_given_channel_count(tmp_path, capsys):
+    plan = write_plan(tmp_path / "plan.json", 2, coil_count=20)  # 40 channels
+    assert main(["run", str(plan), "--rate", "5", "--dry-run"]) == 2
+    assert "uses relay channel 39, but device 'dry-run' has 32 channels" in one_error_line(capsys.readouterr().err)
+    assert main(["run", str(plan), "--rate", "5", "--dry-run", "--channels", "40"]) == 0
+    assert "on a 40-channel controller" in capsys.readouterr().out
+
+
 @pytest.mark.parametrize("args, message", [
     (["--rate", "5"], "--port must be the controller's serial device"),
+    (["--rate", "5", "--port", "/dev/ttyUSB0", "--channels", "64"], "--channels must be given only with --dry-run"),
+    (["--rate", "5", "--dry-run", "--channels", "65"], "--channels must be a channel count 1..64"),
     (["--rate", "0", "--dry-run"], "--rate must be a positive number"),
     (["--rate", "5", "--dry-run", "--max-duty", "1.5"], "--max-duty must be a fraction in (0, 1]"),
     (["--rate", "5", "--dry-run", "--max-on", "-1"], "--max-on must be a positive number of seconds"),

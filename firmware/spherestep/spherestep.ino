@@ -18,6 +18,7 @@
 
 namespace {
 
+// Up to 64 channels: append pins 2..21 and A0..A15 (54..69) and raise CHANNELS (58 for a 29-coil stator).
 const uint8_t CHANNELS = 32;
 const uint8_t CHANNEL_PINS[CHANNELS] = {22, 23, 24, 25, 26, 27, 28, 29, 30, 31, 32, 33, 34, 35, 36, 37,
                                         38, 39, 40, 41, 42, 43, 44, 45, 46, 47, 48, 49, 50, 51, 52, 53};

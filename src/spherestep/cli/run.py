@@ -42,7 +42,9 @@ def run(
                                                    "/dev/ttyACM0, COM3 (not needed with --dry-run)."),
     rate: float = typer.Option(..., "--rate", help="Steps per second (Hz); each step is held for 1/RATE s."),
     dry_run: bool = typer.Option(False, "--dry-run", help="Send nothing; print what would be sent to a "
-                                                          "32-channel controller (four 8-relay boards)."),
+                                                          "controller with --channels channels."),
+    channels: int = typer.Option(None, "--channels", help="With --dry-run: relay channels of the controller it "
+                                                           "stands in for (default 32; a device reports its own)."),
     log: Path = typer.Option(None, "--log", help="Write every frame sent and received, time-stamped, to FILE "
                                                  "(also when the run fails)."),
     max_on: float = typer.Option(_DEFAULT.max_on, "--max-on", help="Longest a coil may stay on without a break "
@@ -62,10 +64,14 @@ def run(
 
     Example: [bold]spherestep run plan.json --port /dev/ttyUSB0 --rate 5 --log run.log[/bold]
 
-    Example: [bold]spherestep run plan.json --rate 5 --dry-run[/bold]
+    Example: [bold]spherestep run plan.json --rate 5 --dry-run --channels 64[/bold]
     """
     if not dry_run and port is None:
         raise bad_value("--port", "the controller's serial device, such as /dev/ttyUSB0 (or give --dry-run)", None)
+    if channels is not None and not dry_run:
+        raise bad_value("--channels", "given only with --dry-run (a device reports its own channel count)", channels)
+    if channels is not None and not 1 <= channels <= 64:
+        raise bad_value("--channels", "a channel count 1..64", channels)
     _positive(rate, "--rate", "a positive number of steps per second, such as 5")
     _positive(max_on, "--max-on", "a positive number of seconds")
     _positive(duty_window, "--duty-window", "a positive number of seconds")
@@ -76,7 +82,10 @@ def run(
     steps = Plan.from_json(plan)
     limits = ThermalLimits(max_on=max_on, max_duty=max_duty, window=duty_window)
     transcript = Transcript()
-    backend = DryRun(transcript=transcript) if dry_run else Serial(port, transcript=transcript)
+    if dry_run:
+        backend = DryRun(channels=32 if channels is None else channels, transcript=transcript)
+    else:
+        backend = Serial(port, transcript=transcript)
     try:
         report = play(steps, backend, rate, limits)
     except BaseException as exc:
