@@ -350,9 +350,6 @@ def test_rotated_and_shuffled_is_congruent_perturbed_is_not(base, name):
         assert not congruent(p, Packing(q.centers[:-1], q.radii[:-1]))
 
 
-@pytest.mark.xfail(strict=True, reason="bug: congruence.aligning_rotations compares radii with np.allclose("
-                                       "..., atol=tol) and so inherits allclose's default rtol=1e-5: radii "
-                                       "differing by up to ~1e-5·r (60× the documented tol=1e-7) count as equal")
 @pytest.mark.parametrize("name", ["cube", "truncated-icosahedron"])
 def test_a_changed_radius_is_not_congruent(base, name):
     p = base[name]

@@ -127,9 +127,6 @@ def test_angles_at_the_poles_and_on_the_equator():
     np.testing.assert_allclose(phi, [0.0, 0.0, math.pi, -math.pi / 2], atol=1e-15)
 
 
-@pytest.mark.xfail(strict=True, reason="bug: angles() returns φ = π at a pole written with x = -0.0 (e.g. "
-                                       "point(π, 0)), and φ = -π for (-1, -0.0, 0); the docstring promises "
-                                       "φ = 0 at the poles and φ in (-π, π]")
 def test_angles_sign_of_zero_respects_documented_range():
     phi, _ = S.angles(S.point(math.pi, 0.0))  # the north pole; point() writes x = -0.0 here
     assert phi == 0.0
@@ -577,9 +574,6 @@ def test_degenerate_triangles_raise_value_error(case):
         S.polygon_incircle(np.array(DEGENERATE[case]))
 
 
-@pytest.mark.xfail(strict=True, reason="doubtful: triangle_incircle/circle_in_corner report a degenerate "
-                                       "triangle as 'vertices must be ...' (the argument of an internal "
-                                       "helper); their own arguments are p, q, r")
 @pytest.mark.parametrize("case", list(DEGENERATE))
 def test_degenerate_triangle_message_names_p_q_r(case):
     for func in (S.triangle_incircle, S.circle_in_corner):

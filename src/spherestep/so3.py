@@ -11,13 +11,10 @@ intrinsic "ZXZ"/"ZYZ" of SciPy). SciPy's :class:`~scipy.spatial.transform.Rotati
 
 from __future__ import annotations
 
-import warnings
-
 import numpy as np
-from scipy.optimize import brentq
 from scipy.spatial.transform import Rotation
 
-from .errors import bad_value
+from .errors import ComputationError, bad_value
 
 
 def _as_rotations(R, name: str = "R") -> np.ndarray:
@@ -118,6 +115,8 @@ def log(R) -> np.ndarray:
 def exp(rotvec) -> np.ndarray:
     """Rotation matrix of the rotation vector ``θ n``, ``(..., 3, 3)``."""
     rotvec = np.asarray(rotvec, dtype=float)
+    if rotvec.shape[-1:] != (3,) or not np.all(np.isfinite(rotvec)):
+        raise bad_value("rotvec", "finite rotation vectors of shape (..., 3)", f"shape {rotvec.shape}")
     return Rotation.from_rotvec(rotvec.reshape(-1, 3)).as_matrix().reshape(rotvec.shape[:-1] + (3, 3))
 
 
@@ -127,8 +126,22 @@ def from_euler_zxz(angles) -> np.ndarray:
 
 
 def to_euler_zxz(R) -> np.ndarray:
-    """``(α, β, γ)`` with ``R = R3(α) R1(β) R3(γ)``, ``β ∈ [0, π]``, ``α, γ ∈ (−π, π]``; shape ``(..., 3)``."""
-    return _to_euler("ZXZ", R)
+    """``(α, β, γ)`` with ``R = R3(α) R1(β) R3(γ)``, ``β ∈ [0, π]``, ``α, γ ∈ (−π, π]``; shape ``(..., 3)``.
+
+    From the unit quaternion ``q = (w, x, y, z) = (cos(β/2) cos(σ/2), sin(β/2) cos(δ/2), sin(β/2) sin(δ/2),
+    cos(β/2) sin(σ/2))`` with ``σ = α + γ = 2 atan2(z, w)``, ``δ = α − γ = 2 atan2(y, x)`` and
+    ``β = 2 atan2(|(x, y)|, |(w, z)|)``. Near ``β = 0`` the sum ``σ`` stays exact and ``δ`` matters only
+    through ``sin(β/2)``, so ``R`` is reproduced to rounding; SciPy's ``as_euler`` sets ``γ = 0`` below
+    ``β ≈ 1e−7`` and so moves ``R`` by up to ``β``. At ``β = 0`` (or π) only ``α ± γ`` is defined; the split
+    returned is the one the formulas give.
+    """
+    R = _as_rotations(R)
+    x, y, z, w = np.moveaxis(Rotation.from_matrix(R.reshape(-1, 3, 3)).as_quat(), -1, 0)
+    total = 2.0 * np.arctan2(z, w)
+    difference = 2.0 * np.arctan2(y, x)
+    beta = 2.0 * np.arctan2(np.hypot(x, y), np.hypot(w, z))
+    angles = np.stack([_wrap(0.5 * (total + difference)), beta, _wrap(0.5 * (total - difference))], axis=-1)
+    return angles.reshape(R.shape[:-2] + (3,))
 
 
 def from_euler_zyz(angles) -> np.ndarray:
@@ -137,8 +150,17 @@ def from_euler_zyz(angles) -> np.ndarray:
 
 
 def to_euler_zyz(R) -> np.ndarray:
-    """``(α, β, γ)`` with ``R = R3(α) R2(β) R3(γ)``; shape ``(..., 3)``."""
-    return _to_euler("ZYZ", R)
+    """``(α, β, γ)`` with ``R = R3(α) R2(β) R3(γ)``; shape ``(..., 3)``.
+
+    Uses ``R_ZYZ(α, β, γ) = R_ZXZ(α + π/2, β, γ − π/2)`` (Sec. III-B-2) on :func:`to_euler_zxz`.
+    """
+    zxz = to_euler_zxz(R)
+    return np.stack([_wrap(zxz[..., 0] - np.pi / 2), zxz[..., 1], _wrap(zxz[..., 2] + np.pi / 2)], axis=-1)
+
+
+def _wrap(angle: np.ndarray) -> np.ndarray:
+    """Angles wrapped into ``(−π, π]``."""
+    return np.pi - np.mod(np.pi - angle, 2 * np.pi)
 
 
 def _from_euler(seq: str, angles) -> np.ndarray:
@@ -147,14 +169,6 @@ def _from_euler(seq: str, angles) -> np.ndarray:
         raise bad_value("angles", "finite Euler angles of shape (..., 3)", f"shape {angles.shape}")
     flat = Rotation.from_euler(seq, angles.reshape(-1, 3)).as_matrix()
     return flat.reshape(angles.shape[:-1] + (3, 3))
-
-
-def _to_euler(seq: str, R) -> np.ndarray:
-    R = _as_rotations(R)
-    with warnings.catch_warnings():  # gimbal lock: SciPy sets γ = 0 and warns; the result is still exact
-        warnings.simplefilter("ignore", UserWarning)
-        flat = _as_scipy(R).as_euler(seq)
-    return flat.reshape(R.shape[:-2] + (3,))
 
 
 def random(n: int, rng: np.random.Generator | int | None = None) -> np.ndarray:
@@ -187,13 +201,18 @@ def resample(path, n: int) -> np.ndarray:
     """``n + 1`` rotations on the piecewise-geodesic path through ``path`` ``(m, 3, 3)`` with equal steps.
 
     The first and last rotations are the path's ends, and consecutive rotations are at one common Park
-    distance ``h``: ``D(R_{i−1}, R_i) = D(R_i, R_{i+1})`` (Sec. III-A). On a single geodesic this is equal arc
-    length; across a corner of the path the chord is shorter than the arc, so ``h`` is found by shooting: for a
-    trial ``h`` each next rotation is the first point further along the path at distance ``h`` from the last
-    one (a closed-form trigonometric equation on each segment), and ``h`` is adjusted (Brent) until the n-th
-    rotation lands on the end. Consecutive keys must be less than π apart (otherwise the geodesic between
-    them is not unique); a full turn is given as several keys.
+    distance: ``D(R_{i−1}, R_i) = D(R_i, R_{i+1})`` (Sec. III-A). On a single geodesic this is equal arc
+    length. Across a corner the chord is shorter than the arc, so the arc-length positions ``s_1 … s_{n−1}``
+    are solved for by Newton's method on ``r_i = D_{i+1} − D_i = 0`` from equal arc lengths. The Jacobian is
+    tridiagonal and exact: moving ``R_i`` along the path at unit body rate ``ŵ`` changes
+    ``D(R_{i−1}, R_i)`` at rate ``n(R_{i−1}ᵀ R_i) · ŵ`` and ``D(R_i, R_{i+1})`` at rate ``−n(R_iᵀ R_{i+1}) · ŵ``.
+    Equal steps need not exist: where the path turns sharply the chord across the corner shrinks and, as
+    for a hairpin, only some step counts fit. When damped Newton does not reach 1e-12 rad a
+    ComputationError says so (add keys to round the corner, or change ``n``). Consecutive keys must be less
+    than π apart (otherwise the geodesic between them is not unique); a full turn is given as several keys.
     """
+    from scipy.linalg import solve_banded
+
     keys = _as_rotations(path, "path")
     if keys.ndim != 3 or keys.shape[0] < 2:
         raise bad_value("path", "at least two rotations, shape (m, 3, 3) with m >= 2", f"shape {keys.shape}")
@@ -205,78 +224,56 @@ def resample(path, n: int) -> np.ndarray:
         raise bad_value("path", "consecutive rotations less than π apart (split a long turn into pieces)",
                         f"a segment of {np.degrees(seg.max()):.3f}°")
     omegas = log(np.swapaxes(keys[:-1], -1, -2) @ keys[1:])  # tangent of each segment, |ω| = its length
-    end = keys[-1]
     moving = seg > 0  # drop repeated keys
-    keys, omegas, seg = keys[:-1][moving], omegas[moving], seg[moving]
+    starts, omegas, seg = keys[:-1][moving], omegas[moving], seg[moving]
     total = float(seg.sum())
     if total == 0.0:
-        return np.repeat(end[None], n + 1, axis=0)
+        return np.repeat(keys[-1][None], n + 1, axis=0)
+    cumulative = np.concatenate([[0.0], np.cumsum(seg)])
+    rates = omegas / seg[:, None]  # unit body angular velocity on each segment
 
-    def point(s_index: int, t: float) -> np.ndarray:
-        return keys[s_index] @ exp(omegas[s_index] * t)
+    def locate(s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        j = np.clip(np.searchsorted(cumulative, s, side="right") - 1, 0, len(seg) - 1)
+        return j, np.clip((s - cumulative[j]) / seg[j], 0.0, 1.0)
 
-    def walk(h: float, record: bool = False):
-        """From the path's start take n steps of Park distance h; return arc length left after the last one."""
-        j, t = 0, 0.0  # segment index and fraction along it of the current rotation
-        current = keys[0]
-        points = [current]
-        for _ in range(n):
-            found = None
-            while j < len(seg):
-                t_next = _next_at_distance(current, keys[j], omegas[j], seg[j], t, h)
-                if t_next is not None:
-                    found = t_next
+    def at(s: np.ndarray) -> np.ndarray:
+        j, t = locate(s)
+        return starts[j] @ exp(omegas[j] * t[:, None])
+
+    def steps(arc: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        P = at(arc)
+        return axis_angle(np.swapaxes(P[:-1], 1, 2) @ P[1:])  # axes n_i (body frame) and d_i = D(P_{i−1}, P_i)
+
+    arc = np.linspace(0.0, total, n + 1)
+    axis, d = steps(arc)
+    r = d[1:] - d[:-1]
+    for _ in range(100):
+        if n == 1 or np.abs(r).max() <= 1e-13:
+            break
+        w = rates[locate(arc)[0]]
+        # r_i = d_{i+1} − d_i depends on s_{i−1}, s_i, s_{i+1}
+        lower = np.einsum("ic,ic->i", axis[1:-1], w[1:-2])            # ∂r_i/∂s_{i−1} = n_i·ŵ_{i−1}
+        diag = -np.einsum("ic,ic->i", axis[1:] + axis[:-1], w[1:-1])  # −(n_{i+1} + n_i)·ŵ_i
+        upper = np.einsum("ic,ic->i", axis[1:-1], w[2:-1])            # ∂r_i/∂s_{i+1} = n_{i+1}·ŵ_{i+1}
+        bands = np.zeros((3, n - 1))
+        bands[0, 1:], bands[1], bands[2, :-1] = upper, diag, lower
+        delta = solve_banded((1, 1), bands, -r)
+        scale, norm = 1.0, np.linalg.norm(r)
+        while scale > 1e-6:  # damped: keep the positions ordered and the residual falling
+            trial = arc.copy()
+            trial[1:-1] += scale * delta
+            if np.all(np.diff(trial) > 0):
+                t_axis, t_d = steps(trial)
+                t_r = t_d[1:] - t_d[:-1]
+                if np.linalg.norm(t_r) < norm:
+                    arc, axis, d, r = trial, t_axis, t_d, t_r
                     break
-                j, t = j + 1, 0.0
-            if found is None:
-                return -np.inf, points  # ran off the end: h too large
-            t = found
-            current = point(j, t)
-            if record:
-                points.append(current)
-        remaining = (1.0 - t) * seg[j] + seg[j + 1:].sum()
-        return remaining, points
-
-    def shortfall(h: float) -> float:
-        remaining = walk(h)[0]
-        return remaining if np.isfinite(remaining) else -total
-
-    h0 = total / n  # the chord never exceeds the arc, so h <= total/n, with equality on one geodesic
-    if len(seg) == 1 or abs(shortfall(h0)) <= 1e-12 * total:
-        h = h0
-    else:
-        h = brentq(shortfall, h0 * 1e-3, h0, xtol=1e-15, rtol=1e-14, maxiter=200)
-    _, points = walk(h, record=True)
-    out = np.array(points)
-    out[-1] = end
+            scale *= 0.5
+        else:
+            break
+    if n > 1 and np.abs(r).max() > 1e-12:
+        raise ComputationError(f"no equal spacing of {n} steps found on this path (steps still differ by "
+                               f"{np.abs(r).max():.2g} rad): its corners are too sharp; add keys or change n")
+    out = at(arc)
+    out[-1] = keys[-1]
     return out
-
-
-def _next_at_distance(Q, A, omega, length, t0, h):
-    """Smallest ``t ∈ (t0, 1]`` with ``D(Q, A exp(t ω)) = h``, or None.
-
-    With unit skew ``K`` of ``ω`` and ``φ = t·|ω|``, ``tr(Qᵀ A exp(φK)) = a + b sin φ + c (1 − cos φ)`` where
-    ``M = QᵀA``, ``a = tr M``, ``b = tr(M K)``, ``c = tr(M K²)``; setting it to ``1 + 2 cos h`` gives
-    ``b sin φ − c cos φ = 1 + 2 cos h − a − c``, solved in closed form.
-    """
-    K = skew(omega / length)
-    M = Q.T @ A
-    a, b, c = np.trace(M), np.trace(M @ K), np.trace(M @ K @ K)
-    rhs = 1.0 + 2.0 * np.cos(h) - a - c
-    amp = np.hypot(b, c)
-    if amp == 0 or abs(rhs) > amp * (1 + 1e-12):
-        return None
-    # b sin φ − c cos φ = amp sin(φ − ψ) with ψ = atan2(c, b)
-    psi = np.arctan2(c, b)
-    base = np.arcsin(np.clip(rhs / amp, -1.0, 1.0))
-    phi0 = t0 * length
-    candidates = []
-    for root in (base + psi, np.pi - base + psi):
-        root = np.mod(root - phi0, 2 * np.pi) + phi0
-        if root <= phi0 + 1e-15:
-            root += 2 * np.pi
-        if root <= length * (1 + 1e-12):
-            candidates.append(root)
-    if not candidates:
-        return None
-    return min(min(candidates) / length, 1.0)

@@ -63,8 +63,10 @@ def point(phi, theta) -> np.ndarray:
 def angles(u) -> tuple[np.ndarray, np.ndarray]:
     """Inverse of :func:`point`: ``(φ ∈ (−π, π], θ ∈ [0, π])``; at the poles φ = 0."""
     u = _as_points(u, "u")
-    theta = np.arctan2(np.hypot(u[..., 0], u[..., 1]), u[..., 2])
+    rho = np.hypot(u[..., 0], u[..., 1])
+    theta = np.arctan2(rho, u[..., 2])
     phi = np.arctan2(u[..., 1], u[..., 0])
+    phi = np.where(rho == 0, 0.0, np.where(phi == -np.pi, np.pi, phi))
     return phi, theta
 
 
@@ -104,7 +106,7 @@ def cap_area(radius) -> np.ndarray:
     return 4.0 * np.pi * np.sin(0.5 * r) ** 2
 
 
-def _inward_normals(vertices: np.ndarray) -> np.ndarray:
+def _inward_normals(vertices: np.ndarray, name: str = "vertices") -> np.ndarray:
     """Unit normals of the sides of a convex spherical polygon ``(..., k, 3)``, pointing inside.
 
     Side ``i`` joins vertex ``i`` and ``i+1``. Raises when two consecutive vertices coincide or a vertex
@@ -114,7 +116,7 @@ def _inward_normals(vertices: np.ndarray) -> np.ndarray:
     cross = np.cross(vertices, nxt)
     norm = np.linalg.norm(cross, axis=-1, keepdims=True)
     if np.any(norm < 1e-12):
-        raise bad_value("vertices", "distinct, non-antipodal consecutive vertices", "a degenerate side")
+        raise bad_value(name, "distinct, non-antipodal consecutive vertices", "a degenerate side")
     normals = cross / norm
     centroid = np.sum(vertices, axis=-2, keepdims=True)
     side = np.sum(normals * centroid, axis=-1, keepdims=True)
@@ -123,7 +125,7 @@ def _inward_normals(vertices: np.ndarray) -> np.ndarray:
     k = vertices.shape[-2]
     off = ~(np.eye(k, dtype=bool) | np.roll(np.eye(k, dtype=bool), 1, axis=1))
     if np.any(np.abs(heights[..., off]) < 1e-12):
-        raise bad_value("vertices", "a non-degenerate spherical polygon", "collinear vertices (on one great circle)")
+        raise bad_value(name, "a non-degenerate spherical polygon", "collinear vertices (on one great circle)")
     return np.where(side < 0, -normals, normals)
 
 
@@ -140,7 +142,7 @@ def triangle_incircle(p, q, r) -> tuple[np.ndarray, np.ndarray]:
     q = _as_points(q, "q")
     r = _as_points(r, "r")
     p, q, r = np.broadcast_arrays(p, q, r)
-    n = _inward_normals(np.stack([p, q, r], axis=-2))
+    n = _inward_normals(np.stack([p, q, r], axis=-2), "p, q, r")
     x = np.cross(n[..., 0, :] - n[..., 1, :], n[..., 2, :] - n[..., 1, :])
     norm = np.linalg.norm(x, axis=-1, keepdims=True)
     x = x / norm

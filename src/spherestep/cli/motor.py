@@ -11,7 +11,7 @@ import typer
 from rich.progress import Progress, SpinnerColumn, TextColumn, TimeElapsedColumn
 from rich.table import Table
 
-from .. import plots
+from .. import plots, so3
 from ..atomic import write_text
 from ..commutation import about_axis, plan_geometric, steps_for
 from ..errors import bad_value
@@ -89,9 +89,11 @@ def write_plan_outputs(design: MotorDesign, plan, axis: np.ndarray, out: Path) -
 def plan_summary(plan) -> dict:
     """Counts and errors of a plan (degrees)."""
     err = np.degrees(plan.errors)
+    achieved = plan.achieved
     return {
         "steps": len(plan.steps) - 1,
-        "moves": sum(s.status == "ok" for s in plan.steps[1:]),
+        "moves": int(np.sum(so3.distance(achieved[:-1], achieved[1:]) > 0)),
+        "settle_steps": sum(s.status.startswith("settle") for s in plan.steps),
         "holds": sum(s.status == "hold" for s in plan.steps),
         "detours": sum(s.status.startswith("detour") for s in plan.steps),
         "blocked": len(plan.failures),
@@ -150,13 +152,14 @@ def plan(
     steps: int = typer.Option(None, "--steps", min=1, max=100_000, help="Number of steps (default: half a max step each)."),
     out: Path = typer.Option(Path("spherestep-out"), "--out", help="Output folder."),
     as_json: bool = typer.Option(False, "--json", help="Print the plan summary as JSON."),
+    design_path: Path = typer.Option(None, "--design", help="Design file (YAML/TOML); default the built-in prototype."),
 ) -> None:
-    """Commutate a rotation about an axis on the prototype: plan CSV/JSON (relay masks) and figures.
+    """Commutate a rotation about an axis on the prototype (or --design FILE): plan CSV/JSON (relay masks) and figures.
 
-    Example: [bold]spherestep plan --axis 0,1,1 --angle 90 --steps 20 --out plan90[/bold]
+    Example: [bold]spherestep plan --axis 0,1,1 --angle 90 --steps 20 --out plan90 --design mymotor.yaml[/bold]
     """
     axis_vec = parse_vector(axis, "--axis")
-    design = prototype()
+    design = prototype() if design_path is None else MotorDesign.load(design_path)
     result = commutate(design, axis_vec, angle, steps)
     written = write_plan_outputs(design, result, axis_vec, out)
     summary = plan_summary(result) | {"files": [str(p) for p in written]}

@@ -12,7 +12,9 @@ the desired motion needs. Two refinements the text leaves open, stated here:
 * at the last step the nearest reachable candidate is taken (the motion ends; only the pose matters);
 * when the rotor lags and no candidate is within reach, it moves to the reachable state nearest ``R_i``
   (status ``"detour: …"``); when no reachable state is nearer ``R_i`` than where it is, it is held and the
-  step recorded as ``"blocked: …"``.
+  step recorded as ``"blocked: …"``;
+* if the rotor lags at the end, up to ten extra steps towards the final target are appended (status
+  ``"settle: …"``) until it sits in the state nearest that target.
 """
 
 from __future__ import annotations
@@ -25,6 +27,8 @@ from .plan import Plan, Step
 
 DEFAULT_CANDIDATES = 8
 DETOUR = "detour: the states nearest the target are out of reach; moved to the reachable state nearest it"
+SETTLE = "settle: an extra step towards the final target"
+MAX_SETTLE_STEPS = 10
 BLOCKED = "blocked: no state within one step of the current one is nearer the target"
 
 
@@ -89,6 +93,20 @@ def plan_geometric(design, targets, *, candidates: int = DEFAULT_CANDIDATES, max
             current = int(cand[moving][np.argmin(cost)])
             status.append("ok")
         chosen.append(current)
+    # lagging at the end: keep stepping towards the final target until the rotor sits in its nearest state
+    goal = int(near[-1, 0])
+    extra = 0
+    while current != goal and extra < MAX_SETTLE_STEPS:
+        around = states.within(states.rotations[current], reach)
+        around_d = so3.distance(states.rotations[around], targets[-1])
+        best = int(around[np.argmin(around_d)])
+        if around_d.min() >= so3.distance(states.rotations[current], targets[-1]) - 1e-12:
+            break
+        current = best
+        chosen.append(current)
+        status.append(SETTLE)
+        extra += 1
+    targets = np.concatenate([targets, np.repeat(targets[-1:], extra, axis=0)])
     return _build_plan(design, states, targets, chosen, status, "geometric")
 
 

@@ -8,7 +8,7 @@ holds for eq. (8) with ``P^l_mn`` of eq. (10); in terms of the physicists' Wigne
 from __future__ import annotations
 
 import numpy as np
-from scipy.spatial.transform import Rotation
+from ..so3 import to_euler_zxz
 
 from . import _checks
 from ._legendre import matrix_of_beta
@@ -68,20 +68,10 @@ def wigner_D(l, R) -> np.ndarray:
 
 
 def euler_zxz(R) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """ZXZ angles ``(α, β, γ)`` of ``R = R3(α) R1(β) R3(γ)``, each ``R.shape[:-2]``, from the unit quaternion.
-
-    With ``q = (w, x, y, z) = (cos(β/2) cos(σ/2), sin(β/2) cos(δ/2), sin(β/2) sin(δ/2), cos(β/2) sin(σ/2))``,
-    ``σ = α + γ = 2 atan2(z, w)``, ``δ = α − γ = 2 atan2(y, x)`` and ``β = 2 atan2(|(x, y)|, |(w, z)|)``. Near
-    ``β = 0`` the sum ``σ`` stays exact and ``δ`` is only needed to the accuracy that multiplies ``sin(β/2)``;
-    ``scipy``'s ``as_euler`` instead sets ``γ = 0`` below ``β ≈ 1e−7`` and so moves ``R`` by up to ``β``.
-    """
-    R = _checks.rotations(R)
-    x, y, z, w = np.moveaxis(Rotation.from_matrix(R.reshape(-1, 3, 3)).as_quat(), -1, 0)
-    total = 2.0 * np.arctan2(z, w)
-    difference = 2.0 * np.arctan2(y, x)
-    beta = 2.0 * np.arctan2(np.hypot(x, y), np.hypot(w, z))
-    shape = R.shape[:-2]
-    return (0.5 * (total + difference)).reshape(shape), beta.reshape(shape), (0.5 * (total - difference)).reshape(shape)
+    """ZXZ angles ``(α, β, γ)`` of ``R = R3(α) R1(β) R3(γ)``, each ``R.shape[:-2]``
+    (:func:`spherestep.so3.to_euler_zxz`, exact near ``β = 0``)."""
+    angles = to_euler_zxz(_checks.rotations(R))
+    return angles[..., 0], angles[..., 1], angles[..., 2]
 
 
 def _zyz(l: int, alpha, beta, gamma, row_phase=1.0, column_phase=1.0) -> np.ndarray:

@@ -110,6 +110,20 @@ class MotorDesign:
         object.__setattr__(self, "channel_map", cmap.astype(int))
         object.__setattr__(self, "failed_coils", tuple(sorted(set(int(k) for k in self.failed_coils))))
 
+    # --- design files ---------------------------------------------------------------------------------
+    @classmethod
+    def load(cls, path) -> "MotorDesign":
+        """Read a design file, YAML or ``.toml`` (see :mod:`spherestep.design_file`)."""
+        from ..design_file import load
+
+        return load(path)
+
+    def save(self, path):
+        """Write this design to a YAML design file, atomically; returns the path."""
+        from ..design_file import save
+
+        return save(self, path)
+
     # --- geometry -------------------------------------------------------------------------------------
     @property
     def radius(self) -> float:

@@ -23,6 +23,7 @@ from ..errors import bad_value
 from ..sphere import NearestPointGrid
 
 CHUNK = 2048
+MAX_REFITS = 6
 
 
 def _pair_frames(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -158,13 +159,10 @@ def held_pairs(R: np.ndarray, u: np.ndarray, v: np.ndarray, tol: float,
     return state, pole, coil
 
 
-def _keys(state: np.ndarray, pole: np.ndarray, coil: np.ndarray, count: int, n_coils: int) -> np.ndarray:
-    """A 64-bit hash per state of its set of pairs (sum of random weights per pair, wrapping mod 2⁶⁴)."""
-    weights = np.random.default_rng(12345).integers(0, 2**63, size=(int(pole.max(initial=0)) + 1) * n_coils,
-                                                    dtype=np.uint64)
-    keys = np.zeros(count, dtype=np.uint64)
-    np.add.at(keys, state, weights[pole * n_coils + coil])
-    return keys
+def _pair_weights(M: int, N: int) -> np.ndarray:
+    """Random 64-bit weights per (pole, coil) pair; a state's key is the sum of its pairs' weights
+    (wrapping mod 2⁶⁴), equal for equal sets of pairs and, with probability ~1 − K²/2⁶⁴, only for them."""
+    return np.random.default_rng(12345).integers(0, 2**63, size=M * N, dtype=np.uint64)
 
 
 def find_states(design, tol: float) -> StepperStates:
@@ -190,17 +188,30 @@ def find_states(design, tol: float) -> StepperStates:
     pole_pair = order[np.arange(counts.sum()) + np.repeat(lo - np.concatenate([[0], np.cumsum(counts)[:-1]]), counts)]
     R = _pair_frames(v[k1], v[k2])[coil_pair] @ np.swapaxes(_pair_frames(u[j1], u[j2])[pole_pair], -1, -2)
     grid = NearestPointGrid(u, tol)
-    for _ in range(2):  # keep one candidate per set of held pairs; refit those holding three or more
+    weights = _pair_weights(M, N)
+    # each candidate is the least-squares fit of the two pairs it was built from; refit to the pairs it
+    # actually holds until the two agree, so every state is the Kabsch fit of its own held set (which
+    # makes the set of states independent of the order of discovery, and symmetric)
+    fitted = weights[j1[pole_pair] * N + k1[coil_pair]] + weights[j2[pole_pair] * N + k2[coil_pair]]
+    for attempt in range(MAX_REFITS + 1):
         state, pole, coil = held_pairs(R, u, v, tol, grid)
-        _, first = np.unique(_keys(state, pole, coil, len(R), N), return_index=True)
+        keys = np.zeros(len(R), dtype=np.uint64)
+        np.add.at(keys, state, weights[pole * N + coil])
         n_pairs = np.bincount(state, minlength=len(R))
-        keep = first[n_pairs[first] >= 2]
-        refit = keep[n_pairs[keep] >= 3]  # two pairs: the symmetric alignment already is the least-squares fit
-        remap = np.full(len(R), -1)
-        remap[refit] = np.arange(len(refit))
+        _, first = np.unique(keys, return_index=True)
+        keep = first[n_pairs[first] >= 2]  # one candidate per held set, holding at least two pairs
+        R, fitted, keys = R[keep], fitted[keep], keys[keep]
+        stale = keys != fitted
+        if not stale.any():
+            break
+        if attempt == MAX_REFITS:  # held set still changing: not a clean equilibrium of its pairs
+            R = R[~stale]
+            break
+        remap = np.full(len(n_pairs), -1)
+        remap[keep[stale]] = np.arange(int(stale.sum()))
         mine = remap[state] >= 0
-        R[refit] = kabsch(remap[state[mine]], pole[mine], coil[mine], len(refit), u, v)
-        R = R[keep]
+        R[stale] = kabsch(remap[state[mine]], pole[mine], coil[mine], int(stale.sum()), u, v)
+        fitted = keys
     state, pole, coil = held_pairs(R, u, v, tol, grid)
     n_pairs = np.bincount(state, minlength=len(R))
     per_pole = np.zeros((len(R), M), dtype=np.int64)
@@ -208,7 +219,8 @@ def find_states(design, tol: float) -> StepperStates:
     per_coil = np.zeros((len(R), N), dtype=np.int64)
     np.add.at(per_coil, (state, coil), 1)
     ok = (n_pairs >= 2) & (per_pole.max(axis=1) <= 1) & (per_coil.max(axis=1) <= 1)
-    keys = _keys(state, pole, coil, len(R), N)
+    keys = np.zeros(len(R), dtype=np.uint64)
+    np.add.at(keys, state, weights[pole * N + coil])
     _, first = np.unique(keys, return_index=True)
     unique = np.zeros(len(R), dtype=bool)
     unique[first] = True

@@ -27,7 +27,7 @@ def aligning_rotations(src: Packing, dst: Packing, tol: float = 1e-7, first: boo
 
     With ``first=True`` stop at the first one found (a congruence test).
     """
-    if len(src) != len(dst) or not np.allclose(np.sort(src.radii), np.sort(dst.radii), atol=tol):
+    if len(src) != len(dst) or not np.allclose(np.sort(src.radii), np.sort(dst.radii), rtol=0.0, atol=tol):
         return np.zeros((0, 3, 3))
     # base cap: one of the rarest radius class
     keys = np.round(src.radii / tol).astype(np.int64)
@@ -60,7 +60,7 @@ def aligning_rotations(src: Packing, dst: Packing, tol: float = 1e-7, first: boo
     for R in candidates:
         moved = src.centers @ R.T
         dist, nearest = dst.tree.query(moved, distance_upper_bound=chord(10 * tol) + tol)
-        if np.all(np.isfinite(dist)) and np.allclose(dst.radii[np.minimum(nearest, len(dst) - 1)], src.radii, atol=tol) \
+        if np.all(np.isfinite(dist)) and np.allclose(dst.radii[np.minimum(nearest, len(dst) - 1)], src.radii, rtol=0.0, atol=tol) \
                 and len(np.unique(nearest)) == len(src):
             found.append(R)
             if first:

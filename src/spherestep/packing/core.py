@@ -48,7 +48,8 @@ class Packing:
         radii = _as_radii(np.broadcast_to(self.radii, centers.shape[:1]).copy(), "radii")
         if self.family not in (None, "T", "O", "I"):
             raise bad_value("family", "'T', 'O', 'I' or None", self.family)
-        centers = centers / np.linalg.norm(centers, axis=1, keepdims=True)
+        norm = np.linalg.norm(centers, axis=1, keepdims=True)
+        centers = np.where(norm == 1.0, centers, centers / norm)  # exact unit vectors are kept bit for bit
         centers.setflags(write=False)
         radii.setflags(write=False)
         object.__setattr__(self, "centers", centers)

@@ -1,0 +1,144 @@
+"""Trajectories, the geometric planner (Sec. III-A) and the plan's file formats."""
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+from spherestep import so3
+from spherestep.commutation import Plan, about_axis, plan_geometric, steps_for, through
+from spherestep.errors import InputError
+from spherestep.sphere import arc_distance
+
+
+def test_about_axis_turns_at_equal_steps():
+    T = about_axis([1, 2, 3], 2 * math.pi, 40, start=so3.rot([0, 1, 0], 0.3))
+    d = so3.distance(T[:-1], T[1:])
+    assert np.allclose(d, 2 * math.pi / 40, atol=1e-12)
+    assert so3.distance(T[0], T[-1]) < 1e-12
+    # the axis of every step is the fixed-frame axis (left multiplication)
+    axis, _ = so3.axis_angle(T[1:] @ np.swapaxes(T[:-1], 1, 2))
+    assert np.allclose(axis, np.array([1, 2, 3]) / math.sqrt(14), atol=1e-10)
+
+
+def test_through_keys_equal_steps():
+    keys = np.array([so3.rot([0, 0, 1], 0.0), so3.rot([0, 0, 1], 0.6), so3.rot([0.3, 0, 1], 0.9) @ so3.rot([0, 0, 1], 0.6),
+                     so3.rot([0, 1, 1], 0.5) @ so3.rot([0.3, 0, 1], 0.9) @ so3.rot([0, 0, 1], 0.6)])
+    T = through(keys, 30)
+    d = so3.distance(T[:-1], T[1:])
+    assert np.ptp(d) < 1e-10 and so3.distance(T[-1], keys[-1]) < 1e-12
+
+
+def test_steps_for():
+    assert steps_for(math.pi, math.pi / 4) == 4 and steps_for(1.0, 2.0) == 1
+    with pytest.raises(InputError):
+        steps_for(1.0, 0.0)
+
+
+def _check_plan(design, plan, metrics):
+    states = design.states()
+    achieved = plan.achieved
+    moves = so3.distance(achieved[:-1], achieved[1:])
+    assert moves.max() <= design.max_step + 1e-12
+    cap_cos = math.cos(design.cap_half_angle)
+    for step in plan.steps:
+        assert len(step.coils) >= 2
+        assert {k for _, k in step.held} == set(step.coils)
+        for j, k in step.held:
+            assert design.stator.centers[k] @ design.stator_axis >= cap_cos - 1e-12
+            assert arc_distance(step.achieved @ design.rotor.centers[j], design.stator.centers[k]) <= design.state_tol + 1e-12
+            assert step.coils[k] == design.polarity[j]
+        assert math.isclose(step.error, so3.distance(step.achieved, step.target), abs_tol=1e-12)
+    assert plan.errors[-1] <= metrics["resolution_p95"]
+
+
+def test_full_turns_about_random_axes(proto, proto_metrics):
+    rng = np.random.default_rng(2024)
+    states = proto.states()
+    for _ in range(50):
+        axis = rng.normal(size=3)
+        start = states.rotations[rng.integers(len(states))]
+        T = about_axis(axis, 2 * math.pi, steps_for(2 * math.pi, 0.5 * proto.max_step), start=start)
+        plan = plan_geometric(proto, T)
+        _check_plan(proto, plan, proto_metrics)
+        # the plan follows the path: typical error within the design's resolution
+        assert np.median(plan.errors) <= proto_metrics["resolution_p95"]
+
+
+def test_plan_from_arbitrary_start_ends_near_target(proto, proto_metrics):
+    T = about_axis([0.2, -1, 0.4], math.radians(200), 30, start=so3.random(1, 3)[0])
+    plan = plan_geometric(proto, T)
+    assert plan.errors[-1] <= proto_metrics["resolution_max"]
+
+
+def test_axis_cost_prefers_the_desired_direction(proto):
+    """Each move's axis (relative to the previous state) points closer to the desired axis than a random one."""
+    states = proto.states()
+    axis = np.array([0.0, 0.6, 0.8])
+    T = about_axis(axis, math.radians(120), 20, start=states.rotations[0])
+    plan = plan_geometric(proto, T)
+    cosines = []
+    for a, b in zip(plan.steps[:-1], plan.steps[1:]):
+        if b.status == "ok" and so3.distance(a.achieved, b.achieved) > 0:
+            n, _ = so3.axis_angle(b.achieved @ a.achieved.T)  # fixed-frame axis of the move
+            cosines.append(n @ axis)
+    assert len(cosines) >= 10 and np.median(cosines) > 0.5
+
+
+def test_next_pole_is_held_in_the_next_step(proto):
+    T = about_axis([1, 0, 0], math.radians(90), 15, start=proto.states().rotations[10])
+    plan = plan_geometric(proto, T)
+    for a, b in zip(plan.steps[:-1], plan.steps[1:]):
+        if a.next_pole is not None:
+            assert a.next_pole in {j for j, _ in b.held} and a.next_pole not in {j for j, _ in a.held}
+
+
+def test_plan_round_trips_through_json_and_masks(proto, tmp_path):
+    T = about_axis([0, 0, 1], math.radians(45), 6, start=proto.states().rotations[3])
+    plan = plan_geometric(proto, T)
+    path = tmp_path / "plan.json"
+    plan.to_json(path)
+    back = Plan.from_json(path)
+    assert [s.coils for s in back.steps] == [s.coils for s in plan.steps]
+    assert np.allclose(back.achieved, plan.achieved, atol=1e-14)
+    data = json.loads(path.read_text())
+    for s, row in zip(plan.steps, data["steps"]):
+        enable = int(row["enable_mask"], 16)
+        polarity = int(row["polarity_mask"], 16)
+        for k in range(plan.coil_count):
+            on = bool(enable >> int(proto.channel_map[k, 0]) & 1)
+            reversed_ = bool(polarity >> int(proto.channel_map[k, 1]) & 1)
+            assert on == (k in s.coils)
+            assert reversed_ == (s.coils.get(k) == -1)
+    csv = plan.to_csv(tmp_path / "plan.csv").splitlines()
+    assert len(csv) == len(plan.steps) + 1 and csv[0].startswith("step,status")
+
+
+@pytest.mark.parametrize("text, field", [
+    ("{", "plan"),
+    ('{"format": "other"}', "plan.format"),
+    ('{"format": "spherestep-plan", "version": 9}', "plan.version"),
+    ('{"format": "spherestep-plan", "version": 1, "coil_count": 2, "channel_map": [], "steps": []}', "channel_map"),
+    ('{"format": "spherestep-plan", "version": 1, "coil_count": 1, "channel_map": [{"enable": 0, "polarity": 1}],'
+     ' "steps": [{"index": 0, "coils": {"5": 1}, "target": [], "achieved": [], "error_deg": 0}]}', "coils"),
+])
+def test_bad_plan_files_raise_input_errors(tmp_path, text, field):
+    path = tmp_path / "bad.json"
+    path.write_text(text)
+    with pytest.raises(InputError, match=field):
+        Plan.from_json(path)
+
+
+def test_planner_rejects_bad_targets(proto):
+    with pytest.raises(InputError, match="targets"):
+        plan_geometric(proto, np.eye(3))
+    with pytest.raises(InputError, match="candidates"):
+        plan_geometric(proto, np.stack([np.eye(3)] * 2), candidates=0)
+
+
+def test_planner_works_around_failed_coils(proto):
+    broken = proto.without_coils([3, 7])
+    T = about_axis([1, 1, 0], math.radians(90), 12, start=broken.states().rotations[0])
+    plan = plan_geometric(broken, T)
+    assert all(3 not in s.coils and 7 not in s.coils for s in plan.steps)
