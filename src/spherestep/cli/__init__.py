@@ -12,7 +12,7 @@ import typer
 from typer.exceptions import TyperException
 
 from ..errors import ComputationError, SpherestepError
-from . import motor, packings  # noqa: F401  (registers commands)
+from . import design, export, motor, packings  # noqa: F401  (registers commands)
 from . import run  # noqa: F401
 from .app import app
 
@@ -25,8 +25,9 @@ def main(argv: list[str] | None = None) -> int:
         args.remove("--debug")
     command = typer.main.get_command(app)
     try:
-        command.main(args=args, prog_name="spherestep", standalone_mode=False)
-        code = 0
+        result = command.main(args=args, prog_name="spherestep", standalone_mode=False)
+        # outside standalone mode Typer returns the code of an Exit (130 for Ctrl-C) instead of exiting
+        code = result if isinstance(result, int) else 0
     except typer.Exit as exc:
         code = exc.exit_code
     except TyperException as exc:  # bad usage (exit_code 2) and Typer's own errors

@@ -1,0 +1,89 @@
+"""``spherestep design new | validate | show``: write, check and summarise design files."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import typer
+from rich.table import Table
+
+from .. import design_file
+from ..atomic import write_text
+from ..errors import InputError
+from .app import app
+from .common import console, print_json
+
+design_app = typer.Typer(
+    name="design",
+    help="Design files (YAML, or TOML to read): a motor's poles, coils, dimensions and wiring "
+         "(docs/design-files.md).\n\nExample: [bold]spherestep design new mymotor.yaml[/bold]",
+    no_args_is_help=True,
+    rich_markup_mode="rich",
+)
+app.add_typer(design_app, name="design")
+
+
+@design_app.command("new")
+def new(
+    file: Path = typer.Argument(..., help="Design file to write (.yaml or .yml)."),
+    source: str = typer.Option("prototype", "--from", help="'prototype' (the built-in design, with comments) or "
+                                                         "an existing design file to copy."),
+    force: bool = typer.Option(False, "--force", help="Overwrite FILE if it exists."),
+) -> None:
+    """Write a starting design file.
+
+    Example: [bold]spherestep design new mymotor.yaml --from prototype[/bold]
+    """
+    if file.suffix.lower() == ".toml":
+        raise InputError(f"FILE {str(file)!r}: design files are written as YAML; use a name ending in .yaml")
+    if file.is_dir():
+        raise InputError(f"FILE {str(file)!r} is a folder; give a file name such as {str(file / 'motor.yaml')!r}")
+    if file.exists() and not force:
+        raise InputError(f"FILE {str(file)!r} exists; give --force to overwrite it, or choose another name")
+    if source == "prototype":
+        text = design_file.prototype_text()
+        design = design_file.loads(text, source="prototype")
+    else:
+        design = design_file.load(source)
+        text = design_file.dumps(design)
+    write_text(file, text)
+    print(f"wrote {file}: design {design.name!r}, {len(design.rotor)} poles, {len(design.stator)} coils")
+
+
+@design_app.command("validate")
+def validate(file: Path = typer.Argument(..., help="Design file (.yaml, .yml or .toml).")) -> None:
+    """Check a design file: 'valid: N poles, M coils' (exit 0), or one line naming the field and the fix (exit 2).
+
+    Example: [bold]spherestep design validate mymotor.yaml[/bold]
+    """
+    design = design_file.load(file)
+    print(f"valid: {len(design.rotor)} poles, {len(design.stator)} coils")
+
+
+def _cell(value) -> str:
+    if isinstance(value, float):
+        return f"{value:.6g}"
+    if isinstance(value, list):
+        return ", ".join(_cell(v) for v in value) or "none"
+    return str(value)
+
+
+@design_app.command("show")
+def show(
+    file: Path = typer.Argument(..., help="Design file (.yaml, .yml or .toml)."),
+    as_json: bool = typer.Option(False, "--json", help="Print the summary as JSON."),
+) -> None:
+    """Summary of a design: packings, pole and coil counts, dimensions (mm), tolerance and step (degrees).
+
+    Example: [bold]spherestep design show mymotor.yaml --json[/bold]
+    """
+    info = design_file.load(file).summary()
+    if as_json:
+        print_json(info)
+        return
+    table = Table(title=f"{info['name']} ({file})")
+    table.add_column("field", no_wrap=True)
+    table.add_column("value", justify="right", no_wrap=True)
+    for key, value in info.items():
+        table.add_row(key, _cell(value))
+    console.print(table)

@@ -1,0 +1,32 @@
+"""``spherestep export FILE --out DIR``: manufacturing tables and the 3-D layout of a design."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import typer
+
+from ..errors import bad_value
+from ..export import UNITS, write_exports
+from ..motor import MotorDesign
+from .app import app
+
+
+@app.command("export")
+def export(
+    file: Path = typer.Argument(..., help="Design file (.yaml, .yml or .toml)."),
+    out: Path = typer.Option(..., "--out", help="Output folder (created if missing)."),
+    unit: str = typer.Option("mm", "--unit", help="Length unit of the tables and the STL: mm or in."),
+    sphere: bool = typer.Option(False, "--sphere", help="Add the rotor ball to the STL."),
+) -> None:
+    """Magnet positions (magnets.csv), coil mounting axes and saddle angles (coils.csv), both in layout.json,
+    and the parts as an STL (layout.stl); definitions in docs/design-files.md.
+
+    Example: [bold]spherestep export mymotor.yaml --out build --unit in[/bold]
+    """
+    if unit not in UNITS:
+        raise bad_value("--unit", f"one of {', '.join(UNITS)}", unit)
+    design = MotorDesign.load(file)
+    written = write_exports(design, out, unit=unit, sphere=sphere)
+    print(f"wrote {len(written)} files to {out}/: {len(design.rotor)} magnets, {len(design.stator)} coils, "
+          f"unit {unit}")
