@@ -22,11 +22,18 @@ def make_plan(coil_sets, coil_count=4):
 
 @given(st.integers(1, 16).flatmap(lambda n: st.tuples(
     st.just(n), st.dictionaries(st.integers(0, n - 1), st.sampled_from([-1, 1])))))
-def test_coil_masks_match_step_masks(case):
+def test_coil_masks_set_exactly_the_mapped_bits(case):
+    """Against a bit string built channel by channel: enable bit of every energised coil, polarity bit of
+    every reversed one, nothing else."""
     n, coils = case
-    cmap = default_channel_map(n)
+    cmap = default_channel_map(n)[::-1].copy()  # a non-trivial map: coil k on channels n-1-k, 2n-1-k
+    enable, polarity = coil_masks(coils, cmap)
+    bits_e = "".join("1" if any(cmap[k, 0] == ch for k in coils) else "0" for ch in reversed(range(2 * n)))
+    bits_p = "".join("1" if any(cmap[k, 1] == ch and coils[k] < 0 for k in coils) else "0"
+                     for ch in reversed(range(2 * n)))
+    assert enable == int(bits_e, 2) and polarity == int(bits_p, 2)
     step = Step(index=0, target=I3, achieved=I3, error=0.0, coils=coils)
-    assert coil_masks(coils, cmap) == step.masks(cmap)
+    assert step.masks(cmap) == (enable, polarity)
 
 
 def test_apply_drives_masks_and_context_ends_all_off():

@@ -27,6 +27,16 @@ FORMAT = "spherestep-plan"
 VERSION = 1
 
 
+def coil_masks(coils: dict[int, int], channel_map: np.ndarray) -> tuple[int, int]:
+    """``(enable_mask, polarity_mask)`` of a coil → ±1 map for the ``(N, 2)`` channel map (module docstring)."""
+    enable = polarity = 0
+    for coil, sign in coils.items():
+        enable |= 1 << int(channel_map[coil, 0])
+        if sign < 0:
+            polarity |= 1 << int(channel_map[coil, 1])
+    return enable, polarity
+
+
 @dataclass
 class Step:
     """One commutation step.
@@ -49,12 +59,7 @@ class Step:
 
     def masks(self, channel_map: np.ndarray) -> tuple[int, int]:
         """``(enable_mask, polarity_mask)`` of this step for the given ``(N, 2)`` channel map."""
-        enable = polarity = 0
-        for coil, sign in self.coils.items():
-            enable |= 1 << int(channel_map[coil, 0])
-            if sign < 0:
-                polarity |= 1 << int(channel_map[coil, 1])
-        return enable, polarity
+        return coil_masks(self.coils, channel_map)
 
 
 @dataclass
@@ -176,6 +181,8 @@ class Plan:
                              "write it with Plan.to_json or `spherestep plan`") from None
         if cmap.shape[0] != coil_count:
             raise bad_value("plan.channel_map", f"{coil_count} entries (one per coil)", f"{cmap.shape[0]} entries")
+        if np.any(cmap < 0) or len(np.unique(cmap)) != cmap.size:
+            raise bad_value("plan.channel_map", "distinct non-negative channels for every coil", cmap.tolist())
         return cls(steps=steps, coil_count=coil_count, channel_map=cmap,
                    design=str(data.get("design", "design")), planner=str(data.get("planner", "geometric")))
 

@@ -16,20 +16,10 @@ from contextlib import contextmanager
 
 import numpy as np
 
-from ..commutation import Step
+from ..commutation.plan import Step, coil_masks
 from ..errors import InputError, bad_value
 from .backend import Backend, DeviceInfo, LinkError
 from .limits import ThermalGuard, ThermalLimitError, ThermalLimits
-
-
-def coil_masks(coils: Mapping[int, int], channel_map: np.ndarray) -> tuple[int, int]:
-    """``(enable_mask, polarity_mask)`` of a coil → ±1 map, the convention of :meth:`Step.masks`."""
-    enable = polarity = 0
-    for coil, sign in coils.items():
-        enable |= 1 << int(channel_map[coil, 0])
-        if sign < 0:
-            polarity |= 1 << int(channel_map[coil, 1])
-    return enable, polarity
 
 
 @contextmanager
