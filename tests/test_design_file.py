@@ -71,6 +71,16 @@ def test_shipped_prototype_file_builds_the_prototype_bit_for_bit():
     assert design.polarity[:60].tolist() == [1] * 60 and design.polarity[60:].tolist() == [-1] * 32
 
 
+def test_the_documented_examples_load():
+    page = (Path(__file__).parents[1] / "docs" / "design-files.md").read_text()
+    blocks = page.split("```yaml\n")[1:]
+    assert len(blocks) == 2
+    assert_same(df.loads(blocks[0].split("```")[0]), prototype())
+    six = yaml.safe_load(blocks[1].split("```")[0])
+    design = df.from_dict(mutate(rotor=six["rotor"]))
+    assert design.rotor.label == "six" and np.allclose(np.abs(design.rotor.centers).sum(axis=1), 1, atol=1e-15)
+
+
 def test_save_then_load_the_prototype_is_identical_and_uses_the_named_forms(tmp_path):
     design = prototype()
     path = design.save(tmp_path / "proto.yaml")

@@ -66,7 +66,7 @@ class DesignFileError(InputError):
     def __init__(self, source: str, field: str | None, message: str):
         self.source = source
         self.field = field
-        text = " ".join(f"{source}: {message}".split())
+        text = re.sub(r"\s*\n\s*", " ", f"{source}: {message}")
         super().__init__(text)
 
 
