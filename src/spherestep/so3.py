@@ -11,6 +11,8 @@ intrinsic "ZXZ"/"ZYZ" of SciPy). SciPy's :class:`~scipy.spatial.transform.Rotati
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from scipy.spatial.transform import Rotation
 
@@ -113,11 +115,34 @@ def log(R) -> np.ndarray:
 
 
 def exp(rotvec) -> np.ndarray:
-    """Rotation matrix of the rotation vector ``θ n``, ``(..., 3, 3)``."""
+    """Rotation matrix of the rotation vector ``v = θ n``, ``(..., 3, 3)``: ``I + a [v]× + b [v]×²`` with
+    ``a = sin θ / θ`` and ``b = (1 − cos θ)/θ²`` (Taylor series below θ = 1e-4, full precision everywhere)."""
     rotvec = np.asarray(rotvec, dtype=float)
     if rotvec.shape[-1:] != (3,) or not np.all(np.isfinite(rotvec)):
         raise bad_value("rotvec", "finite rotation vectors of shape (..., 3)", f"shape {rotvec.shape}")
-    return Rotation.from_rotvec(rotvec.reshape(-1, 3)).as_matrix().reshape(rotvec.shape[:-1] + (3, 3))
+    if rotvec.size == 3:  # one rotation (the integrator's inner loop): scalar arithmetic, no array overhead
+        return _exp_one(*rotvec.ravel().tolist()).reshape(rotvec.shape[:-1] + (3, 3))
+    t2 = np.sum(rotvec * rotvec, axis=-1)
+    t = np.sqrt(t2)
+    small = t < 1e-4
+    safe = np.where(small, 1.0, t)
+    a = np.where(small, 1.0 - t2 / 6.0 + t2 * t2 / 120.0, np.sin(safe) / safe)
+    b = np.where(small, 0.5 - t2 / 24.0 + t2 * t2 / 720.0, (1.0 - np.cos(safe)) / (safe * safe))
+    K = skew(rotvec)
+    return np.eye(3) + a[..., None, None] * K + b[..., None, None] * (K @ K)
+
+
+def _exp_one(x: float, y: float, z: float) -> np.ndarray:
+    """:func:`exp` of one rotation vector with Python floats (same formula and series)."""
+    t2 = x * x + y * y + z * z
+    if t2 < 1e-8:
+        a, b = 1.0 - t2 / 6.0 + t2 * t2 / 120.0, 0.5 - t2 / 24.0 + t2 * t2 / 720.0
+    else:
+        t = math.sqrt(t2)
+        a, b = math.sin(t) / t, (1.0 - math.cos(t)) / t2
+    return np.array([[1.0 - b * (y * y + z * z), b * x * y - a * z, b * x * z + a * y],
+                     [b * x * y + a * z, 1.0 - b * (x * x + z * z), b * y * z - a * x],
+                     [b * x * z - a * y, b * y * z + a * x, 1.0 - b * (x * x + y * y)]])
 
 
 def from_euler_zxz(angles) -> np.ndarray:

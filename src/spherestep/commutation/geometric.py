@@ -43,6 +43,48 @@ def start_state(states, R0) -> int:
     return int(idx.ravel()[0])
 
 
+def next_state(states, current: int, target, candidates: np.ndarray, reach: float, last: bool = False
+               ) -> tuple[int, str]:
+    """One step of the planner: from state ``current`` towards the desired rotation ``target``.
+
+    ``candidates``: indices of the states nearest ``target``; ``reach``: the largest step; ``last``: the
+    final step of the motion (nearest candidate instead of the axis cost). Returns the chosen state and
+    the step's status (see the module docstring).
+    """
+    prev_R = states.rotations[current]
+    ok = (so3.distance(prev_R, states.rotations[candidates]) <= reach) & (candidates != current)
+    to_target = so3.distance(states.rotations[candidates], target)
+    stay_d = float(so3.distance(prev_R, target))
+    helps = ok & (to_target < stay_d)
+    if not helps.any():
+        # none of the nearest candidates helps: take the reachable state nearest the target, if it helps
+        around = states.within(prev_R, reach)
+        around_d = so3.distance(states.rotations[around], target)
+        if len(around) and around_d.min() < stay_d - 1e-12:
+            return int(around[np.argmin(around_d)]), ("ok" if ok.any() or last else DETOUR)
+        return current, ("hold" if stay_d <= to_target.min() + 1e-12 else BLOCKED)
+    if last:
+        return int(candidates[np.argmin(np.where(ok, to_target, np.inf))]), "ok"
+    want = _axis(prev_R.T @ target)
+    have = _axis(prev_R.T @ states.rotations[candidates[helps]])
+    cost = np.arccos(np.clip(have @ want, -1.0, 1.0))
+    return int(candidates[helps][np.argmin(cost)]), "ok"
+
+
+def settle(states, current: int, target, reach: float, goal: int) -> list[int]:
+    """Extra states (at most :data:`MAX_SETTLE_STEPS`) walking from ``current`` to ``goal``, each the
+    reachable state nearest ``target``, while that gets nearer."""
+    path = []
+    while current != goal and len(path) < MAX_SETTLE_STEPS:
+        around = states.within(states.rotations[current], reach)
+        around_d = so3.distance(states.rotations[around], target)
+        if around_d.min() >= so3.distance(states.rotations[current], target) - 1e-12:
+            break
+        current = int(around[np.argmin(around_d)])
+        path.append(current)
+    return path
+
+
 def plan_geometric(design, targets, *, candidates: int = DEFAULT_CANDIDATES, max_step: float | None = None,
                    start: int | None = None) -> Plan:
     """Commutate ``targets (n+1, 3, 3)`` on ``design`` (a :class:`~spherestep.motor.MotorDesign`).
@@ -62,51 +104,16 @@ def plan_geometric(design, targets, *, candidates: int = DEFAULT_CANDIDATES, max
     reach = design.max_step if max_step is None else float(max_step)
     current = start_state(states, targets[0]) if start is None else int(start)
     _, near = states.nearest(targets, k=candidates)  # (n+1, k) candidate states per target
-    chosen = [current]
-    status = ["ok"]
+    chosen, status = [current], ["ok"]
     n = len(targets) - 1
     for i in range(1, n + 1):
-        prev_R = states.rotations[current]
-        cand = near[i]
-        step_d = so3.distance(prev_R, states.rotations[cand])
-        ok = (step_d <= reach) & (cand != current)
-        to_target = so3.distance(states.rotations[cand], targets[i])
-        stay_d = float(so3.distance(prev_R, targets[i]))
-        if not np.any(ok & (to_target < stay_d)):
-            # none of the nearest candidates helps: take the reachable state nearest the target, if it helps
-            around = states.within(prev_R, reach)
-            around_d = so3.distance(states.rotations[around], targets[i])
-            best = int(np.argmin(around_d)) if len(around) else -1
-            if best >= 0 and around_d[best] < stay_d - 1e-12:
-                current = int(around[best])
-                status.append("ok" if ok.any() or i == n else DETOUR)
-            else:
-                status.append("hold" if stay_d <= to_target.min() + 1e-12 else BLOCKED)
-        elif i == n:
-            current = int(cand[np.argmin(np.where(ok, to_target, np.inf))])
-            status.append("ok")
-        else:
-            moving = ok & (to_target < stay_d)
-            want = _axis(prev_R.T @ targets[i])
-            have = _axis(prev_R.T @ states.rotations[cand[moving]])
-            cost = np.arccos(np.clip(have @ want, -1.0, 1.0))
-            current = int(cand[moving][np.argmin(cost)])
-            status.append("ok")
+        current, why = next_state(states, current, targets[i], near[i], reach, last=i == n)
         chosen.append(current)
-    # lagging at the end: keep stepping towards the final target until the rotor sits in its nearest state
-    goal = int(near[-1, 0])
-    extra = 0
-    while current != goal and extra < MAX_SETTLE_STEPS:
-        around = states.within(states.rotations[current], reach)
-        around_d = so3.distance(states.rotations[around], targets[-1])
-        best = int(around[np.argmin(around_d)])
-        if around_d.min() >= so3.distance(states.rotations[current], targets[-1]) - 1e-12:
-            break
-        current = best
-        chosen.append(current)
-        status.append(SETTLE)
-        extra += 1
-    targets = np.concatenate([targets, np.repeat(targets[-1:], extra, axis=0)])
+        status.append(why)
+    extra = settle(states, current, targets[-1], reach, int(near[-1, 0]))
+    chosen += extra
+    status += [SETTLE] * len(extra)
+    targets = np.concatenate([targets, np.repeat(targets[-1:], len(extra), axis=0)])
     return _build_plan(design, states, targets, chosen, status, "geometric")
 
 

@@ -214,11 +214,10 @@ def find_states(design, tol: float) -> StepperStates:
         fitted = keys
     state, pole, coil = held_pairs(R, u, v, tol, grid)
     n_pairs = np.bincount(state, minlength=len(R))
-    per_pole = np.zeros((len(R), M), dtype=np.int64)
-    np.add.at(per_pole, (state, pole), 1)
-    per_coil = np.zeros((len(R), N), dtype=np.int64)
-    np.add.at(per_coil, (state, coil), 1)
-    ok = (n_pairs >= 2) & (per_pole.max(axis=1) <= 1) & (per_coil.max(axis=1) <= 1)
+    ok = n_pairs >= 2
+    for item, count in ((pole, M), (coil, N)):  # one pole per coil and one coil per pole
+        pair_id, uses = np.unique(state * count + item, return_counts=True)
+        ok[pair_id[uses > 1] // count] = False
     keys = np.zeros(len(R), dtype=np.uint64)
     np.add.at(keys, state, weights[pole * N + coil])
     _, first = np.unique(keys, return_index=True)

@@ -1,0 +1,7 @@
+"""Rigid-rotor dynamics: the integrator, running plans, the closed loop."""
+
+from .rotor import Rotor
+from .closed_loop import ClosedLoopRun, run_closed_loop
+from .simulate import Integrator, Simulation, currents_of, simulate
+
+__all__ = ["ClosedLoopRun", "Integrator", "Rotor", "Simulation", "currents_of", "run_closed_loop", "simulate"]

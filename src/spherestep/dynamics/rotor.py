@@ -1,0 +1,79 @@
+"""The rotor as a rigid ball: inertia, damping, castor friction, and a Lie-group integrator on SO(3).
+
+State: orientation ``R`` (3×3) and angular velocity ``ω`` (rad/s, fixed frame, ``Ṙ = [ω]× R``). The torque
+model gives ``τ(R, c)`` (N·m, fixed frame, about the centre) and the energy ``V(R, c)`` (J) with
+``τ = −∂V/∂ε`` for ``R → exp([ε]×) R``. The paper's rotor is balanced (``I_xx = I_yy = I_zz``, Sec. IV-A), so
+the inertia is the scalar ``I`` (the mean principal moment; :meth:`Rotor.from_design` reports the design's
+anisotropy) and the free motion is a uniform rotation.
+
+Integrator (one step of length ``h``). The conservative part is velocity Verlet on the group,
+``ω ← ω + h/2 · τ(R)/I``, ``R ← exp(h [ω]×) R``, ``ω ← ω + h/2 · τ(R)/I`` (symplectic and time-reversible
+for a bi-invariant metric), composed as Yoshida's fourth-order triple ``V(w₁h) V(w₀h) V(w₁h)`` with
+``w₁ = 1/(2 − 2^{1/3})``, ``w₀ = 1 − 2w₁``: the energy error stays bounded and falls as ``h⁴``. It is wrapped
+by half steps of the dissipation, solved exactly: viscous ``ω ← ω e^{−b t / I}`` then castor (Coulomb)
+friction, which lowers ``|ω|`` by ``f t / I`` and stops the rotor rather than reversing it.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .. import so3
+from ..errors import bad_value
+
+_W1 = 1.0 / (2.0 - 2.0 ** (1.0 / 3.0))
+YOSHIDA = (_W1, 1.0 - 2.0 * _W1, _W1)  # fourth-order symmetric composition of Verlet steps
+SHELL_MASS = 0.6  # kg, a 12-in plastic sphere (Sec. IV-A gives no mass; a thin ABS shell of ~2.5 mm)
+
+
+@dataclass(frozen=True)
+class Rotor:
+    """Scalar ``inertia`` (kg·m²), viscous ``damping`` (N·m·s/rad) and castor ``friction`` torque (N·m)."""
+
+    inertia: float
+    damping: float = 0.0
+    friction: float = 0.0
+
+    def __post_init__(self):
+        for name in ("inertia", "damping", "friction"):
+            value = getattr(self, name)
+            if not (isinstance(value, (int, float)) and math.isfinite(value) and value >= 0) or \
+                    (name == "inertia" and value == 0):
+                raise bad_value(name, "a finite non-negative number (inertia positive)", value)
+
+    @classmethod
+    def from_design(cls, design, damping: float = 0.0, friction: float = 0.0, shell_mass: float = SHELL_MASS):
+        """The design's rotor: thin shell plus point magnets (:meth:`MotorDesign.inertia`), mean moment."""
+        return cls(float(np.trace(design.inertia(shell_mass=shell_mass)) / 3.0), damping, friction)
+
+    def dissipate(self, w: np.ndarray, t: float) -> np.ndarray:
+        """Exact flow of damping then friction for time ``t`` on angular velocities ``w (..., 3)``."""
+        if self.damping:
+            w = w * math.exp(-self.damping * t / self.inertia)
+        if self.friction:
+            speed = np.linalg.norm(w, axis=-1, keepdims=True)
+            slower = np.maximum(speed - self.friction * t / self.inertia, 0.0)
+            w = np.where(speed > 0, w * slower / np.where(speed > 0, speed, 1.0), 0.0)
+        return w
+
+    def step(self, R: np.ndarray, w: np.ndarray, torque, h: float, tau: np.ndarray | None = None):
+        """Advance ``(R (K,3,3), ω (K,3))`` by ``h`` seconds under ``torque(R) -> (K, 3)``; see the module.
+
+        ``tau`` is ``torque(R)`` when already known (the last evaluation of the previous step); returns
+        ``(R, ω, τ(R))`` so that each step costs three torque evaluations.
+        """
+        w = self.dissipate(w, 0.5 * h)
+        tau = torque(R) if tau is None else tau
+        for weight in YOSHIDA:
+            w = w + (0.5 * weight * h / self.inertia) * tau
+            R = so3.exp(weight * h * w) @ R
+            tau = torque(R)
+            w = w + (0.5 * weight * h / self.inertia) * tau
+        return R, self.dissipate(w, 0.5 * h), tau
+
+    def kinetic_energy(self, w: np.ndarray) -> np.ndarray:
+        """``½ I |ω|²`` (J)."""
+        return 0.5 * self.inertia * np.sum(w * w, axis=-1)
