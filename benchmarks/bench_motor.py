@@ -3,7 +3,9 @@
 Run: ``.venv/bin/python benchmarks/bench_motor.py [--quick]``.
 
 Designs: the prototype (92-pole rotor, 29 coils) and the same stator with the rotor refined further
-(truncated icosahedron at levels 2, 3, 4: 272, 812 and 2432 poles). Finer rotors need a tolerance below
+(truncated icosahedron at level 2: 272 poles; ``--levels 1 2 3`` adds 812 poles, which did not finish in
+20 minutes on a 2-core machine: the number of states grows like the number of (pole pair, coil pair)
+matches, i.e. with the square of the rotor's poles — 101,640 states at 92 poles, 718,800 at 272). Finer rotors need a tolerance below
 half their pole spacing, so ``tol`` is ``min(1°, ¼ · rotor min separation)``, printed per row. Planner
 throughput is steps per second of ``plan_geometric`` over a 360° turn at steps of half a max step.
 The baseline measured in the same run is the same enumeration with the held pairs found by a dense
@@ -49,13 +51,14 @@ def dense_held_pairs(R, u, v, tol, grid=None):
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--quick", action="store_true", help="fewer repeats and sizes")
+    parser.add_argument("--quick", action="store_true", help="one repeat")
+    parser.add_argument("--levels", type=int, nargs="+", default=[1, 2], help="rotor refinement levels")
     args = parser.parse_args()
     repeats = 1 if args.quick else 3
     print(f"# bench_motor  {datetime.datetime.now().isoformat(timespec='minutes')}  {platform.platform()}  "
           f"cpus={os.cpu_count()}  python={platform.python_version()}  numpy={np.__version__}")
     base = prototype()
-    levels = (1, 2, 3) if args.quick else (1, 2, 3, 4)
+    levels = args.levels
     print(f"{'rotor poles':>11} {'coils':>5} {'tol °':>6} {'states':>9} {'enumerate s':>11} {'plan steps/s':>12}")
     for level in levels:
         rotor = pk.refine(pk.by_name("truncated-icosahedron"), levels=level)

@@ -189,11 +189,11 @@ class MotorDesign:
             raise bad_value("tol", "an angle in (0, 0.5) radians", tol)
         return find_states(self, float(tol))
 
-    def metrics(self, samples: int = 20_000, seed: int = 0) -> dict:
+    def metrics(self, samples: int = 20_000, seed: int = 0, escape: bool = True) -> dict:
         """Design metrics (see :func:`spherestep.motor.metrics.design_metrics`)."""
         from .metrics import design_metrics
 
-        return design_metrics(self, samples=samples, seed=seed)
+        return design_metrics(self, samples=samples, seed=seed, escape=escape)
 
     def summary(self) -> dict:
         """Poles, coils and dimensions as a JSON-ready dict (degrees and millimetres for people)."""
