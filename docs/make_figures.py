@@ -132,6 +132,60 @@ def packings(outdir: Path) -> Path:
     return save(fig, outdir / "packings.png")
 
 
+@figure("potential_well")
+def potential_well(outdir: Path) -> Path:
+    """Eq. (4) around a stepper state of the prototype with the state's coils energised (Sec. III-B, Fig. 6):
+    the energy over rotations exp((a e1 + b e2)^) R_s about two fixed-frame axes normal to the held coils' mean
+    direction, and a cut with the torque about e1 (the rotational analogue of Fig. 6's force and potential)."""
+    from spherestep import so3
+    from spherestep.motor import prototype
+    from spherestep.potential import MotorPotential, coil_currents, equilibrium
+
+    design = prototype()
+    states = design.states()
+    index = 0
+    R_s = states.rotations[index]
+    c = coil_currents(design, states.coils(index))
+    model = MotorPotential(design)
+    eq = equilibrium(model, R_s, c)
+    mean = design.stator.centers[[k for _, k in states.held(index)]].sum(axis=0)
+    mean /= np.linalg.norm(mean)
+    e1 = np.cross(mean, [1.0, 0.0, 0.0] if abs(mean[0]) < 0.9 else [0.0, 1.0, 0.0])
+    e1 /= np.linalg.norm(e1)
+    e2 = np.cross(mean, e1)
+    span = np.radians(np.linspace(-30.0, 30.0, 241))
+    a, b = np.meshgrid(span, span, indexing="xy")
+    R = so3.exp(a[..., None] * e1 + b[..., None] * e2) @ R_s
+    V = model.energy_pairwise(R, c)
+    offset = so3.log(eq.rotation @ R_s.T)
+    fig, (left, right) = plt.subplots(1, 2, figsize=(11.5, 4.8), gridspec_kw={"width_ratios": [1.05, 1]})
+    shown = left.contourf(np.degrees(a), np.degrees(b), V - eq.energy, levels=24, cmap="viridis")
+    left.contour(np.degrees(a), np.degrees(b), V - eq.energy, levels=24, colors="k", linewidths=0.3, alpha=0.5)
+    fig.colorbar(shown, ax=left, label="V(R, c) − V(R_eq, c)  (model units)")
+    left.plot(0, 0, "w+", ms=11, mew=2, label="geometric state")
+    left.plot(*np.degrees([offset @ e1, offset @ e2]), "rx", ms=9, mew=2, label="equilibrium (min of V)")
+    left.set_xlabel("rotation about e1 (°)")
+    left.set_ylabel("rotation about e2 (°)")
+    left.set_aspect("equal")
+    left.legend(loc="upper right", fontsize=8, framealpha=0.85)
+    left.set_title(f"state {index}: {len(states.held(index))} held pairs, coils {sorted(states.coils(index))}",
+                   fontsize=10)
+    line = so3.exp(span[:, None] * e1) @ eq.rotation
+    E, tau = model.energy_and_torque(line, c)
+    right.plot(np.degrees(span), E - eq.energy, color="k", label="energy V − V_eq")
+    right.set_xlabel("rotation about e1 from the equilibrium (°)")
+    right.set_ylabel("energy (model units)")
+    twin = right.twinx()
+    twin.plot(np.degrees(span), tau @ e1, color="#c0392b", label="torque τ · e1")
+    twin.axhline(0, color="#c0392b", lw=0.5, ls=":")
+    twin.set_ylabel("torque about e1 (model units)", color="#c0392b")
+    right.set_title("cut through the minimum: the well and its restoring torque", fontsize=10)
+    fig.suptitle(f"Eq. (4) for the prototype (von Mises–Fisher profiles, L = {model.bandlimit}); equilibrium "
+                 f"{np.degrees(so3.distance(eq.rotation, R_s)):.2f}° from the geometric state", fontsize=11)
+    fig.tight_layout()
+    return save(fig, outdir / "potential_well.png")
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("names", nargs="*", help=f"figures to make (default all): {', '.join(FIGURES)}")

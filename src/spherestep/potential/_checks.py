@@ -1,0 +1,83 @@
+"""Input checks of the potential room: one place that raises the user-facing errors."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..errors import bad_value
+
+_EYE = np.eye(3)
+
+
+def real_array(a, name: str) -> np.ndarray:
+    """A float array of finite real numbers."""
+    try:
+        arr = np.asarray(a, dtype=float)
+    except (TypeError, ValueError):
+        raise bad_value(name, "real numbers", a) from None
+    if not np.all(np.isfinite(arr)):
+        raise bad_value(name, "finite real numbers", a)
+    return arr
+
+
+def rotations(R, name: str = "R") -> np.ndarray:
+    """Rotation matrices ``(..., 3, 3)``: finite, orthogonal to 1e-6 with determinant +1."""
+    arr = np.asarray(R, dtype=float) if not isinstance(R, np.ndarray) or R.dtype != float else R
+    if arr.ndim < 2 or arr.shape[-2:] != (3, 3):
+        raise bad_value(name, "rotation matrices of shape (..., 3, 3)", f"shape {arr.shape}")
+    gram = np.swapaxes(arr, -1, -2) @ arr - _EYE
+    # orthogonal to 1e-6 (NaN fails too), and proper: the third row is the cross product of the first two
+    triple = (arr[..., 0, 0] * (arr[..., 1, 1] * arr[..., 2, 2] - arr[..., 1, 2] * arr[..., 2, 1])
+              + arr[..., 0, 1] * (arr[..., 1, 2] * arr[..., 2, 0] - arr[..., 1, 0] * arr[..., 2, 2])
+              + arr[..., 0, 2] * (arr[..., 1, 0] * arr[..., 2, 1] - arr[..., 1, 1] * arr[..., 2, 0]))
+    if arr.size and not (np.max(np.abs(gram)) <= 1e-6 and np.min(triple) > 0):
+        if not np.all(np.isfinite(arr)):
+            raise bad_value(name, "finite rotation matrices", "NaN or infinite entries")
+        raise bad_value(name, "rotation matrices (orthogonal to 1e-6, determinant +1)",
+                        "a matrix that is not a rotation")
+    return arr
+
+
+def currents(c, count: int, failed: tuple[int, ...], name: str = "currents") -> np.ndarray:
+    """Coil currents ``(..., N)``: finite reals, zero on failed coils."""
+    arr = c if isinstance(c, np.ndarray) and c.dtype == float else real_array(c, name)
+    if not np.isfinite(arr).all():
+        raise bad_value(name, "finite real numbers", "NaN or infinite entries")
+    if arr.ndim < 1 or arr.shape[-1] != count:
+        raise bad_value(name, f"one current per stator coil, shape (..., {count})", f"shape {arr.shape}")
+    if failed and np.any(arr[..., list(failed)] != 0):
+        raise bad_value(name, f"zero on the failed coils {list(failed)} (they cannot be energised)",
+                        "a non-zero current on a failed coil")
+    return arr
+
+
+def positive(x, name: str) -> float:
+    """A finite positive real number."""
+    if isinstance(x, bool) or not isinstance(x, (int, float, np.integer, np.floating)) or not math.isfinite(x) \
+            or x <= 0:
+        raise bad_value(name, "a finite positive number", x)
+    return float(x)
+
+
+def count(n, name: str, minimum: int = 0) -> int:
+    """An integer ``>= minimum``."""
+    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < minimum:
+        raise bad_value(name, f"an integer >= {minimum}", n)
+    return int(n)
+
+
+def fraction(x, name: str) -> float:
+    """A real number in (0, 1)."""
+    if isinstance(x, bool) or not isinstance(x, (int, float, np.floating)) or not 0 < x < 1:
+        raise bad_value(name, "a number in (0, 1)", x)
+    return float(x)
+
+
+def samples(x, name: str) -> np.ndarray:
+    """A 1-D array of finite reals."""
+    arr = real_array(x, name)
+    if arr.ndim != 1:
+        raise bad_value(name, "a 1-D array of samples", f"shape {arr.shape}")
+    return arr
