@@ -142,3 +142,48 @@ def test_planner_works_around_failed_coils(proto):
     T = about_axis([1, 1, 0], math.radians(90), 12, start=broken.states().rotations[0])
     plan = plan_geometric(broken, T)
     assert all(3 not in s.coils and 7 not in s.coils for s in plan.steps)
+
+
+@pytest.fixture(scope="module")
+def model(proto):
+    from spherestep.potential import MotorPotential
+
+    return MotorPotential(proto)
+
+
+def test_potential_planner_lands_on_equilibria(proto, model):
+    from spherestep.commutation import plan_potential
+    from spherestep.potential import coil_currents, equilibrium
+
+    T = about_axis([1, 0.5, 2], math.radians(60), 8, start=proto.states().rotations[0])
+    plan = plan_potential(proto, T, model, max_coils=3)
+    assert plan.planner == "potential" and len(plan.steps) == len(T)
+    for prev, step in zip(plan.steps[:-1], plan.steps[1:]):
+        assert 2 <= len(step.coils) <= 3
+        # the achieved orientation is a strict minimum of the energy under the step's coils ...
+        eq = equilibrium(model, step.achieved, coil_currents(proto, step.coils))
+        assert so3.distance(eq.rotation, step.achieved) < 1e-6 and eq.is_minimum
+        # ... within one step of the previous one
+        assert so3.distance(prev.achieved, step.achieved) <= proto.max_step + 1e-9
+    assert np.median(plan.errors) < math.radians(6)
+
+
+def test_potential_planner_beats_or_matches_geometric_on_a_turn(proto, model):
+    from spherestep.commutation import plan_potential
+
+    T = about_axis([0.2, -1, 0.5], 2 * math.pi, steps_for(2 * math.pi, 0.5 * proto.max_step),
+                   start=proto.states().rotations[17])
+    geometric = plan_geometric(proto, T)
+    potential = plan_potential(proto, T, model)
+    assert np.median(potential.errors) <= np.median(geometric.errors) + math.radians(0.5)
+    assert potential.errors[-1] < math.radians(2)
+
+
+def test_potential_planner_avoids_failed_coils(proto):
+    from spherestep.commutation import plan_potential
+    from spherestep.potential import MotorPotential
+
+    broken = proto.without_coils([4])
+    T = about_axis([1, 0, 0], math.radians(40), 5, start=broken.states().rotations[0])
+    plan = plan_potential(broken, T, MotorPotential(broken))
+    assert all(4 not in s.coils for s in plan.steps)

@@ -2,6 +2,6 @@
 
 from .rotor import Rotor
 from .closed_loop import ClosedLoopRun, run_closed_loop
-from .simulate import Integrator, Simulation, currents_of, simulate
+from .simulate import Integrator, Scaled, Simulation, currents_of, simulate
 
-__all__ = ["ClosedLoopRun", "Integrator", "Rotor", "Simulation", "currents_of", "run_closed_loop", "simulate"]
+__all__ = ["ClosedLoopRun", "Integrator", "Rotor", "Scaled", "Simulation", "currents_of", "run_closed_loop", "simulate"]

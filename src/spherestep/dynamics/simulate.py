@@ -59,6 +59,25 @@ class Simulation:
         return np.flatnonzero(self.step_errors > self.tolerance)
 
 
+class Scaled:
+    """A torque model in SI units: ``scale`` joules per model unit, so ``τ`` in N·m and ``V`` in J.
+
+    Uses the model's fast pairwise energy where it has one (:class:`~spherestep.potential.MotorPotential`).
+    """
+
+    def __init__(self, model, scale: float = 1.0):
+        if not (isinstance(scale, (int, float)) and math.isfinite(scale) and scale > 0):
+            raise bad_value("scale", "a positive number of joules per model unit", scale)
+        self.model, self.scale = model, float(scale)
+        self._energy = getattr(model, "energy_pairwise", model.energy)
+
+    def torque(self, R, c):
+        return self.scale * self.model.torque(R, c)
+
+    def energy(self, R, c):
+        return self.scale * self._energy(R, c)
+
+
 class Integrator:
     """Integrates one rotor under ``model`` (``torque``/``energy`` of ``(R, currents)``) with time step ``dt``."""
 

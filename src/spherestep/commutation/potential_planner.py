@@ -1,0 +1,98 @@
+"""The potential planner of Sec. III-B.
+
+At each step the planner weighs activations — sets of coils with polarities, at most ``max_coils``
+energised at once — by where the rotor would come to rest under them: the minimum of the energy
+``V(·, c)`` reached by descending from the previous resting orientation ``R̃_{i−1}``
+(:func:`spherestep.potential.equilibrium`). The activation whose equilibrium is nearest the desired
+``R_i`` wins. Candidate activations are the coil sets of the stepper states nearest ``R_i`` (each trimmed
+to the ``max_coils`` pairs whose poles sit closest to their coils at ``R_i``), plus the current one
+(staying). An equilibrium counts only if the descent converged to a strict minimum within ``max_step`` of
+``R̃_{i−1}`` (one step's pull, as in the geometric planner). The plan's ``achieved`` orientations are these
+equilibria, not the geometric states, so a simulated rotor settles on them; ``held`` lists the pole–coil
+pairs within the design's tolerance at the equilibrium.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .. import so3
+from ..errors import bad_value
+from .geometric import BLOCKED, DEFAULT_CANDIDATES, start_state
+from .plan import Plan, Step
+
+DEFAULT_MAX_COILS = 4
+
+
+def _trim(held: list[tuple[int, int]], design, target, max_coils: int) -> dict[int, int]:
+    """The coil → polarity map of ``held`` keeping the ``max_coils`` pairs closest at ``target``."""
+    if len(held) > max_coils:
+        u, v = design.rotor.centers, design.stator.centers
+        closeness = [-(target @ u[j]) @ v[k] for j, k in held]
+        held = [held[i] for i in np.argsort(closeness)[:max_coils]]
+    return {k: int(design.polarity[j]) for j, k in held}
+
+
+def plan_potential(design, targets, model, *, max_coils: int = DEFAULT_MAX_COILS,
+                   candidates: int = DEFAULT_CANDIDATES, max_step: float | None = None,
+                   start: int | None = None) -> Plan:
+    """Commutate ``targets (n+1, 3, 3)`` with the energy ``model`` (a
+    :class:`~spherestep.potential.MotorPotential` of ``design``); see the module docstring."""
+    from ..potential import equilibrium
+
+    targets = np.asarray(targets, dtype=float)
+    if targets.ndim != 3 or targets.shape[1:] != (3, 3) or len(targets) < 2:
+        raise bad_value("targets", "at least two rotations, shape (n+1, 3, 3)", f"shape {targets.shape}")
+    if isinstance(max_coils, bool) or not isinstance(max_coils, (int, np.integer)) or max_coils < 2:
+        raise bad_value("max_coils", "an integer of at least 2 (two poles fix the rotor)", max_coils)
+    states = design.states()
+    if len(states) == 0:
+        raise bad_value("design", "a design with stepper states", "none")
+    reach = design.max_step if max_step is None else float(max_step)
+    N = len(design.stator)
+    first = start_state(states, targets[0]) if start is None else int(start)
+    coils = _trim(states.held(first), design, states.rotations[first], max_coils)
+    here = equilibrium(model, states.rotations[first], _currents(coils, N)).rotation
+    _, near = states.nearest(targets, k=candidates)
+    rows = [(targets[0], here, coils, "ok")]
+    for i in range(1, len(targets)):
+        options = [coils] + [_trim(states.held(int(s)), design, targets[i], max_coils) for s in near[i]]
+        unique = list({tuple(sorted(o.items())): o for o in options}.values())
+        eq = equilibrium(model, np.broadcast_to(here, (len(unique), 3, 3)),
+                         np.array([_currents(o, N) for o in unique]))
+        valid = eq.converged & eq.is_minimum & (so3.distance(eq.rotation, here) <= reach)
+        if not valid.any():
+            rows.append((targets[i], here, coils, BLOCKED))
+            continue
+        error = np.where(valid, so3.distance(eq.rotation, targets[i]), np.inf)
+        best = int(np.argmin(error))
+        status = "hold" if unique[best] == coils else "ok"
+        coils, here = unique[best], eq.rotation[best]
+        rows.append((targets[i], here, coils, status))
+    return _assemble(design, rows)
+
+
+def _currents(coils: dict[int, int], N: int) -> np.ndarray:
+    c = np.zeros(N)
+    for k, s in coils.items():
+        c[k] = s
+    return c
+
+
+def _assemble(design, rows) -> Plan:
+    """Build the :class:`Plan` from ``(target, achieved, coils, status)`` rows."""
+    u, v, tol = design.rotor.centers, design.stator.centers, design.state_tol
+    steps = []
+    for i, (target, achieved, coils, status) in enumerate(rows):
+        cos = (achieved @ u.T).T @ v[list(coils)].T if coils else np.zeros((len(u), 0))
+        ks = list(coils)
+        held = [(int(j), ks[c]) for j, c in zip(*np.nonzero(cos >= np.cos(tol)))]
+        steps.append(Step(index=i, target=target, achieved=achieved, error=float(so3.distance(achieved, target)),
+                          coils=dict(coils), held=held, status=status))
+    for a, b in zip(steps[:-1], steps[1:]):
+        # the next pole: the pole nearest a newly energised coil at the next equilibrium, not held now
+        mine = {j for j, _ in a.held}
+        new = [j for j, _ in b.held if j not in mine]
+        a.next_pole = new[0] if new else None
+    return Plan(steps=steps, coil_count=len(design.stator), channel_map=design.channel_map,
+                design=design.name, planner="potential")
