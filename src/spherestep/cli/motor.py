@@ -113,10 +113,12 @@ def demo(
     quiet: bool = typer.Option(False, "--quiet", help="Print nothing but errors."),
 ) -> None:
     """The main job on the built-in prototype: states, resolution, range, a commutated 360° turn about a
-    tilted axis, and the plan and figures in the output folder.
+    tilted axis, and the plan, figures and HTML report (report.html) in the output folder.
 
     Example: [bold]spherestep demo --out spherestep-out[/bold]
     """
+    from ..report import write_report  # plotly loads only when a report is written
+
     axis_vec = parse_vector(axis, "--axis")
     with Progress(SpinnerColumn(), TextColumn("{task.description}"), TimeElapsedColumn(), console=console,
                   disable=quiet or as_json, transient=True) as progress:
@@ -125,11 +127,14 @@ def demo(
         progress.update(task, description="enumerating stepper states")
         design.states()
         progress.update(task, description="measuring resolution, range and escape directions")
-        info = metrics_for_people(design, design.metrics())
+        metrics = design.metrics()
+        info = metrics_for_people(design, metrics)
         progress.update(task, description="commutating")
         plan = commutate(design, axis_vec, angle, None)
         progress.update(task, description="writing plan and figures")
         written = write_plan_outputs(design, plan, axis_vec, out)
+        progress.update(task, description="writing the HTML report")
+        written.append(Path(write_report(out / "report.html", design, metrics, plan, axis=axis_vec)["path"]))
     info["plan"] = plan_summary(plan) | {"axis": (axis_vec / np.linalg.norm(axis_vec)).tolist(), "angle_deg": angle}
     written.append(write_text(out / "summary.json", json.dumps(info, indent=1)))
     info["files"] = [str(p) for p in written]
