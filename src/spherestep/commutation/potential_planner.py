@@ -4,9 +4,9 @@ At each step the planner weighs activations — sets of coils with polarities, a
 energised at once — by where the rotor would come to rest under them: the minimum of the energy
 ``V(·, c)`` reached by descending from the previous resting orientation ``R̃_{i−1}``
 (:func:`spherestep.potential.equilibrium`). The activation whose equilibrium is nearest the desired
-``R_i`` wins. Candidate activations are the coil sets of the stepper states nearest ``R_i`` (each trimmed
-to the ``max_coils`` pairs whose poles sit closest to their coils at ``R_i``), plus the current one
-(staying). An equilibrium counts only if the descent converged to a strict minimum within ``max_step`` of
+``R_i`` wins. Candidate activations are the coil sets of the stepper states nearest ``R_i`` and of the
+states within one step of ``R̃_{i−1}`` nearest ``R_i`` (so a lagging rotor catches up), each trimmed to the
+``max_coils`` pairs whose poles sit closest to their coils at ``R_i``, plus the current one (staying). An equilibrium counts only if the descent converged to a strict minimum within ``max_step`` of
 ``R̃_{i−1}`` (one step's pull, as in the geometric planner). The plan's ``achieved`` orientations are these
 equilibria, not the geometric states, so a simulated rotor settles on them; ``held`` lists the pole–coil
 pairs within the design's tolerance at the equilibrium.
@@ -56,7 +56,11 @@ def plan_potential(design, targets, model, *, max_coils: int = DEFAULT_MAX_COILS
     _, near = states.nearest(targets, k=candidates)
     rows = [(targets[0], here, coils, "ok")]
     for i in range(1, len(targets)):
-        options = [coils] + [_trim(states.held(int(s)), design, targets[i], max_coils) for s in near[i]]
+        # the states nearest the target, and — so a lagging rotor catches up — the reachable ones nearest it
+        around = states.within(here, reach)
+        around = around[np.argsort(so3.distance(states.rotations[around], targets[i]))[:candidates]]
+        options = [coils] + [_trim(states.held(int(s)), design, targets[i], max_coils)
+                             for s in np.concatenate([near[i], around])]
         unique = list({tuple(sorted(o.items())): o for o in options}.values())
         eq = equilibrium(model, np.broadcast_to(here, (len(unique), 3, 3)),
                          np.array([_currents(o, N) for o in unique]))
