@@ -138,3 +138,22 @@ def save_figure(fig: Figure, path: str | Path, dpi: int = 130) -> Path:
     with atomic_path(path) as tmp:
         fig.savefig(tmp, format=path.suffix.lstrip(".") or "png", dpi=dpi)
     return path
+
+
+def figure_simulation(sim, plan, axis, dwell: float) -> Figure:
+    """Desired, planned and simulated rotation angle about ``axis`` (degrees) against time."""
+    from . import so3
+
+    fig = Figure(figsize=(7, 3.2))
+    ax = fig.add_subplot()
+    steps = np.arange(len(plan.steps)) * dwell
+    ax.step(steps, np.degrees(so3.turned_angle(plan.targets, axis)), where="post", color="0.6", lw=1.0,
+            label="desired Rᵢ")
+    ax.step(steps, np.degrees(so3.turned_angle(plan.achieved, axis)), where="post", color="#2c6fbb", lw=1.0,
+            label="planned R̃ᵢ")
+    ax.plot(sim.times, np.degrees(so3.turned_angle(sim.orientations, axis)), color="k", lw=1.0, label="simulated")
+    ax.set_xlabel("time (s)")
+    ax.set_ylabel("rotation about the axis (°)")
+    ax.legend(fontsize=7)
+    fig.tight_layout()
+    return fig

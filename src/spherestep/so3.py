@@ -216,6 +216,16 @@ def geodesic(R1, R2, t) -> np.ndarray:
     return R1 @ exp(omega * t[..., None])
 
 
+def turned_angle(rotations, axis) -> np.ndarray:
+    """Cumulative angle (rad) turned about the fixed-frame ``axis`` along ``rotations (T, 3, 3)``:
+    ``ψ_0 = 0``, ``ψ_k = ψ_{k−1} + n · log(R_k R_{k−1}ᵀ)`` (unwrapped, so a full turn gives 2π)."""
+    R = _as_rotations(rotations, "rotations")
+    n = np.asarray(axis, dtype=float)
+    n = n / np.linalg.norm(n)
+    steps = log(R[1:] @ np.swapaxes(R[:-1], 1, 2)) @ n
+    return np.concatenate([[0.0], np.cumsum(steps)])
+
+
 def path_length(keys) -> float:
     """Length of the piecewise-geodesic path through ``keys`` ``(m, 3, 3)``: the sum of Park distances."""
     keys = _as_rotations(keys, "path")

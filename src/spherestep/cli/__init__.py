@@ -12,7 +12,7 @@ import typer
 from typer.exceptions import TyperException
 
 from ..errors import ComputationError, SpherestepError
-from . import design, export, motor, packings, report  # noqa: F401  (registers commands)
+from . import design, export, motor, packings, report, simulate  # noqa: F401  (registers commands)
 from . import run  # noqa: F401
 from .app import app
 

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import csv
+import io
 import json
 import math
 from pathlib import Path
@@ -20,6 +22,7 @@ from .app import app
 from .common import console, parse_vector, print_json
 
 DEMO_AXIS = "1,0.5,2"
+STEP_FRACTION = 0.35  # default desired step, as a fraction of the max step (finer steps land more reliably)
 
 
 def metrics_for_people(design: MotorDesign, metrics: dict) -> dict:
@@ -59,15 +62,32 @@ def print_summary(info: dict) -> None:
     console.print(table)
 
 
-def commutate(design: MotorDesign, axis: np.ndarray, angle_deg: float, steps: int | None):
-    """Plan a rotation of ``angle_deg`` about ``axis`` from the state nearest the identity."""
+def design_from(path: Path | None) -> MotorDesign:
+    """The design in the file at ``path``, or the built-in prototype."""
+    return prototype() if path is None else MotorDesign.load(path)
+
+
+def targets_for(design: MotorDesign, axis: np.ndarray, angle_deg: float, steps: int | None) -> np.ndarray:
+    """A turn of ``angle_deg`` about ``axis`` from the stepper state nearest the identity, at ``steps`` equal
+    steps (default: steps of :data:`STEP_FRACTION` of a max step)."""
     if not math.isfinite(angle_deg) or angle_deg == 0 or abs(angle_deg) > 36000:
         raise bad_value("--angle", "a non-zero angle in degrees, at most 36000 in size", angle_deg)
     states = design.states()
     start = states.rotations[int(states.nearest(np.eye(3))[1].ravel()[0])]
     angle = math.radians(angle_deg)
-    n = steps if steps is not None else steps_for(abs(angle), 0.5 * design.max_step)
-    targets = about_axis(axis, angle, n, start=start)
+    n = steps if steps is not None else steps_for(abs(angle), STEP_FRACTION * design.max_step)
+    return about_axis(axis, angle, n, start=start)
+
+
+def commutate(design: MotorDesign, axis: np.ndarray, angle_deg: float, steps: int | None,
+              planner: str = "geometric"):
+    """Plan a turn (see :func:`targets_for`) with the geometric or the potential planner."""
+    targets = targets_for(design, axis, angle_deg, steps)
+    if planner == "potential":
+        from ..commutation import plan_potential
+        from ..potential import MotorPotential
+
+        return plan_potential(design, targets, MotorPotential(design))
     return plan_geometric(design, targets)
 
 
@@ -84,6 +104,42 @@ def write_plan_outputs(design: MotorDesign, plan, axis: np.ndarray, out: Path) -
     for name, fig in figures.items():
         written.append(plots.save_figure(fig, out / name))
     return written
+
+
+def trajectory_csv(sim, axis) -> str:
+    """Time, unit quaternion (w, x, y, z), angular velocity, angle turned about the axis, energised coils."""
+    from scipy.spatial.transform import Rotation
+
+    q = Rotation.from_matrix(sim.orientations).as_quat(scalar_first=True)
+    angle = np.degrees(so3.turned_angle(sim.orientations, axis))
+    buf = io.StringIO()
+    w = csv.writer(buf, lineterminator="\n")
+    w.writerow(["t_s", "qw", "qx", "qy", "qz", "wx_rad_s", "wy_rad_s", "wz_rad_s", "turned_deg", "coils"])
+    for t, qq, om, a, c in zip(sim.times, q, sim.angular_velocity, angle, sim.active_coils):
+        coils = ";".join(f"{k}:{int(c[k]):+d}" for k in np.flatnonzero(c))
+        w.writerow([f"{t:.6f}", *(f"{x:.12f}" for x in qq), *(f"{x:.9f}" for x in om), f"{a:.6f}", coils])
+    return buf.getvalue()
+
+
+def simulate_plan(design: MotorDesign, plan, axis: np.ndarray, out: Path, physics=None, tuning=None):
+    """Run ``plan`` on the rotor under the magnets' torque map (tuned damping and dwell); write
+    ``trajectory.csv`` and ``simulation.png``. Returns ``(simulation, summary dict, paths written)``."""
+    from ..dynamics import simulate, tune
+    from ..magnetics import torque_map
+
+    physics = torque_map(design) if physics is None else physics
+    tuning = tune(design, physics) if tuning is None else tuning
+    sim = simulate(design, plan, physics, dwell=tuning.dwell, rotor=tuning.rotor, dt=5e-3, record_every=4)
+    written = [write_text(out / "trajectory.csv", trajectory_csv(sim, axis)),
+               plots.save_figure(plots.figure_simulation(sim, plan, axis, tuning.dwell), out / "simulation.png")]
+    err = np.degrees(sim.step_errors)
+    summary = {"steps": len(plan.steps) - 1, "executed": sim.executed, "dwell_s": tuning.dwell,
+               "damping_N_m_s": tuning.rotor.damping, "settled_error_median_deg": float(np.median(err)),
+               "settled_error_max_deg": float(err.max()),
+               "steps_off_by_more_than_0_5_deg": sim.missed_steps.tolist(),
+               "final_error_to_target_deg": math.degrees(float(so3.distance(sim.settled[-1], plan.targets[-1]))),
+               "simulated_s": float(sim.times[-1])}
+    return sim, summary, written
 
 
 def plan_summary(plan) -> dict:
@@ -133,8 +189,12 @@ def demo(
         plan = commutate(design, axis_vec, angle, None)
         progress.update(task, description="writing plan and figures")
         written = write_plan_outputs(design, plan, axis_vec, out)
+        progress.update(task, description="simulating the plan on the magnets' torque map")
+        sim, info["simulation"], more = simulate_plan(design, plan, axis_vec, out)
+        written += more
         progress.update(task, description="writing the HTML report")
-        written.append(Path(write_report(out / "report.html", design, metrics, plan, axis=axis_vec)["path"]))
+        written.append(Path(write_report(out / "report.html", design, metrics, plan, simulation=sim,
+                                         axis=axis_vec)["path"]))
     info["plan"] = plan_summary(plan) | {"axis": (axis_vec / np.linalg.norm(axis_vec)).tolist(), "angle_deg": angle}
     written.append(write_text(out / "summary.json", json.dumps(info, indent=1)))
     info["files"] = [str(p) for p in written]
@@ -147,6 +207,10 @@ def demo(
                       f"{p['steps']} steps, {p['moves']} moves, {p['holds']} holds, {p['blocked']} blocked; "
                       f"error median {p['error_median_deg']:.2f}°, max {p['error_max_deg']:.2f}°, "
                       f"final {p['error_final_deg']:.2f}°")
+        r = info["simulation"]
+        console.print(f"simulated {r['simulated_s']:.0f} s on the magnets' torque map: {r['steps'] - len(r['steps_off_by_more_than_0_5_deg'])} "
+                      f"of {r['steps']} steps settled within 0.5° of the plan (median {r['settled_error_median_deg']:.2f}°, "
+                      f"max {r['settled_error_max_deg']:.2f}°); final pose {r['final_error_to_target_deg']:.2f}° from the target")
         console.print(f"wrote {len(written)} files to {out}/")
 
 
@@ -154,7 +218,7 @@ def demo(
 def plan(
     axis: str = typer.Option(..., "--axis", help="Rotation axis X,Y,Z in the fixed (stator) frame."),
     angle: float = typer.Option(..., "--angle", help="Rotation angle in degrees (sign gives the sense)."),
-    steps: int = typer.Option(None, "--steps", min=1, max=100_000, help="Number of steps (default: half a max step each)."),
+    steps: int = typer.Option(None, "--steps", min=1, max=100_000, help="Number of steps (default: 0.35 of a max step each)."),
     out: Path = typer.Option(Path("spherestep-out"), "--out", help="Output folder."),
     as_json: bool = typer.Option(False, "--json", help="Print the plan summary as JSON."),
     design_path: Path = typer.Option(None, "--design", help="Design file (YAML/TOML); default the built-in prototype."),
@@ -164,7 +228,7 @@ def plan(
     Example: [bold]spherestep plan --axis 0,1,1 --angle 90 --steps 20 --out plan90 --design mymotor.yaml[/bold]
     """
     axis_vec = parse_vector(axis, "--axis")
-    design = prototype() if design_path is None else MotorDesign.load(design_path)
+    design = design_from(design_path)
     result = commutate(design, axis_vec, angle, steps)
     written = write_plan_outputs(design, result, axis_vec, out)
     summary = plan_summary(result) | {"files": [str(p) for p in written]}

@@ -3,5 +3,7 @@
 from .rotor import Rotor
 from .closed_loop import ClosedLoopRun, run_closed_loop
 from .simulate import Integrator, Scaled, Simulation, currents_of, simulate
+from .tuning import Tuning, stiffness, tune
 
-__all__ = ["ClosedLoopRun", "Integrator", "Rotor", "Scaled", "Simulation", "currents_of", "run_closed_loop", "simulate"]
+__all__ = ["ClosedLoopRun", "Integrator", "Rotor", "Scaled", "Simulation", "Tuning", "currents_of", "run_closed_loop", "simulate",
+           "stiffness", "tune"]

@@ -1,0 +1,43 @@
+"""``spherestep simulate`` end to end, on the magnets' torque map."""
+
+import csv
+import json
+
+import numpy as np
+
+from spherestep.cli import main
+
+
+def test_open_loop_run_writes_trajectory_and_plot(tmp_path, capsys):
+    assert main(["simulate", "--axis", "1,0.5,2", "--angle", "20", "--steps", "3", "--out", str(tmp_path),
+                 "--json"]) == 0
+    summary = json.loads(capsys.readouterr().out)
+    assert summary["steps"] >= 3 and summary["closed_loop"] is False
+    rows = list(csv.DictReader((tmp_path / "trajectory.csv").open()))
+    t = np.array([float(r["t_s"]) for r in rows])
+    q = np.array([[float(r[k]) for k in ("qw", "qx", "qy", "qz")] for r in rows])
+    assert np.all(np.diff(t) > 0) and np.allclose(np.linalg.norm(q, axis=1), 1, atol=1e-9)
+    assert abs(t[-1] - summary["steps"] * summary["dwell_s"]) < 0.02
+    assert (tmp_path / "simulation.png").read_bytes()[:4] == b"\x89PNG"
+
+
+def test_closed_loop_with_failed_coil_and_missed_steps(tmp_path, capsys):
+    assert main(["simulate", "--axis", "0,0,1", "--angle", "30", "--steps", "4", "--missed", "0.3",
+                 "--noise", "0.1", "--failed-coils", "2", "--seed", "1", "--out", str(tmp_path), "--json"]) == 0
+    summary = json.loads(capsys.readouterr().out)
+    assert summary["closed_loop"] and summary["failed_coils"] == [2]
+    assert summary["final_error_deg"] < 10
+    assert (tmp_path / "closed_loop.csv").exists()
+
+
+def test_bad_input_exits_2(tmp_path, capsys):
+    for args in (["--planner", "magic"], ["--failed-coils", "99"], ["--failed-coils", "a,b"], ["--missed", "2"],
+                 ["--axis", "0,0,0"]):
+        base = ["simulate", "--axis", "1,0,0", "--angle", "10", "--out", str(tmp_path / "x")]
+        if args[0] == "--axis":
+            base[2] = args[1]
+            args = []
+        assert main(base + args) == 2
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1 and "Traceback" not in err
+    assert not (tmp_path / "x").exists()
