@@ -186,6 +186,21 @@ def potential_well(outdir: Path) -> Path:
     return save(fig, outdir / "potential_well.png")
 
 
+@figure("magnetics_fig6")
+def magnetics_fig6(outdir: Path) -> Path:
+    """Fig. 6 in simulation (magpylib) and the calibrated potential model against magpylib: the force curve
+    and its quartic, the potentials, the pole–coil torque three ways, and torques on 1000 random orientations
+    (direct getFT at 8 cells per magnet: about a minute). docs/magnetics.md."""
+    from spherestep import magnetics as mg
+    from spherestep.motor import prototype
+
+    design = prototype()
+    calibration = mg.calibrate(design)
+    tmap = mg.torque_map(design)
+    comparison = mg.compare_models(design, calibration, tmap, samples=1000, states=300, seed=0)
+    return save(mg.figure_comparison(design, calibration, comparison, tmap), outdir / "magnetics_fig6.png")
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("names", nargs="*", help=f"figures to make (default all): {', '.join(FIGURES)}")

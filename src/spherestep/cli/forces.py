@@ -1,0 +1,87 @@
+"""``spherestep forces``: the physical model's Fig. 6 curve with its fit, and holding torques of stepper states."""
+
+from __future__ import annotations
+
+import json
+from contextlib import nullcontext
+from pathlib import Path
+
+import numpy as np
+import typer
+from rich.table import Table
+
+from .. import magnetics as mg
+from ..atomic import write_text
+from ..errors import bad_value
+from ..motor import MotorDesign, prototype
+from ..plots import save_figure
+from .app import app
+from .common import console, print_json
+
+
+@app.command()
+def forces(
+    design_path: Path = typer.Option(None, "--design", help="Design file (YAML/TOML); default the built-in prototype."),
+    out: Path = typer.Option(Path("spherestep-out/forces"), "--out", help="Output folder."),
+    states: int = typer.Option(8, "--states", help="Number of stepper states to sample for the torque table."),
+    seed: int = typer.Option(0, "--seed", help="Seed of the state sample."),
+    as_json: bool = typer.Option(False, "--json", help="Print the results as JSON."),
+) -> None:
+    """Physical forces by magpylib: the Fig. 6 force curve (one magnet slid under one coil, simulated) with its
+    4th-order fit (force_curve.csv, force_curve.png), and holding and stepping torques (N·m) of a sample of
+    stepper states (forces.json; a table, or --json).
+
+    Example: [bold]spherestep forces --out forces --states 10[/bold]
+    """
+    if states < 1 or states > 10_000:
+        raise bad_value("--states", "a number of states from 1 to 10000", states)
+    design = prototype() if design_path is None else MotorDesign.load(design_path)
+    st = design.states()
+    if len(st) == 0:
+        raise bad_value("--design", "a design with at least one stepper state", "none")
+    with console.status("simulating the Fig. 6 curve and calibrating", spinner="dots") if not as_json \
+            else nullcontext():
+        cal = mg.calibrate(design)
+        tmap = mg.torque_map(design)
+    idx = np.sort(np.random.default_rng(seed).choice(len(st), min(states, len(st)), replace=False))
+    with console.status("holding and step torques", spinner="dots") if not as_json else nullcontext():
+        rows = mg.state_torques(design, tmap, idx)
+    out.mkdir(parents=True, exist_ok=True)
+    csv_path = out / "force_curve.csv"
+    cal.curve.save(csv_path, design.name)
+    png_path = save_figure(mg.figure_force_curve(cal, design.name), out / "force_curve.png")
+    curve = cal.curve
+    peak = int(np.argmin(curve.lateral))
+    info = {
+        "design": design.name,
+        "model": mg.model_summary(design),
+        "curve": {"source": "simulation (magpylib getFT), not a measurement", "gap_m": curve.gap,
+                  "meshing": curve.meshing, "peak_lateral_force_N": float(-curve.lateral[peak]),
+                  "peak_at_m": float(curve.displacement[peak]),
+                  "normal_force_aligned_N": float(curve.normal[int(np.argmin(np.abs(curve.displacement)))]),
+                  "fit_range_m": [0.0, cal.limit],
+                  "fit_coefficients_N_per_m^i": cal.fit.force_polynomial.coef.tolist(),
+                  "fitted_stator_profile": {"kappa": cal.fit.stator.kappa, "amplitude": cal.fit.stator.amplitude}},
+        "states": rows,
+    }
+    json_path = write_text(out / "forces.json", json.dumps(info, indent=1))
+    info["files"] = [str(csv_path), str(png_path), str(json_path)]
+    if as_json:
+        print_json(info)
+        return
+    console.print(f"Fig. 6 curve (simulated): peak lateral force {info['curve']['peak_lateral_force_N']:.3f} N at "
+                  f"{1e3 * info['curve']['peak_at_m']:.1f} mm; attraction when aligned "
+                  f"{info['curve']['normal_force_aligned_N']:.3f} N; quartic fitted on 0–{1e3 * cal.limit:.1f} mm")
+    table = Table(title=f"{design.name}: torques at {len(rows)} stepper states (N·m)")
+    for col in ("state", "coils", "offset °", "holding", "strongest", "min stiffness N·m/rad",
+                "downhill steps", "peak step torque"):
+        table.add_column(col, justify="right", no_wrap=True)
+    for r in rows:
+        table.add_row(str(r["state"]), " ".join(f"{k}{'+' if s > 0 else '−'}" for k, s in r["coils"].items()),
+                      f"{r['equilibrium_offset_deg']:.2f}", f"{r['holding_torque_Nm']:.3f}",
+                      f"{r['strongest_axis_Nm']:.3f}", f"{r['stiffness_Nm_per_rad'][0]:.3f}",
+                      f"{r.get('downhill_steps', 0)}/{r['steps']}",
+                      f"{r['step_peak_torque_Nm']:.3f}" if "step_peak_torque_Nm" in r else "—")
+    console.print(table)
+    console.print(f"wrote {len(info['files'])} files to {out}/")
+

@@ -1,0 +1,34 @@
+"""Physical forces and torques from the motor's magnet geometry, with magpylib (Sec. IV).
+
+* Model (:mod:`._model`): rotor magnets and coils as magpylib cylinders; a coil is the uniformly magnetised
+  cylinder equivalent to its solenoid (``J = μ0 c NI / l_c``). Air core, linear, no saturation or eddy currents.
+* Direct (:mod:`._direct`): :func:`force_torque`, :func:`torque`, :func:`force` by ``magpylib.getFT``, batched
+  over orientations; :func:`reaction`, the force and torque on the stator (Newton's third law check).
+* Fig. 6 (:mod:`._curve`): :func:`force_curve`; calibration of the potential model (:mod:`._calibration`):
+  :func:`calibrate`, :func:`compare_models`.
+* Torque map (:mod:`._table`): :class:`TorqueMap` from one pole–coil table ``τ(α)``; :func:`torque_function`
+  for the dynamics.
+* Statics (:mod:`._statics`): :func:`equilibrium`, :func:`holding_torque`, :func:`step_torque`,
+  :func:`state_torques`.
+
+Every torque is about the sphere's centre in the fixed frame (N·m), forces in N; currents are per coil,
+nominal ±1 (``coil_ampere_turns``), ``+1`` attracting a north-out (``+1``) pole.
+"""
+
+from ._calibration import Calibration, Comparison, calibrate, compare_models, fit_limit, random_drives
+from ._curve import ForceCurve, force_curve
+from ._figures import figure_comparison, figure_force_curve
+from ._direct import MESHING, coil_wrenches, force, force_torque, reaction, torque
+from ._model import coil_polarization, model_summary, rotor_collection, rotor_magnets, stator_coils
+from ._statics import (Equilibrium, Holding, StepTorque, cube_axes, equilibrium, holding_torque,
+                       state_currents, state_torques, step_torque, stiffness)
+from ._table import TABLE_MESHING, TorqueMap, pair_torque, table_nodes, torque_function, torque_map
+
+__all__ = [
+    "MESHING", "TABLE_MESHING", "Calibration", "Comparison", "Equilibrium", "ForceCurve", "Holding", "StepTorque",
+    "TorqueMap", "calibrate", "coil_polarization", "coil_wrenches", "compare_models", "cube_axes", "equilibrium",
+    "figure_comparison", "figure_force_curve", "fit_limit", "force", "force_curve", "force_torque",
+    "holding_torque", "model_summary", "pair_torque", "random_drives", "reaction", "rotor_collection",
+    "rotor_magnets", "state_currents", "state_torques", "stator_coils", "step_torque", "stiffness", "table_nodes",
+    "torque", "torque_function", "torque_map",
+]
