@@ -148,3 +148,27 @@ def test_rotor_rejects_bad_parameters():
         Rotor(inertia=0.0)
     with pytest.raises(InputError, match="damping"):
         Rotor(inertia=1.0, damping=-1.0)
+
+
+def test_tuning_matches_an_independent_stiffness(proto, wells):
+    """``tune``: stiffness against the model's Hessian by a coarser central difference of the energy
+    (second differences, an independent route), damping 2ζ√(kI), dwell 5/(ζω)."""
+    from spherestep.dynamics import stiffness, tune
+
+    states = proto.states()
+    c = np.zeros(len(proto.stator))
+    for k, s in states.coils(0).items():
+        c[k] = s
+    R = states.rotations[0]
+    h = 1e-3
+    H = np.empty((3, 3))
+    E = lambda v: wells.energy((so3.exp(v) @ R)[None], c[None])[0]  # noqa: E731
+    for a in range(3):
+        for b in range(3):
+            ea, eb = h * np.eye(3)[a], h * np.eye(3)[b]
+            H[a, b] = (E(ea + eb) - E(ea - eb) - E(-ea + eb) + E(-ea - eb)) / (4 * h * h)
+    # the second differences of V(exp(v) R) carry the Lie-bracket term symmetrically; compare eigenvalues
+    assert np.allclose(stiffness(wells, R, c), np.linalg.eigvalsh(0.5 * (H + H.T)), rtol=2e-3, atol=1e-4)
+    t = tune(proto, wells, zeta=0.8, samples=5)
+    assert math.isclose(t.rotor.damping, 2 * 0.8 * math.sqrt(t.stiffness * t.rotor.inertia), rel_tol=1e-12)
+    assert math.isclose(t.dwell, 5 / (0.8 * t.omega), rel_tol=1e-12) and t.stiffness > 0
