@@ -6,6 +6,7 @@ import math
 import sys
 from pathlib import Path
 
+import numpy as np
 import typer
 from rich.table import Table
 
@@ -16,6 +17,22 @@ from .app import app
 from .common import console
 
 _DEFAULT = ThermalLimits()
+
+
+def _simulated(design_path, plan):
+    """The :class:`Simulated` back end for ``plan``: the design's rotor under its magnets' torque map, tuned,
+    starting at rest at the plan's first orientation."""
+    from ..dynamics import tune
+    from ..hardware import Simulated
+    from ..magnetics import torque_map
+    from .motor import design_from
+
+    design = design_from(design_path)
+    if len(design.stator) != plan.coil_count:
+        raise bad_value("--design", f"the design the plan was made for ({plan.coil_count} coils)",
+                        f"a design with {len(design.stator)} coils")
+    model = torque_map(design)
+    return Simulated(design, model, plan.steps[0].achieved, rotor=tune(design, model).rotor)
 
 
 def _positive(value: float, flag: str, expected: str) -> float:
@@ -43,6 +60,10 @@ def run(
     rate: float = typer.Option(..., "--rate", help="Steps per second (Hz); each step is held for 1/RATE s."),
     dry_run: bool = typer.Option(False, "--dry-run", help="Send nothing; print what would be sent to a "
                                                           "controller with --channels channels."),
+    simulate: bool = typer.Option(False, "--simulate", help="Run the plan on the simulated rotor (magnets' torque "
+                                                            "map, tuned damping) instead of a device."),
+    design_path: Path = typer.Option(None, "--design", help="With --simulate: the design file (default the "
+                                                            "built-in prototype)."),
     channels: int = typer.Option(None, "--channels", help="With --dry-run: relay channels of the controller it "
                                                            "stands in for (default 32; a device reports its own)."),
     log: Path = typer.Option(None, "--log", help="Write every frame sent and received, time-stamped, to FILE "
@@ -65,7 +86,15 @@ def run(
     Example: [bold]spherestep run plan.json --port /dev/ttyUSB0 --rate 5 --log run.log[/bold]
 
     Example: [bold]spherestep run plan.json --rate 5 --dry-run --channels 64[/bold]
+
+    Example: [bold]spherestep run plan.json --rate 0.8 --simulate[/bold]
     """
+    if dry_run and simulate:
+        raise bad_value("--dry-run/--simulate", "at most one of the two", "both")
+    if design_path is not None and not simulate:
+        raise bad_value("--design", "given only with --simulate", str(design_path))
+    if simulate:
+        port = port or "simulated"
     if not dry_run and port is None:
         raise bad_value("--port", "the controller's serial device, such as /dev/ttyUSB0 (or give --dry-run)", None)
     if channels is not None and not dry_run:
@@ -84,6 +113,8 @@ def run(
     transcript = Transcript()
     if dry_run:
         backend = DryRun(channels=32 if channels is None else channels, transcript=transcript)
+    elif simulate:
+        backend = _simulated(design_path, steps)
     else:
         backend = Serial(port, transcript=transcript)
     try:
@@ -107,6 +138,16 @@ def run(
         console.print(table)
         print(f"dry run: {report.steps} steps at {rate:g} Hz would take {report.elapsed:.3f} s on a "
               f"{dev.channels}-channel controller; nothing was sent")
+        return
+    if simulate:
+        from .. import so3
+
+        settled = np.array([R for _, R in backend.orientations])
+        planned = steps.achieved[:len(settled)]  # play holds every step, the first one included
+        err = np.degrees(so3.distance(settled, planned))
+        print(f"simulated {report.steps} steps at {rate:g} Hz ({report.elapsed:.1f} s of rotor time): "
+              f"{int(np.sum(err <= 0.5))} settled within 0.5° of the plan (median {np.median(err):.2f}°, "
+              f"max {err.max():.2f}°); all coils off")
         return
     stats = backend.stats
     print(f"streamed {report.steps} steps at {rate:g} Hz to {port} (device {dev.name!r}, protocol {dev.protocol}, "

@@ -1,6 +1,7 @@
 """Hardware: coil drivers and the serial line protocol to the relay boards (Sec. IV-B).
 
-:class:`CoilDriver` switches stator coils through a :class:`Backend` (:class:`DryRun`, :class:`Serial`) within
+:class:`CoilDriver` switches stator coils through a :class:`Backend` (:class:`DryRun`, :class:`Serial`,
+:class:`Simulated`) within
 :class:`ThermalLimits`, and always leaves them off; :func:`play` streams a commutation plan at a step rate.
 :mod:`~spherestep.hardware.protocol` is the wire format, :class:`Emulator`/:class:`PtyDevice` a device that
 speaks it on a pseudo-terminal. See ``docs/protocol.md``.
@@ -15,11 +16,12 @@ from .dryrun import DryRun, Sent
 from .emulator import Emulator, Faults, PtyDevice
 from .limits import ThermalGuard, ThermalLimitError, ThermalLimits
 from .serialport import NakError, Serial
+from .simulated import Simulated
 from .stream import PlayReport, play
 from .transcript import Transcript
 
 __all__ = [
     "Backend", "CoilDriver", "DeviceInfo", "DryRun", "Emulator", "Faults", "LinkError", "NakError", "PlayReport",
-    "PtyDevice", "Sent", "Serial", "ThermalGuard", "ThermalLimitError", "ThermalLimits", "Transcript",
+    "PtyDevice", "Sent", "Serial", "Simulated", "ThermalGuard", "ThermalLimitError", "ThermalLimits", "Transcript",
     "coil_masks", "play", "protocol",
 ]
