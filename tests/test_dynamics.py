@@ -172,3 +172,20 @@ def test_tuning_matches_an_independent_stiffness(proto, wells):
     t = tune(proto, wells, zeta=0.8, samples=5)
     assert math.isclose(t.rotor.damping, 2 * 0.8 * math.sqrt(t.stiffness * t.rotor.inertia), rel_tol=1e-12)
     assert math.isclose(t.dwell, 5 / (0.8 * t.omega), rel_tol=1e-12) and t.stiffness > 0
+
+
+def test_a_potential_plan_is_executed_on_its_model(proto):
+    """The potential planner's equilibria are where the rotor comes to rest: simulated on the same model
+    (in SI at 1 J per model unit) with tuned damping and dwell, every step settles within 0.5° of the plan."""
+    from spherestep.commutation import plan_potential
+    from spherestep.dynamics import Scaled, tune
+    from spherestep.potential import MotorPotential
+
+    potential = MotorPotential(proto)
+    T = about_axis([1, 0.5, 2], math.radians(45), 6, start=proto.states().rotations[0])
+    plan = plan_potential(proto, T, potential)
+    model = Scaled(potential, 1.0)
+    t = tune(proto, model, samples=8)
+    sim = simulate(proto, plan, model, dwell=t.dwell, rotor=t.rotor, dt=5e-3, record_every=10)
+    assert sim.executed, np.degrees(sim.step_errors)
+    assert so3.distance(sim.settled[-1], T[-1]) < math.radians(6)
