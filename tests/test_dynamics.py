@@ -152,7 +152,7 @@ def test_rotor_rejects_bad_parameters():
 
 def test_tuning_matches_an_independent_stiffness(proto, wells):
     """``tune``: stiffness against the model's Hessian by a coarser central difference of the energy
-    (second differences, an independent route), damping 2ζ√(kI), dwell 5/(ζω)."""
+    (second differences, an independent route), damping 2ζ√(kI), dwell 8/(ζω) for ζ < 1."""
     from spherestep.dynamics import stiffness, tune
 
     states = proto.states()
@@ -171,7 +171,7 @@ def test_tuning_matches_an_independent_stiffness(proto, wells):
     assert np.allclose(stiffness(wells, R, c), np.linalg.eigvalsh(0.5 * (H + H.T)), rtol=2e-3, atol=1e-4)
     t = tune(proto, wells, zeta=0.8, samples=5)
     assert math.isclose(t.rotor.damping, 2 * 0.8 * math.sqrt(t.stiffness * t.rotor.inertia), rel_tol=1e-12)
-    assert math.isclose(t.dwell, 5 / (0.8 * t.omega), rel_tol=1e-12) and t.stiffness > 0
+    assert math.isclose(t.dwell, 8 / (0.8 * t.omega), rel_tol=1e-12) and t.stiffness > 0
 
 
 def test_a_potential_plan_is_executed_on_its_model(proto):
