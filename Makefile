@@ -2,6 +2,8 @@
 PYTHON ?= $(shell command -v python3.11 || command -v python3)
 VENV := .venv
 BIN := $(VENV)/bin
+# the numerics are many small matrix products: one BLAS thread is faster than a pool on 2 cores
+export OPENBLAS_NUM_THREADS ?= 1
 
 .PHONY: demo test browser figures bench clean
 
