@@ -5,15 +5,23 @@ import json
 from spherestep.cli import main
 
 
-def test_demo_writes_plan_figures_and_summary(tmp_path, capsys):
+def test_demo_writes_plan_figures_simulation_and_report(tmp_path, capsys):
+    """The main job, quietly: summary, plan, figures, the simulated run and the HTML report."""
     out = tmp_path / "out"
-    assert main(["demo", "--out", str(out), "--json"]) == 0
-    info = json.loads(capsys.readouterr().out)
+    assert main(["demo", "--out", str(out), "--quiet"]) == 0
+    assert capsys.readouterr().out == ""
+    info = json.loads((out / "summary.json").read_text())
     assert info["states"] > 1000 and info["reaches_all"] is True
     assert info["plan"]["error_final_deg"] < info["resolution_p95_deg"]
-    for name in ("plan.csv", "plan.json", "commutation_steps.png", "motor_3d.png", "plan_error.png", "summary.json"):
+    sim = info["simulation"]
+    assert sim["steps"] == info["plan"]["steps"] and sim["final_error_to_target_deg"] < info["resolution_p95_deg"]
+    for name in ("plan.csv", "plan.json", "commutation_steps.png", "motor_3d.png", "plan_error.png", "summary.json",
+                 "trajectory.csv", "simulation.png", "report.html"):
         assert (out / name).stat().st_size > 100
     assert (out / "commutation_steps.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    text = (out / "report.html").read_text()
+    # motor 3-D, histogram, commutation slider, simulated run
+    assert f"<b>{info['plan']['steps']} steps</b>" in text and text.count("Plotly.newPlot(") == 4
 
 
 def test_plan_command_and_bad_input(tmp_path, capsys):

@@ -192,15 +192,6 @@ def test_cli_report_bad_input(args, tmp_path, capsys, monkeypatch):
     assert not (tmp_path / "report.html").exists()
 
 
-@pytest.mark.slow
-def test_demo_writes_the_report_quietly(tmp_path, capsys):
-    assert main(["demo", "--out", str(tmp_path), "--quiet"]) == 0
-    assert capsys.readouterr().out == ""
-    summary = json.loads((tmp_path / "summary.json").read_text())
-    text = (tmp_path / "report.html").read_text()
-    assert f"<b>{summary['plan']['steps']} steps</b>" in text and text.count("Plotly.newPlot(") == 3
-
-
 def test_energy_map_from_an_euler_grid(proto):
     grid = so3_grid(6)
     c = np.zeros(len(proto.stator))
