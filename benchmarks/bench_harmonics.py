@@ -14,12 +14,12 @@ from __future__ import annotations
 import datetime
 import os
 import platform
-import time
 
 import numpy as np
 import scipy
 from scipy.special import gammaln, sph_harm_y
 
+from _timing import median_seconds
 from spherestep import so3
 from spherestep.harmonics import (
     legendre_P,
@@ -32,17 +32,6 @@ from spherestep.harmonics import (
     so3_inverse,
     wigner_U,
 )
-
-
-def median_seconds(repeats: int, func, *args) -> float:
-    """Median wall time of ``func(*args)`` over ``repeats`` calls, after one warm-up call."""
-    func(*args)
-    times = []
-    for _ in range(repeats):
-        start = time.perf_counter()
-        func(*args)
-        times.append(time.perf_counter() - start)
-    return float(np.median(times))
 
 
 def per_rotation(l: int, rotations: np.ndarray) -> list:

@@ -19,20 +19,10 @@ import time
 import magpylib
 import numpy as np
 
+from _timing import median_seconds
 from spherestep import magnetics as mg
 from spherestep import so3
 from spherestep.motor import prototype
-
-
-def median_seconds(repeats: int, func, *args) -> float:
-    """Median wall time of ``func(*args)`` over ``repeats`` calls, after one warm-up call."""
-    func(*args)
-    times = []
-    for _ in range(repeats):
-        start = time.perf_counter()
-        func(*args)
-        times.append(time.perf_counter() - start)
-    return float(np.median(times))
 
 
 def one_at_a_time(f, R, c):
@@ -44,7 +34,7 @@ def main() -> None:
     rng = np.random.default_rng(0)
     design = prototype()
     start = time.perf_counter()
-    tmap = mg.torque_map(design)
+    mg.torque_map(design)
     build = time.perf_counter() - start
     f = mg.torque_function(design)
     R = so3.random(1000, rng)

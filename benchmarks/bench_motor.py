@@ -19,24 +19,15 @@ import datetime
 import math
 import os
 import platform
-import time
 from dataclasses import replace
 
 import numpy as np
 
+from _timing import median_seconds
 from spherestep import packing as pk
 from spherestep.commutation import about_axis, plan_geometric, steps_for
 from spherestep.motor import prototype
 from spherestep.motor import states as st
-
-
-def median_seconds(func, repeats: int) -> float:
-    times = []
-    for _ in range(repeats):
-        start = time.perf_counter()
-        func()
-        times.append(time.perf_counter() - start)
-    return float(np.median(times))
 
 
 def dense_held_pairs(R, u, v, tol, grid=None):
@@ -66,18 +57,18 @@ def main() -> None:
         design = base if level == 1 else replace(
             base, rotor=rotor, polarity=np.where(np.arange(len(rotor)) < 60, 1, -1), tol=tol,
             magnet_diameter=base.sphere_diameter * math.tan(0.5 * rotor.min_separation()) * 0.9)
-        t_enum = median_seconds(lambda: st.find_states(design, design.state_tol), repeats)
+        t_enum = median_seconds(repeats, st.find_states, design, design.state_tol)
         states = design.states()
         T = about_axis([1, 0.5, 2], 2 * math.pi, steps_for(2 * math.pi, 0.5 * design.max_step),
                        start=states.rotations[0])
-        t_plan = median_seconds(lambda: plan_geometric(design, T), repeats)
+        t_plan = median_seconds(repeats, plan_geometric, design, T)
         print(f"{len(rotor):>11} {len(design.stator):>5} {math.degrees(tol):>6.3f} {len(states):>9} "
               f"{t_enum:>11.3f} {(len(T) - 1) / t_plan:>12.0f}")
-    fast = median_seconds(lambda: st.find_states(base, base.state_tol), repeats)
+    fast = median_seconds(repeats, st.find_states, base, base.state_tol)
     original = st.held_pairs
     st.held_pairs = dense_held_pairs
     try:
-        dense = median_seconds(lambda: st.find_states(base, base.state_tol), repeats)
+        dense = median_seconds(repeats, st.find_states, base, base.state_tol)
     finally:
         st.held_pairs = original
     print(f"baseline (prototype): voxel lookup {fast:.3f} s, dense dot products {dense:.3f} s, ratio {dense / fast:.1f}x")

@@ -17,22 +17,12 @@ import argparse
 import datetime
 import os
 import platform
-import time
 
 import numpy as np
 import scipy
 
+from _timing import median_seconds
 from spherestep.packing import by_name, refine, semiregular
-
-
-def median_seconds(func, repeats: int) -> float:
-    func()  # warm caches
-    times = []
-    for _ in range(repeats):
-        start = time.perf_counter()
-        func()
-        times.append(time.perf_counter() - start)
-    return float(np.median(times))
 
 
 def brute_min_separation(centers: np.ndarray, block: int = 1024) -> float:
@@ -68,19 +58,19 @@ def main() -> None:
     big = refine(ti, target=10_000)
     rows = []
     rows.append((f"refine(truncated-icosahedron, target=10000) -> {len(big)} caps (L{big.level})",
-                 median_seconds(lambda: refine(ti, target=10_000), few), few))
-    rows.append((f"validate() on {len(big)} caps", median_seconds(big.validate, many), many))
-    rows.append((f"min_separation() on {len(big)} caps", median_seconds(big.min_separation, many), many))
+                 median_seconds(few, lambda: refine(ti, target=10_000)), few))
+    rows.append((f"validate() on {len(big)} caps", median_seconds(many, big.validate), many))
+    rows.append((f"min_separation() on {len(big)} caps", median_seconds(many, big.min_separation), many))
     rows.append((f"symmetry_order() on {len(big)} caps -> {big.symmetry_order()}",
-                 median_seconds(big.symmetry_order, few), few))
+                 median_seconds(few, big.symmetry_order), few))
     tid = by_name("truncated-icosidodecahedron")
     rows.append((f"symmetry_order() on {len(tid)} caps -> {tid.symmetry_order()}",
-                 median_seconds(tid.symmetry_order, many), many))
-    rows.append(("semiregular(): the 21 base packings", median_seconds(semiregular, few), few))
+                 median_seconds(many, tid.symmetry_order), many))
+    rows.append(("semiregular(): the 21 base packings", median_seconds(few, semiregular), few))
 
     mid = refine(by_name("rhombicosidodecahedron"), levels=4)
-    kd = median_seconds(mid.min_separation, many)
-    brute = median_seconds(lambda: brute_min_separation(mid.centers), few)
+    kd = median_seconds(many, mid.min_separation)
+    brute = median_seconds(few, lambda: brute_min_separation(mid.centers))
     agree = abs(mid.min_separation() - brute_min_separation(mid.centers))
     rows.append((f"min_separation() on {len(mid)} caps (KD-tree)", kd, many))
     rows.append((f"brute-force N² min separation on {len(mid)} caps (baseline)", brute, few))

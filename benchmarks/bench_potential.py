@@ -22,20 +22,10 @@ import time
 import numpy as np
 import scipy
 
+from _timing import median_seconds
 from spherestep import so3
 from spherestep.motor import prototype
 from spherestep.potential import MotorPotential, coil_currents, equilibrium
-
-
-def median_seconds(repeats: int, func, *args) -> float:
-    """Median wall time of ``func(*args)`` over ``repeats`` calls, after one warm-up call."""
-    func(*args)
-    times = []
-    for _ in range(repeats):
-        start = time.perf_counter()
-        func(*args)
-        times.append(time.perf_counter() - start)
-    return float(np.median(times))
 
 
 def repeat_single(func, R, c, count: int = 2000):

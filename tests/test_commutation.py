@@ -37,7 +37,6 @@ def test_steps_for():
 
 
 def _check_plan(design, plan, metrics):
-    states = design.states()
     achieved = plan.achieved
     moves = so3.distance(achieved[:-1], achieved[1:])
     assert moves.max() <= design.max_step + 1e-12

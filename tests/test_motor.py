@@ -8,7 +8,7 @@ import pytest
 
 from spherestep import so3
 from spherestep.errors import InputError
-from spherestep.motor import MotorDesign, check_fits
+from spherestep.motor import check_fits
 from spherestep.motor.metrics import largest_empty_cone, orbit_representatives, rotor_symmetries
 from spherestep.sphere import arc_distance
 

@@ -55,7 +55,7 @@ def simulate(
 
     Example: [bold]spherestep simulate --axis 1,0.5,2 --angle 90 --missed 0.1 --noise 0.2 --out sim[/bold]
     """
-    from ..dynamics import run_closed_loop, simulate as run_plan, tune
+    from ..dynamics import run_closed_loop, tune
     from ..magnetics import torque_map
 
     if planner not in PLANNERS:

@@ -24,6 +24,7 @@ import numpy as np
 from .. import so3
 from ..errors import bad_value
 from .plan import Plan, Step
+from .trajectory import check_targets
 
 DEFAULT_CANDIDATES = 8
 DETOUR = "detour: the states nearest the target are out of reach; moved to the reachable state nearest it"
@@ -93,9 +94,7 @@ def plan_geometric(design, targets, *, candidates: int = DEFAULT_CANDIDATES, max
     step (default the design's); ``start``: index of the state the rotor rests in (default: nearest
     ``R_0``). Returns a :class:`Plan` whose step 0 is the starting state.
     """
-    targets = np.asarray(targets, dtype=float)
-    if targets.ndim != 3 or targets.shape[1:] != (3, 3) or len(targets) < 2:
-        raise bad_value("targets", "at least two rotations, shape (n+1, 3, 3)", f"shape {targets.shape}")
+    targets = check_targets(targets)
     if isinstance(candidates, bool) or not isinstance(candidates, (int, np.integer)) or candidates < 1:
         raise bad_value("candidates", "a positive integer", candidates)
     states = design.states()

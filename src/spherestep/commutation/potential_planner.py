@@ -20,6 +20,7 @@ from .. import so3
 from ..errors import bad_value
 from .geometric import BLOCKED, DEFAULT_CANDIDATES, start_state
 from .plan import Plan, Step
+from .trajectory import check_targets
 
 DEFAULT_MAX_COILS = 4
 
@@ -40,9 +41,7 @@ def plan_potential(design, targets, model, *, max_coils: int = DEFAULT_MAX_COILS
     :class:`~spherestep.potential.MotorPotential` of ``design``); see the module docstring."""
     from ..potential import equilibrium
 
-    targets = np.asarray(targets, dtype=float)
-    if targets.ndim != 3 or targets.shape[1:] != (3, 3) or len(targets) < 2:
-        raise bad_value("targets", "at least two rotations, shape (n+1, 3, 3)", f"shape {targets.shape}")
+    targets = check_targets(targets)
     if isinstance(max_coils, bool) or not isinstance(max_coils, (int, np.integer)) or max_coils < 2:
         raise bad_value("max_coils", "an integer of at least 2 (two poles fix the rotor)", max_coils)
     states = design.states()

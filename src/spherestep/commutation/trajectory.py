@@ -40,3 +40,11 @@ def about_axis(axis, angle: float, steps: int, start=None) -> np.ndarray:
 def through(keys, steps: int) -> np.ndarray:
     """``steps + 1`` orientations on the piecewise geodesic through ``keys (m, 3, 3)``, equally spaced."""
     return so3.resample(keys, steps)
+
+
+def check_targets(targets) -> np.ndarray:
+    """``targets`` as a float array of at least two rotations ``(n+1, 3, 3)``; InputError otherwise."""
+    targets = np.asarray(targets, dtype=float)
+    if targets.ndim != 3 or targets.shape[1:] != (3, 3) or len(targets) < 2:
+        raise bad_value("targets", "at least two rotations, shape (n+1, 3, 3)", f"shape {targets.shape}")
+    return targets

@@ -21,6 +21,7 @@ from ..commutation.geometric import DEFAULT_CANDIDATES, next_state
 from ..errors import bad_value
 from .rotor import Rotor
 from .simulate import Integrator, currents_of
+from ..commutation.trajectory import check_targets
 
 
 @dataclass
@@ -45,9 +46,7 @@ def run_closed_loop(design, targets, model, *, dwell: float = 0.5, noise: float 
                     rotor: Rotor | None = None, dt: float = 1e-3, extra_steps: int = 10,
                     rng: np.random.Generator | int | None = None) -> ClosedLoopRun:
     """Follow ``targets (n+1, 3, 3)`` in closed loop (see the module docstring); ``noise`` is σ in radians."""
-    targets = np.asarray(targets, dtype=float)
-    if targets.ndim != 3 or targets.shape[1:] != (3, 3) or len(targets) < 2:
-        raise bad_value("targets", "at least two rotations, shape (n+1, 3, 3)", f"shape {targets.shape}")
+    targets = check_targets(targets)
     if not (math.isfinite(noise) and noise >= 0):
         raise bad_value("noise", "a non-negative angle in radians", noise)
     if not (math.isfinite(missed) and 0 <= missed < 1):

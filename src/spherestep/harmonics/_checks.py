@@ -47,7 +47,7 @@ def orders(m, l: np.ndarray, name: str = "m") -> np.ndarray:
 
 def cosines(x, name: str = "x") -> np.ndarray:
     """``x`` as a float array of finite values in ``[-1, 1]``."""
-    arr = _real(x, name)
+    arr = real_array(x, name)
     if np.any(np.abs(arr) > 1.0):
         raise bad_value(name, "values in [-1, 1]", x)
     return arr
@@ -55,12 +55,12 @@ def cosines(x, name: str = "x") -> np.ndarray:
 
 def angles(a, name: str) -> np.ndarray:
     """A float array of finite angles (radians)."""
-    return _real(a, name)
+    return real_array(a, name)
 
 
 def polar(theta, name: str = "theta") -> np.ndarray:
     """A float array of polar angles in ``[0, π]``."""
-    arr = _real(theta, name)
+    arr = real_array(theta, name)
     if np.any((arr < 0.0) | (arr > np.pi)):
         raise bad_value(name, "polar angles in [0, π] (radians)", theta)
     return arr
@@ -68,7 +68,7 @@ def polar(theta, name: str = "theta") -> np.ndarray:
 
 def points(u, name: str = "u") -> np.ndarray:
     """Unit 3-vectors ``(..., 3)`` (normalised here; zero vectors are rejected)."""
-    arr = _real(u, name)
+    arr = real_array(u, name)
     if arr.shape[-1:] != (3,):
         raise bad_value(name, "points of shape (..., 3)", f"shape {arr.shape}")
     norm = np.linalg.norm(arr, axis=-1, keepdims=True)
@@ -79,7 +79,7 @@ def points(u, name: str = "u") -> np.ndarray:
 
 def rotations(R, name: str = "R") -> np.ndarray:
     """Rotation matrices ``(..., 3, 3)`` with finite entries."""
-    arr = _real(R, name)
+    arr = real_array(R, name)
     if arr.shape[-2:] != (3, 3):
         raise bad_value(name, "rotation matrices of shape (..., 3, 3)", f"shape {arr.shape}")
     return arr
@@ -118,7 +118,8 @@ def samples_so3(f, name: str = "f") -> tuple[np.ndarray, int]:
     return arr, arr.shape[-2] - 1
 
 
-def _real(a, name: str) -> np.ndarray:
+def real_array(a, name: str) -> np.ndarray:
+    """A float array of finite real numbers; InputError naming ``name`` otherwise."""
     try:
         arr = np.asarray(a, dtype=float)
     except (TypeError, ValueError):

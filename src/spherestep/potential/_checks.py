@@ -7,19 +7,9 @@ import math
 import numpy as np
 
 from ..errors import bad_value
+from ..harmonics._checks import real_array  # noqa: F401  (one check for both rooms)
 
 _EYE = np.eye(3)
-
-
-def real_array(a, name: str) -> np.ndarray:
-    """A float array of finite real numbers."""
-    try:
-        arr = np.asarray(a, dtype=float)
-    except (TypeError, ValueError):
-        raise bad_value(name, "real numbers", a) from None
-    if not np.all(np.isfinite(arr)):
-        raise bad_value(name, "finite real numbers", a)
-    return arr
 
 
 def rotations(R, name: str = "R") -> np.ndarray:
