@@ -129,7 +129,7 @@ def simulate_plan(design: MotorDesign, plan, axis: np.ndarray, out: Path, physic
 
     physics = torque_map(design) if physics is None else physics
     tuning = tune(design, physics) if tuning is None else tuning
-    sim = simulate(design, plan, physics, dwell=tuning.dwell, rotor=tuning.rotor, dt=5e-3, record_every=4)
+    sim = simulate(design, plan, physics, dwell=tuning.dwell, rotor=tuning.rotor, dt=tuning.dt, record_every=1)
     written = [write_text(out / "trajectory.csv", trajectory_csv(sim, axis)),
                plots.save_figure(plots.figure_simulation(sim, plan, axis, tuning.dwell), out / "simulation.png")]
     err = np.degrees(sim.step_errors)

@@ -32,7 +32,8 @@ def _simulated(design_path, plan):
         raise bad_value("--design", f"the design the plan was made for ({plan.coil_count} coils)",
                         f"a design with {len(design.stator)} coils")
     model = torque_map(design)
-    return Simulated(design, model, plan.steps[0].achieved, rotor=tune(design, model).rotor)
+    tuning = tune(design, model)
+    return Simulated(design, model, plan.steps[0].achieved, rotor=tuning.rotor, dt=tuning.dt)
 
 
 def _positive(value: float, flag: str, expected: str) -> float:

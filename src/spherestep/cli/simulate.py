@@ -74,7 +74,7 @@ def simulate(
         targets = targets_for(design, axis_vec, angle, steps)
         with console.status("running the closed loop"):
             run = run_closed_loop(design, targets, physics, dwell=tuning.dwell, noise=math.radians(noise),
-                                  missed=missed, rotor=tuning.rotor, dt=5e-3, rng=seed)
+                                  missed=missed, rotor=tuning.rotor, dt=tuning.dt, rng=seed)
         buf = io.StringIO()
         w = csv.writer(buf, lineterminator="\n")
         w.writerow(["step", "missed", "error_deg", "turned_desired_deg", "turned_true_deg"])

@@ -6,7 +6,9 @@ sample states of the smallest eigenvalue: a soft well left overdamped would cree
 ``ω = √(k/I)``; viscous damping ``b = 2ζ√(kI)`` gives damping ratio ``ζ`` on that mode. Every mode then
 decays at least as fast as ``e^{−λt}`` with ``λ = ζω`` for ``ζ < 1`` (stiffer modes, less damped, share the
 envelope ``e^{−bt/2I}``) and ``λ = ω(ζ − √(ζ² − 1))`` for ``ζ ≥ 1``; the dwell ``8/λ`` leaves below 0.3 % of
-a step (``(1 + 8)e⁻⁸`` in the critical case) before the next one.
+a step (``(1 + 8)e⁻⁸`` in the critical case) before the next one. The time step resolves the stiffest
+well (90th percentile of the largest eigenvalue, ``ω_max``): ``dt = 0.25/ω_max``, at most dwell/50; the
+fourth-order integrator then changes settled orientations by less than 0.01° (the demo plan at 26 ms against 10 ms).
 """
 
 from __future__ import annotations
@@ -28,12 +30,14 @@ SOFT_QUANTILE = 0.1  # which of the sampled wells' softest stiffness sets the da
 
 @dataclass(frozen=True)
 class Tuning:
-    """``rotor`` (with the chosen damping), ``dwell`` (s), softest ``stiffness`` (N·m/rad) and ``omega`` (rad/s)."""
+    """``rotor`` (with the chosen damping), ``dwell`` (s), softest ``stiffness`` (N·m/rad) and ``omega`` (rad/s),
+    and the integration time step ``dt`` (s)."""
 
     rotor: Rotor
     dwell: float
     stiffness: float
     omega: float
+    dt: float
 
 
 def stiffness(model, R: np.ndarray, currents: np.ndarray) -> np.ndarray:
@@ -51,13 +55,15 @@ def tune(design, model, zeta: float = 1.0, samples: int = 40, seed: int = 0) -> 
     states = design.states()
     rng = np.random.default_rng(seed)
     picks = rng.choice(len(states), size=min(samples, len(states)), replace=False)
-    softest = [stiffness(model, states.rotations[i], currents_of(states.coils(int(i)), len(design.stator)))[0]
-               for i in picks]
-    k = float(np.quantile(softest, SOFT_QUANTILE))
+    eig = np.array([stiffness(model, states.rotations[i], currents_of(states.coils(int(i)), len(design.stator)))
+                    for i in picks])
+    k = float(np.quantile(eig[:, 0], SOFT_QUANTILE))
     if not k > 0:
         raise bad_value("model", "a torque model with stable wells at the stepper states", f"stiffness {k:.3g}")
     base = Rotor.from_design(design)
     omega = math.sqrt(k / base.inertia)
     rotor = Rotor(base.inertia, damping=2.0 * zeta * math.sqrt(k * base.inertia), friction=base.friction)
     rate = zeta * omega if zeta < 1 else omega * (zeta - math.sqrt(zeta * zeta - 1.0))
-    return Tuning(rotor, DECAY / rate, k, omega)
+    dwell = DECAY / rate
+    omega_max = math.sqrt(max(float(np.quantile(eig[:, -1], 0.9)), k) / base.inertia)
+    return Tuning(rotor, dwell, k, omega, min(0.25 / omega_max, dwell / 50))
