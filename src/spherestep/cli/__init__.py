@@ -13,7 +13,7 @@ from typer.exceptions import TyperException
 
 from ..errors import ComputationError, SpherestepError
 from . import design, export, motor, packings, report, simulate  # noqa: F401  (registers commands)
-from . import forces, run  # noqa: F401
+from . import explore, forces, run  # noqa: F401
 from .app import app
 
 

@@ -1,0 +1,38 @@
+"""Design-space sweeps: rotor × stator packings, refinement, stator cap and tolerance, on Dask (Sec. II-B-3).
+
+>>> from spherestep.explore import ResultStore, default_grid, dask_client, run_sweep   # doctest: +SKIP
+>>> with dask_client(workers=2) as client:                                              # doctest: +SKIP
+...     run_sweep(default_grid().points(), ResultStore("out/results"), client)
+
+See ``docs/explore.md`` for the grid, the pairing rule and measured results.
+
+The public names are loaded from their modules on first use, so importing the package (as every
+``spherestep`` command does, through the CLI) does not import pandas, pyarrow or Dask.
+"""
+
+from importlib import import_module
+
+_MODULES = {
+    "build": ("LIMIT_STATUSES", "STATUSES", "Limits", "Unbuildable", "build_design", "candidate_count",
+              "evaluate", "holding_torques", "lookup_voxels", "motor_fingerprint", "part_sizes"),
+    "grid": ("DesignPoint", "Grid", "default_grid", "distinct_names", "primary_ratio", "quick_grid",
+             "symmetry_family"),
+    "pareto": ("OBJECTIVES", "TORQUE", "eligible", "figure_pareto", "objectives", "pareto_front", "pareto_mask"),
+    "outputs": ("Proposal", "design_file_name", "propose", "write_designs", "write_table"),
+    "run": ("SweepSummary", "dask_client", "finished_keys", "run_sweep"),
+    "store": ("COLUMNS", "MEASURED", "SCHEMA", "ResultStore"),
+}
+_HOME = {name: module for module, names in _MODULES.items() for name in names}
+__all__ = sorted(_HOME)
+
+
+def __getattr__(name: str):
+    if name not in _HOME:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(import_module(f".{_HOME[name]}", __name__), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__():
+    return sorted(set(globals()) | set(__all__))

@@ -1,0 +1,250 @@
+"""Build and measure one design of a sweep; every outcome is a row, including the designs that cannot be built.
+
+Statuses (a design gets the first that applies, checked in the order the design is built: rotor size, part
+sizes, coil count, fit, lookup grid, candidate count, metrics):
+
+* ``too_large``: the rotor has more poles than ``Limits.max_rotor_poles``; or the tolerance is so close to
+  half the pole spacing that the state lookup grid would need more than ``Limits.max_lookup_voxels`` voxels
+  (:func:`lookup_voxels`: 13.7 M for a 182-pole rotor with poles 4.1° apart at 1°, 4–7 s and 0.9 GB to build); or
+  state enumeration would start from more candidate alignments than ``Limits.max_candidates`` (memory and
+  time grow with them: 114 240 for the prototype, 0.4 GB and 10 s; 502 680 for a 272-pole rotor on 21
+  coils, 4 GB and 110 s);
+* ``does_not_fit``: a magnet or coil would have to shrink below its minimum size, parts overlap
+  (:func:`spherestep.motor.check_fits`), or the tolerance is not under half the pole spacing;
+* ``over_budget``: more coils in the stator cap than ``Limits.budget_coils``;
+* ``no_states``: fewer than two coils, or no orientation holds two poles on two coils;
+* ``failed``: the metrics raised an error (its type and message are the reason);
+* ``ok``: measured (when the holding torque could not be, the reason says why and its columns are empty).
+
+The candidate count is the number of (coil pair, ordered pole pair) with arcs within ``2 tol`` of each
+other, exactly the alignments :func:`spherestep.motor.find_states` starts from.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+import os
+import socket
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..design_file import named_packing
+from ..errors import SpherestepError, bad_value
+from ..motor import MotorDesign, check_fits, stator_in_cap
+from .grid import DesignPoint, primary_ratio
+
+STATUSES = ("ok", "too_large", "does_not_fit", "over_budget", "no_states", "failed")
+LIMIT_STATUSES = ("too_large", "over_budget")  # outcomes that depend on the sweep's limits, not the design
+
+
+@dataclass(frozen=True)
+class Limits:
+    """What a sweep is willing to build and evaluate (not part of a design's key)."""
+
+    budget_coils: int = 32
+    max_rotor_poles: int = 300
+    max_candidates: int = 200_000
+    max_lookup_voxels: int = 4_000_000
+
+    def __post_init__(self):
+        for label in ("budget_coils", "max_rotor_poles", "max_candidates", "max_lookup_voxels"):
+            value = getattr(self, label)
+            if isinstance(value, bool) or not isinstance(value, int) or value < 2:
+                raise bad_value(label, "an integer of at least 2", value)
+
+
+class Unbuildable(Exception):
+    """A design the sweep records but does not measure: ``status`` (one of :data:`STATUSES`), ``reason`` and,
+    once the stator is known, the number of ``coils``."""
+
+    def __init__(self, status: str, reason: str, coils: int | None = None):
+        super().__init__(reason)
+        self.status = status
+        self.reason = reason
+        self.coils = coils
+
+
+def part_sizes(point: DesignPoint) -> tuple[float, float]:
+    """Magnet and coil diameters (m) by the rule of :mod:`spherestep.explore.grid`; Unbuildable if too small."""
+    R = 0.5 * point.sphere_diameter
+    rotor = named_packing(point.rotor, point.rotor_level)
+    room = 2 * R * math.tan(0.5 * rotor.min_separation())
+    magnet = min(point.magnet_diameter_max, point.fill * room)
+    if magnet < point.magnet_diameter_min:
+        raise Unbuildable("does_not_fit", f"the rotor's closest poles leave room for a {1e3 * room:.3g} mm magnet, "
+                          f"under the minimum {1e3 * point.magnet_diameter_min:.3g} mm")
+    primary = float(named_packing(point.stator, 0).radii[0])
+    room = 2 * (R + point.air_gap) * math.tan(primary)
+    coil = min(point.coil_diameter_max, point.fill * room)
+    if coil < point.coil_diameter_min:
+        raise Unbuildable("does_not_fit", f"the stator's primary caps leave room for a {1e3 * room:.3g} mm coil, "
+                          f"under the minimum {1e3 * point.coil_diameter_min:.3g} mm")
+    return magnet, coil
+
+
+def build_design(point: DesignPoint, limits: Limits = Limits(), name: str | None = None) -> MotorDesign:
+    """The :class:`~spherestep.motor.MotorDesign` of ``point``; Unbuildable with the status and reason otherwise."""
+    rotor = named_packing(point.rotor, point.rotor_level)
+    if len(rotor) > limits.max_rotor_poles:
+        raise Unbuildable("too_large", f"the rotor has {len(rotor)} poles, over the sweep's limit of "
+                          f"{limits.max_rotor_poles}")
+    magnet, coil = part_sizes(point)
+    R = 0.5 * point.sphere_diameter
+    coil_angle = math.atan(0.5 * coil / (R + point.air_gap))  # as MotorDesign.coil_angle, so 'fit' reselects them
+    cap = math.radians(point.cap_half_angle_deg)
+    stator = stator_in_cap(named_packing(point.stator, point.stator_level), point.stator_axis, cap, coil_angle)
+    if len(stator) > limits.budget_coils:
+        raise Unbuildable("over_budget", f"{len(stator)} coils in the stator cap, over the budget of "
+                          f"{limits.budget_coils}", coils=len(stator))
+    if len(stator) < 2:
+        raise Unbuildable("no_states", f"{len(stator)} coil{'s' if len(stator) != 1 else ''} in the stator cap; a "
+                          "state needs two poles on two coils", coils=len(stator))
+    base = len(named_packing(point.rotor, 0))
+    try:
+        design = MotorDesign(
+            rotor=rotor, polarity=np.where(np.arange(len(rotor)) < base, 1, -1), stator=stator,
+            stator_axis=np.array(point.stator_axis), cap_half_angle=cap, sphere_diameter=point.sphere_diameter,
+            magnet_diameter=magnet, magnet_length=point.magnet_length, coil_diameter=coil,
+            coil_length=point.coil_length, air_gap=point.air_gap, tol=math.radians(point.tol_deg),
+            name=name or f"explore {point.key}", max_coils=max(limits.budget_coils, len(stator)),
+        )
+        check_fits(design)
+    except SpherestepError as exc:
+        raise Unbuildable("does_not_fit", str(exc), coils=len(stator)) from None
+    return design
+
+
+def candidate_count(design: MotorDesign) -> int:
+    """Alignments state enumeration starts from: (coil pair, ordered pole pair) with arcs within ``2 tol``."""
+    u, v = design.rotor.centers, design.stator.centers[design.active_coils]
+    tol = design.state_tol
+    k1, k2 = np.triu_indices(len(v), 1)
+    coil_arcs = np.arccos(np.clip(np.sum(v[k1] * v[k2], axis=1), -1, 1))
+    j1, j2 = np.nonzero(~np.eye(len(u), dtype=bool))
+    pole_arcs = np.sort(np.arccos(np.clip(np.sum(u[j1] * u[j2], axis=1), -1, 1)))
+    return int((np.searchsorted(pole_arcs, coil_arcs + 2 * tol, "right")
+                - np.searchsorted(pole_arcs, coil_arcs - 2 * tol, "left")).sum())
+
+
+def motor_fingerprint(design: MotorDesign) -> str:
+    """16 hex digits naming the physical motor: poles, polarities, coils, part sizes and tolerance (to 1e-9).
+
+    Grid points can build the same motor (a stator refined once more whose new caps are all too small for a
+    coil); their fingerprints are equal, so a proposal lists the motor once.
+    """
+    parts = [design.rotor.centers, design.polarity, design.stator.centers,
+             [design.sphere_diameter, design.magnet_diameter, design.magnet_length, design.coil_diameter,
+              design.coil_length, design.air_gap, design.state_tol]]
+    digest = hashlib.sha256()
+    for part in parts:
+        digest.update(np.round(np.asarray(part, dtype=float), 9).tobytes())
+    return digest.hexdigest()[:16]
+
+
+def lookup_voxels(design: MotorDesign) -> float:
+    """Voxels of the :class:`~spherestep.sphere.NearestPointGrid` that state enumeration builds on the poles:
+    ``n³`` with ``n = ⌈2√3 / (0.8 m)⌉`` and margin ``m = d_min/2 − tol`` (its constructor's rule); infinite
+    when ``tol`` is not under half the pole spacing. Time and memory (~70 bytes a voxel) grow with it."""
+    margin = 0.5 * design.rotor.min_separation() - design.state_tol
+    if margin <= 0:
+        return math.inf
+    return float(math.ceil(2.0 / (0.8 * margin / math.sqrt(3.0)))) ** 3
+
+
+def holding_torques(design: MotorDesign, count: int, seed: int) -> np.ndarray:
+    """Holding torques (N·m) of ``count`` stepper states drawn at random (``seed``), on the physical model.
+
+    Each state's coils are energised at its poles' polarities (nominal ampere-turns), the rotor is settled
+    into the physical equilibrium near the geometric state, and the smallest peak restoring torque over 32
+    axes is its holding torque (:func:`spherestep.magnetics.holding_torque`). States whose equilibrium search
+    does not converge are left out.
+    """
+    from ..magnetics import equilibrium, holding_torque, state_currents, torque_map
+
+    states = design.states()
+    idx = np.sort(np.random.default_rng(seed).choice(len(states), size=min(count, len(states)), replace=False))
+    tmap = torque_map(design)
+    currents = np.array([state_currents(design, i) for i in idx])
+    eq = equilibrium(tmap, states.rotations[idx], currents)
+    return holding_torque(tmap, eq.rotation, currents).torque[np.asarray(eq.converged, dtype=bool)]
+
+
+def _base_row(point: DesignPoint) -> dict:
+    return {
+        "key": point.key, "rotor": point.rotor, "rotor_level": point.rotor_level, "rotor_family": point.rotor_family,
+        "rotor_poles": len(named_packing(point.rotor, point.rotor_level)), "stator": point.stator,
+        "stator_level": point.stator_level, "stator_family": point.stator_family, "family_rule": point.family_rule,
+        "primary_ratio": primary_ratio(point.rotor, point.stator), "cap_half_angle_deg": point.cap_half_angle_deg,
+        "tol_deg": point.tol_deg, "samples": point.samples, "seed": point.seed,
+        "inertia_isotropy": named_packing(point.rotor, point.rotor_level).inertia_isotropy(),
+    }
+
+
+def evaluate(point: DesignPoint, limits: Limits = Limits()) -> dict:
+    """One row of the results table for ``point`` (see :data:`spherestep.explore.store.SCHEMA` for the columns).
+
+    Never raises for a design that cannot be built or measured: the row carries its status and reason.
+    """
+    start = time.perf_counter()
+    row = _base_row(point)
+    try:
+        design = build_design(point, limits)
+        row.update(motor=motor_fingerprint(design), coils=len(design.stator),
+                   magnet_diameter_mm=1e3 * design.magnet_diameter, coil_diameter_mm=1e3 * design.coil_diameter,
+                   max_step_deg=math.degrees(design.max_step))
+        voxels = lookup_voxels(design)
+        spacing = math.degrees(design.rotor.min_separation())
+        if not math.isfinite(voxels):
+            raise Unbuildable("does_not_fit", f"a tolerance of {point.tol_deg:g}° is not under half the "
+                              f"{spacing:.3g}° pole spacing: one coil could hold two poles")
+        row["lookup_voxels"] = int(voxels)
+        if voxels > limits.max_lookup_voxels:
+            raise Unbuildable("too_large", f"a tolerance of {point.tol_deg:g}° against poles {spacing:.3g}° apart "
+                              f"needs a state lookup grid of {voxels:.3g} voxels, over the sweep's limit of "
+                              f"{limits.max_lookup_voxels}")
+        row["candidates"] = candidate_count(design)
+        if row["candidates"] > limits.max_candidates:
+            raise Unbuildable("too_large", f"{row['candidates']} candidate alignments, over the sweep's limit of "
+                              f"{limits.max_candidates}")
+        try:
+            # find_states builds frames for every pole pair before selecting; antipodal pairs give 0/0 there
+            # and are never selected, so the warning says nothing about this design
+            with np.errstate(invalid="ignore", divide="ignore"):
+                metrics = design.metrics(samples=point.samples, seed=point.seed)
+        except Exception as exc:  # noqa: BLE001 (a design that breaks the metrics is recorded, not fatal)
+            raise Unbuildable("failed", f"{type(exc).__name__}: {exc}") from None
+        if metrics["states"] == 0:
+            raise Unbuildable("no_states", "no orientation holds two poles on two coils")
+        row.update(
+            status="ok", reason="", states=metrics["states"],
+            resolution_median_deg=math.degrees(metrics["resolution_median"]),
+            resolution_p95_deg=math.degrees(metrics["resolution_p95"]),
+            resolution_max_deg=math.degrees(metrics["resolution_max"]),
+            range_fraction=metrics["range_fraction"], state_graph_components=metrics["state_graph_components"],
+            reaches_all=metrics["reaches_all"], escape_violations=len(metrics["escape_violations"]),
+        )
+        if point.torque_states:
+            try:
+                with np.errstate(invalid="ignore", divide="ignore"):
+                    torques = holding_torques(design, point.torque_states, point.seed)
+            except Exception as exc:  # noqa: BLE001 (the kinematic metrics stand without the torque)
+                row["reason"] = f"holding torque not measured: {type(exc).__name__}: {exc}"
+            else:
+                row["holding_torque_states"] = len(torques)
+                if len(torques):
+                    row.update(holding_torque_median_Nm=float(np.median(torques)),
+                               holding_torque_min_Nm=float(torques.min()))
+                else:
+                    row["reason"] = "holding torque not measured: no equilibrium search converged"
+    except Unbuildable as exc:
+        row.update(status=exc.status, reason=exc.reason)
+        if exc.coils is not None:
+            row["coils"] = exc.coils
+    row["seconds"] = time.perf_counter() - start
+    row["worker"] = f"{socket.gethostname()}:{os.getpid()}"
+    row["params"] = json.dumps(point.params, sort_keys=True)
+    return row
