@@ -283,18 +283,24 @@ class NearestPointGrid:
         tree = cKDTree(self.points)
         dist, _ = tree.query(self.points, k=2)
         separation = 2.0 * np.arcsin(min(1.0, 0.5 * dist[:, 1].min()))
-        margin = 0.5 * separation - self.tol
-        if margin <= 0:
+        if 0.5 * separation <= self.tol:
             raise bad_value("tol", f"under half the points' separation ({np.degrees(separation) / 2:.4g}°)",
                             f"{np.degrees(self.tol):.4g}°")
-        # angular radius of a voxel seen from the sphere: half-diagonal √3h/2 over the distance >= 1 − √3h/2
-        self.n = int(np.ceil(2.0 / (0.8 * margin / np.sqrt(3.0))))
+        self.n = self.side(separation, self.tol)
         h = 2.0 / self.n
         ticks = -1.0 + (np.arange(self.n) + 0.5) * h
         centres = np.stack(np.meshgrid(ticks, ticks, ticks, indexing="ij"), axis=-1).reshape(-1, 3)
         norm = np.linalg.norm(centres, axis=1, keepdims=True)
         _, self.cell_point = tree.query(centres / np.maximum(norm, 1e-12))
         self.cos_tol = np.cos(self.tol)
+
+    @staticmethod
+    def side(separation: float, tol: float) -> int:
+        """Voxels along each axis for points ``separation`` apart (rad): the voxel's angular radius, its
+        half-diagonal ``√3h/2`` over the distance ``≥ 1 − √3h/2``, must stay under ``separation/2 − tol``
+        (with 20 % to spare); infinite-size grids are refused by the caller."""
+        margin = 0.5 * separation - tol
+        return int(np.ceil(2.0 / (0.8 * margin / np.sqrt(3.0))))
 
     def cell(self, q: np.ndarray) -> np.ndarray:
         """Voxel index of each query ``q (..., 3)`` inside the cube ``[−1, 1]³``."""

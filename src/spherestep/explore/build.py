@@ -35,6 +35,8 @@ import numpy as np
 from ..design_file import named_packing
 from ..errors import SpherestepError, bad_value
 from ..motor import MotorDesign, check_fits, stator_in_cap
+from ..motor.states import candidate_count
+from ..sphere import NearestPointGrid
 from .grid import DesignPoint, primary_ratio
 
 STATUSES = ("ok", "too_large", "does_not_fit", "over_budget", "no_states", "failed")
@@ -118,18 +120,6 @@ def build_design(point: DesignPoint, limits: Limits = Limits(), name: str | None
     return design
 
 
-def candidate_count(design: MotorDesign) -> int:
-    """Alignments state enumeration starts from: (coil pair, ordered pole pair) with arcs within ``2 tol``."""
-    u, v = design.rotor.centers, design.stator.centers[design.active_coils]
-    tol = design.state_tol
-    k1, k2 = np.triu_indices(len(v), 1)
-    coil_arcs = np.arccos(np.clip(np.sum(v[k1] * v[k2], axis=1), -1, 1))
-    j1, j2 = np.nonzero(~np.eye(len(u), dtype=bool))
-    pole_arcs = np.sort(np.arccos(np.clip(np.sum(u[j1] * u[j2], axis=1), -1, 1)))
-    return int((np.searchsorted(pole_arcs, coil_arcs + 2 * tol, "right")
-                - np.searchsorted(pole_arcs, coil_arcs - 2 * tol, "left")).sum())
-
-
 def motor_fingerprint(design: MotorDesign) -> str:
     """16 hex digits naming the physical motor: poles, polarities, coils, part sizes and tolerance (to 1e-9).
 
@@ -147,12 +137,12 @@ def motor_fingerprint(design: MotorDesign) -> str:
 
 def lookup_voxels(design: MotorDesign) -> float:
     """Voxels of the :class:`~spherestep.sphere.NearestPointGrid` that state enumeration builds on the poles:
-    ``n³`` with ``n = ⌈2√3 / (0.8 m)⌉`` and margin ``m = d_min/2 − tol`` (its constructor's rule); infinite
+    ``n³`` with ``n`` from :meth:`~spherestep.sphere.NearestPointGrid.side` (its constructor's rule); infinite
     when ``tol`` is not under half the pole spacing. Time and memory (~70 bytes a voxel) grow with it."""
-    margin = 0.5 * design.rotor.min_separation() - design.state_tol
-    if margin <= 0:
+    separation = design.rotor.min_separation()
+    if 0.5 * separation <= design.state_tol:
         return math.inf
-    return float(math.ceil(2.0 / (0.8 * margin / math.sqrt(3.0)))) ** 3
+    return float(NearestPointGrid.side(separation, design.state_tol)) ** 3
 
 
 def holding_torques(design: MotorDesign, count: int, seed: int) -> np.ndarray:
@@ -211,10 +201,7 @@ def evaluate(point: DesignPoint, limits: Limits = Limits()) -> dict:
             raise Unbuildable("too_large", f"{row['candidates']} candidate alignments, over the sweep's limit of "
                               f"{limits.max_candidates}")
         try:
-            # find_states builds frames for every pole pair before selecting; antipodal pairs give 0/0 there
-            # and are never selected, so the warning says nothing about this design
-            with np.errstate(invalid="ignore", divide="ignore"):
-                metrics = design.metrics(samples=point.samples, seed=point.seed)
+            metrics = design.metrics(samples=point.samples, seed=point.seed)
         except Exception as exc:  # noqa: BLE001 (a design that breaks the metrics is recorded, not fatal)
             raise Unbuildable("failed", f"{type(exc).__name__}: {exc}") from None
         if metrics["states"] == 0:
@@ -229,8 +216,7 @@ def evaluate(point: DesignPoint, limits: Limits = Limits()) -> dict:
         )
         if point.torque_states:
             try:
-                with np.errstate(invalid="ignore", divide="ignore"):
-                    torques = holding_torques(design, point.torque_states, point.seed)
+                torques = holding_torques(design, point.torque_states, point.seed)
             except Exception as exc:  # noqa: BLE001 (the kinematic metrics stand without the torque)
                 row["reason"] = f"holding torque not measured: {type(exc).__name__}: {exc}"
             else:

@@ -165,6 +165,29 @@ def _pair_weights(M: int, N: int) -> np.ndarray:
     return np.random.default_rng(12345).integers(0, 2**63, size=M * N, dtype=np.uint64)
 
 
+def _arc_matches(u: np.ndarray, v: np.ndarray, tol: float):
+    """Coil pairs ``(k1, k2)``, ordered pole pairs ``(j1, j2)`` (antipodal pairs left out: they fix no
+    rotation), the order sorting the pole pairs by arc, and per coil pair the range ``[lo, hi)`` of sorted pole
+    pairs whose arc is within ``2 tol`` of the coil pair's."""
+    k1, k2 = np.triu_indices(len(v), 1)
+    s = np.arccos(np.clip(np.sum(v[k1] * v[k2], axis=1), -1, 1))
+    j1, j2 = np.nonzero(~np.eye(len(u), dtype=bool))
+    a = np.arccos(np.clip(np.sum(u[j1] * u[j2], axis=1), -1, 1))
+    framed = a < np.pi - 1e-9
+    j1, j2, a = j1[framed], j2[framed], a[framed]
+    order = np.argsort(a)
+    lo = np.searchsorted(a[order], s - 2 * tol, "left")
+    hi = np.searchsorted(a[order], s + 2 * tol, "right")
+    return k1, k2, j1, j2, order, lo, hi
+
+
+def candidate_count(design, tol: float | None = None) -> int:
+    """How many (coil pair, ordered pole pair) alignments the enumeration starts from (its cost)."""
+    tol = design.state_tol if tol is None else tol
+    *_, lo, hi = _arc_matches(design.rotor.centers, design.stator.centers[design.active_coils], tol)
+    return int((hi - lo).sum())
+
+
 def find_states(design, tol: float) -> StepperStates:
     """Enumerate the stepper states of ``design`` at tolerance ``tol`` (radians); see the module docstring."""
     u = design.rotor.centers
@@ -174,17 +197,11 @@ def find_states(design, tol: float) -> StepperStates:
     empty = StepperStates(np.zeros((0, 3, 3)), np.zeros((0, 2), int), np.zeros(1, int), design.polarity, tol)
     if N < 2:
         return empty
-    k1, k2 = np.triu_indices(N, 1)
-    s = np.arccos(np.clip(np.sum(v[k1] * v[k2], axis=1), -1, 1))
-    j1, j2 = np.nonzero(~np.eye(M, dtype=bool))
-    a = np.arccos(np.clip(np.sum(u[j1] * u[j2], axis=1), -1, 1))
-    order = np.argsort(a)
-    lo = np.searchsorted(a[order], s - 2 * tol, "left")
-    hi = np.searchsorted(a[order], s + 2 * tol, "right")
+    k1, k2, j1, j2, order, lo, hi = _arc_matches(u, v, tol)
     counts = hi - lo
     if counts.sum() == 0:
         return empty
-    coil_pair = np.repeat(np.arange(len(s)), counts)
+    coil_pair = np.repeat(np.arange(len(k1)), counts)
     pole_pair = order[np.arange(counts.sum()) + np.repeat(lo - np.concatenate([[0], np.cumsum(counts)[:-1]]), counts)]
     R = _pair_frames(v[k1], v[k2])[coil_pair] @ np.swapaxes(_pair_frames(u[j1], u[j2])[pole_pair], -1, -2)
     grid = NearestPointGrid(u, tol)
