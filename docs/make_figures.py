@@ -201,6 +201,23 @@ def magnetics_fig6(outdir: Path) -> Path:
     return save(mg.figure_comparison(design, calibration, comparison, tmap), outdir / "magnetics_fig6.png")
 
 
+@figure("commutation_steps")
+def commutation_steps(outdir: Path) -> Path:
+    """Fig. 10 view: three steps of the demo's 360° turn about (1, 0.5, 2) on the prototype."""
+    import math
+
+    from spherestep import plots
+    from spherestep.commutation import about_axis, plan_geometric, steps_for
+    from spherestep.motor import prototype
+
+    design = prototype()
+    axis = np.array([1.0, 0.5, 2.0])
+    start = design.states().rotations[int(design.states().nearest(np.eye(3))[1].ravel()[0])]
+    plan = plan_geometric(design, about_axis(axis, 2 * math.pi, steps_for(2 * math.pi, 0.35 * design.max_step),
+                                             start=start))
+    return plots.save_figure(plots.figure_steps(design, plan, axis), outdir / "commutation_steps.png")
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("names", nargs="*", help=f"figures to make (default all): {', '.join(FIGURES)}")
