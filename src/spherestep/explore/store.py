@@ -1,6 +1,6 @@
 """The results table of a sweep: a folder of Parquet part files, one per batch, each written whole.
 
-A batch of rows is written to a temporary file in the folder and renamed to ``part-NNNNNN-XXXXXXXX.parquet``
+A batch of rows is written to a temporary file in the folder and renamed to ``part-<batch>-<8 hex digits>.parquet``
 (a sequence number and a random tag), so a reader sees a part whole or not at all, and an interrupted
 sweep loses at most the batch it was collecting. Reading concatenates the parts in sequence order; when a
 key appears more than once (a design evaluated again after its limits were raised) the latest row wins.
