@@ -18,7 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .. import so3
+from ..potential.equilibrium import torque_hessian
 from ..errors import bad_value
 from .rotor import Rotor
 from .simulate import currents_of
@@ -41,11 +41,9 @@ class Tuning:
 
 
 def stiffness(model, R: np.ndarray, currents: np.ndarray) -> np.ndarray:
-    """Eigenvalues (ascending) of the symmetrised ``−∂τ/∂ε`` at ``R`` under ``currents``."""
-    J = np.stack([-(model.torque(so3.exp(FD_STEP * e) @ R[None], currents[None])
-                    - model.torque(so3.exp(-FD_STEP * e) @ R[None], currents[None]))[0] / (2 * FD_STEP)
-                  for e in np.eye(3)], axis=1)
-    return np.linalg.eigvalsh(0.5 * (J + J.T))
+    """Eigenvalues (ascending) of the symmetrised ``−∂τ/∂ε`` at ``R`` under ``currents``
+    (:func:`spherestep.potential.torque_hessian`)."""
+    return np.linalg.eigvalsh(torque_hessian(model, R[None], currents[None], FD_STEP)[0])
 
 
 def tune(design, model, zeta: float = 1.0, samples: int = 40, seed: int = 0) -> Tuning:

@@ -3,11 +3,11 @@
 All on the :class:`~._table.TorqueMap` (torque ``T(R, c)`` and its exact energy ``E(R, c)``, ``T = −∂E/∂θ`` for
 ``R → exp(θ̂) R``, fixed frame, N·m and J), batched over orientations.
 
-* :func:`equilibrium`: damped Newton on SO(3) from a start ``R0``: the step ``ω = Σ_i (e_i · T / |h_i|) e_i``
-  over the eigenpairs of the stiffness ``H = ∂²E/∂θ²`` (central differences of the torque, step 1e-6 rad),
-  at most ``max_step`` long, halved until the energy falls (Armijo, 1e-4). Stops at ``|T| ≤ gtol · τ_ref``
-  with ``τ_ref = max|τ| Σ_k |c_k|``. The stiffness eigenvalues (N·m/rad) are returned, all positive at a
-  minimum.
+* :func:`equilibrium`: the damped Newton descent of :func:`spherestep.potential.equilibrium` on the map's
+  energy and torque, with the stiffness ``H = ∂²E/∂θ²`` by central differences of the torque (step 1e-6
+  rad), steps of at most ``max_step``; it stops at ``|T| ≤ gtol · τ_ref`` with
+  ``τ_ref = max|τ| Σ_k |c_k|`` (:meth:`TorqueMap.torque_reference`). The stiffness eigenvalues (N·m/rad) are
+  returned, all positive at a minimum.
 * :func:`holding_torque`: from an equilibrium, turn the rotor by ``θ`` about fixed axes ``ŵ`` (32
   directions: the faces, edges and corners of a cube, and both senses of the stiffness's eigen-axes) up to
   ``max_angle`` and record the restoring torque
@@ -29,11 +29,12 @@ import numpy as np
 
 from .. import so3
 from ..errors import bad_value
+from ..potential.equilibrium import Equilibrium, torque_hessian
+from ..potential.equilibrium import equilibrium as potential_equilibrium
 from ._model import as_rotations
 from ._table import TorqueMap
 
 FD_STEP = 1e-6  # rad, for the stiffness by central differences of the torque
-BASIS = np.eye(3)
 
 
 def cube_axes() -> np.ndarray:
@@ -45,80 +46,15 @@ def cube_axes() -> np.ndarray:
 
 def stiffness(tmap: TorqueMap, R: np.ndarray, c: np.ndarray) -> np.ndarray:
     """``H = ∂²E/∂θ∂θ = −∂T/∂θ`` (N·m/rad) at ``R (K, 3, 3)`` for currents ``c (K, N)``, symmetrised,
-    ``(K, 3, 3)``."""
-    K = len(R)
-    turns = so3.exp(np.concatenate([FD_STEP * BASIS, -FD_STEP * BASIS]))  # (6, 3, 3)
-    Rs = np.einsum("sab,kbc->ksac", turns, R).reshape(-1, 3, 3)
-    T = tmap.torque(Rs, np.repeat(c, 6, axis=0)).reshape(K, 6, 3)
-    H = -(T[:, :3] - T[:, 3:]) / (2 * FD_STEP)  # H[k, j, i] = −∂T_i/∂θ_j
-    return 0.5 * (H + np.swapaxes(H, 1, 2))
-
-
-@dataclass(frozen=True)
-class Equilibrium:
-    """Result of :func:`equilibrium`: ``rotation (K, 3, 3)``, residual ``torque (K, 3)`` (N·m),
-    ``stiffness (K, 3)`` (eigenvalues of ``H``, N·m/rad, ascending), ``iterations``, ``converged``."""
-
-    rotation: np.ndarray
-    torque: np.ndarray
-    stiffness: np.ndarray
-    iterations: np.ndarray
-    converged: np.ndarray
-
-    @property
-    def is_minimum(self) -> np.ndarray:
-        """Converged with positive stiffness about every axis."""
-        return self.converged & (self.stiffness[:, 0] > 0)
-
-
-def _scale(tmap: TorqueMap, c: np.ndarray) -> np.ndarray:
-    return float(np.max(np.abs(tmap.tau))) * np.sum(np.abs(c), axis=1)
+    ``(K, 3, 3)`` (:func:`spherestep.potential.torque_hessian`, step 1e-6 rad)."""
+    return torque_hessian(tmap, R, c, FD_STEP)
 
 
 def equilibrium(tmap: TorqueMap, R0, currents, *, gtol: float = 1e-9, max_iter: int = 60,
                 max_step: float = math.radians(2.0)) -> Equilibrium:
-    """The rest orientation of the rotor from ``R0 (K, 3, 3)`` under ``currents (K, N)`` (see the module)."""
-    R, _ = as_rotations(R0)
-    R = R.copy()
-    c = np.array(np.broadcast_to(np.asarray(currents, dtype=float), (len(R), len(tmap.coils))))
-    if not np.all(np.any(c != 0, axis=1)):
-        raise bad_value("currents", "at least one energised coil per orientation", "a row of zeros")
-    if not (isinstance(gtol, float) and 0 < gtol < 1):
-        raise bad_value("gtol", "a tolerance in (0, 1)", gtol)
-    tol = gtol * _scale(tmap, c)
-    E, T = tmap.energy(R, c), tmap.torque(R, c)
-    iterations = np.zeros(len(R), dtype=int)
-    done = np.linalg.norm(T, axis=1) <= tol
-    stalled = np.zeros(len(R), dtype=bool)
-    for _ in range(max_iter):
-        act = np.flatnonzero(~done & ~stalled)
-        if not len(act):
-            break
-        h, e = np.linalg.eigh(stiffness(tmap, R[act], c[act]))
-        floor = 1e-8 * np.abs(h).max(axis=1, keepdims=True) + 1e-300
-        omega = np.einsum("kai,ki->ka", e, np.einsum("kai,ka->ki", e, T[act]) / np.maximum(np.abs(h), floor))
-        omega *= np.minimum(1.0, max_step / np.maximum(np.linalg.norm(omega, axis=1, keepdims=True), 1e-300))
-        slope = np.sum(T[act] * omega, axis=1)
-        step = np.ones(len(act))
-        pending = np.ones(len(act), dtype=bool)
-        for _ in range(30):
-            idx = np.flatnonzero(pending)
-            if not len(idx):
-                break
-            Rt = so3.exp(step[idx, None] * omega[idx]) @ R[act[idx]]
-            Et = tmap.energy(Rt, c[act[idx]])
-            ok = (Et <= E[act[idx]] - 1e-4 * step[idx] * slope[idx]) | \
-                 (np.abs(Et - E[act[idx]]) <= 1e-14 * np.maximum(np.abs(E[act[idx]]), 1e-12))
-            take = act[idx[ok]]
-            R[take], E[take] = Rt[ok], Et[ok]
-            pending[idx[ok]] = False
-            step[idx[~ok]] *= 0.5
-        moved = act[~pending]
-        stalled[act[pending]] = True
-        iterations[moved] += 1
-        T[moved] = tmap.torque(R[moved], c[moved])
-        done[moved] = np.linalg.norm(T[moved], axis=1) <= tol[moved]
-    return Equilibrium(R, T, np.linalg.eigvalsh(stiffness(tmap, R, c)), iterations, done)
+    """The rest orientation of the rotor from ``R0 (K, 3, 3)`` under ``currents (K, N)``: the damped Newton
+    descent of :func:`spherestep.potential.equilibrium` on the map's energy and torque (see the module)."""
+    return potential_equilibrium(tmap, R0, currents, gtol=gtol, max_iter=max_iter, max_step=max_step)
 
 
 @dataclass(frozen=True)

@@ -150,6 +150,10 @@ class TorqueMap:
             out[s:s + CHUNK] = np.cross(self.coils[idx][None], S)
         return out
 
+    def torque_reference(self, currents) -> np.ndarray:
+        """``max|τ(α)| Σ_k |c_k|`` (N·m), shape ``currents.shape[:-1]``: the reference for torque tolerances."""
+        return float(np.max(np.abs(self.tau))) * np.sum(np.abs(np.asarray(currents, dtype=float)), axis=-1)
+
     def _drive(self, R, currents) -> tuple[np.ndarray, bool, np.ndarray, np.ndarray]:
         R, single = as_rotations(R)
         c = as_currents(currents, len(self.coils), self.failed, len(R))

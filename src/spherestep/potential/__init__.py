@@ -11,7 +11,7 @@ and their basins, and the force-curve fit of Fig. 6 (docs/potential.md states ev
 * :func:`fit_force_curve`, :func:`potential_from_force`, :func:`fit_profile`: Fig. 6.
 """
 
-from .equilibrium import Equilibrium, equilibrium, gradient_flow, in_basin, torque_scale
+from .equilibrium import Equilibrium, equilibrium, gradient_flow, in_basin, torque_hessian, torque_scale
 from .force import (
     ProfileFit,
     example_force_curve,
@@ -47,5 +47,6 @@ __all__ = [
     "potential_from_force",
     "save_force_curve",
     "synthetic_force_curve",
+    "torque_hessian",
     "torque_scale",
 ]

@@ -2,7 +2,9 @@
 
 :func:`equilibrium` descends ``V(·, c)`` from a start ``R0`` by a safeguarded Newton method on the rotation group:
 at ``R`` the local model is ``V(exp(ω̂) R) ≈ V − τ·ω + ½ ωᵀ H ω`` with the analytic torque ``τ`` and Hessian ``H``
-of :class:`~spherestep.potential.MotorPotential`. The step is ``ω = Σ_i (e_i · τ / |h_i|) e_i`` over the
+of :class:`~spherestep.potential.MotorPotential` — or, for any other torque model with ``energy``, ``torque``,
+``coils`` and ``failed`` (the magnets' :class:`~spherestep.magnetics.TorqueMap`), its torque and the Hessian by
+central differences of the torque (:func:`torque_hessian`). The step is ``ω = Σ_i (e_i · τ / |h_i|) e_i`` over the
 eigenpairs ``(h_i, e_i)`` of ``H`` (Newton where ``H`` is positive definite; along negative curvature it still
 descends, so saddles repel rather than attract), shortened to at most ``max_step`` radians, and then halved
 until the Armijo condition ``V(exp(sω̂) R) ≤ V − 10⁻⁴ s τ·ω`` holds (or, once the decrease is at rounding
@@ -52,14 +54,43 @@ class Equilibrium:
         return self.converged & (self.stiffness[..., 0] > 0)
 
 
-def torque_scale(model: MotorPotential, currents: np.ndarray) -> np.ndarray:
-    """``τ_ref = 2 max|G'| Σ_k |c_k|``, shape ``currents.shape[:-1]``: the reference for torque tolerances."""
-    return 2.0 * model.kernel.maxima[1] * np.sum(np.abs(currents), axis=-1)
+def torque_scale(model, currents: np.ndarray) -> np.ndarray:
+    """The reference for torque tolerances, shape ``currents.shape[:-1]``: ``τ_ref = 2 max|G'| Σ_k |c_k|`` for a
+    :class:`MotorPotential` (the largest torque one pole per coil could feel), the model's own
+    ``torque_reference(c)`` otherwise."""
+    if isinstance(model, MotorPotential):
+        return 2.0 * model.kernel.maxima[1] * np.sum(np.abs(currents), axis=-1)
+    return model.torque_reference(currents)
+
+
+def torque_hessian(model, R: np.ndarray, c: np.ndarray, step: float = 1e-6) -> np.ndarray:
+    """``H = −∂τ/∂θ`` (symmetrised) at ``R (K, 3, 3)`` under ``c (K, N)`` by central differences of the model's
+    torque (turns of ``±step`` rad about the fixed axes), ``(K, 3, 3)``."""
+    K = len(R)
+    basis = np.eye(3)
+    turns = so3.exp(np.concatenate([step * basis, -step * basis]))  # (6, 3, 3)
+    Rs = np.einsum("sab,kbc->ksac", turns, R).reshape(-1, 3, 3)
+    T = model.torque(Rs, np.repeat(c, 6, axis=0)).reshape(K, 6, 3)
+    H = -(T[:, :3] - T[:, 3:]) / (2 * step)  # H[k, j, i] = −∂τ_i/∂θ_j
+    return 0.5 * (H + np.swapaxes(H, 1, 2))
+
+
+def _evaluate(model, R: np.ndarray, c: np.ndarray, order: int) -> tuple[np.ndarray, ...]:
+    """Energy, torque (order ≥ 1) and Hessian (order 2) of validated batches."""
+    if isinstance(model, MotorPotential):
+        return model._pairwise(R, c, order)
+    out = [model.energy(R, c)]
+    if order >= 1:
+        out.append(model.torque(R, c))
+    if order >= 2:
+        out.append(torque_hessian(model, R, c))
+    return tuple(out)
 
 
 def _prepare(model, R0, currents, name: str = "R0") -> tuple[np.ndarray, np.ndarray, tuple]:
-    if not isinstance(model, MotorPotential):
-        raise bad_value("model", "a MotorPotential", type(model).__name__)
+    if not all(hasattr(model, attr) for attr in ("energy", "torque", "coils", "failed")):
+        raise bad_value("model", "a MotorPotential or a torque model (energy, torque, coils, failed)",
+                        type(model).__name__)
     R0 = _checks.rotations(R0, name)
     c = _checks.currents(currents, len(model.coils), model.failed)
     try:
@@ -96,7 +127,7 @@ def equilibrium(model: MotorPotential, R0, currents, *, gtol: float = 1e-10, max
     max_iter = _checks.count(max_iter, "max_iter", minimum=1)
     max_step = _checks.positive(max_step, "max_step")
     tol = gtol * torque_scale(model, c)
-    E, tau, H = model._pairwise(R, c, 2)
+    E, tau, H = _evaluate(model, R, c, 2)
     iterations = np.zeros(len(R), dtype=int)
     converged = np.linalg.norm(tau, axis=-1) <= tol
     stalled = np.zeros(len(R), dtype=bool)
@@ -115,7 +146,7 @@ def equilibrium(model: MotorPotential, R0, currents, *, gtol: float = 1e-10, max
             if len(todo) == 0:
                 break
             Rt = so3.exp(step[todo, None] * omega[todo]) @ Ra[todo]
-            Et, tt, Ht = model._pairwise(Rt, ca[todo], 2)
+            Et, tt, Ht = _evaluate(model, Rt, ca[todo], 2)
             rounding = 1e-13 * np.maximum(np.abs(Ea[todo]), 1.0)
             armijo = Et <= Ea[todo] - 1e-4 * step[todo] * slope[todo]
             flat = (np.abs(Et - Ea[todo]) <= rounding) & \
@@ -165,19 +196,19 @@ def gradient_flow(model: MotorPotential, R0, currents, *, gtol: float = 1e-6, rt
 
     def rate(_, y):
         Ry = y.reshape(K, 3, 3)
-        tau = model._pairwise(Ry, c, 1)[1]
+        tau = _evaluate(model, Ry, c, 1)[1]
         return (_cross(tau[:, None, :], np.swapaxes(Ry, -1, -2))).swapaxes(-1, -2).reshape(-1)  # τ̂ R, column-wise
 
-    H = model._pairwise(R, c, 2)[2]
+    H = _evaluate(model, R, c, 2)[2]
     h_max = float(np.max(np.abs(np.linalg.eigvalsh(H))))
     span = 10.0 / max(h_max, np.finfo(float).tiny)
-    at_rest = np.linalg.norm(model._pairwise(R, c, 1)[1], axis=-1) <= tol
+    at_rest = np.linalg.norm(_evaluate(model, R, c, 1)[1], axis=-1) <= tol
     for _ in range(max_rounds):
         if np.all(at_rest):
             break
         sol = solve_ivp(rate, (0.0, span), R.reshape(-1), method="RK45", rtol=rtol, atol=rtol * 1e-2)
         R = _orthonormalise(sol.y[:, -1].reshape(K, 3, 3))
-        at_rest = np.linalg.norm(model._pairwise(R, c, 1)[1], axis=-1) <= tol
+        at_rest = np.linalg.norm(_evaluate(model, R, c, 1)[1], axis=-1) <= tol
     return R.reshape(lead + (3, 3)), at_rest.reshape(lead)
 
 
