@@ -579,3 +579,41 @@ def test_degenerate_triangle_message_names_p_q_r(case):
     for func in (S.triangle_incircle, S.circle_in_corner):
         with pytest.raises(ValueError, match=r"^(p, q, r|p|q|r) must be "):
             func(*DEGENERATE[case])
+
+
+def test_shell_voxels_against_brute_force():
+    """The voxels meeting the unit sphere, by their two z-bands per column, equal a brute-force test of
+    every voxel (nearest and farthest point of the box from the origin straddle radius 1)."""
+    from spherestep.sphere import shell_voxels
+
+    for n in (1, 2, 3, 4, 7, 10, 17, 30, 31):
+        h = 2 / n
+        lo = -1 + np.arange(n) * h
+        hi = lo + h
+        near = np.where((lo <= 0) & (hi >= 0), 0.0, np.minimum(abs(lo), abs(hi)))
+        far = np.maximum(abs(lo), abs(hi))
+        I, J, K = np.meshgrid(np.arange(n), np.arange(n), np.arange(n), indexing="ij")
+        d_min = near[I] ** 2 + near[J] ** 2 + near[K] ** 2
+        d_max = far[I] ** 2 + far[J] ** 2 + far[K] ** 2
+        expected = np.flatnonzero(((d_min <= 1 + 1e-12) & (d_max >= 1 - 1e-12)).ravel())
+        assert np.array_equal(shell_voxels(n), expected)
+
+
+def test_nearest_point_grid_against_a_kd_tree():
+    """Every unit query within tol of a point gets that point; every other query gets -1."""
+    from scipy.spatial import cKDTree
+
+    from spherestep.packing import by_name, refine
+    from spherestep.sphere import NearestPointGrid
+
+    pts = refine(by_name("truncated-icosahedron"), levels=2).centers
+    tol = 0.02
+    grid = NearestPointGrid(pts, tol)
+    rng = np.random.default_rng(8)
+    near = pts[rng.integers(len(pts), size=20000)] + rng.normal(scale=0.012, size=(20000, 3))
+    q = np.vstack([near, rng.normal(size=(20000, 3))])
+    q /= np.linalg.norm(q, axis=1, keepdims=True)
+    dist, idx = cKDTree(pts).query(q)
+    expected = np.where(2 * np.arcsin(dist / 2) <= tol, idx, -1)
+    assert np.array_equal(grid.match(q), expected)
+    assert (expected >= 0).sum() > 5000

@@ -265,14 +265,48 @@ def circle_in_corner(p, q, r) -> tuple[np.ndarray, np.ndarray]:
     return center, rho
 
 
-class NearestPointGrid:
-    """Which of a fixed set of well-separated points lies within ``tol`` of a query point, in O(1).
+def shell_voxels(n: int, eps: float = 1e-12) -> np.ndarray:
+    """Sorted ids ``(i n + j) n + k`` of the voxels of ``[−1, 1]³`` cut into ``n³`` that meet the unit sphere.
 
-    Space around the sphere is cut into cubic voxels of side ``h`` and each voxel stores the point nearest
-    its centre's projection on the sphere. A unit query within ``tol`` of point ``p`` is at most ``tol + ρ``
-    from that projection (``ρ ≈ √3 h / 2`` the voxel's angular radius, bounded with margin below) and every
-    other point at least ``s − tol − ρ`` (``s`` the smallest separation), so the stored point is ``p``
-    whenever ``ρ < s/2 − tol``; ``h`` is chosen so. Requires ``tol < s/2``.
+    Per column ``(i, j)`` with ``ρ²`` between ``r²_min`` and ``r²_max`` over its cross-section, a voxel meets
+    the sphere when some point has ``|z| ≤ A = √(1 − r²_min)`` and some point ``|z| ≥ B = √(1 − r²_max)``: the
+    voxels meeting ``|z| ≤ A`` less those wholly inside ``|z| < B``, at most two bands per column, so the work
+    is ``O(n²)``, not ``O(n³)``.
+    """
+    h = 2.0 / n
+    lo = -1.0 + np.arange(n) * h
+    hi = lo + h
+    amin = np.where((lo <= 0) & (hi >= 0), 0.0, np.minimum(np.abs(lo), np.abs(hi)))
+    amax = np.maximum(np.abs(lo), np.abs(hi))
+    rmin2 = (amin[:, None] ** 2 + amin[None, :] ** 2).ravel()
+    rmax2 = (amax[:, None] ** 2 + amax[None, :] ** 2).ravel()
+    cols = np.flatnonzero(rmin2 <= 1.0 + eps)
+    A = np.sqrt(1.0 + eps - rmin2[cols])
+    B = np.sqrt(np.maximum(1.0 - eps - rmax2[cols], 0.0))
+    k_first = np.clip(np.floor((1.0 - A) / h).astype(np.int64), 0, n - 1)  # voxel k spans [lo_k, hi_k]
+    k_last = np.clip(np.floor((1.0 + A) / h).astype(np.int64), 0, n - 1)
+    k_in_first = np.floor((1.0 - B) / h).astype(np.int64) + 1  # wholly inside |z| < B
+    k_in_last = np.ceil((1.0 + B) / h).astype(np.int64) - 2
+    has_in = (B > 0) & (k_in_first <= k_in_last)
+    starts = np.concatenate([k_first, np.where(has_in, np.maximum(k_in_last + 1, k_first), k_last + 1)])
+    ends = np.concatenate([np.where(has_in, np.minimum(k_in_first - 1, k_last), k_last),
+                           np.where(has_in, k_last, k_first - 1)])
+    column = np.concatenate([cols, cols])
+    count = np.maximum(ends - starts + 1, 0)
+    rep = np.repeat(np.arange(len(count)), count)
+    offset = np.arange(int(count.sum())) - np.repeat(np.cumsum(count) - count, count)
+    return np.unique(column[rep] * n + starts[rep] + offset)
+
+
+class NearestPointGrid:
+    """Which of a fixed set of well-separated points lies within ``tol`` of a unit query, in O(log V).
+
+    Space around the sphere is cut into cubic voxels of side ``h``; only the ``V ≈ 3πn²`` voxels that meet the
+    unit sphere are kept (:func:`shell_voxels`), each with the point nearest its centre's projection. A unit
+    query within ``tol`` of point ``p`` is at most ``tol + ρ`` from that projection (``ρ ≈ √3 h / 2`` the voxel's
+    angular radius, bounded with margin below) and every other point at least ``s − tol − ρ`` (``s`` the
+    smallest separation), so the stored point is ``p`` whenever ``ρ < s/2 − tol``; ``h`` is chosen so.
+    Requires ``tol < s/2``.
     """
 
     def __init__(self, points, tol: float):
@@ -287,9 +321,10 @@ class NearestPointGrid:
             raise bad_value("tol", f"under half the points' separation ({np.degrees(separation) / 2:.4g}°)",
                             f"{np.degrees(self.tol):.4g}°")
         self.n = self.side(separation, self.tol)
+        self.ids = shell_voxels(self.n)
         h = 2.0 / self.n
-        ticks = -1.0 + (np.arange(self.n) + 0.5) * h
-        centres = np.stack(np.meshgrid(ticks, ticks, ticks, indexing="ij"), axis=-1).reshape(-1, 3)
+        ijk = np.stack([self.ids // (self.n * self.n), (self.ids // self.n) % self.n, self.ids % self.n], axis=1)
+        centres = -1.0 + (ijk + 0.5) * h
         norm = np.linalg.norm(centres, axis=1, keepdims=True)
         _, self.cell_point = tree.query(centres / np.maximum(norm, 1e-12))
         self.cos_tol = np.cos(self.tol)
@@ -298,17 +333,19 @@ class NearestPointGrid:
     def side(separation: float, tol: float) -> int:
         """Voxels along each axis for points ``separation`` apart (rad): the voxel's angular radius, its
         half-diagonal ``√3h/2`` over the distance ``≥ 1 − √3h/2``, must stay under ``separation/2 − tol``
-        (with 20 % to spare); infinite-size grids are refused by the caller."""
+        (with 20 % to spare)."""
         margin = 0.5 * separation - tol
         return int(np.ceil(2.0 / (0.8 * margin / np.sqrt(3.0))))
 
     def cell(self, q: np.ndarray) -> np.ndarray:
-        """Voxel index of each query ``q (..., 3)`` inside the cube ``[−1, 1]³``."""
+        """Voxel id of each query ``q (..., 3)`` inside the cube ``[−1, 1]³``."""
         i = np.clip(((q + 1.0) * (0.5 * self.n)).astype(np.int64), 0, self.n - 1)
         return (i[..., 0] * self.n + i[..., 1]) * self.n + i[..., 2]
 
     def match(self, q: np.ndarray) -> np.ndarray:
         """Index of the point within ``tol`` of each unit query ``q (..., 3)``, or −1 where there is none."""
-        idx = self.cell_point[self.cell(q)]
-        hit = np.einsum("...c,...c->...", q, self.points[idx]) >= self.cos_tol
+        cell = self.cell(q)
+        slot = np.minimum(np.searchsorted(self.ids, cell), len(self.ids) - 1)
+        idx = self.cell_point[slot]
+        hit = (self.ids[slot] == cell) & (np.einsum("...c,...c->...", q, self.points[idx]) >= self.cos_tol)
         return np.where(hit, idx, -1)

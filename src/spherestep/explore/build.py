@@ -36,7 +36,7 @@ from ..design_file import named_packing
 from ..errors import SpherestepError, bad_value
 from ..motor import MotorDesign, check_fits, stator_in_cap
 from ..motor.states import candidate_count
-from ..sphere import NearestPointGrid
+from ..sphere import NearestPointGrid, shell_voxels
 from .grid import DesignPoint, primary_ratio
 
 STATUSES = ("ok", "too_large", "does_not_fit", "over_budget", "no_states", "failed")
@@ -137,12 +137,13 @@ def motor_fingerprint(design: MotorDesign) -> str:
 
 def lookup_voxels(design: MotorDesign) -> float:
     """Voxels of the :class:`~spherestep.sphere.NearestPointGrid` that state enumeration builds on the poles:
-    ``n³`` with ``n`` from :meth:`~spherestep.sphere.NearestPointGrid.side` (its constructor's rule); infinite
-    when ``tol`` is not under half the pole spacing. Time and memory (~70 bytes a voxel) grow with it."""
+    the shell of an ``n³`` cube (:func:`~spherestep.sphere.shell_voxels`, ``n`` from
+    :meth:`~spherestep.sphere.NearestPointGrid.side`); infinite when ``tol`` is not under half the pole
+    spacing. Time and memory (~70 bytes a voxel) grow with it."""
     separation = design.rotor.min_separation()
     if 0.5 * separation <= design.state_tol:
         return math.inf
-    return float(NearestPointGrid.side(separation, design.state_tol)) ** 3
+    return float(len(shell_voxels(NearestPointGrid.side(separation, design.state_tol))))
 
 
 def holding_torques(design: MotorDesign, count: int, seed: int) -> np.ndarray:
