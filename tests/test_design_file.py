@@ -109,7 +109,8 @@ def test_save_load_round_trip_of_varied_designs(proto, data):
         failed_coils=tuple(data.draw(st.lists(st.integers(0, len(coils) - 1), max_size=3))),
         tol=data.draw(st.none() | st.floats(1e-4, 0.49)),
         remanence=data.draw(st.floats(0.1, 2.0)), coil_ampere_turns=data.draw(st.floats(1.0, 1e5)),
-        air_gap=data.draw(st.floats(0.0, 1e-3)), name=data.draw(st.text(st.characters(categories=["L", "N", "P", "S", "Zs"]), min_size=1, max_size=12)),
+        air_gap=data.draw(st.floats(0.0, 1e-3)), name=data.draw(st.text(st.characters(categories=["L", "N", "P", "S", "Zs"]), min_size=1, max_size=12)
+                                                     .filter(str.isprintable)),
         max_coils=data.draw(st.integers(len(coils), 64)),
     )
     with tempfile.TemporaryDirectory() as tmp:
