@@ -27,3 +27,11 @@ def proto():
 @pytest.fixture(scope="session")
 def proto_metrics(proto):
     return proto.metrics(samples=20_000, seed=7)
+
+
+@pytest.fixture(scope="session")
+def model(proto):
+    """The prototype's potential model (Sec. III-B), built once."""
+    from spherestep.potential import MotorPotential
+
+    return MotorPotential(proto)

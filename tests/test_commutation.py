@@ -143,13 +143,6 @@ def test_planner_works_around_failed_coils(proto):
     assert all(3 not in s.coils and 7 not in s.coils for s in plan.steps)
 
 
-@pytest.fixture(scope="module")
-def model(proto):
-    from spherestep.potential import MotorPotential
-
-    return MotorPotential(proto)
-
-
 def test_potential_planner_lands_on_equilibria(proto, model):
     from spherestep.commutation import plan_potential
     from spherestep.potential import coil_currents, equilibrium

@@ -29,11 +29,6 @@ from spherestep.potential import (
 
 
 @pytest.fixture(scope="module")
-def model(proto):
-    return MotorPotential(proto)
-
-
-@pytest.fixture(scope="module")
 def small(proto):
     """A strongly truncated model (L = 10): the band-limited identities must still hold exactly."""
     return MotorPotential(proto, bandlimit=10)

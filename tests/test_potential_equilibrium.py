@@ -8,18 +8,12 @@ import pytest
 from spherestep import so3
 from spherestep.errors import InputError
 from spherestep.potential import (
-    MotorPotential,
     coil_currents,
     equilibrium,
     gradient_flow,
     in_basin,
     torque_scale,
 )
-
-
-@pytest.fixture(scope="module")
-def model(proto):
-    return MotorPotential(proto)
 
 
 @pytest.fixture(scope="module")
