@@ -19,17 +19,33 @@ from scipy.spatial.transform import Rotation
 from .errors import ComputationError, bad_value
 
 
-def _as_rotations(R, name: str = "R") -> np.ndarray:
-    R = np.asarray(R, dtype=float)
-    if R.shape[-2:] != (3, 3):
-        raise bad_value(name, "an array of rotation matrices of shape (..., 3, 3)", f"shape {R.shape}")
-    if not np.all(np.isfinite(R)):
-        raise bad_value(name, "finite rotation matrices", "NaN or infinite entries")
-    return R
+ORTHOGONALITY_TOL = 1e-6  # |RᵀR − I| accepted as a rotation (rounding of products of many rotations)
+
+
+def as_rotations(R, name: str = "R") -> np.ndarray:
+    """The one input contract for rotations: ``R`` as a float array ``(..., 3, 3)`` of proper rotations
+    (finite, ``|RᵀR − I| ≤ 1e-6`` entrywise, determinant +1), any leading batch shape; otherwise the project's
+    one-line :class:`~spherestep.errors.InputError` naming ``name``."""
+    arr = R if isinstance(R, np.ndarray) and R.dtype == float else np.asarray(R, dtype=float)
+    if arr.ndim < 2 or arr.shape[-2:] != (3, 3):
+        raise bad_value(name, "rotation matrices of shape (..., 3, 3)", f"shape {arr.shape}")
+    if arr.size == 0:
+        return arr
+    gram = np.swapaxes(arr, -1, -2) @ arr - np.eye(3)
+    # proper: the third row is the cross product of the first two (det > 0); NaN fails both tests
+    det = (arr[..., 0, 0] * (arr[..., 1, 1] * arr[..., 2, 2] - arr[..., 1, 2] * arr[..., 2, 1])
+           + arr[..., 0, 1] * (arr[..., 1, 2] * arr[..., 2, 0] - arr[..., 1, 0] * arr[..., 2, 2])
+           + arr[..., 0, 2] * (arr[..., 1, 0] * arr[..., 2, 1] - arr[..., 1, 1] * arr[..., 2, 0]))
+    if not (np.max(np.abs(gram)) <= ORTHOGONALITY_TOL and np.min(det) > 0):
+        if not np.all(np.isfinite(arr)):
+            raise bad_value(name, "finite rotation matrices", "NaN or infinite entries")
+        raise bad_value(name, "proper rotation matrices (RᵀR = I within 1e-6, determinant +1)",
+                        "a matrix that is not a rotation")
+    return arr
 
 
 def _as_scipy(R) -> Rotation:
-    R = _as_rotations(R)
+    R = as_rotations(R)
     return Rotation.from_matrix(R.reshape(-1, 3, 3))
 
 
@@ -80,7 +96,7 @@ def angle(R) -> np.ndarray:
     Computed as ``atan2(|vect(R − Rᵀ)|/2 … , (tr R − 1)/2)``: unlike ``arccos((tr R − 1)/2)`` it keeps full
     precision near 0 and near π.
     """
-    R = _as_rotations(R)
+    R = as_rotations(R)
     sin_part = np.linalg.norm(vect(R), axis=-1)
     cos_part = 0.5 * (np.trace(R, axis1=-2, axis2=-1) - 1.0)
     return np.arctan2(sin_part, cos_part)
@@ -88,8 +104,8 @@ def angle(R) -> np.ndarray:
 
 def distance(R1, R2) -> np.ndarray:
     """Park's metric ``D(R1, R2) = θ(R1ᵀ R2)`` (radians), broadcasting over leading axes."""
-    R1 = _as_rotations(R1, "R1")
-    R2 = _as_rotations(R2, "R2")
+    R1 = as_rotations(R1, "R1")
+    R2 = as_rotations(R2, "R2")
     return angle(np.swapaxes(R1, -1, -2) @ R2)
 
 
@@ -100,7 +116,7 @@ def axis_angle(R) -> tuple[np.ndarray, np.ndarray]:
     does not. At θ = 0 the axis is arbitrary and returned as ``(0, 0, 1)``; at θ = π both ``±n`` describe
     ``R``, and the one returned is SciPy's choice.
     """
-    R = _as_rotations(R)
+    R = as_rotations(R)
     rotvec = _as_scipy(R).as_rotvec().reshape(R.shape[:-2] + (3,))
     theta = np.linalg.norm(rotvec, axis=-1)
     safe = np.where(theta > 0, theta, 1.0)[..., None]
@@ -160,7 +176,7 @@ def to_euler_zxz(R) -> np.ndarray:
     ``β ≈ 1e−7`` and so moves ``R`` by up to ``β``. At ``β = 0`` (or π) only ``α ± γ`` is defined; the split
     returned is the one the formulas give.
     """
-    R = _as_rotations(R)
+    R = as_rotations(R)
     x, y, z, w = np.moveaxis(Rotation.from_matrix(R.reshape(-1, 3, 3)).as_quat(), -1, 0)
     total = 2.0 * np.arctan2(z, w)
     difference = 2.0 * np.arctan2(y, x)
@@ -209,8 +225,8 @@ def geodesic(R1, R2, t) -> np.ndarray:
 
     ``t`` may be an array; the result has shape ``t.shape + (3, 3)`` for single ``R1``, ``R2``.
     """
-    R1 = _as_rotations(R1, "R1")
-    R2 = _as_rotations(R2, "R2")
+    R1 = as_rotations(R1, "R1")
+    R2 = as_rotations(R2, "R2")
     t = np.asarray(t, dtype=float)
     omega = log(np.swapaxes(R1, -1, -2) @ R2)
     return R1 @ exp(omega * t[..., None])
@@ -219,7 +235,7 @@ def geodesic(R1, R2, t) -> np.ndarray:
 def turned_angle(rotations, axis) -> np.ndarray:
     """Cumulative angle (rad) turned about the fixed-frame ``axis`` along ``rotations (T, 3, 3)``:
     ``ψ_0 = 0``, ``ψ_k = ψ_{k−1} + n · log(R_k R_{k−1}ᵀ)`` (unwrapped, so a full turn gives 2π)."""
-    R = _as_rotations(rotations, "rotations")
+    R = as_rotations(rotations, "rotations")
     n = np.asarray(axis, dtype=float)
     n = n / np.linalg.norm(n)
     steps = log(R[1:] @ np.swapaxes(R[:-1], 1, 2)) @ n
@@ -228,7 +244,7 @@ def turned_angle(rotations, axis) -> np.ndarray:
 
 def path_length(keys) -> float:
     """Length of the piecewise-geodesic path through ``keys`` ``(m, 3, 3)``: the sum of Park distances."""
-    keys = _as_rotations(keys, "path")
+    keys = as_rotations(keys, "path")
     return float(np.sum(distance(keys[:-1], keys[1:])))
 
 
@@ -248,7 +264,7 @@ def resample(path, n: int) -> np.ndarray:
     """
     from scipy.linalg import solve_banded
 
-    keys = _as_rotations(path, "path")
+    keys = as_rotations(path, "path")
     if keys.ndim != 3 or keys.shape[0] < 2:
         raise bad_value("path", "at least two rotations, shape (m, 3, 3) with m >= 2", f"shape {keys.shape}")
     if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:

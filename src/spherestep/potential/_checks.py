@@ -6,28 +6,13 @@ import math
 
 import numpy as np
 
+from .. import so3
 from ..errors import bad_value
 from ..harmonics._checks import real_array  # noqa: F401  (one check for both rooms)
 
-_EYE = np.eye(3)
-
-
 def rotations(R, name: str = "R") -> np.ndarray:
-    """Rotation matrices ``(..., 3, 3)``: finite, orthogonal to 1e-6 with determinant +1."""
-    arr = np.asarray(R, dtype=float) if not isinstance(R, np.ndarray) or R.dtype != float else R
-    if arr.ndim < 2 or arr.shape[-2:] != (3, 3):
-        raise bad_value(name, "rotation matrices of shape (..., 3, 3)", f"shape {arr.shape}")
-    gram = np.swapaxes(arr, -1, -2) @ arr - _EYE
-    # orthogonal to 1e-6 (NaN fails too), and proper: the third row is the cross product of the first two
-    triple = (arr[..., 0, 0] * (arr[..., 1, 1] * arr[..., 2, 2] - arr[..., 1, 2] * arr[..., 2, 1])
-              + arr[..., 0, 1] * (arr[..., 1, 2] * arr[..., 2, 0] - arr[..., 1, 0] * arr[..., 2, 2])
-              + arr[..., 0, 2] * (arr[..., 1, 0] * arr[..., 2, 1] - arr[..., 1, 1] * arr[..., 2, 0]))
-    if arr.size and not (np.max(np.abs(gram)) <= 1e-6 and np.min(triple) > 0):
-        if not np.all(np.isfinite(arr)):
-            raise bad_value(name, "finite rotation matrices", "NaN or infinite entries")
-        raise bad_value(name, "rotation matrices (orthogonal to 1e-6, determinant +1)",
-                        "a matrix that is not a rotation")
-    return arr
+    """Rotation matrices ``(..., 3, 3)`` (:func:`spherestep.so3.as_rotations`)."""
+    return so3.as_rotations(R, name)
 
 
 def currents(c, count: int, failed: tuple[int, ...], name: str = "currents") -> np.ndarray:
