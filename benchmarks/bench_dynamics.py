@@ -20,7 +20,7 @@ import time
 import numpy as np
 
 from spherestep import so3
-from spherestep.dynamics import Integrator, Scaled, currents_of, tune
+from spherestep.dynamics import Integrator, currents_of, tune
 from spherestep.magnetics import torque_map
 from spherestep.motor import prototype
 from spherestep.potential import MotorPotential
@@ -44,7 +44,7 @@ def main() -> None:
     c = currents_of(states.coils(0), len(design.stator))
     R0 = so3.exp(np.radians([3.0, 0.0, 0.0])) @ states.rotations[0]
     print(f"{'model':>22} {'tuned dt':>9} {'x real time':>12} {'dt 5 ms':>9} {'dt 1 ms':>9}")
-    for name, model in (("potential (pairwise)", Scaled(MotorPotential(design), 1.0)), ("magnets' torque map", torque_map(design))):
+    for name, model in (("potential (pairwise)", MotorPotential(design)), ("magnets' torque map", torque_map(design))):
         tuning = tune(design, model)
         tuned = speed(model, tuning.rotor, tuning.dt, R0, c)
         fast, fine = speed(model, tuning.rotor, 5e-3, R0, c), speed(model, tuning.rotor, 1e-3, R0, c)

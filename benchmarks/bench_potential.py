@@ -25,7 +25,8 @@ import scipy
 from _timing import median_seconds
 from spherestep import so3
 from spherestep.motor import prototype
-from spherestep.potential import MotorPotential, coil_currents, equilibrium
+from spherestep.potential import MotorPotential, coil_currents
+from spherestep.statics import equilibrium
 
 
 def repeat_single(func, R, c, count: int = 2000):

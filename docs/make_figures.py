@@ -139,7 +139,8 @@ def potential_well(outdir: Path) -> Path:
     direction, and a cut with the torque about e1 (the rotational analogue of Fig. 6's force and potential)."""
     from spherestep import so3
     from spherestep.motor import prototype
-    from spherestep.potential import MotorPotential, coil_currents, equilibrium
+    from spherestep.potential import MotorPotential, coil_currents
+    from spherestep.statics import equilibrium
 
     design = prototype()
     states = design.states()

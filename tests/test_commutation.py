@@ -145,7 +145,8 @@ def test_planner_works_around_failed_coils(proto):
 
 def test_potential_planner_lands_on_equilibria(proto, model):
     from spherestep.commutation import plan_potential
-    from spherestep.potential import coil_currents, equilibrium
+    from spherestep.potential import coil_currents
+    from spherestep.statics import equilibrium
 
     T = about_axis([1, 0.5, 2], math.radians(60), 8, start=proto.states().rotations[0])
     plan = plan_potential(proto, T, model, max_coils=3)

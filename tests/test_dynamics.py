@@ -115,7 +115,7 @@ def test_a_settled_step_lands_in_the_wells_minimum(proto, wells):
 def test_simulate_records_a_plan(proto, wells):
     states = proto.states()
     plan = plan_geometric(proto, about_axis([1, 0.5, 2], math.radians(40), 5, start=states.rotations[0]))
-    sim = simulate(proto, plan, wells, dwell=0.8, rotor=Rotor.from_design(proto, damping=0.6), record_every=20)
+    sim = simulate(proto, plan, wells, dwell=0.8, rotor=Rotor.from_design(proto, damping=0.6), dt=1e-3, record_every=20)
     assert sim.settled.shape == (len(plan.steps), 3, 3)
     assert len(sim.times) == len(sim.orientations) == len(sim.angular_velocity) == len(sim.active_coils)
     assert np.all(np.diff(sim.times) > 0)
@@ -178,13 +178,13 @@ def test_a_potential_plan_is_executed_on_its_model(proto):
     """The potential planner's equilibria are where the rotor comes to rest: simulated on the same model
     (in SI at 1 J per model unit) with tuned damping and dwell, every step settles within 0.5° of the plan."""
     from spherestep.commutation import plan_potential
-    from spherestep.dynamics import Scaled, tune
+    from spherestep.dynamics import tune
     from spherestep.potential import MotorPotential
 
     potential = MotorPotential(proto)
     T = about_axis([1, 0.5, 2], math.radians(45), 6, start=proto.states().rotations[0])
     plan = plan_potential(proto, T, potential)
-    model = Scaled(potential, 1.0)
+    model = potential
     t = tune(proto, model, samples=8)
     sim = simulate(proto, plan, model, dwell=t.dwell, rotor=t.rotor, dt=5e-3, record_every=10)
     assert sim.executed, np.degrees(sim.step_errors)

@@ -137,7 +137,7 @@ def test_measured_row_agrees_with_the_motor_metrics():
 
 
 def test_holding_torque_of_sampled_states_on_the_physical_model():
-    from spherestep import magnetics
+    from spherestep import magnetics, statics
 
     point = DesignPoint("truncated-icosahedron", 0, "truncated-cuboctahedron", 0, 60.0, samples=200, seed=5,
                         torque_states=4)
@@ -148,7 +148,7 @@ def test_holding_torque_of_sampled_states_on_the_physical_model():
     tmap = magnetics.torque_map(design)
     currents = np.array([magnetics.state_currents(design, i) for i in idx])
     eq = magnetics.equilibrium(tmap, states.rotations[idx], currents)
-    torque = magnetics.holding_torque(tmap, eq.rotation, currents).torque[eq.converged]
+    torque = statics.holding_torque(tmap, eq.rotation, currents).torque[eq.converged]
     assert row["status"] == "ok" and row["holding_torque_states"] == len(torque) >= 3
     assert row["holding_torque_median_Nm"] == pytest.approx(np.median(torque), rel=1e-12)
     assert row["holding_torque_min_Nm"] == pytest.approx(torque.min(), rel=1e-12)

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from spherestep import magnetics as mg
-from spherestep import so3
+from spherestep import so3, statics
 from spherestep.errors import InputError
 
 
@@ -91,19 +91,19 @@ def test_equilibria_near_the_geometric_states(proto, tmap, settled):
 
 def test_holding_torque(proto, tmap, settled):
     _, c, eq = settled
-    hold = mg.holding_torque(tmap, eq.rotation[:5], c[:5])
+    hold = statics.holding_torque(tmap, eq.rotation[:5], c[:5])
     assert hold.per_axis.shape == (5, 32)
     assert np.all(hold.torque > 0.1) and np.all(hold.torque < 2.0)  # N·m
     assert np.all(hold.peak_angle > math.radians(2.0))
-    cube_only = mg.holding_torque(tmap, eq.rotation[:5], c[:5], axes=mg.cube_axes())
+    cube_only = statics.holding_torque(tmap, eq.rotation[:5], c[:5], axes=statics.cube_axes())
     assert np.all(hold.torque <= cube_only.torque + 1e-12)  # the eigen-axes can only find a softer direction
     # linear in the currents
-    double = mg.holding_torque(tmap, eq.rotation[:5], 2 * c[:5])
+    double = statics.holding_torque(tmap, eq.rotation[:5], 2 * c[:5])
     np.testing.assert_allclose(double.per_axis, 2 * hold.per_axis, rtol=1e-9)
     # small turns: restoring torque ≈ stiffness × angle along the weakest eigen-axis
-    H = mg.stiffness(tmap, eq.rotation[:1], c[:1])[0]
+    H = tmap.hessian(eq.rotation[:1], c[:1])[0]
     h, e = np.linalg.eigh(H)
-    small = mg.holding_torque(tmap, eq.rotation[:1], c[:1], axes=e[:, :1].T, max_angle=1e-3, samples=2)
+    small = statics.holding_torque(tmap, eq.rotation[:1], c[:1], axes=e[:, :1].T, max_angle=1e-3, samples=2)
     assert small.per_axis[0, 0] == pytest.approx(h[0] * 1e-3, rel=1e-3)
 
 
@@ -114,7 +114,7 @@ def test_step_torque_drives_to_the_next_state(proto, tmap, settled):
     near = near[near != idx[0]][:4]
     cb = np.array([mg.state_currents(proto, j) for j in near])
     eqb = mg.equilibrium(tmap, states.rotations[near], cb)
-    s = mg.step_torque(tmap, np.repeat(eq.rotation[:1], len(near), axis=0), eqb.rotation, cb)
+    s = statics.step_torque(tmap, np.repeat(eq.rotation[:1], len(near), axis=0), eqb.rotation, cb)
     assert np.all(s.start > 0) and np.all(s.peak >= s.start)
     end = tmap.torque(eqb.rotation, cb)
     assert np.abs(end).max() < 1e-6

@@ -129,7 +129,7 @@ def test_simulation_and_energy_map_sections(proto, tmp_path):
     start = proto.states().rotations[0]
     plan = plan_geometric(proto, about_axis(AXIS, math.radians(40), 5, start=start))
     model = Wells(proto)
-    sim = simulate(proto, plan, model, dwell=0.8, rotor=Rotor.from_design(proto, damping=0.6), record_every=20)
+    sim = simulate(proto, plan, model, dwell=0.8, rotor=Rotor.from_design(proto, damping=0.6), dt=1e-3, record_every=20)
     a = np.radians(np.linspace(-20, 20, 21))
     rotations = so3.exp(np.stack([*np.meshgrid(a, a, indexing="ij"), np.zeros((21, 21))], -1)) @ plan.steps[1].achieved
     c = np.zeros(len(proto.stator))

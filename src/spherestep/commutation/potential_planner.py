@@ -3,7 +3,7 @@
 At each step the planner weighs activations — sets of coils with polarities, at most ``max_coils``
 energised at once — by where the rotor would come to rest under them: the minimum of the energy
 ``V(·, c)`` reached by descending from the previous resting orientation ``R̃_{i−1}``
-(:func:`spherestep.potential.equilibrium`). The activation whose equilibrium is nearest the desired
+(:func:`spherestep.statics.equilibrium`). The activation whose equilibrium is nearest the desired
 ``R_i`` wins. Candidate activations are the coil sets of the stepper states nearest ``R_i`` and of the
 states within one step of ``R̃_{i−1}`` nearest ``R_i`` (so a lagging rotor catches up), each trimmed to the
 ``max_coils`` pairs whose poles sit closest to their coils at ``R_i``, plus the current one (staying). An equilibrium counts only if the descent converged to a strict minimum within ``max_step`` of
@@ -39,7 +39,7 @@ def plan_potential(design, targets, model, *, max_coils: int = DEFAULT_MAX_COILS
                    start: int | None = None) -> Plan:
     """Commutate ``targets (n+1, 3, 3)`` with the energy ``model`` (a
     :class:`~spherestep.potential.MotorPotential` of ``design``); see the module docstring."""
-    from ..potential import equilibrium
+    from ..statics import equilibrium
 
     targets = check_targets(targets)
     if isinstance(max_coils, bool) or not isinstance(max_coils, (int, np.integer)) or max_coils < 2:

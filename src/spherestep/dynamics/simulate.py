@@ -59,25 +59,6 @@ class Simulation:
         return np.flatnonzero(self.step_errors > self.tolerance)
 
 
-class Scaled:
-    """A torque model in SI units: ``scale`` joules per model unit, so ``τ`` in N·m and ``V`` in J.
-
-    Uses the model's fast pairwise energy where it has one (:class:`~spherestep.potential.MotorPotential`).
-    """
-
-    def __init__(self, model, scale: float = 1.0):
-        if not (isinstance(scale, (int, float)) and math.isfinite(scale) and scale > 0):
-            raise bad_value("scale", "a positive number of joules per model unit", scale)
-        self.model, self.scale = model, float(scale)
-        self._energy = getattr(model, "energy_pairwise", model.energy)
-
-    def torque(self, R, c):
-        return self.scale * self.model.torque(R, c)
-
-    def energy(self, R, c):
-        return self.scale * self._energy(R, c)
-
-
 class Integrator:
     """Integrates one rotor under ``model`` (``torque``/``energy`` of ``(R, currents)``) with time step ``dt``."""
 
@@ -105,16 +86,25 @@ class Integrator:
         return R[0], w[0], np.array(times), Rs, ws, energy
 
 
-def simulate(design, plan, model, dwell: float = 0.5, *, rotor: Rotor | None = None, dt: float = 1e-3,
-             record_every: int = 5, tolerance: float = EXECUTED_TOL) -> Simulation:
-    """Run ``plan`` on ``design``'s rotor under the torque ``model`` (see the module docstring).
+def simulate(design, plan, model, dwell: float | None = None, *, rotor: Rotor | None = None,
+             dt: float | None = None, record_every: int = 5, tolerance: float = EXECUTED_TOL) -> Simulation:
+    """Run ``plan`` on ``design``'s rotor under the torque ``model`` (a :class:`~spherestep.statics.TorqueModel`
+    in SI units; see the module docstring).
 
-    ``rotor`` defaults to :meth:`Rotor.from_design` with no dissipation — pass damping for a rotor that
-    settles. ``record_every``: keep every k-th integration step in the trajectory.
+    ``dwell`` (s), ``rotor`` (inertia and damping) and ``dt`` (s) default to :func:`~spherestep.dynamics.tune`'s
+    choice for this design and model (damping critical on the softest wells, dwell 8 decay times, the step
+    resolving the stiffest well); give all three to skip the tuning. ``record_every``: keep every k-th
+    integration step in the trajectory.
     """
-    if not (isinstance(dwell, (int, float)) and math.isfinite(dwell) and dwell > 0):
+    if dwell is None or rotor is None or dt is None:
+        from .tuning import tune
+
+        tuning = tune(design, model)
+        dwell = tuning.dwell if dwell is None else dwell
+        rotor = tuning.rotor if rotor is None else rotor
+        dt = tuning.dt if dt is None else dt
+    if isinstance(dwell, bool) or not (isinstance(dwell, (int, float)) and math.isfinite(dwell) and dwell > 0):
         raise bad_value("dwell", "a positive time in seconds", dwell)
-    rotor = Rotor.from_design(design) if rotor is None else rotor
     integrator = Integrator(model, rotor, dt)
     N = plan.coil_count
     R = plan.steps[0].achieved.copy()

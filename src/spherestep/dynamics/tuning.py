@@ -18,7 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..potential.equilibrium import torque_hessian
+from ..statics import finite_difference_hessian
 from ..errors import bad_value
 from .rotor import Rotor
 from .simulate import currents_of
@@ -42,8 +42,8 @@ class Tuning:
 
 def stiffness(model, R: np.ndarray, currents: np.ndarray) -> np.ndarray:
     """Eigenvalues (ascending) of the symmetrised ``−∂τ/∂ε`` at ``R`` under ``currents``
-    (:func:`spherestep.potential.torque_hessian`)."""
-    return np.linalg.eigvalsh(torque_hessian(model, R[None], currents[None], FD_STEP)[0])
+    (:func:`spherestep.statics.finite_difference_hessian`, step 1e-4 rad)."""
+    return np.linalg.eigvalsh(finite_difference_hessian(model, R, currents, FD_STEP))
 
 
 def tune(design, model, zeta: float = 1.0, samples: int = 40, seed: int = 0) -> Tuning:

@@ -151,10 +151,11 @@ def holding_torques(design: MotorDesign, count: int, seed: int) -> np.ndarray:
 
     Each state's coils are energised at its poles' polarities (nominal ampere-turns), the rotor is settled
     into the physical equilibrium near the geometric state, and the smallest peak restoring torque over 32
-    axes is its holding torque (:func:`spherestep.magnetics.holding_torque`). States whose equilibrium search
+    axes is its holding torque (:func:`spherestep.statics.holding_torque`). States whose equilibrium search
     does not converge are left out.
     """
-    from ..magnetics import equilibrium, holding_torque, state_currents, torque_map
+    from ..magnetics import equilibrium, state_currents, torque_map
+    from ..statics import holding_torque
 
     states = design.states()
     idx = np.sort(np.random.default_rng(seed).choice(len(states), size=min(count, len(states)), replace=False))

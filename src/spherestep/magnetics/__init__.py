@@ -8,8 +8,8 @@
   :func:`calibrate`, :func:`compare_models`.
 * Torque map (:mod:`._table`): :class:`TorqueMap` from one pole–coil table ``τ(α)``; :func:`torque_function`
   for the dynamics.
-* Statics (:mod:`._statics`): :func:`equilibrium`, :func:`holding_torque`, :func:`step_torque`,
-  :func:`state_torques`.
+* Statics (:mod:`._statics`): :func:`equilibrium` with the map's settings, :func:`state_torques`; holding and
+  step torque on any torque model are in :mod:`spherestep.statics`.
 
 Every torque is about the sphere's centre in the fixed frame (N·m), forces in N; currents are per coil,
 nominal ±1 (``coil_ampere_turns``), ``+1`` attracting a north-out (``+1``) pole.
@@ -20,15 +20,14 @@ from ._curve import ForceCurve, force_curve
 from ._figures import figure_comparison, figure_force_curve
 from ._direct import MESHING, coil_wrenches, force, force_torque, reaction, torque
 from ._model import coil_polarization, model_summary, rotor_collection, rotor_magnets, stator_coils
-from ._statics import (Equilibrium, Holding, StepTorque, cube_axes, equilibrium, holding_torque,
-                       state_currents, state_torques, step_torque, stiffness)
+from ._statics import equilibrium, state_currents, state_torques
 from ._table import TABLE_MESHING, TorqueMap, pair_torque, table_nodes, torque_function, torque_map
 
 __all__ = [
-    "MESHING", "TABLE_MESHING", "Calibration", "Comparison", "Equilibrium", "ForceCurve", "Holding", "StepTorque",
-    "TorqueMap", "calibrate", "coil_polarization", "coil_wrenches", "compare_models", "cube_axes", "equilibrium",
+    "MESHING", "TABLE_MESHING", "Calibration", "Comparison", "ForceCurve",
+    "TorqueMap", "calibrate", "coil_polarization", "coil_wrenches", "compare_models", "equilibrium",
     "figure_comparison", "figure_force_curve", "fit_limit", "force", "force_curve", "force_torque",
-    "holding_torque", "model_summary", "pair_torque", "random_drives", "reaction", "rotor_collection",
-    "rotor_magnets", "state_currents", "state_torques", "stator_coils", "step_torque", "stiffness", "table_nodes",
+    "model_summary", "pair_torque", "random_drives", "reaction", "rotor_collection",
+    "rotor_magnets", "state_currents", "state_torques", "stator_coils", "table_nodes",
     "torque", "torque_function", "torque_map",
 ]

@@ -14,7 +14,7 @@ seconds instead of over an hour), the torque map, and the calibrated potential m
 Pearson correlation of all torque components and the relative error ``‖T_pot − T_mag‖ / ‖T_mag‖`` (over the
 whole sample, and the median per orientation). For stepper states, both models start from the geometric
 states with the states' coils energised and settle to their own equilibria (:func:`~._statics.equilibrium`
-and :func:`spherestep.potential.equilibrium`); the Park distance between the two is the state offset.
+and :func:`spherestep.statics.equilibrium`); the Park distance between the two is the state offset.
 """
 
 from __future__ import annotations
@@ -27,7 +27,7 @@ import numpy as np
 from .. import so3
 from ..errors import bad_value
 from ..potential import MotorPotential, ProfileFit, VonMisesFisher, coil_currents, fit_profile
-from ..potential import equilibrium as potential_equilibrium
+from ..statics import equilibrium as potential_equilibrium
 from ._curve import ForceCurve, force_curve
 from ._direct import torque as direct_torque
 from ._statics import equilibrium

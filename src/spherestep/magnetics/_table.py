@@ -39,6 +39,7 @@ import numpy as np
 from scipy.interpolate import CubicSpline
 from scipy.spatial.transform import Rotation
 
+from ..statics import TorqueModelBase
 from ._direct import EPS
 from ._model import MU0, as_currents, as_meshing, as_rotations
 
@@ -88,8 +89,9 @@ def _table(key: tuple, meshing: int) -> tuple[np.ndarray, np.ndarray]:
 
 
 @dataclass(frozen=True, eq=False)
-class TorqueMap:
-    """Fast torque and energy of a design from the pair table ``τ(α)`` (see the module docstring).
+class TorqueMap(TorqueModelBase):
+    """Fast torque and energy of a design from the pair table ``τ(α)`` (see the module docstring); a
+    :class:`~spherestep.statics.TorqueModel` (its Hessian by central differences of the torque).
 
     ``poles (M, 3)``, ``polarity (M,)`` (body frame), ``coils (N, 3)`` (fixed frame), ``failed`` coil
     indices; ``nodes`` (rad) and ``tau`` (N·m) the table, built with ``meshing`` cells per magnet.
@@ -116,6 +118,10 @@ class TorqueMap:
         nodes, tau = _table(_geometry_key(design), as_meshing(meshing))
         return cls(design.rotor.centers.copy(), design.polarity.astype(float), design.stator.centers.copy(),
                    tuple(design.failed_coils), nodes, tau, int(meshing))
+
+    @property
+    def coil_count(self) -> int:
+        return len(self.coils)
 
     def pair(self, alpha) -> np.ndarray:
         """Interpolated ``τ(α)`` (N·m) for angles ``alpha`` (rad) in ``[0, π]``."""
@@ -149,6 +155,15 @@ class TorqueMap:
             S = np.einsum("kmn,m,kma->kna", g, self.polarity, W)  # Σ_j p_j g(α_jk) w_j
             out[s:s + CHUNK] = np.cross(self.coils[idx][None], S)
         return out
+
+    def torque_matrix(self, R, currents=None) -> np.ndarray:
+        """``K(R)`` (N·m per unit current), ``(3, N)`` or ``(K, 3, N)``: column ``k`` is coil ``k``'s torque at unit
+        current (zero for failed coils); the map is linear in the currents, so ``currents`` does not matter."""
+        R, single = as_rotations(R)
+        live = np.setdiff1d(np.arange(len(self.coils)), self.failed)
+        K = np.zeros((len(R), 3, len(self.coils)))
+        K[:, :, live] = np.swapaxes(self.coil_torques(R, live), 1, 2)
+        return K[0] if single else K
 
     def torque_reference(self, currents) -> np.ndarray:
         """``max|τ(α)| Σ_k |c_k|`` (N·m), shape ``currents.shape[:-1]``: the reference for torque tolerances."""

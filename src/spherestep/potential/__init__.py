@@ -7,11 +7,10 @@ and their basins, and the force-curve fit of Fig. 6 (docs/potential.md states ev
   ``τ = −∂V/∂ω`` for ``R → exp(ω̂) R``, in the fixed frame.
 * Profiles: :class:`VonMisesFisher` (default, half maximum at the face's rim), :class:`RaisedCosine`;
   :class:`ZonalKernel` tabulates the overlap ``G(t)``.
-* :func:`equilibrium`, :func:`gradient_flow`, :func:`in_basin`: minima of ``V(·, c)`` and their basins.
+* Equilibria, basins and stiffness of this (and every) torque model: :mod:`spherestep.statics`.
 * :func:`fit_force_curve`, :func:`potential_from_force`, :func:`fit_profile`: Fig. 6.
 """
 
-from .equilibrium import Equilibrium, equilibrium, gradient_flow, in_basin, torque_hessian, torque_scale
 from .force import (
     ProfileFit,
     example_force_curve,
@@ -28,7 +27,6 @@ from .model import MotorPotential, coil_currents
 from .profiles import RaisedCosine, VonMisesFisher, ZonalProfile
 
 __all__ = [
-    "Equilibrium",
     "MotorPotential",
     "ProfileFit",
     "RaisedCosine",
@@ -36,17 +34,12 @@ __all__ = [
     "ZonalKernel",
     "ZonalProfile",
     "coil_currents",
-    "equilibrium",
     "example_force_curve",
     "fit_force_curve",
     "fit_profile",
-    "gradient_flow",
-    "in_basin",
     "load_force_curve",
     "pair_potential",
     "potential_from_force",
     "save_force_curve",
     "synthetic_force_curve",
-    "torque_hessian",
-    "torque_scale",
 ]

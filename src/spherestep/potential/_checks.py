@@ -8,6 +8,7 @@ import numpy as np
 
 from .. import so3
 from ..errors import bad_value
+from ..statics import as_currents
 from ..harmonics._checks import real_array  # noqa: F401  (one check for both rooms)
 
 def rotations(R, name: str = "R") -> np.ndarray:
@@ -16,16 +17,8 @@ def rotations(R, name: str = "R") -> np.ndarray:
 
 
 def currents(c, count: int, failed: tuple[int, ...], name: str = "currents") -> np.ndarray:
-    """Coil currents ``(..., N)``: finite reals, zero on failed coils."""
-    arr = c if isinstance(c, np.ndarray) and c.dtype == float else real_array(c, name)
-    if not np.isfinite(arr).all():
-        raise bad_value(name, "finite real numbers", "NaN or infinite entries")
-    if arr.ndim < 1 or arr.shape[-1] != count:
-        raise bad_value(name, f"one current per stator coil, shape (..., {count})", f"shape {arr.shape}")
-    if failed and np.any(arr[..., list(failed)] != 0):
-        raise bad_value(name, f"zero on the failed coils {list(failed)} (they cannot be energised)",
-                        "a non-zero current on a failed coil")
-    return arr
+    """Coil currents ``(..., N)`` (:func:`spherestep.statics.as_currents`)."""
+    return as_currents(c, count, failed, name)
 
 
 def positive(x, name: str) -> float:

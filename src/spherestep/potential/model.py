@@ -49,8 +49,11 @@ import math
 
 import numpy as np
 
+import dataclasses
+
 from .. import so3
 from ..errors import bad_value
+from ..statics import TorqueModelBase
 from ..harmonics import SO3Grid, half_pi_matrix, s2_rotate, so3_grid, so3_inverse, sph_harm_u
 from . import _checks
 from .kernel import ZonalKernel
@@ -74,7 +77,7 @@ def coil_currents(design, coils) -> np.ndarray:
     return _checks.currents(out, len(out), tuple(design.failed_coils), "coils")
 
 
-class MotorPotential:
+class MotorPotential(TorqueModelBase):
     """Eq. (4) for a motor design: energy ``V(R, c)``, torque, Hessian, and the energy over an SO(3) grid.
 
     ``design``: a :class:`~spherestep.motor.MotorDesign`. ``rotor_profile``, ``stator_profile``: zonal profiles
@@ -86,7 +89,9 @@ class MotorPotential:
     Rotations ``R`` are ``(..., 3, 3)``, currents ``(..., N)`` with ``N = len(design.stator)`` (failed coils must
     carry zero); leading axes broadcast, and every method returns arrays with the broadcast leading shape.
     Units: those of ``amplitude_r · amplitude_s`` (arbitrary with the default amplitude 1; joules and newton
-    metres once the profiles come from :func:`~spherestep.potential.fit_profile`).
+    metres once the profiles come from :func:`~spherestep.potential.fit_profile`). ``scale`` (J per model unit)
+    multiplies both amplitudes by ``√scale``, so every energy, torque and Hessian is multiplied by ``scale``: the
+    model in SI units for the dynamics. A :class:`~spherestep.statics.TorqueModel`.
 
     >>> from spherestep.motor import prototype
     >>> model = MotorPotential(prototype())
@@ -95,7 +100,8 @@ class MotorPotential:
     """
 
     def __init__(self, design, bandlimit=None, rotor_profile: ZonalProfile | None = None,
-                 stator_profile: ZonalProfile | None = None, *, tail: float = 1e-10, rtol: float = 1e-12):
+                 stator_profile: ZonalProfile | None = None, *, tail: float = 1e-10, rtol: float = 1e-12,
+                 scale: float = 1.0):
         for label in ("rotor", "stator", "polarity"):
             if not hasattr(design, label):
                 raise bad_value("design", "a MotorDesign", type(design).__name__)
@@ -107,6 +113,12 @@ class MotorPotential:
         for label, profile in (("rotor_profile", self.rotor_profile), ("stator_profile", self.stator_profile)):
             if not isinstance(profile, ZonalProfile):
                 raise bad_value(label, "a ZonalProfile (e.g. VonMisesFisher)", profile)
+        self.scale = _checks.positive(scale, "scale")
+        if self.scale != 1.0:
+            root = math.sqrt(self.scale)
+            self.rotor_profile, self.stator_profile = (
+                dataclasses.replace(profile, amplitude=profile.amplitude * root)
+                for profile in (self.rotor_profile, self.stator_profile))
         if bandlimit is None:
             tail = _checks.fraction(tail, "tail")
             bandlimit = max(self.rotor_profile.bandwidth(tail), self.stator_profile.bandwidth(tail))
@@ -115,6 +127,7 @@ class MotorPotential:
         self.polarity = np.asarray(design.polarity, dtype=float)
         self.coils = np.asarray(design.stator.centers, dtype=float)
         self.failed = tuple(design.failed_coils)
+        self.coil_count = len(self.coils)
         self.lambda_rotor = self.rotor_profile.legendre_coefficients(L)
         self.lambda_stator = self.stator_profile.legendre_coefficients(L)
         degrees = np.arange(L + 1)
@@ -245,6 +258,26 @@ class MotorPotential:
         """``(V, τ)`` from one pass over the pairs (the call for a simulation's inner loop)."""
         R, c = self._inputs(R, currents)
         return self._pairwise(R, c, 1)
+
+    def evaluate(self, R, currents, order: int) -> tuple[np.ndarray, ...]:
+        """``(V,)``, ``(V, τ)`` or ``(V, τ, H)`` from one pass over the pairs (pairwise form)."""
+        R, c = self._inputs(R, currents)
+        return self._pairwise(R, c, order)
+
+    def torque_matrix(self, R, currents=None) -> np.ndarray:
+        """``K(R) = ∂τ/∂c``, ``(..., 3, N)``: column ``k`` is ``2 Σ_j p_j G'(R u_j · v_k) (R u_j × v_k)``; the torque
+        is linear in the currents, so ``currents`` does not matter. Zero columns for failed coils."""
+        R = _checks.rotations(R)
+        W = np.swapaxes(R @ self.poles.T, -1, -2)  # (..., M, 3) poles in the fixed frame
+        slope = self.kernel.evaluate(W @ self.coils.T, 1)[1] * self.polarity[:, None]  # (..., M, N) p_j G'
+        Q = np.swapaxes(slope, -1, -2) @ W  # (..., N, 3): Σ_j p_j G'(t_jk) w_j
+        K = 2.0 * np.swapaxes(_cross(Q, self.coils), -1, -2)
+        K[..., list(self.failed)] = 0.0
+        return K
+
+    def torque_reference(self, currents) -> np.ndarray:
+        """``τ_ref = 2 max|G'| Σ_k |c_k|``: the largest torque one pole per coil could feel."""
+        return 2.0 * self.kernel.maxima[1] * np.sum(np.abs(np.asarray(currents, dtype=float)), axis=-1)
 
     def hessian(self, R, currents) -> np.ndarray:
         """Hessian ``∂²V/∂ω∂ω`` of ``ω ↦ V(exp(ω̂) R)`` at ``ω = 0`` (fixed frame), ``(..., 3, 3)``, symmetric.

@@ -1,4 +1,5 @@
-"""Equilibria of the prototype's energy next to its stepper states, and basins of attraction (issue 5 §1)."""
+"""The torque-model protocol, and equilibria of the prototype's energy next to its stepper states, with their
+basins of attraction (issue 5 §1, issue 12 §3)."""
 
 from __future__ import annotations
 
@@ -7,13 +8,9 @@ import pytest
 
 from spherestep import so3
 from spherestep.errors import InputError
-from spherestep.potential import (
-    coil_currents,
-    equilibrium,
-    gradient_flow,
-    in_basin,
-    torque_scale,
-)
+from spherestep.potential import coil_currents
+from spherestep.statics import (TorqueModel, TorqueModelBase, equilibrium, finite_difference_hessian, gradient_flow,
+                                in_basin)
 
 
 @pytest.fixture(scope="module")
@@ -30,7 +27,7 @@ def test_equilibria_sit_within_two_degrees_of_the_geometric_states(proto, model,
     states = proto.states()
     idx, currents, eq = sample
     assert np.all(eq.converged) and np.all(eq.is_minimum)
-    assert np.all(np.linalg.norm(eq.torque, axis=-1) <= 1e-10 * torque_scale(model, currents))
+    assert np.all(np.linalg.norm(eq.torque, axis=-1) <= 1e-10 * model.torque_reference(currents))
     assert eq.iterations.max() <= 10  # Newton from the geometric state: measured at most 3
     offsets = np.degrees(so3.distance(eq.rotation, states.rotations[idx]))
     # measured: median 0.84°, 90th percentile 1.79°, max 1.82° (docs/potential.md)
@@ -109,8 +106,9 @@ def test_basin_test_separates_the_two_sides_of_a_saddle(model, two_minima):
 
 def test_equilibrium_bad_inputs(proto, model):
     N = len(proto.stator)
-    with pytest.raises(InputError, match="^currents must be at least one energised coil"):
-        equilibrium(model, np.eye(3), np.zeros(N))
+    # no current and no detent: every orientation is at rest, and none is a strict minimum
+    rest = equilibrium(model, np.eye(3), np.zeros(N))
+    assert bool(rest.converged) and not bool(rest.is_minimum) and np.array_equal(rest.rotation, np.eye(3))
     with pytest.raises(InputError, match="^model must be"):
         equilibrium(object(), np.eye(3), np.ones(N))
     with pytest.raises(InputError, match="^R0 must be"):
@@ -119,3 +117,72 @@ def test_equilibrium_bad_inputs(proto, model):
         equilibrium(model, np.eye(3), np.ones(N), max_step=-1.0)
     with pytest.raises(InputError, match="^R_eq must be"):
         in_basin(model, np.eye(3), np.ones(N), np.zeros((3, 3)))
+
+
+# --- the TorqueModel protocol (issue 12 §3) -------------------------------------------------------------------
+
+@pytest.fixture(scope="module")
+def tmap(proto):
+    from spherestep.magnetics import torque_map
+
+    return torque_map(proto)
+
+
+def _random_drive(proto, count, seed):
+    rng = np.random.default_rng(seed)
+    return so3.random(count, rng), rng.uniform(-1, 1, (count, len(proto.stator)))
+
+
+@pytest.mark.parametrize("which", ["potential", "map"])
+def test_both_models_follow_the_protocol(proto, model, tmap, which):
+    m = model if which == "potential" else tmap
+    assert isinstance(m, TorqueModel) and m.coil_count == len(proto.stator)
+    R, c = _random_drive(proto, 20, 1)
+    K = m.torque_matrix(R)
+    assert K.shape == (20, 3, len(proto.stator))
+    tau = m.torque(R, c)
+    # linear in the currents: τ = K(R) c (no detent in either model)
+    np.testing.assert_allclose(np.einsum("kan,kn->ka", K, c), tau, rtol=1e-10, atol=1e-12 * np.abs(tau).max())
+    # the analytic matrix against the protocol's default, central differences in the currents
+    fd = TorqueModelBase.torque_matrix(m, R[:4], c[:4])
+    np.testing.assert_allclose(fd, K[:4], rtol=1e-6, atol=1e-9 * np.abs(K).max())
+    # single orientation: (3, N)
+    assert m.torque_matrix(R[0]).shape == (3, len(proto.stator))
+    # torque is minus the gradient of the energy (turns about the fixed axes, central differences)
+    h = 1e-6
+    fd_tau = np.stack([-(m.energy(so3.exp(h * e) @ R[:4], c[:4]) - m.energy(so3.exp(-h * e) @ R[:4], c[:4])) / (2 * h)
+                       for e in np.eye(3)], axis=-1)
+    np.testing.assert_allclose(fd_tau, tau[:4], rtol=1e-5, atol=1e-7 * np.abs(tau).max())
+
+
+def test_analytic_hessian_matches_finite_differences_of_the_torque(proto, model):
+    R, c = _random_drive(proto, 6, 2)
+    H = model.hessian(R, c)
+    fd = finite_difference_hessian(model, R, c, 1e-5)
+    np.testing.assert_allclose(H, fd, rtol=1e-6, atol=1e-7 * np.abs(H).max())
+    E, tau, H2 = model.evaluate(R, c, 2)
+    np.testing.assert_allclose(H2, H, rtol=1e-13)
+    np.testing.assert_allclose(E, model.energy(R, c), rtol=1e-11)
+
+
+def test_potential_scale_multiplies_every_output(proto, model):
+    from spherestep.potential import MotorPotential
+
+    scaled = MotorPotential(proto, scale=2.5)
+    R, c = _random_drive(proto, 5, 3)
+    for name in ("energy", "torque", "hessian"):
+        expected = 2.5 * getattr(model, name)(R, c)  # the kernel table is rebuilt: its own 1e-12-level error
+        np.testing.assert_allclose(getattr(scaled, name)(R, c), expected, rtol=1e-8, atol=1e-9 * np.abs(expected).max())
+    np.testing.assert_allclose(scaled.torque_reference(c), 2.5 * model.torque_reference(c), rtol=1e-12)
+    with pytest.raises(InputError, match="^scale must be"):
+        MotorPotential(proto, scale=0.0)
+
+
+def test_failed_coils_have_zero_columns_and_refuse_current(proto):
+    from spherestep.magnetics import torque_map
+
+    m = torque_map(proto.without_coils([3]))
+    R, c = _random_drive(proto, 3, 4)
+    assert np.all(m.torque_matrix(R)[..., 3] == 0) and np.any(m.torque_matrix(R)[..., 4] != 0)
+    with pytest.raises(InputError, match="^currents must be zero"):
+        m.torque(R, c)
