@@ -23,6 +23,7 @@ demo: $(VENV)/.installed
 	$(BIN)/spherestep demo
 
 test: $(VENV)/.installed-test browser
+	$(BIN)/ruff check src tests benchmarks docs
 	$(BIN)/python -m pytest -q
 
 # Debian's chromium and its driver for tests/test_report_browser.py; installed only as root (as in CI)

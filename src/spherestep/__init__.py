@@ -1,8 +1,38 @@
-"""spherestep: kinematic design and commutation of spherical stepper motors (Chirikjian & Stein, 1999)."""
+"""spherestep: kinematic design, commutation and control of spherical stepper motors (Chirikjian & Stein, 1999).
+
+Every room is reachable from here. The light ones are imported with the package; the heavy ones (those that
+load magpylib, matplotlib, plotly, Dask, pyserial, or large tables) on first use, through the module
+``__getattr__``, so ``import spherestep`` stays fast::
+
+    >>> import spherestep as ss
+    >>> design = ss.motor.prototype()
+    >>> len(design.stator)
+    29
+"""
 
 from __future__ import annotations
 
-from . import errors, packing, so3, sphere, units
+import importlib
 
-__all__ = ["errors", "packing", "so3", "sphere", "units"]
+from . import commutation, errors, harmonics, motor, packing, potential, so3, sphere, statics, units
+
+_LAZY = ("atomic", "control", "design_file", "dynamics", "explore", "export", "hardware", "magnetics", "plots",
+         "report", "sensing")
+
+__all__ = ["atomic", "commutation", "control", "design_file", "dynamics", "errors", "explore", "export", "hardware",
+           "harmonics", "magnetics", "motor", "packing", "plots", "potential", "report", "sensing", "so3", "sphere",
+           "statics", "units"]
 __version__ = "0.1.0"
+
+
+def __getattr__(name: str):
+    """Import a heavy room on first access (``spherestep.magnetics`` …)."""
+    if name in _LAZY:
+        module = importlib.import_module(f".{name}", __name__)
+        globals()[name] = module
+        return module
+    raise AttributeError(f"module 'spherestep' has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_LAZY))

@@ -52,10 +52,10 @@ from dataclasses import dataclass
 from typing import Protocol, runtime_checkable
 
 import numpy as np
-from scipy.integrate import solve_ivp
 
 from . import so3
 from .errors import bad_value
+from ._threads import single_blas_thread
 
 HESSIAN_STEP = 1e-6  # rad, central differences of the torque
 CURRENT_STEP = 1e-3  # per unit current, central differences in the currents (exact for quadratic models)
@@ -216,6 +216,7 @@ def _prepare(model, R0, currents, name: str = "R0") -> tuple[np.ndarray, np.ndar
     return R, c, lead
 
 
+@single_blas_thread
 def equilibrium(model: TorqueModel, R0, currents, *, gtol: float = 1e-10, max_iter: int = 100,
                 max_step: float = math.radians(5.0)) -> Equilibrium:
     """Descend the energy from ``R0`` to a stationary point (normally the local minimum), batched.
@@ -291,6 +292,7 @@ def _newton_direction(H: np.ndarray, tau: np.ndarray, max_step: float) -> np.nda
     return omega * np.minimum(1.0, max_step / np.maximum(length, np.finfo(float).tiny))
 
 
+@single_blas_thread
 def gradient_flow(model: TorqueModel, R0, currents, *, gtol: float = 1e-6, rtol: float = 1e-7,
                   max_rounds: int = 200) -> tuple[np.ndarray, np.ndarray]:
     """Follow ``Ṙ = τ̂(R) R`` (steepest descent of ``E``, ``τ`` the fixed-frame torque) from ``R0`` until rest.
@@ -300,6 +302,8 @@ def gradient_flow(model: TorqueModel, R0, currents, *, gtol: float = 1e-6, rtol:
     between rounds, until every ``|τ| ≤ gtol · torque_reference`` or ``max_rounds`` rounds. Returns
     ``(rotations, at_rest)`` with the broadcast leading shape.
     """
+    from scipy.integrate import solve_ivp
+
     R, c, lead = _prepare(model, R0, currents)
     for value, label in ((gtol, "gtol"), (rtol, "rtol")):
         if isinstance(value, bool) or not isinstance(value, (int, float)) or not 0 < value < 1:

@@ -25,6 +25,7 @@ from .. import so3
 from ..errors import bad_value
 from .plan import Plan, Step
 from .trajectory import check_targets
+from .._threads import single_blas_thread
 
 DEFAULT_CANDIDATES = 8
 DETOUR = "detour: the states nearest the target are out of reach; moved to the reachable state nearest it"
@@ -86,6 +87,7 @@ def settle(states, current: int, target, reach: float, goal: int) -> list[int]:
     return path
 
 
+@single_blas_thread
 def plan_geometric(design, targets, *, candidates: int = DEFAULT_CANDIDATES, max_step: float | None = None,
                    start: int | None = None) -> Plan:
     """Commutate ``targets (n+1, 3, 3)`` on ``design`` (a :class:`~spherestep.motor.MotorDesign`).

@@ -21,6 +21,7 @@ from ..errors import bad_value
 from .geometric import BLOCKED, DEFAULT_CANDIDATES, start_state
 from .plan import Plan, Step
 from .trajectory import check_targets
+from .._threads import single_blas_thread
 
 DEFAULT_MAX_COILS = 4
 
@@ -34,6 +35,7 @@ def _trim(held: list[tuple[int, int]], design, target, max_coils: int) -> dict[i
     return {k: int(design.polarity[j]) for j, k in held}
 
 
+@single_blas_thread
 def plan_potential(design, targets, model, *, max_coils: int = DEFAULT_MAX_COILS,
                    candidates: int = DEFAULT_CANDIDATES, max_step: float | None = None,
                    start: int | None = None) -> Plan:

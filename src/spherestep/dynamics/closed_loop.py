@@ -22,6 +22,7 @@ from ..errors import bad_value
 from .rotor import Rotor
 from .simulate import Integrator, currents_of
 from ..commutation.trajectory import check_targets
+from .._threads import single_blas_thread
 
 
 @dataclass
@@ -42,6 +43,7 @@ class ClosedLoopRun:
         return so3.distance(self.true, self.targets)
 
 
+@single_blas_thread
 def run_closed_loop(design, targets, model, *, dwell: float = 0.5, noise: float = 0.0, missed: float = 0.0,
                     rotor: Rotor | None = None, dt: float = 1e-3, extra_steps: int = 10,
                     rng: np.random.Generator | int | None = None) -> ClosedLoopRun:

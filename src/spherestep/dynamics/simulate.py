@@ -16,6 +16,7 @@ import numpy as np
 from .. import so3
 from ..errors import bad_value
 from .rotor import Rotor
+from .._threads import single_blas_thread
 
 EXECUTED_TOL = math.radians(0.5)
 
@@ -86,6 +87,7 @@ class Integrator:
         return R[0], w[0], np.array(times), Rs, ws, energy
 
 
+@single_blas_thread
 def simulate(design, plan, model, dwell: float | None = None, *, rotor: Rotor | None = None,
              dt: float | None = None, record_every: int = 5, tolerance: float = EXECUTED_TOL) -> Simulation:
     """Run ``plan`` on ``design``'s rotor under the torque ``model`` (a :class:`~spherestep.statics.TorqueModel`

@@ -22,6 +22,7 @@ from ..statics import finite_difference_hessian
 from ..errors import bad_value
 from .rotor import Rotor
 from .simulate import currents_of
+from .._threads import single_blas_thread
 
 FD_STEP = 1e-4  # rad, central differences of the torque
 DECAY = 8.0  # dwell in units of the slowest decay time
@@ -46,6 +47,7 @@ def stiffness(model, R: np.ndarray, currents: np.ndarray) -> np.ndarray:
     return np.linalg.eigvalsh(finite_difference_hessian(model, R, currents, FD_STEP))
 
 
+@single_blas_thread
 def tune(design, model, zeta: float = 1.0, samples: int = 40, seed: int = 0) -> Tuning:
     """Damping and dwell for ``design`` under the torque ``model`` (see the module docstring)."""
     if not (math.isfinite(zeta) and zeta > 0):
