@@ -1,10 +1,8 @@
 """Figures (matplotlib, no GUI backend): the Fig. 10 view of commutation steps, a 3-D view of the motor,
 and a plan's tracking error.
 
-Fig. 10 view: everything is projected orthographically on the plane normal to the rotation axis (the axis
-points out of the page). Large outlines are the stator coils (the caps their faces cover), small ones the
-rotor magnets that take part: filled when held by an energised coil, hatched for the next pole to be
-attracted. A line fixed in the rotor, perpendicular to the axis, marks how far the rotor has turned.
+Fig. 10 view (:mod:`spherestep.fig10`, the geometry shared with the HTML report): coils tinted when energised,
+held poles filled, the next pole hatched, a line fixed in the rotor.
 """
 
 from __future__ import annotations
@@ -16,66 +14,36 @@ from matplotlib.figure import Figure
 from matplotlib.patches import Polygon
 
 from .atomic import atomic_path
-
-POLARITY_COLOUR = {1: "#c0392b", -1: "#2c6fbb"}
-
-
-def plane_basis(axis) -> np.ndarray:
-    """Rows ``e1, e2, n``: an orthonormal frame with ``n`` along ``axis`` (the page is ``e1, e2``)."""
-    n = np.asarray(axis, dtype=float)
-    n = n / np.linalg.norm(n)
-    helper = np.array([1.0, 0.0, 0.0]) if abs(n[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
-    e1 = np.cross(helper, n)
-    e1 /= np.linalg.norm(e1)
-    return np.array([e1, np.cross(n, e1), n])
-
-
-def cap_outline(center, radius: float, points: int = 64) -> np.ndarray:
-    """``(points, 3)`` points of the circle bounding the cap of angular ``radius`` about unit ``center``."""
-    c = np.asarray(center, dtype=float)
-    a = plane_basis(c)
-    t = np.linspace(0.0, 2 * np.pi, points, endpoint=False)
-    return np.cos(radius) * c + np.sin(radius) * (np.outer(np.cos(t), a[0]) + np.outer(np.sin(t), a[1]))
-
+from .fig10 import POLARITY_COLOUR, cap_outline, fig10_step
 
 def draw_step(ax, design, plan, i: int, axis) -> None:
-    """Draw step ``i`` of ``plan`` in the Fig. 10 view about ``axis`` on matplotlib axes ``ax``."""
-    basis = plane_basis(axis)
-    step = plan.steps[i]
-    R = step.achieved
-    for k, v in enumerate(design.stator.centers):
-        ring = cap_outline(v, design.coil_angle) @ basis[:2].T
-        energised = step.coils.get(k)
-        face = "none" if energised is None else POLARITY_COLOUR[energised]
-        ax.add_patch(Polygon(ring, closed=True, facecolor=face, alpha=0.25 if energised else 1.0,
-                             edgecolor="0.35", lw=0.8))
-        if k in step.coils:
-            ax.text(*(v @ basis[:2].T), str(k), ha="center", va="center", fontsize=6, color="0.2")
-    held_poles = {j for j, _ in step.held}
-    shown = sorted(held_poles | ({step.next_pole} if step.next_pole is not None else set()))
-    for j in shown:
-        u = R @ design.rotor.centers[j]
-        ring = cap_outline(u, design.magnet_angle) @ basis[:2].T
-        colour = POLARITY_COLOUR[int(design.polarity[j])]
-        if j in held_poles:
-            ax.add_patch(Polygon(ring, closed=True, facecolor=colour, edgecolor="k", lw=0.8))
-        else:
-            ax.add_patch(Polygon(ring, closed=True, facecolor="white", edgecolor=colour, hatch="////", lw=0.8))
-    # marker fixed in the rotor, perpendicular to the axis at the start
-    start = plan.steps[0].achieved
-    marker_body = start.T @ basis[0]
-    tip = (R @ marker_body) @ basis[:2].T
-    ax.plot([0, 1.15 * tip[0]], [0, 1.15 * tip[1]], color="k", lw=1.2)
+    """Draw step ``i`` of ``plan`` in the Fig. 10 view about ``axis`` on matplotlib axes ``ax``
+    (the geometry of :func:`spherestep.fig10.fig10_step`)."""
+    view = fig10_step(design, plan, i, axis, points=64)
+    for ring in view.coils:
+        ax.add_patch(Polygon(ring, closed=True, facecolor="none", edgecolor="0.35", lw=0.8))
+    for sign, rings in view.energised.items():
+        for ring in rings:
+            ax.add_patch(Polygon(ring, closed=True, facecolor=POLARITY_COLOUR[sign], alpha=0.25, edgecolor="0.35",
+                                 lw=0.8))
+    for k, xy in view.labels:
+        ax.text(*xy, str(k), ha="center", va="center", fontsize=6, color="0.2")
+    for sign, rings in view.held.items():
+        for ring in rings:
+            ax.add_patch(Polygon(ring, closed=True, facecolor=POLARITY_COLOUR[sign], edgecolor="k", lw=0.8))
+    for ring in view.next_pole:
+        ax.add_patch(Polygon(ring, closed=True, facecolor="white", edgecolor=POLARITY_COLOUR[view.next_polarity],
+                             hatch="////", lw=0.8))
+    ax.plot(view.marker[:, 0], view.marker[:, 1], color="k", lw=1.2)
     ax.plot(0, 0, marker="o", color="k", ms=3)
-    ax.add_patch(Polygon(np.column_stack([np.cos(np.linspace(0, 2 * np.pi, 128)),
-                                          np.sin(np.linspace(0, 2 * np.pi, 128))]),
-                         closed=True, fill=False, edgecolor="0.8", lw=0.6))
+    t = np.linspace(0, 2 * np.pi, 128)
+    ax.add_patch(Polygon(np.column_stack([np.cos(t), np.sin(t)]), closed=True, fill=False, edgecolor="0.8", lw=0.6))
     ax.set_xlim(-1.25, 1.25)
     ax.set_ylim(-1.25, 1.25)
     ax.set_aspect("equal")
     ax.set_xticks([])
     ax.set_yticks([])
-    ax.set_title(f"step {i}: error {np.degrees(step.error):.2f}°", fontsize=9)
+    ax.set_title(f"step {i}: error {np.degrees(plan.steps[i].error):.2f}°", fontsize=9)
 
 
 def figure_steps(design, plan, axis, steps=None) -> Figure:
