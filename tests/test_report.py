@@ -204,3 +204,21 @@ def test_energy_map_from_an_euler_grid(proto):
     assert np.allclose(heat.z, values.min(axis=2).T, rtol=1e-6)  # lowest over γ, rows β
     with pytest.raises(InputError, match="energy_map"):
         energy_figure((grid, values[:, :, :3]))
+
+
+def test_extra_sections_are_appended_in_order(proto, tmp_path):
+    import plotly.graph_objects as go
+
+    from spherestep.errors import InputError
+    from spherestep.report import Section
+
+    extra = (Section("servo", "Servo run", note="a note", figure=go.Figure(go.Scatter(x=[0, 1], y=[1, 2]))),
+             Section("iron", "Iron", html="<p>table</p>"))
+    metrics = proto.metrics(samples=500, seed=0)
+    info = write_report(tmp_path / "r.html", proto, metrics=metrics, sections=extra)
+    assert info["sections"][-2:] == ["servo", "iron"]
+    text = (tmp_path / "r.html").read_text()
+    assert 'id="section-servo"' in text and "<p>table</p>" in text and 'id="servo"' in text
+    with pytest.raises(InputError, match="^sections must be"):
+        write_report(tmp_path / "s.html", proto, metrics=metrics, sections=("nope",))
+    assert not (tmp_path / "s.html").exists()

@@ -16,8 +16,8 @@ in the rotor and shows how far it has turned, the dotted one where it started. P
 
 from .figures import (MAX_FRAMES, commutation_figure, energy_figure, frame_steps, motor_figure, resolution_distances,
                       resolution_figure, trajectory_figure)
-from .page import build_report, design_tables, plan_table, write_report
+from .page import Section, build_report, design_tables, plan_table, write_report
 
-__all__ = ["MAX_FRAMES", "build_report", "commutation_figure", "design_tables", "energy_figure", "frame_steps",
+__all__ = ["MAX_FRAMES", "Section", "build_report", "commutation_figure", "design_tables", "energy_figure", "frame_steps",
            "motor_figure", "plan_table", "resolution_distances", "resolution_figure", "trajectory_figure",
            "write_report"]

@@ -6,6 +6,7 @@ import datetime as _dt
 import html
 import math
 from collections.abc import Callable
+from dataclasses import dataclass
 
 import numpy as np
 import plotly.io as pio
@@ -157,8 +158,25 @@ def plan_numbers(plan) -> dict:
             "error_final_deg": float(err[-1])}
 
 
+@dataclass(frozen=True)
+class Section:
+    """A section of the page: ``anchor`` (HTML id), ``heading``, ``note`` (HTML above the figure), ``figure``
+    (a plotly figure or figure dict, or None) and its ``height`` in pixels, and ``html`` below it."""
+
+    anchor: str
+    heading: str
+    note: str = ""
+    figure: object = None
+    height: int = 460
+    html: str = ""
+
+    def body(self) -> str:
+        figure = _div(self.figure, self.anchor, self.height) if self.figure is not None else ""
+        return (f'<p class="note">{self.note}</p>' if self.note else "") + figure + self.html
+
+
 def build_report(design, metrics=None, plan=None, simulation=None, energy_map=None, axis=None, *,
-                 samples: int = 20_000, seed=0, title: str | None = None,
+                 samples: int = 20_000, seed=0, title: str | None = None, sections: tuple[Section, ...] = (),
                  progress: Callable[[str], None] | None = None) -> tuple[str, dict]:
     """The report's HTML text and a summary of its contents (see :func:`write_report`)."""
     say = progress or (lambda _: None)
@@ -176,19 +194,19 @@ def build_report(design, metrics=None, plan=None, simulation=None, energy_map=No
     elif simulation is not None:
         axis = _infer_axis(simulation.planned)
     title = title or f"spherestep report: {design.name}"
-    sections: list[tuple[str, str, str]] = []  # (anchor, heading, body)
+    sections_html: list[tuple[str, str, str]] = []  # (anchor, heading, body)
     say("drawing the motor")
-    sections.append(("motor", "Motor in 3-D",
+    sections_html.append(("motor", "Motor in 3-D",
                      '<p class="note">Drag to turn, scroll to zoom, hover for pole and coil numbers. Red discs: '
                      "magnets with the north pole facing out (+1); blue: south out (−1). Grey rings: the stator "
                      "coils' faces, just outside the rotor."
                      + (" Rotor at the plan's first state." if plan is not None else "") + "</p>" +
                      _div(motor_figure(design, plan.steps[0].achieved if plan is not None else None), "motor3d", 600)))
-    sections.append(("design", "Design, packings and metrics", design_tables(design, metrics)))
+    sections_html.append(("design", "Design, packings and metrics", design_tables(design, metrics)))
     if metrics["states"]:
         say("measuring the resolution histogram")
         dist = resolution_distances(design, samples, seed)
-        sections.append(("resolution", "Resolution",
+        sections_html.append(("resolution", "Resolution",
                          f'<p class="note">Park distance D(R, R̃) = θ(RᵀR̃) from {samples} orientations drawn '
                          f"uniformly on SO(3) (seed {seed}) to the nearest of the {metrics['states']} stepper states. "
                          "A state is in reach when it lies within one max step.</p>" +
@@ -203,7 +221,7 @@ def build_report(design, metrics=None, plan=None, simulation=None, energy_map=No
         thinned = (f" The animation shows {frames} evenly spaced steps of {len(plan.steps)}."
                    if frames < len(plan.steps) else "")
         axis_text = ", ".join(f"{a:.3f}" for a in axis)
-        sections.append(("commutation", "Commutation",
+        sections_html.append(("commutation", "Commutation",
                          f"<p><b>{numbers['steps']} steps</b> about the axis ({axis_text}) (fixed frame), planner "
                          f"{html.escape(plan.planner)}: {numbers['moves']} moves, {numbers['holds']} holds, "
                          f"{numbers['blocked']} blocked; error median {numbers['error_median_deg']:.2f}°, max "
@@ -221,7 +239,7 @@ def build_report(design, metrics=None, plan=None, simulation=None, energy_map=No
         say("plotting the simulated run")
         executed = "every step settled" if simulation.executed else \
             f"{len(simulation.missed_steps)} steps missed"
-        sections.append(("simulation", "Simulated run",
+        sections_html.append(("simulation", "Simulated run",
                          f'<p class="note">{len(simulation.times)} samples over {simulation.times[-1]:.2f} s; '
                          f"{executed} (within {math.degrees(simulation.tolerance):.2f}° of the planned state). "
                          "Rotation angles are read from the rotor marker about the commutation axis.</p>" +
@@ -229,11 +247,15 @@ def build_report(design, metrics=None, plan=None, simulation=None, energy_map=No
                               "trajectory", 520)))
     if energy_map is not None:
         say("plotting the energy map")
-        sections.append(("energy", "Energy map", _div(energy_figure(energy_map), "energy", 460)))
+        sections_html.append(("energy", "Energy map", _div(energy_figure(energy_map), "energy", 460)))
+    for extra in sections:
+        if not isinstance(extra, Section):
+            raise bad_value("sections", "spherestep.report.Section values", type(extra).__name__)
+        sections_html.append((extra.anchor, extra.heading, extra.body()))
     say("writing the page")
-    nav = " ".join(f'<a href="#section-{a}">{html.escape(h)}</a>' for a, h, _ in sections)
+    nav = " ".join(f'<a href="#section-{a}">{html.escape(h)}</a>' for a, h, _ in sections_html)
     stamp = _dt.datetime.now().astimezone().strftime("%Y-%m-%d %H:%M %Z")
-    body = "".join(f'<section id="section-{a}"><h2>{html.escape(h)}</h2>{b}</section>' for a, h, b in sections)
+    body = "".join(f'<section id="section-{a}"><h2>{html.escape(h)}</h2>{b}</section>' for a, h, b in sections_html)
     page = (f'<!DOCTYPE html>\n<html lang="en"><head><meta charset="utf-8">'
             f'<meta name="viewport" content="width=device-width, initial-scale=1">'
             f"<title>{html.escape(title)}</title><style>{CSS}</style>"
@@ -243,23 +265,24 @@ def build_report(design, metrics=None, plan=None, simulation=None, energy_map=No
             f"({len(design.rotor)} magnets), stator {html.escape(design.stator.label)} ({len(design.stator)} coils). "
             "Angles in degrees; after Chirikjian &amp; Stein (1999).</p>"
             f"<nav>{nav}</nav>{body}</body></html>\n")
-    summary = {"title": title, "sections": [a for a, _, _ in sections], "frames": frames} | summary
+    summary = {"title": title, "sections": [a for a, _, _ in sections_html], "frames": frames} | summary
     return page, summary
 
 
 def write_report(path, design, metrics=None, plan=None, simulation=None, energy_map=None, axis=None, *,
-                 samples: int = 20_000, seed=0, title: str | None = None,
+                 samples: int = 20_000, seed=0, title: str | None = None, sections: tuple[Section, ...] = (),
                  progress: Callable[[str], None] | None = None) -> dict:
     """Write the HTML report on ``design`` to ``path``, atomically; returns a summary of what was written.
 
     ``metrics``: as returned by :meth:`MotorDesign.metrics` (computed with ``samples`` and ``seed`` when
     None; the resolution histogram redraws the same ``seed``). ``plan``: a :class:`~spherestep.commutation.Plan`
     to tabulate and animate; ``simulation``: a :class:`~spherestep.dynamics.Simulation` of it; ``energy_map``:
-    see :func:`energy_figure`; ``axis``: the rotation axis of the Fig. 10 view (default: the plan's).
+    see :func:`energy_figure`; ``axis``: the rotation axis of the Fig. 10 view (default: the plan's);
+    ``sections``: further :class:`Section` values (capability map, servo run, iron, sensors …) appended in order.
     ``progress`` is called with a short description of each stage.
     Returns ``{"path", "bytes", "title", "sections", "frames", "plan_steps"?}``.
     """
     page, summary = build_report(design, metrics, plan, simulation, energy_map, axis, samples=samples, seed=seed,
-                                 title=title, progress=progress)
+                                 title=title, sections=sections, progress=progress)
     written = write_text(path, page)
     return {"path": str(written), "bytes": written.stat().st_size} | summary
