@@ -8,7 +8,10 @@ from __future__ import annotations
 
 
 class SpherestepError(Exception):
-    """Base class of the errors a user can cause with bad input."""
+    """Base class of the errors a user can cause with bad input; ``field`` names the argument or field at fault
+    (set by :func:`bad_value`), so callers map it without parsing the message."""
+
+    field: str | None = None
 
 
 class InputError(SpherestepError, ValueError):
@@ -28,4 +31,6 @@ def bad_value(name: str, expected: str, received: object) -> InputError:
     text = repr(received)
     if len(text) > 120:
         text = text[:117] + "..."
-    return InputError(f"{name} must be {expected}; instead received {text}")
+    error = InputError(f"{name} must be {expected}; instead received {text}")
+    error.field = name
+    return error
