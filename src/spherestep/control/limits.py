@@ -1,0 +1,114 @@
+"""What the drive can give the coils: currents, supply voltage and power, and the coils' resistance and inductance.
+
+Units. The torque models take currents *per unit of the coil's nominal current* ``c`` (``+1`` = nominal, the
+current at which the magnets' torque map was built: ``coil_ampere_turns`` ampere-turns); amperes are
+``i = I_n c``. Every limit here is stored in SI (A, V, W, Ω, H) and turned into per-unit bounds by
+:meth:`DriveLimits.per_unit_bound` and :meth:`DriveLimits.per_unit_power_radius`.
+
+Defaults, from the paper's supply (Sec. IV-B: a 24 V magnet supply rated to 100 W, relays switching coils on and
+off). The paper gives no coil resistance; we take the coil that a relay at 24 V drives at its nominal current of
+1 A, so ``R = 24 Ω`` and the map's 1000 ampere-turns are 1000 turns at 1 A. A coil then draws 24 W, and the 100 W
+supply feeds four coils at nominal current, as many as the relay plans energise. The largest current an H-bridge
+on 24 V can hold in a coil is ``V / R`` = 1 A. The inductance is Wheeler's multilayer formula
+``L = 31.6 µH · N² r̄² / (6 r̄ + 9 l + 10 d)`` (metres) for 1000 turns wound from half the coil's radius to its
+outer radius (``r̄`` the mean radius, ``d`` the winding depth, ``l`` the coil's length): 18.7 mH for the
+prototype's 2 in × 1.625 in coil, an electrical time constant ``L/R`` of 0.78 ms.
+:meth:`DriveLimits.from_coil` takes the numbers from a coil specification instead (``spherestep.motor.coil``).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass, replace
+
+import numpy as np
+
+from ..errors import bad_value
+
+SUPPLY_VOLTAGE = 24.0  # V, Sec. IV-B
+SUPPLY_POWER = 100.0  # W, Sec. IV-B
+NOMINAL_CURRENT = 1.0  # A: 1000 turns at 1 A give the torque map's 1000 ampere-turns
+COIL_RESISTANCE = SUPPLY_VOLTAGE / NOMINAL_CURRENT  # Ω: a relay at 24 V drives the nominal current
+TURNS = 1000
+
+
+def wheeler_inductance(turns: float, outer_radius: float, length: float, inner_radius: float) -> float:
+    """Wheeler's multilayer air-core inductance (H): ``31.6e-6 N² r̄² / (6 r̄ + 9 l + 10 d)``, lengths in m,
+    ``r̄ = (r_i + r_o)/2``, ``d = r_o − r_i`` (about 1 % for the usual proportions)."""
+    mean = 0.5 * (inner_radius + outer_radius)
+    depth = outer_radius - inner_radius
+    return 31.6e-6 * turns ** 2 * mean ** 2 / (6.0 * mean + 9.0 * length + 10.0 * depth)
+
+
+def _positive(value, name: str) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value) or value <= 0:
+        raise bad_value(name, "a finite positive number", value)
+    return float(value)
+
+
+@dataclass(frozen=True)
+class DriveLimits:
+    """The drive's limits and the coils' electrics (SI), the same for every coil.
+
+    ``nominal_current`` (A): the current of ``c = 1``; ``max_current`` (A): the most any coil may carry;
+    ``supply_voltage`` (V) and ``supply_power`` (W): the supply, whose power bounds the copper loss
+    ``Σ R i_k² ≤ P``; ``resistance`` (Ω) and ``inductance`` (H) of one coil. See the module for the defaults.
+    """
+
+    nominal_current: float = NOMINAL_CURRENT
+    max_current: float = NOMINAL_CURRENT
+    supply_voltage: float = SUPPLY_VOLTAGE
+    supply_power: float = SUPPLY_POWER
+    resistance: float = COIL_RESISTANCE
+    inductance: float = wheeler_inductance(TURNS, 0.0254, 0.041275, 0.0127)
+
+    def __post_init__(self):
+        for name in ("nominal_current", "max_current", "supply_voltage", "supply_power", "resistance",
+                     "inductance"):
+            _positive(getattr(self, name), name)
+
+    @classmethod
+    def from_coil(cls, resistance: float, inductance: float, nominal_current: float, *,
+                  supply_voltage: float = SUPPLY_VOLTAGE, supply_power: float = SUPPLY_POWER,
+                  max_current: float | None = None) -> "DriveLimits":
+        """Limits for a coil of given ``resistance`` (Ω), ``inductance`` (H) and ``nominal_current`` (A) — the
+        numbers a coil specification (``spherestep.motor.coil``) computes from its winding; ``max_current``
+        defaults to what the supply voltage drives through the coil, ``V / R``."""
+        r = _positive(resistance, "resistance")
+        v = _positive(supply_voltage, "supply_voltage")
+        return cls(nominal_current=_positive(nominal_current, "nominal_current"),
+                   max_current=v / r if max_current is None else max_current, supply_voltage=v,
+                   supply_power=supply_power, resistance=r, inductance=_positive(inductance, "inductance"))
+
+    def replace(self, **changes) -> "DriveLimits":
+        """A copy with ``changes``."""
+        return replace(self, **changes)
+
+    @property
+    def per_unit_bound(self) -> float:
+        """The largest ``|c_k|``: ``max_current / nominal_current``."""
+        return self.max_current / self.nominal_current
+
+    @property
+    def per_unit_power_radius(self) -> float:
+        """``ρ`` with ``Σ c_k² ≤ ρ²`` ⇔ ``Σ R (I_n c_k)² ≤ P``: ``ρ = √(P / R) / I_n``."""
+        return math.sqrt(self.supply_power / self.resistance) / self.nominal_current
+
+    @property
+    def time_constant(self) -> float:
+        """``L / R`` (s)."""
+        return self.inductance / self.resistance
+
+    def copper_power(self, currents):
+        """``Σ R (I_n c_k)²`` (W) for per-unit ``currents (..., N)``."""
+        c = np.asarray(currents, dtype=float)
+        return self.resistance * self.nominal_current ** 2 * np.sum(c * c, axis=-1)
+
+    def to_dict(self) -> dict:
+        """The limits (SI, keys with units) and the per-unit bounds."""
+        d = asdict(self)
+        return {"nominal_current_A": d["nominal_current"], "max_current_A": d["max_current"],
+                "supply_voltage_V": d["supply_voltage"], "supply_power_W": d["supply_power"],
+                "resistance_ohm": d["resistance"], "inductance_H": d["inductance"],
+                "time_constant_s": self.time_constant, "per_unit_bound": self.per_unit_bound,
+                "per_unit_power_radius": self.per_unit_power_radius}
