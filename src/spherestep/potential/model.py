@@ -53,6 +53,7 @@ import dataclasses
 
 from .. import so3
 from ..errors import bad_value
+from ..rotor_field import RotorField, fast_evaluate, fast_torque_matrix, threads
 from ..statics import TorqueModelBase
 from ..harmonics import SO3Grid, half_pi_matrix, s2_rotate, so3_grid, so3_inverse, sph_harm_u
 from . import _checks
@@ -93,6 +94,12 @@ class MotorPotential(TorqueModelBase):
     multiplies both amplitudes by ``√scale``, so every energy, torque and Hessian is multiplied by ``scale``: the
     model in SI units for the dynamics. A :class:`~spherestep.statics.TorqueModel`.
 
+    ``fast`` (default): ``energy``, ``torque``, ``energy_and_torque``, ``evaluate``, ``hessian`` and
+    ``torque_matrix`` go through the rotor function ``F(x) = Σ_j p_j G(x·u_j)`` evaluated at the coils'
+    body-frame directions (:mod:`spherestep.rotor_field`; ducc0 with ``nthreads`` threads for large batches);
+    ``fast=False`` keeps the exact forms, which stay available by name (``energy_harmonic``,
+    ``energy_pairwise``, ``evaluate_pairwise``, ``torque_matrix_pairwise``) as the reference.
+
     >>> from spherestep.motor import prototype
     >>> model = MotorPotential(prototype())
     >>> model.bandlimit
@@ -101,7 +108,7 @@ class MotorPotential(TorqueModelBase):
 
     def __init__(self, design, bandlimit=None, rotor_profile: ZonalProfile | None = None,
                  stator_profile: ZonalProfile | None = None, *, tail: float = 1e-10, rtol: float = 1e-12,
-                 scale: float = 1.0):
+                 scale: float = 1.0, fast: bool = True, nthreads: int = 1):
         for label in ("rotor", "stator", "polarity"):
             if not hasattr(design, label):
                 raise bad_value("design", "a MotorDesign", type(design).__name__)
@@ -114,6 +121,9 @@ class MotorPotential(TorqueModelBase):
             if not isinstance(profile, ZonalProfile):
                 raise bad_value(label, "a ZonalProfile (e.g. VonMisesFisher)", profile)
         self.scale = _checks.positive(scale, "scale")
+        self.fast = bool(fast)
+        self.nthreads = threads(nthreads)
+        self._field = None
         if self.scale != 1.0:
             root = math.sqrt(self.scale)
             self.rotor_profile, self.stator_profile = (
@@ -182,8 +192,31 @@ class MotorPotential(TorqueModelBase):
             return self._rotor_norm2_pairwise + np.sum((c @ self._stator_gram_pairwise) * c, axis=-1)
         return self.rotor_norm2 + np.sum((c @ self.stator_gram) * c, axis=-1)
 
-    # --- harmonic form ---------------------------------------------------------------------------------
+    # --- fast path: the rotor function at the coils ------------------------------------------------------
+    @property
+    def rotor_field(self) -> RotorField:
+        """``F(x) = Σ_j p_j G(x · u_j)`` (body frame), so ``V = ‖Â‖² + cᵀSc − 2 Σ_k c_k F(Rᵀ v_k)``; built on first
+        use (exact: ``F`` has degree ``L``)."""
+        if self._field is None:
+            kernel = self.kernel
+            self._field = RotorField(self.poles, self.polarity,
+                                     lambda t, order: (kernel.value(t),) if order == 0 else kernel.evaluate(t, order),
+                                     self.bandlimit, nthreads=self.nthreads)
+        return self._field
+
+    def _fast(self, R: np.ndarray, c: np.ndarray, order: int, value: bool = True) -> tuple[np.ndarray, ...]:
+        constant = self._constant(c, pairwise=True) if value else None
+        return fast_evaluate(self.rotor_field, -2.0, self.coils, R, c, order, constant, value)
+
     def energy(self, R, currents) -> np.ndarray:
+        """``V(R, c)`` (eq. (4)): the fast path, or :meth:`energy_harmonic` with ``fast=False``."""
+        if self.fast:
+            R, c = self._inputs(R, currents)
+            return self._fast(R, c, 0)[0]
+        return self.energy_harmonic(R, currents)
+
+    # --- harmonic form ---------------------------------------------------------------------------------
+    def energy_harmonic(self, R, currents) -> np.ndarray:
         """Eq. (4) by Plancherel: ``V = ‖Â‖² + cᵀSc − 2 Σ_l Re⟨D^l(R) Â^l, b̂^l⟩`` (see the module docstring).
 
         ``R`` ``(..., 3, 3)``, ``currents`` ``(..., N)``; returns the broadcast leading shape. Cost ``O(L³)`` per
@@ -250,21 +283,33 @@ class MotorPotential(TorqueModelBase):
 
     def torque(self, R, currents) -> np.ndarray:
         """``τ = −∂V/∂ω = 2 Σ_jk p_j c_k G'(R u_j · v_k) (R u_j × v_k)``, fixed frame, for ``R → exp(ω̂) R``;
-        shape ``(..., 3)``. The body-frame torque is ``Rᵀ τ``."""
+        shape ``(..., 3)``. The body-frame torque is ``Rᵀ τ``. Fast path (without the energy) unless ``fast=False``."""
         R, c = self._inputs(R, currents)
-        return self._pairwise(R, c, 1)[1]
+        return self._fast(R, c, 1, value=False)[1] if self.fast else self._pairwise(R, c, 1)[1]
 
     def energy_and_torque(self, R, currents) -> tuple[np.ndarray, np.ndarray]:
-        """``(V, τ)`` from one pass over the pairs (the call for a simulation's inner loop)."""
-        R, c = self._inputs(R, currents)
-        return self._pairwise(R, c, 1)
+        """``(V, τ)`` in one pass (the call for a simulation's inner loop)."""
+        return self.evaluate(R, currents, 1)
 
     def evaluate(self, R, currents, order: int) -> tuple[np.ndarray, ...]:
-        """``(V,)``, ``(V, τ)`` or ``(V, τ, H)`` from one pass over the pairs (pairwise form)."""
+        """``(V,)``, ``(V, τ)`` or ``(V, τ, H)``: the fast path, or :meth:`evaluate_pairwise` with ``fast=False``."""
+        R, c = self._inputs(R, currents)
+        return self._fast(R, c, order) if self.fast else self._pairwise(R, c, order)
+
+    def evaluate_pairwise(self, R, currents, order: int) -> tuple[np.ndarray, ...]:
+        """``(V,)``, ``(V, τ)`` or ``(V, τ, H)`` from one pass over the pairs (the exact pairwise form)."""
         R, c = self._inputs(R, currents)
         return self._pairwise(R, c, order)
 
     def torque_matrix(self, R, currents=None) -> np.ndarray:
+        """``K(R) = ∂τ/∂c``, ``(..., 3, N)``: column ``k`` is ``−2 R (x_k × ∇F(x_k))``, ``x_k = Rᵀ v_k`` (fast path;
+        :meth:`torque_matrix_pairwise` with ``fast=False``). Zero columns for failed coils."""
+        if not self.fast:
+            return self.torque_matrix_pairwise(R)
+        R = _checks.rotations(R)
+        return fast_torque_matrix(self.rotor_field, -2.0, self.coils, self.failed, R)
+
+    def torque_matrix_pairwise(self, R, currents=None) -> np.ndarray:
         """``K(R) = ∂τ/∂c``, ``(..., 3, N)``: column ``k`` is ``2 Σ_j p_j G'(R u_j · v_k) (R u_j × v_k)``; the torque
         is linear in the currents, so ``currents`` does not matter. Zero columns for failed coils."""
         R = _checks.rotations(R)
@@ -283,10 +328,9 @@ class MotorPotential(TorqueModelBase):
         """Hessian ``∂²V/∂ω∂ω`` of ``ω ↦ V(exp(ω̂) R)`` at ``ω = 0`` (fixed frame), ``(..., 3, 3)``, symmetric.
 
         ``H = −2 Σ_jk p_j c_k [G'' s sᵀ + G' (½(v wᵀ + w vᵀ) − t I)]``, ``w = R u_j``, ``s = w × v_k``, ``t = w · v_k``.
-        At an equilibrium its eigenvalues are the rotational stiffnesses.
+        At an equilibrium its eigenvalues are the rotational stiffnesses. Fast path unless ``fast=False``.
         """
-        R, c = self._inputs(R, currents)
-        return self._pairwise(R, c, 2)[2]
+        return self.evaluate(R, currents, 2)[2]
 
     def _pairwise(self, R: np.ndarray, c: np.ndarray, order: int) -> tuple[np.ndarray, ...]:
         """Energy (and torque for ``order ≥ 1``, Hessian for ``order = 2``) of validated inputs, in blocks of at

@@ -1,0 +1,213 @@
+"""The rotor as one function on the sphere: ``F(x) = Σ_j p_j h(x · u_j)``, its gradient and Hessian, fast.
+
+Why. Every torque model whose pole–coil interaction depends only on the angle between a pole's axis and a
+coil's axis (the potential of Sec. III-B, the magnets' torque map) has an energy of the form
+
+    E(R, c) = E_0(c) + s Σ_k c_k F(x_k),   x_k = Rᵀ v_k (coil k's direction in the rotor's body frame),
+
+with ``F(x) = Σ_j p_j h(x · u_j)`` one function on the sphere, fixed per design (``s`` a model constant: −2 for
+the potential, +1 for the map). So the energy of 29 coils is 29 values of one function, not 29 × M pair terms.
+
+Derivatives. Turn the rotor by ``R → exp(θ̂) R`` (``θ`` in the fixed frame). Then ``x_k → Rᵀ exp(−θ̂) v_k`` and,
+with ``g(x) = (I − x xᵀ) ∇F`` the tangential gradient and ``Hess F`` the intrinsic (covariant) Hessian on the
+sphere (tangent 3×3 matrices, ``Hess F = P M P − (x·∇F) P`` with ``M`` the ambient second derivative of the
+extension ``Σ p_j h(y·u_j)``, ``P = I − x xᵀ``),
+
+    τ = −∂E/∂θ = s R Σ_k c_k x_k × g(x_k),
+    K(R)[:, k] = s R (x_k × g(x_k))                       (torque per unit current, the torque matrix),
+    H = ∂²E/∂θ² = s R [Σ_k c_k (ΔF(x_k) P_k − Hess F(x_k) + ½(g_k x_kᵀ + x_k g_kᵀ))] Rᵀ,
+
+where ``ΔF = tr Hess F`` is the Laplace–Beltrami operator (``[x]×ᵀ A [x]× = (tr A) P − A`` for a tangent
+symmetric ``A`` turns the Hessian's ``[x]×ᵀ Hess F [x]×`` into the bracket above).
+
+Two evaluators return the same fields (``F``, ``g``, ``Hess F`` at unit vectors ``x``):
+
+* ``"ducc0"``: ``F`` is band-limited (degree ``lmax``: exact for the potential, whose kernel is a Legendre
+  series of degree ``L``; a truncation with a measured error for the map). Its coefficients ``f_lm`` come once
+  from exact samples on a Gauss–Legendre grid (:func:`ducc0.sht.experimental.analysis_2d`). Each call then
+  synthesises at the points with :func:`ducc0.sht.synthesis_general` (non-uniform FFT, accuracy ``epsilon``):
+  spin 0 for ``F``; spin 1 (``DERIV1``, the gradient ``(∂_θ F, ∂_φ F / sin θ)``) for ``g``; for the Hessian
+  spin 0 with ``−l(l+1) f_lm`` (``ΔF``) and spin 2 with ``√((l−1)l(l+1)(l+2)) f_lm`` (the trace-free part,
+  ``ð²F``, in the ``θ̂, φ̂`` basis). Each synthesis has a fixed cost (a Legendre transform and an FFT of about
+  ``(2 lmax)²`` points, ~0.7 ms for ``lmax = 68``) and then ~0.15 µs per point, so it wins for large batches.
+* ``"direct"``: the sum over the poles with the model's own kernel ``h, h', h''`` (``O(M)`` per point, no
+  fixed cost): used below ``direct_below`` points, where it is faster, and as the reference of the harmonic
+  evaluator.
+
+``nthreads`` (ducc0's threads) is set deliberately: 1 by default (one core per process on a shared machine);
+results do not depend on it beyond rounding.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .errors import bad_value
+
+DIRECT_BELOW = 400  # points: below this the direct sum is faster than ducc0's synthesis (benchmarks/bench_potential.py)
+SPIN2_SIGN = -1.0  # ducc0's spin-2 (Q, U) are minus the trace-free Hessian's (θθ − φφ, 2θφ) parts (tests/test_fast_path.py)
+
+
+def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """``a × b`` over the last axis (broadcasting), without ``np.cross``'s per-call overhead."""
+    a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
+    b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
+    return np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], axis=-1)
+
+
+class RotorField:
+    """``F(x) = Σ_j p_j h(x · u_j)`` on the unit sphere with its tangential gradient and intrinsic Hessian.
+
+    ``poles (M, 3)`` unit vectors ``u_j`` and ``polarity (M,)`` ``p_j`` (body frame); ``kernel(t, order)`` returns
+    ``(h, h', …)`` up to ``order`` (0, 1 or 2) at ``t`` (any shape), used by the direct evaluator;
+    ``exact(t)`` (default ``kernel(t, 0)[0]``) the most accurate ``h``, used once to sample ``F`` for its
+    spherical-harmonic coefficients up to degree ``lmax`` on a Gauss–Legendre grid of ``rings ≥ lmax + 1``
+    rings. ``epsilon``: ducc0's synthesis accuracy; ``nthreads``: ducc0's threads; ``direct_below``: batches
+    of fewer points use the direct sum (see the module docstring).
+    """
+
+    def __init__(self, poles, polarity, kernel, lmax: int, *, exact=None, rings: int | None = None,
+                 epsilon: float = 1e-13, nthreads: int = 1, direct_below: int = DIRECT_BELOW):
+        import ducc0
+
+        self.poles = np.ascontiguousarray(poles, dtype=float)
+        self.polarity = np.ascontiguousarray(polarity, dtype=float)
+        self.kernel = kernel
+        self.lmax = int(lmax)
+        self.epsilon = float(epsilon)
+        self.nthreads = threads(nthreads)
+        self.direct_below = int(direct_below)
+        self._pu = self.polarity[:, None] * self.poles  # p_j u_j
+        rings = self.lmax + 1 if rings is None else int(rings)
+        if rings < self.lmax + 1:
+            raise bad_value("rings", f"at least lmax + 1 = {self.lmax + 1}", rings)
+        h = (lambda t: kernel(t, 0)[0]) if exact is None else exact
+        nodes = np.polynomial.legendre.leggauss(rings)[0][::-1]  # cos θ, θ ascending (ducc0's GL order)
+        phi = 2 * np.pi * np.arange(2 * self.lmax + 2) / (2 * self.lmax + 2)
+        sin = np.sqrt(1.0 - nodes**2)
+        grid = np.stack(np.broadcast_arrays(sin[:, None] * np.cos(phi), sin[:, None] * np.sin(phi),
+                                            nodes[:, None]), axis=-1)
+        values = h(np.clip(grid @ self.poles.T, -1.0, 1.0)) @ self.polarity
+        self.alm = ducc0.sht.experimental.analysis_2d(map=values[None], spin=0, lmax=self.lmax, geometry="GL",
+                                                      nthreads=self.nthreads)
+        degrees = np.concatenate([np.arange(m, self.lmax + 1) for m in range(self.lmax + 1)])  # healpy order
+        self._laplacian_alm = self.alm * (-degrees * (degrees + 1.0))
+        self._spin2_alm = self.alm * np.sqrt(np.maximum((degrees - 1.0) * degrees * (degrees + 1) * (degrees + 2),
+                                                        0.0))
+
+    def fields(self, x: np.ndarray, order: int = 1, value: bool = True, method: str | None = None):
+        """``(F, g, Hess F)`` at unit vectors ``x (P, 3)``: ``F (P,)`` if ``value`` (else ``None``),
+        ``g (P, 3)`` the tangential gradient for ``order ≥ 1``, for ``order = 2`` the pair ``(ΔF (P,),
+        Hess F (P, 3, 3))``. ``method``: ``"ducc0"``, ``"direct"`` or ``None`` (by the batch size)."""
+        if method is None:
+            method = "direct" if len(x) < self.direct_below else "ducc0"
+        if method == "direct":
+            return self._direct(x, order, value)
+        if method == "ducc0":
+            return self._harmonic(x, order, value)
+        raise bad_value("method", "'ducc0', 'direct' or None", method)
+
+    # --- direct sum over the poles -----------------------------------------------------------------------
+    def _direct(self, x: np.ndarray, order: int, value: bool):
+        t = x @ self.poles.T  # (P, M)
+        hs = self.kernel(t, order)
+        F = hs[0] @ self.polarity if value else None
+        if order == 0:
+            return F, None, None
+        S = hs[1] @ self._pu  # ambient gradient Σ p h'(t) u
+        radial = np.sum(S * x, axis=-1)
+        g = S - radial[:, None] * x
+        if order == 1:
+            return F, g, None
+        M = np.einsum("pj,ja,jb->pab", hs[2], self._pu, self.poles)  # Σ p h'' u uᵀ
+        P = np.eye(3) - x[:, :, None] * x[:, None, :]
+        hess = P @ M @ P - radial[:, None, None] * P
+        return F, g, (np.trace(hess, axis1=1, axis2=2), hess)
+
+    # --- spherical-harmonic synthesis (ducc0) -------------------------------------------------------------
+    def _harmonic(self, x: np.ndarray, order: int, value: bool):
+        from ducc0.sht import synthesis_general
+
+        rho = np.hypot(x[:, 0], x[:, 1])  # sin θ, accurate near the poles (unlike √(1 − z²))
+        z = x[:, 2]
+        phi = np.arctan2(x[:, 1], x[:, 0])
+        loc = np.stack([np.arctan2(rho, z), np.where(phi < 0, phi + 2 * np.pi, phi)], axis=-1)
+        common = dict(lmax=self.lmax, loc=loc, epsilon=self.epsilon, nthreads=self.nthreads)
+        F = synthesis_general(alm=self.alm, spin=0, **common)[0] if value else None
+        if order == 0:
+            return F, None, None
+        sin_t, cos_t = rho, z
+        on_axis = rho == 0.0
+        safe = np.where(on_axis, 1.0, rho)
+        cos_p, sin_p = np.where(on_axis, 1.0, x[:, 0] / safe), x[:, 1] / safe  # φ = 0 on the axis, as in loc
+        e_theta = np.stack([cos_t * cos_p, cos_t * sin_p, -sin_t], axis=-1)
+        e_phi = np.stack([-sin_p, cos_p, np.zeros_like(phi)], axis=-1)
+        d = synthesis_general(alm=self.alm, spin=1, mode="DERIV1", **common)
+        g = d[0][:, None] * e_theta + d[1][:, None] * e_phi
+        if order == 1:
+            return F, g, None
+        lap = synthesis_general(alm=self._laplacian_alm, spin=0, **common)[0]
+        q, u = synthesis_general(alm=self._spin2_alm, spin=2, mode="GRAD_ONLY", **common)
+        tt = e_theta[:, :, None] * e_theta[:, None, :]
+        pp = e_phi[:, :, None] * e_phi[:, None, :]
+        tp = e_theta[:, :, None] * e_phi[:, None, :]
+        hess = (0.5 * lap[:, None, None] * (tt + pp) + SPIN2_SIGN * 0.5 * q[:, None, None] * (tt - pp)
+                + SPIN2_SIGN * 0.5 * u[:, None, None] * (tp + np.swapaxes(tp, 1, 2)))
+        return F, g, (lap, hess)
+
+
+
+def threads(n) -> int:
+    """A thread count for ducc0: an integer ≥ 1."""
+    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
+        raise bad_value("nthreads", "an integer >= 1 (ducc0's threads)", n)
+    return int(n)
+
+
+def fast_evaluate(field: RotorField, sign: float, coils: np.ndarray, R: np.ndarray, c: np.ndarray, order: int,
+                  constant, value: bool = True) -> tuple[np.ndarray, ...]:
+    """``(E,)``, ``(E, τ)`` or ``(E, τ, H)`` of ``E = constant + sign Σ_k c_k F(Rᵀ v_k)`` (module docstring) for
+    validated ``R (..., 3, 3)`` and ``c (..., N)`` (leading axes broadcast), ``coils (N, 3)`` the ``v_k``.
+    Only coils with a current somewhere in the batch are evaluated. ``value=False`` skips ``F`` (the returned
+    energy is then ``None``: for callers that need only the torque)."""
+    lead = np.broadcast_shapes(R.shape[:-2], c.shape[:-1])
+    Rf = (R if R.shape[:-2] == lead else np.broadcast_to(R, lead + (3, 3))).reshape(-1, 3, 3)
+    cf = (c if c.shape[:-1] == lead else np.broadcast_to(c, lead + c.shape[-1:])).reshape(-1, c.shape[-1])
+    energy = np.array(np.broadcast_to(constant, lead), dtype=float).reshape(-1) if value else None
+    live = np.flatnonzero(np.any(cf != 0, axis=0))
+    out = [energy]
+    if len(live) == 0:
+        out += [np.zeros((len(Rf), 3)), np.zeros((len(Rf), 3, 3))][:order]
+        return tuple(None if a is None else a.reshape(lead + a.shape[1:]) for a in out)
+    cl = cf[:, live]
+    x = coils[live] @ Rf  # (K, n, 3): x_k = Rᵀ v_k
+    F, g, second = field.fields(x.reshape(-1, 3), order, value)
+    K, n = cl.shape
+    if value:
+        energy += sign * np.sum(cl * F.reshape(K, n), axis=-1)
+    if order >= 1:
+        g = g.reshape(K, n, 3)
+        body = np.einsum("kn,kna->ka", cl, _cross(x, g))
+        out.append(sign * np.einsum("kab,kb->ka", Rf, body))
+    if order >= 2:
+        lap, hess = second
+        lap, hess = lap.reshape(K, n), hess.reshape(K, n, 3, 3)
+        xx = x[..., :, None] * x[..., None, :]
+        gx = g[..., :, None] * x[..., None, :]
+        per = lap[..., None, None] * (np.eye(3) - xx) - hess + 0.5 * (gx + np.swapaxes(gx, -1, -2))
+        Hb = np.einsum("kn,knab->kab", cl, per)
+        out.append(sign * (Rf @ Hb @ np.swapaxes(Rf, -1, -2)))
+    return tuple(None if a is None else a.reshape(lead + a.shape[1:]) for a in out)
+
+
+def fast_torque_matrix(field: RotorField, sign: float, coils: np.ndarray, failed, R: np.ndarray) -> np.ndarray:
+    """``K(R) (..., 3, N)``: column ``k`` is ``sign R (x_k × g(x_k))``, ``x_k = Rᵀ v_k``, zero for ``failed`` coils,
+    for validated ``R (..., 3, 3)``."""
+    lead = R.shape[:-2]
+    Rf = R.reshape(-1, 3, 3)
+    live = np.setdiff1d(np.arange(len(coils)), failed)
+    x = coils[live] @ Rf  # (K, n, 3)
+    g = field.fields(x.reshape(-1, 3), 1, value=False)[1].reshape(x.shape)
+    out = np.zeros((len(Rf), 3, len(coils)))
+    out[:, :, live] = sign * (Rf @ np.swapaxes(_cross(x, g), -1, -2))
+    return out.reshape(lead + (3, len(coils)))

@@ -1,0 +1,131 @@
+"""The fast path (issue 17): the rotor as one function on the sphere, evaluated at the coils' body-frame directions.
+
+References: the exact forms of :class:`MotorPotential` (harmonic and pairwise), finite differences, and the two
+evaluators of :class:`RotorField` (ducc0's synthesis and the direct sum) against each other.
+"""
+
+import numpy as np
+import pytest
+
+from spherestep import so3
+from spherestep.errors import InputError
+from spherestep.potential import MotorPotential
+from spherestep.rotor_field import DIRECT_BELOW, RotorField
+from spherestep.statics import finite_difference_hessian
+
+BIG = DIRECT_BELOW // 29 + 20  # orientations × 29 coils: enough points for the ducc0 evaluator
+
+
+def _unit(rng, n):
+    x = rng.normal(size=(n, 3))
+    x[:4] = [[0, 0, 1], [0, 0, -1], [1, 0, 0], [0, 1e-9, -1]]  # the poles of (θ, φ) and the seam
+    return x / np.linalg.norm(x, axis=1, keepdims=True)
+
+
+@pytest.fixture(scope="module")
+def exact_field(model):
+    """The prototype's rotor function with the exact Legendre series as the direct kernel."""
+    k = model.kernel
+    return RotorField(model.poles, model.polarity, lambda t, order: tuple(k.series(t, i) for i in range(order + 1)),
+                      model.bandlimit, exact=k.value)
+
+
+def test_synthesis_matches_direct_sum(exact_field):
+    """ducc0's synthesis of F, its gradient and Hessian (spins 0, 1, 2) equals the sum over the poles."""
+    x = _unit(np.random.default_rng(1), 500)
+    F0, g0, (lap0, H0) = exact_field.fields(x, 2, method="direct")
+    F1, g1, (lap1, H1) = exact_field.fields(x, 2, method="ducc0")
+    assert np.max(np.abs(F1 - F0)) <= 1e-12 * np.max(np.abs(F0))
+    assert np.max(np.abs(g1 - g0)) <= 1e-12 * np.max(np.abs(g0))
+    assert np.max(np.abs(H1 - H0)) <= 1e-11 * np.max(np.abs(H0))
+    assert np.max(np.abs(lap1 - lap0)) <= 1e-11 * np.max(np.abs(lap0))
+    # the gradient is tangent and the Hessian acts on the tangent plane
+    assert np.max(np.abs(np.sum(g1 * x, axis=1))) <= 1e-12 * np.max(np.abs(g1))
+    assert np.max(np.abs(H1 @ x[:, :, None])) <= 1e-11 * np.max(np.abs(H1))
+
+
+@pytest.mark.parametrize("count", [3, BIG])
+def test_fast_path_matches_exact_forms(model, count):
+    """Energy within 1e-9 relative of the harmonic and pairwise forms, torque and K(R) within 1e-9 of the
+    torque reference, the Hessian within 1e-8 of its peak (the pairwise G'' table is good to ~1e-9)."""
+    rng = np.random.default_rng(count)
+    R = so3.random(count, rng)
+    c = rng.uniform(-1.0, 1.0, (count, model.coil_count))
+    E, tau, H = model.evaluate(R, c, 2)
+    E_pair, tau_pair, H_pair = model.evaluate_pairwise(R, c, 2)
+    assert np.max(np.abs(E - E_pair) / np.abs(E_pair)) <= 1e-9
+    assert np.max(np.abs(E - model.energy_harmonic(R, c)) / np.abs(E_pair)) <= 1e-9
+    ref = model.torque_reference(c)
+    assert np.max(np.linalg.norm(tau - tau_pair, axis=-1) / ref) <= 1e-9
+    assert np.max(np.abs(model.torque(R, c) - tau_pair)) <= 1e-9 * np.min(ref)
+    assert np.max(np.abs(H - H_pair)) <= 1e-8 * np.max(np.abs(H_pair))
+    K, K_pair = model.torque_matrix(R), model.torque_matrix_pairwise(R)
+    assert np.max(np.abs(K - K_pair)) <= 1e-9 * np.max(np.abs(K_pair))
+    assert np.allclose(np.einsum("kan,kn->ka", K, c), tau, rtol=0, atol=1e-12 * np.max(ref))
+
+
+def test_single_orientation_shapes(model, proto):
+    rng = np.random.default_rng(3)
+    R, c = so3.random(1, rng)[0], rng.uniform(-1.0, 1.0, model.coil_count)
+    assert model.energy(R, c).shape == () and model.torque(R, c).shape == (3,)
+    assert model.hessian(R, c).shape == (3, 3) and model.torque_matrix(R).shape == (3, model.coil_count)
+    # nothing energised: the constant energy, no torque
+    E, tau, H = model.evaluate(R, np.zeros(model.coil_count), 2)
+    assert E == pytest.approx(model.evaluate_pairwise(R, np.zeros(model.coil_count), 0)[0], rel=1e-12)
+    assert not tau.any() and not H.any()
+
+
+@pytest.mark.parametrize("count", [1, BIG])
+def test_torque_is_minus_gradient_of_fast_energy(model, count):
+    """τ = −∂E/∂θ for R → exp(θ̂) R, by central differences of the fast energy (step 1e-5 rad)."""
+    rng = np.random.default_rng(10 + count)
+    R = so3.random(count, rng)
+    c = rng.uniform(-1.0, 1.0, (count, model.coil_count))
+    h = 1e-5
+    turns = so3.exp(np.concatenate([h * np.eye(3), -h * np.eye(3)]))
+    Rs = np.einsum("sab,kbc->ksac", turns, R)
+    E = model.energy(Rs, c[:, None, :])  # (count, 6)
+    gradient = (E[:, :3] - E[:, 3:]) / (2 * h)
+    assert np.max(np.abs(-gradient - model.torque(R, c))) <= 1e-6 * np.min(model.torque_reference(c))
+
+
+@pytest.mark.parametrize("count", [2, BIG])
+def test_hessian_matches_finite_differences(model, count):
+    """The analytic Hessian against central differences of the fast torque (step 1e-6 rad)."""
+    rng = np.random.default_rng(20 + count)
+    R = so3.random(count, rng)
+    c = rng.uniform(-1.0, 1.0, (count, model.coil_count))
+    H = model.hessian(R, c)
+    fd = finite_difference_hessian(model, R, c)
+    assert np.max(np.abs(H - fd)) <= 1e-6 * np.max(np.abs(H))
+    assert np.allclose(H, np.swapaxes(H, -1, -2), rtol=0, atol=1e-14 * np.max(np.abs(H)))
+
+
+def test_threads_give_identical_results(proto, model):
+    """ducc0 with 1 and 2 threads: the same numbers (each point is synthesised independently)."""
+    two = MotorPotential(proto, nthreads=2)
+    rng = np.random.default_rng(5)
+    R = so3.random(BIG, rng)
+    c = rng.uniform(-1.0, 1.0, (BIG, model.coil_count))
+    for a, b in zip(model.evaluate(R, c, 2), two.evaluate(R, c, 2)):
+        np.testing.assert_allclose(a, b, rtol=1e-15, atol=1e-15 * np.max(np.abs(b)))
+    np.testing.assert_allclose(model.torque_matrix(R), two.torque_matrix(R), rtol=1e-15,
+                               atol=1e-15 * np.max(np.abs(two.torque_matrix(R))))
+
+
+def test_fast_false_is_the_exact_form(proto, model):
+    exact = MotorPotential(proto, fast=False)
+    rng = np.random.default_rng(6)
+    R, c = so3.random(4, rng), rng.uniform(-1.0, 1.0, (4, model.coil_count))
+    np.testing.assert_array_equal(exact.energy(R, c), model.energy_harmonic(R, c))
+    np.testing.assert_array_equal(exact.torque(R, c), model.evaluate_pairwise(R, c, 1)[1])
+    np.testing.assert_array_equal(exact.torque_matrix(R), model.torque_matrix_pairwise(R))
+
+
+def test_bad_input(proto, model):
+    with pytest.raises(InputError, match="nthreads"):
+        MotorPotential(proto, nthreads=0)
+    with pytest.raises(InputError, match="method"):
+        model.rotor_field.fields(np.array([[0.0, 0.0, 1.0]]), 1, method="fft")
+    with pytest.raises(InputError, match="currents"):
+        model.torque(np.eye(3), np.ones(3))
