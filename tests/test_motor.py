@@ -51,8 +51,9 @@ def test_hemisphere_allowed_only_on_request(proto):
 
 
 def test_coil_outside_cap_is_refused(proto):
-    with pytest.raises(InputError, match="stator coil"):
+    with pytest.raises(InputError, match=r"stator\[\d+\] must be a coil within the stator cap") as err:
         replace(proto, cap_half_angle=math.radians(40))
+    assert err.value.field.startswith("stator[")
 
 
 def test_every_state_is_held_by_two_or_more_pairs_within_tol(proto):

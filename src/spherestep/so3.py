@@ -26,7 +26,10 @@ def as_rotations(R, name: str = "R") -> np.ndarray:
     """The one input contract for rotations: ``R`` as a float array ``(..., 3, 3)`` of proper rotations
     (finite, ``|RᵀR − I| ≤ 1e-6`` entrywise, determinant +1), any leading batch shape; otherwise the project's
     one-line :class:`~spherestep.errors.InputError` naming ``name``."""
-    arr = R if isinstance(R, np.ndarray) and R.dtype == float else np.asarray(R, dtype=float)
+    try:
+        arr = R if isinstance(R, np.ndarray) and R.dtype == float else np.asarray(R, dtype=float)
+    except (TypeError, ValueError):
+        raise bad_value(name, "rotation matrices of shape (..., 3, 3)", R) from None
     if arr.ndim < 2 or arr.shape[-2:] != (3, 3):
         raise bad_value(name, "rotation matrices of shape (..., 3, 3)", f"shape {arr.shape}")
     if arr.size == 0:

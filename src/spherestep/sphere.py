@@ -10,6 +10,8 @@ centres equals the sum of their radii. Every function is vectorised over leading
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from .errors import bad_value
@@ -17,9 +19,15 @@ from .errors import bad_value
 UNIT_TOL = 1e-9
 
 
-def _as_points(u, name: str, *, min_ndim: int = 1) -> np.ndarray:
-    """Check that ``u`` holds finite unit 3-vectors; raise a ValueError saying which check failed."""
-    u = np.asarray(u, dtype=float)
+def as_points(u, name: str = "u", *, min_ndim: int = 1) -> np.ndarray:
+    """The one input contract for points on the sphere: ``u`` as a float array ``(..., 3)`` of finite unit
+    vectors (``||u| − 1| ≤ UNIT_TOL = 1e-9``), any leading batch shape (at least ``min_ndim`` axes); otherwise
+    the project's one-line :class:`~spherestep.errors.InputError` naming ``name``. Nothing is normalised
+    silently: divide by the norm first if that is what is meant."""
+    try:
+        u = np.asarray(u, dtype=float)
+    except (TypeError, ValueError):
+        raise bad_value(name, "unit 3-vectors of shape (..., 3)", u) from None
     if u.ndim < min_ndim or u.shape[-1:] != (3,):
         raise bad_value(name, "unit 3-vectors of shape (..., 3)", f"an array of shape {u.shape}")
     if not np.all(np.isfinite(u)):
@@ -34,7 +42,8 @@ def _as_points(u, name: str, *, min_ndim: int = 1) -> np.ndarray:
     return u
 
 
-def _as_radii(r, name: str = "radius") -> np.ndarray:
+def as_radii(r, name: str = "radius") -> np.ndarray:
+    """``r`` as a float array of finite angular radii in ``[0, π]``; InputError naming ``name`` otherwise."""
     r = np.asarray(r, dtype=float)
     if not np.all(np.isfinite(r)) or np.any(r < 0) or np.any(r > np.pi):
         raise bad_value(name, "finite angular radii in [0, π] radians", r.tolist())
@@ -62,7 +71,7 @@ def point(phi, theta) -> np.ndarray:
 
 def angles(u) -> tuple[np.ndarray, np.ndarray]:
     """Inverse of :func:`point`: ``(φ ∈ (−π, π], θ ∈ [0, π])``; at the poles φ = 0."""
-    u = _as_points(u, "u")
+    u = as_points(u, "u")
     rho = np.hypot(u[..., 0], u[..., 1])
     theta = np.arctan2(rho, u[..., 2])
     phi = np.arctan2(u[..., 1], u[..., 0])
@@ -76,15 +85,15 @@ def arc_distance(u1, u2) -> np.ndarray:
     Evaluated as ``atan2(|u1 × u2|, u1 · u2)``, which keeps full precision for nearly equal and nearly
     antipodal points where ``arccos`` loses half the digits.
     """
-    u1 = _as_points(u1, "u1")
-    u2 = _as_points(u2, "u2")
+    u1 = as_points(u1, "u1")
+    u2 = as_points(u2, "u2")
     return np.arctan2(np.linalg.norm(np.cross(u1, u2), axis=-1), np.sum(u1 * u2, axis=-1))
 
 
 def great_circle_normal(p, q) -> np.ndarray:
     """Unit normal ``n = p × q / |p × q|`` of the great circle through ``p`` and ``q``."""
-    p = _as_points(p, "p")
-    q = _as_points(q, "q")
+    p = as_points(p, "p")
+    q = as_points(q, "q")
     cross = np.cross(p, q)
     norm = np.linalg.norm(cross, axis=-1, keepdims=True)
     if np.any(norm < 1e-12):
@@ -95,14 +104,20 @@ def great_circle_normal(p, q) -> np.ndarray:
 
 def distance_to_great_circle(r, n) -> np.ndarray:
     """``d2(r, n) = cos⁻¹ √(1 − (r·n)²) = sin⁻¹ |r·n|``: arc from ``r`` to the great circle with normal ``n``."""
-    r = _as_points(r, "r")
-    n = _as_points(n, "n")
+    r = as_points(r, "r")
+    n = as_points(n, "n")
     return np.arctan2(np.abs(np.sum(r * n, axis=-1)), np.linalg.norm(np.cross(r, n), axis=-1))
+
+
+def disc_angle(diameter: float, distance: float) -> float:
+    """Angular radius (rad) of a disc of ``diameter`` facing the centre from ``distance``:
+    ``atan(diameter / 2 / distance)`` (a magnet's face on the rotor, a coil's face across the air gap)."""
+    return math.atan(0.5 * diameter / distance)
 
 
 def cap_area(radius) -> np.ndarray:
     """Area ``2π(1 − cos r)`` of a cap of angular radius ``r`` on the unit sphere."""
-    r = _as_radii(radius)
+    r = as_radii(radius)
     return 4.0 * np.pi * np.sin(0.5 * r) ** 2
 
 
@@ -138,9 +153,9 @@ def triangle_incircle(p, q, r) -> tuple[np.ndarray, np.ndarray]:
     ``d2(x, n1) = sin⁻¹(x·n1)``. (The paper writes ``n2 = n(p, r)`` and ``n3 = n(r, q)``; orienting all three
     normals inwards is what makes the equidistance equations hold with equal signs.)
     """
-    p = _as_points(p, "p")
-    q = _as_points(q, "q")
-    r = _as_points(r, "r")
+    p = as_points(p, "p")
+    q = as_points(q, "q")
+    r = as_points(r, "r")
     p, q, r = np.broadcast_arrays(p, q, r)
     n = _inward_normals(np.stack([p, q, r], axis=-2), "p, q, r")
     x = np.cross(n[..., 0, :] - n[..., 1, :], n[..., 2, :] - n[..., 1, :])
@@ -157,7 +172,7 @@ def polygon_incircle(vertices, tol: float = 1e-9) -> tuple[np.ndarray, np.ndarra
     an incircle). The centre solves ``(n_i − n_0)·x = 0`` for the inward side normals (least squares by
     SVD); the polygon has an incircle when the residual vanishes, otherwise an error is raised.
     """
-    v = _as_points(vertices, "vertices", min_ndim=2)
+    v = as_points(vertices, "vertices", min_ndim=2)
     if v.shape[-2] < 3:
         raise bad_value("vertices", "at least three vertices", f"{v.shape[-2]}")
     n = _inward_normals(v)
@@ -183,10 +198,10 @@ def circle_in_gap(centers, radii) -> tuple[np.ndarray, np.ndarray]:
     of the cap in the gap on the side where the three caps bound a small region; back-substitution gives
     ``x``. Returns ``(center (..., 3), radius (...))``.
     """
-    P = _as_points(centers, "centers", min_ndim=2)
+    P = as_points(centers, "centers", min_ndim=2)
     if P.shape[-2:] != (3, 3):
         raise bad_value("centers", "three centres, shape (..., 3, 3)", f"shape {P.shape}")
-    r = _as_radii(radii, "radii")
+    r = as_radii(radii, "radii")
     if r.shape[-1:] != (3,):
         raise bad_value("radii", "three radii, shape (..., 3)", f"shape {r.shape}")
     det = np.linalg.det(P)
@@ -223,8 +238,8 @@ def circle_in_ring(centers, radii, tol: float = 1e-9) -> tuple[np.ndarray, np.nd
     ``d(x, p_i) − r_i``; the caps must all be tangent to it within ``tol`` (else the ring is not symmetric
     and a ValueError is raised: use :func:`circle_in_gap` on three of them).
     """
-    P = _as_points(centers, "centers", min_ndim=2)
-    r = _as_radii(radii, "radii")
+    P = as_points(centers, "centers", min_ndim=2)
+    r = as_radii(radii, "radii")
     if P.shape[-2] < 3 or r.shape != P.shape[:-1]:
         raise bad_value("centers, radii", "k >= 3 centres (..., k, 3) and k radii (..., k)",
                         f"shapes {P.shape} and {r.shape}")
@@ -252,7 +267,7 @@ def circle_in_corner(p, q, r) -> tuple[np.ndarray, np.ndarray]:
     ``t_I − t = ρ + r_in``, solves in closed form as ``tan t = sin D / (cos D + sin(A/2))`` with ``D = t_I − r_in``.
     """
     inc, r_in = triangle_incircle(p, q, r)
-    p = np.broadcast_to(_as_points(p, "p"), inc.shape)
+    p = np.broadcast_to(as_points(p, "p"), inc.shape)
     t_i = arc_distance(p, inc)
     half = np.sin(r_in) / np.sin(t_i)
     D = t_i - r_in
@@ -312,7 +327,7 @@ class NearestPointGrid:
     def __init__(self, points, tol: float):
         from scipy.spatial import cKDTree
 
-        self.points = _as_points(points, "points", min_ndim=2)
+        self.points = as_points(points, "points", min_ndim=2)
         self.tol = float(tol)
         tree = cKDTree(self.points)
         dist, _ = tree.query(self.points, k=2)

@@ -10,6 +10,7 @@ from rich.table import Table
 from .. import design_file
 from ..atomic import write_text
 from ..errors import InputError
+from ..motor import MotorDesign
 from .app import app
 from .common import console, print_json
 
@@ -42,10 +43,10 @@ def new(
         raise InputError(f"FILE {str(file)!r} exists; give --force to overwrite it, or choose another name")
     if source == "prototype":
         text = design_file.prototype_text()
-        design = design_file.loads(text, source="prototype")
+        design = MotorDesign.loads(text, source="prototype")
     else:
-        design = design_file.load(source)
-        text = design_file.dumps(design)
+        design = MotorDesign.load(source)
+        text = design.dumps()
     write_text(file, text)
     print(f"wrote {file}: design {design.name!r}, {len(design.rotor)} poles, {len(design.stator)} coils")
 
@@ -56,7 +57,7 @@ def validate(file: Path = typer.Argument(..., help="Design file (.yaml, .yml or 
 
     Example: [bold]spherestep design validate mymotor.yaml[/bold]
     """
-    design = design_file.load(file)
+    design = MotorDesign.load(file)
     print(f"valid: {len(design.rotor)} poles, {len(design.stator)} coils")
 
 
@@ -77,7 +78,7 @@ def show(
 
     Example: [bold]spherestep design show mymotor.yaml --json[/bold]
     """
-    info = design_file.load(file).summary()
+    info = MotorDesign.load(file).summary()
     if as_json:
         print_json(info)
         return

@@ -27,15 +27,16 @@ import json
 import math
 import os
 import socket
+import sys
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
-from ..design_file import named_packing
-from ..errors import SpherestepError, bad_value
-from ..motor import MotorDesign, check_fits, stator_in_cap
+from ..errors import InputError, SpherestepError, bad_value
+from ..motor import MotorDesign, PolarityRule, check_fits
 from ..motor.states import candidate_count
+from ..packing import named
 from ..sphere import NearestPointGrid, shell_voxels
 from .grid import DesignPoint, primary_ratio
 
@@ -73,13 +74,13 @@ class Unbuildable(Exception):
 def part_sizes(point: DesignPoint) -> tuple[float, float]:
     """Magnet and coil diameters (m) by the rule of :mod:`spherestep.explore.grid`; Unbuildable if too small."""
     R = 0.5 * point.sphere_diameter
-    rotor = named_packing(point.rotor, point.rotor_level)
+    rotor = named(point.rotor, point.rotor_level)
     room = 2 * R * math.tan(0.5 * rotor.min_separation())
     magnet = min(point.magnet_diameter_max, point.fill * room)
     if magnet < point.magnet_diameter_min:
         raise Unbuildable("does_not_fit", f"the rotor's closest poles leave room for a {1e3 * room:.3g} mm magnet, "
                           f"under the minimum {1e3 * point.magnet_diameter_min:.3g} mm")
-    primary = float(named_packing(point.stator, 0).radii[0])
+    primary = float(named(point.stator, 0).radii[0])
     room = 2 * (R + point.air_gap) * math.tan(primary)
     coil = min(point.coil_diameter_max, point.fill * room)
     if coil < point.coil_diameter_min:
@@ -89,34 +90,40 @@ def part_sizes(point: DesignPoint) -> tuple[float, float]:
 
 
 def build_design(point: DesignPoint, limits: Limits = Limits(), name: str | None = None) -> MotorDesign:
-    """The :class:`~spherestep.motor.MotorDesign` of ``point``; Unbuildable with the status and reason otherwise."""
-    rotor = named_packing(point.rotor, point.rotor_level)
+    """The :class:`~spherestep.motor.MotorDesign` of ``point`` (:meth:`MotorDesign.from_packings` with the
+    prototype's polarity rule and 'fit' coils); Unbuildable with the status and reason otherwise."""
+    rotor = named(point.rotor, point.rotor_level)
     if len(rotor) > limits.max_rotor_poles:
         raise Unbuildable("too_large", f"the rotor has {len(rotor)} poles, over the sweep's limit of "
                           f"{limits.max_rotor_poles}")
     magnet, coil = part_sizes(point)
-    R = 0.5 * point.sphere_diameter
-    coil_angle = math.atan(0.5 * coil / (R + point.air_gap))  # as MotorDesign.coil_angle, so 'fit' reselects them
-    cap = math.radians(point.cap_half_angle_deg)
-    stator = stator_in_cap(named_packing(point.stator, point.stator_level), point.stator_axis, cap, coil_angle)
-    if len(stator) > limits.budget_coils:
-        raise Unbuildable("over_budget", f"{len(stator)} coils in the stator cap, over the budget of "
-                          f"{limits.budget_coils}", coils=len(stator))
-    if len(stator) < 2:
-        raise Unbuildable("no_states", f"{len(stator)} coil{'s' if len(stator) != 1 else ''} in the stator cap; a "
-                          "state needs two poles on two coils", coils=len(stator))
-    base = len(named_packing(point.rotor, 0))
-    try:
-        design = MotorDesign(
-            rotor=rotor, polarity=np.where(np.arange(len(rotor)) < base, 1, -1), stator=stator,
-            stator_axis=np.array(point.stator_axis), cap_half_angle=cap, sphere_diameter=point.sphere_diameter,
-            magnet_diameter=magnet, magnet_length=point.magnet_length, coil_diameter=coil,
-            coil_length=point.coil_length, air_gap=point.air_gap, tol=math.radians(point.tol_deg),
-            name=name or f"explore {point.key}", max_coils=max(limits.budget_coils, len(stator)),
+    try:  # the coil budget is the sweep's, checked below; the design's own limit is set from the count
+        design = MotorDesign.from_packings(
+            rotor=point.rotor, rotor_refine=point.rotor_level, polarity=PolarityRule(1, -1), stator=point.stator,
+            stator_refine=point.stator_level, stator_axis=point.stator_axis,
+            cap_half_angle=math.radians(point.cap_half_angle_deg), coils="fit",
+            sphere_diameter=point.sphere_diameter, magnet_diameter=magnet, magnet_length=point.magnet_length,
+            coil_diameter=coil, coil_length=point.coil_length, air_gap=point.air_gap,
+            tol=math.radians(point.tol_deg), name=name or f"explore {point.key}", max_coils=sys.maxsize,
+            check_fit=False,
         )
+    except InputError as exc:
+        if exc.field == "coils":  # 'fit' found no cap wide enough for a coil
+            raise Unbuildable("no_states", "0 coils in the stator cap; a state needs two poles on two coils",
+                              coils=0) from None
+        raise Unbuildable("does_not_fit", str(exc)) from None
+    coils = len(design.stator)
+    if coils > limits.budget_coils:
+        raise Unbuildable("over_budget", f"{coils} coils in the stator cap, over the budget of "
+                          f"{limits.budget_coils}", coils=coils)
+    if coils < 2:
+        raise Unbuildable("no_states", f"{coils} coil{'s' if coils != 1 else ''} in the stator cap; a "
+                          "state needs two poles on two coils", coils=coils)
+    design = replace(design, max_coils=max(limits.budget_coils, coils))
+    try:
         check_fits(design)
     except SpherestepError as exc:
-        raise Unbuildable("does_not_fit", str(exc), coils=len(stator)) from None
+        raise Unbuildable("does_not_fit", str(exc), coils=coils) from None
     return design
 
 
@@ -168,11 +175,11 @@ def holding_torques(design: MotorDesign, count: int, seed: int) -> np.ndarray:
 def _base_row(point: DesignPoint) -> dict:
     return {
         "key": point.key, "rotor": point.rotor, "rotor_level": point.rotor_level, "rotor_family": point.rotor_family,
-        "rotor_poles": len(named_packing(point.rotor, point.rotor_level)), "stator": point.stator,
+        "rotor_poles": len(named(point.rotor, point.rotor_level)), "stator": point.stator,
         "stator_level": point.stator_level, "stator_family": point.stator_family, "family_rule": point.family_rule,
         "primary_ratio": primary_ratio(point.rotor, point.stator), "cap_half_angle_deg": point.cap_half_angle_deg,
         "tol_deg": point.tol_deg, "samples": point.samples, "seed": point.seed,
-        "inertia_isotropy": named_packing(point.rotor, point.rotor_level).inertia_isotropy(),
+        "inertia_isotropy": named(point.rotor, point.rotor_level).inertia_isotropy(),
     }
 
 

@@ -15,7 +15,7 @@ Parts (rotor magnets and stator coils) are the prototype's (Sec. IV-A: 12-in rot
 0.005-in gap; 1-in × 0.5-in magnets) where they fit, and shrink where the packing is finer: a magnet's
 diameter is at most ``fill`` × the room between the two closest poles, ``2R tan(d_min/2)``; a coil's at most
 ``fill`` × the stator's primary cap (coils go on the caps at least as wide as the coil, as in
-:func:`spherestep.motor.stator_in_cap`). Parts that would shrink below ``magnet_diameter_min`` or
+:meth:`spherestep.packing.Packing.within_cap`). Parts that would shrink below ``magnet_diameter_min`` or
 ``coil_diameter_min`` do not fit.
 """
 

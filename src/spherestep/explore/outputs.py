@@ -18,7 +18,6 @@ import pandas as pd
 
 from .. import plots
 from ..atomic import atomic_path
-from ..design_file import save
 from .build import Limits, build_design
 from .grid import DesignPoint
 from .pareto import figure_pareto, pareto_front
@@ -45,7 +44,7 @@ def write_designs(front: pd.DataFrame, folder: str | Path, limits: Limits = Limi
             point = DesignPoint.from_params(row["params"])
             design = build_design(point, limits, name=f"explore #{rank}: {point.label}")
             name = design_file_name(rank, row)
-            save(design, fresh / name)
+            design.save(fresh / name)
             names.append(name)
         old = None
         if folder.exists():

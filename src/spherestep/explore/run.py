@@ -21,8 +21,8 @@ from typing import Callable
 
 import pandas as pd
 
-from ..design_file import named_packing
 from ..errors import InputError, bad_value
+from ..packing import named
 from .build import Limits, evaluate
 from .grid import DesignPoint
 from .store import ResultStore
@@ -124,7 +124,7 @@ def run_sweep(points: list[DesignPoint], store: ResultStore, client, limits: Lim
         on_start(summary.total, len(todo))
     start = time.perf_counter()
     futures = {client.submit(evaluate, p, limits, pure=False, retries=retries,
-                             priority=len(named_packing(p.rotor, p.rotor_level))): p for p in todo}
+                             priority=len(named(p.rotor, p.rotor_level))): p for p in todo}
     pending: list[dict] = []
     last_flush = time.perf_counter()
 

@@ -8,23 +8,90 @@ pole faces outwards; a coil driven with polarity ``s`` attracts poles of polarit
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 from functools import cached_property
 
 import numpy as np
 
+from .. import packing as pk
+from ..channels import MAX_COILS, as_channel_map, default_channel_map
 from ..errors import InputError, bad_value
 from ..packing import Packing
-from ..sphere import _as_points
+from ..sphere import as_points, disc_angle
+from ..units import length
 
-MAX_COILS = 32  # four 8-relay boards (Sec. IV-B)
+__all__ = ["DEFAULT_TOL", "MAX_COILS", "MotorDesign", "PolarityRule", "check_fits", "default_channel_map"]
+
 DEFAULT_TOL = math.radians(1.0)  # a pole within 1° of a coil's axis sits on it (2.7 mm on a 12-in rotor)
+DIMENSIONS = ("sphere_diameter", "magnet_diameter", "magnet_length", "coil_diameter", "coil_length", "air_gap")
 
 
-def default_channel_map(coil_count: int) -> np.ndarray:
-    """Coil ``k`` → enable channel ``k``, polarity channel ``coil_count + k`` (shape ``(N, 2)``)."""
-    k = np.arange(coil_count)
-    return np.stack([k, coil_count + k], axis=1)
+@dataclass(frozen=True)
+class PolarityRule:
+    """Polarity of a rotor built from a named packing: ``primary`` for the base packing's poles, ``filled`` for
+    the poles refinement added (default ``−primary``). The prototype's rule is ``PolarityRule(+1, −1)``."""
+
+    primary: int = 1
+    filled: int | None = None
+
+    def __post_init__(self):
+        for label in ("primary", "filled"):
+            value = getattr(self, label)
+            if not (value is None and label == "filled") and (isinstance(value, bool) or value not in (-1, 1)):
+                raise bad_value(f"polarity.{label}", "+1 or -1", value)
+
+    def signs(self, count: int, base: int) -> np.ndarray:
+        """``±1`` for ``count`` poles whose first ``base`` belong to the base packing."""
+        filled = -self.primary if self.filled is None else self.filled
+        return np.where(np.arange(count) < base, self.primary, filled)
+
+
+def _check_dimensions(values: dict) -> None:
+    """The one check of a motor's sizes (metres): finite and positive (the air gap may be 0), magnets and coils
+    smaller than the sphere. Raises InputError whose ``field`` is the size at fault."""
+    for label in DIMENSIONS:
+        value = values[label]
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value) or value < 0 \
+                or (value == 0 and label != "air_gap"):
+            kind = "non-negative" if label == "air_gap" else "positive"
+            raise bad_value(label, f"a finite {kind} length in metres", value)
+    for label in ("magnet_diameter", "coil_diameter"):
+        if values[label] >= values["sphere_diameter"]:
+            raise bad_value(label, f"smaller than the sphere_diameter ({values['sphere_diameter']:.6g} m)",
+                            values[label])
+
+
+def _check_cap(cap_half_angle, allow_hemisphere: bool) -> None:
+    """The stator cap: an angle in (0, π) radians, under π/2 unless ``allow_hemisphere``."""
+    if isinstance(cap_half_angle, bool) or not isinstance(cap_half_angle, (int, float)) or \
+            not (math.isfinite(cap_half_angle) and 0 < cap_half_angle < math.pi):
+        raise bad_value("cap_half_angle", "an angle in (0, π) radians", cap_half_angle)
+    if cap_half_angle >= math.pi / 2 and not allow_hemisphere:
+        raise bad_value("cap_half_angle", "under 90° (a stator covering less than a hemisphere gives the wide "
+                        "range of motion, Sec. IV); set allow_hemisphere (overrides.allow_hemisphere in a design "
+                        "file) to override", f"{math.degrees(cap_half_angle):.4g}°")
+
+
+def _stator_axis(axis) -> np.ndarray:
+    """One unit 3-vector (the contract of :func:`~spherestep.sphere.as_points`), divided by its norm."""
+    axis = as_points(axis, "stator_axis")
+    if axis.shape != (3,):
+        raise bad_value("stator_axis", "one unit 3-vector", f"shape {axis.shape}")
+    return axis / np.linalg.norm(axis)
+
+
+def _packing(value: str | Packing, level: int, name: str) -> Packing:
+    """A :class:`Packing` as given, or the named one refined ``level`` times (shared, :func:`packing.named`)."""
+    if isinstance(value, Packing):
+        if level:
+            raise bad_value(f"{name}_refine", f"0 when {name} is a Packing (refine it with packing.refine)", level)
+        return value
+    if not isinstance(value, str) or value not in pk.names():
+        raise bad_value(name, "a Packing or a packing name listed by `spherestep packings --all`", value)
+    if isinstance(level, bool) or not isinstance(level, (int, np.integer)) or level < 0:
+        raise bad_value(f"{name}_refine", "a non-negative integer number of refinement levels", level)
+    return pk.named(value, int(level))
 
 
 @dataclass(frozen=True, eq=False)
@@ -37,6 +104,10 @@ class MotorDesign:
     coil ``coil_diameter`` × ``coil_length``, ``air_gap`` between rotor surface and coil faces. ``tol``
     (radians) is how close a pole must sit to a coil to count as held; ``channel_map`` gives each coil its
     (enable, polarity) relay channel. ``allow_hemisphere`` and ``max_coils`` lift the paper's limits.
+
+    This class's checks are the only validation of a motor: every error is an
+    :class:`~spherestep.errors.InputError` whose ``field`` names the field at fault (``stator[k]`` for coil
+    ``k``). Build one from named packings with :meth:`from_packings`, from a design file with :meth:`load`.
     """
 
     rotor: Packing
@@ -64,65 +135,128 @@ class MotorDesign:
         if polarity.shape != (len(self.rotor),) or not np.all(np.isin(polarity, (-1, 1))):
             raise bad_value("polarity", f"{len(self.rotor)} values, each +1 or -1 (one per rotor pole)",
                             f"shape {polarity.shape}" if polarity.shape != (len(self.rotor),) else polarity.tolist())
-        axis = _as_points(self.stator_axis, "stator_axis")
-        if axis.shape != (3,):
-            raise bad_value("stator_axis", "one unit 3-vector", f"shape {axis.shape}")
-        for label in ("cap_half_angle",):
-            value = getattr(self, label)
-            if not (isinstance(value, (int, float)) and math.isfinite(value) and 0 < value < math.pi):
-                raise bad_value(label, "an angle in (0, π) radians", value)
-        if self.cap_half_angle >= math.pi / 2 and not self.allow_hemisphere:
-            raise bad_value("cap_half_angle", "under 90° (a stator covering less than a hemisphere gives the wide "
-                            "range of motion, Sec. IV); set allow_hemisphere to override",
-                            f"{math.degrees(self.cap_half_angle):.4g}°")
-        for label in ("sphere_diameter", "magnet_diameter", "magnet_length", "coil_diameter", "coil_length",
-                      "remanence", "coil_ampere_turns"):
+        axis = _stator_axis(self.stator_axis)
+        _check_cap(self.cap_half_angle, self.allow_hemisphere)
+        _check_dimensions({label: getattr(self, label) for label in DIMENSIONS})
+        for label in ("remanence", "coil_ampere_turns"):
             value = getattr(self, label)
             if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value) or value <= 0:
-                raise bad_value(label, "a finite positive number (metres for lengths)", value)
-        if isinstance(self.air_gap, bool) or not isinstance(self.air_gap, (int, float)) or \
-                not math.isfinite(self.air_gap) or self.air_gap < 0:
-            raise bad_value("air_gap", "a finite non-negative length in metres", self.air_gap)
-        if self.magnet_diameter >= self.sphere_diameter or self.coil_diameter >= self.sphere_diameter:
-            raise bad_value("magnet_diameter/coil_diameter", "smaller than the sphere's diameter",
-                            (self.magnet_diameter, self.coil_diameter))
+                raise bad_value(label, "a finite positive number", value)
+        if isinstance(self.max_coils, bool) or not isinstance(self.max_coils, (int, np.integer)) or self.max_coils < 1:
+            raise bad_value("max_coils", "a positive integer", self.max_coils)
         if len(self.stator) > self.max_coils:
             raise bad_value("stator", f"at most {self.max_coils} coils (four 8-relay boards, Sec. IV-B); raise "
-                            "max_coils to override", f"{len(self.stator)} coils")
+                            "max_coils (overrides.max_coils in a design file) to override", f"{len(self.stator)} coils")
         off = np.degrees(np.arccos(np.clip(self.stator.centers @ axis, -1, 1))) - math.degrees(self.cap_half_angle)
         if np.any(off > 1e-9):
             k = int(np.argmax(off))
-            raise bad_value(f"stator coil {k}", f"within the stator cap ({math.degrees(self.cap_half_angle):.4g}° "
-                            "about stator_axis)", f"{off[k]:.4g}° outside it")
+            raise bad_value(f"stator[{k}]", f"a coil within the stator cap ({math.degrees(self.cap_half_angle):.4g}° "
+                            "about stator_axis): remove it or widen cap_half_angle", f"{off[k]:.4g}° outside it")
         if self.tol is not None and not (isinstance(self.tol, (int, float)) and 0 < self.tol < 0.5):
             raise bad_value("tol", "an angle in (0, 0.5) radians", self.tol)
-        cmap = default_channel_map(len(self.stator)) if self.channel_map is None else np.asarray(self.channel_map)
-        if cmap.shape != (len(self.stator), 2) or not np.issubdtype(cmap.dtype, np.integer) or np.any(cmap < 0):
-            raise bad_value("channel_map", f"{len(self.stator)} pairs of non-negative integer channels "
-                            "(enable, polarity), one per coil", f"shape {cmap.shape}")
-        if len(np.unique(cmap.ravel())) != cmap.size:
-            raise bad_value("channel_map", "distinct channels for every coil's enable and polarity", cmap.tolist())
+        cmap = default_channel_map(len(self.stator)) if self.channel_map is None else self.channel_map
+        cmap = as_channel_map(cmap, len(self.stator))
         bad = [k for k in self.failed_coils if not 0 <= k < len(self.stator)]
         if bad:
             raise bad_value("failed_coils", f"coil indices 0..{len(self.stator) - 1}", bad)
         object.__setattr__(self, "polarity", polarity.astype(int))
-        object.__setattr__(self, "stator_axis", axis / np.linalg.norm(axis))
-        object.__setattr__(self, "channel_map", cmap.astype(int))
+        object.__setattr__(self, "stator_axis", axis)
+        object.__setattr__(self, "channel_map", cmap)
         object.__setattr__(self, "failed_coils", tuple(sorted(set(int(k) for k in self.failed_coils))))
+
+    # --- the one builder ----------------------------------------------------------------------------
+    @classmethod
+    def from_packings(cls, *, rotor: str | Packing, stator: str | Packing, stator_axis, cap_half_angle: float,
+                      sphere_diameter, magnet_diameter, magnet_length, coil_diameter, coil_length, air_gap,
+                      rotor_refine: int = 0, stator_refine: int = 0,
+                      polarity: PolarityRule | Sequence[int] = PolarityRule(1, -1),
+                      coils: str | Sequence[int] = "fit", check_fit: bool = True, **options) -> "MotorDesign":
+        """A motor from packings: the one place where coil angle, polarity rule and cap selection are decided.
+
+        ``rotor``/``stator``: a packing name (:func:`spherestep.packing.names`) refined ``rotor_refine`` /
+        ``stator_refine`` times (:func:`spherestep.packing.named`), or a :class:`Packing`. ``polarity``: a
+        :class:`PolarityRule` (primary poles of the base packing, then the filled ones; needs a named rotor), a
+        mapping ``{"primary": 1, "filled": -1}`` of one, or one ±1 per pole. ``coils``: ``"fit"`` keeps the stator caps within ``cap_half_angle`` (rad) of
+        ``stator_axis`` that are at least as wide as a coil face, ``atan(d_c / 2 / (R + g))``
+        (:meth:`Packing.within_cap`); ``"all"`` keeps every cap; a list of cap indices keeps those, in order.
+        Sizes are metres or strings with units (``"12 in"``, :func:`spherestep.units.length`).
+        ``check_fit`` also refuses overlapping magnets or coils (:func:`check_fits`). ``options`` are the
+        remaining fields (``tol``, ``name``, ``channel_map``, ``max_coils``, ...). Errors are InputErrors whose
+        ``field`` names the argument (``coils[k]`` for the ``k``-th listed cap).
+
+        >>> design = MotorDesign.from_packings(
+        ...     rotor="truncated-icosahedron", rotor_refine=1, stator="truncated-cuboctahedron", stator_refine=1,
+        ...     stator_axis=[0, 0, -1], cap_half_angle=math.radians(80), sphere_diameter="12 in",
+        ...     magnet_diameter="1 in", magnet_length="0.5 in", coil_diameter="2 in", coil_length="1.625 in",
+        ...     air_gap="0.005 in")
+        >>> len(design.rotor), len(design.stator)
+        (92, 29)
+        """
+        sizes = dict(sphere_diameter=sphere_diameter, magnet_diameter=magnet_diameter, magnet_length=magnet_length,
+                     coil_diameter=coil_diameter, coil_length=coil_length, air_gap=air_gap)
+        sizes = {k: length(v, k, allow_zero=k == "air_gap") if isinstance(v, str) else v for k, v in sizes.items()}
+        _check_dimensions(sizes)
+        axis = _stator_axis(stator_axis)
+        _check_cap(cap_half_angle, options.get("allow_hemisphere", False))
+        rotor_packing = _packing(rotor, rotor_refine, "rotor")
+        if isinstance(polarity, dict):
+            polarity = PolarityRule(**polarity)
+        if isinstance(polarity, PolarityRule):
+            if isinstance(rotor, str):
+                base = len(pk.named(rotor, 0))
+            elif rotor.name in pk.names() and len(pk.named(rotor.name, 0)) <= len(rotor):
+                base = len(pk.named(rotor.name, 0))
+            else:
+                raise bad_value("polarity", "one +1/-1 per pole for a rotor that is not a named packing",
+                                polarity)
+            polarity = polarity.signs(len(rotor_packing), base)
+        full = _packing(stator, stator_refine, "stator")
+        coil_angle = disc_angle(sizes["coil_diameter"], 0.5 * sizes["sphere_diameter"] + sizes["air_gap"])
+        if isinstance(coils, str) and coils == "fit":
+            chosen = full.within_cap(axis, cap_half_angle, min_radius=coil_angle)
+            if len(chosen) == 0:
+                raise bad_value("coils", f"'fit' selecting at least one cap of {full.label}: none within the cap is "
+                                f"as wide as a coil ({math.degrees(coil_angle):.3g}°); widen the cap, use smaller "
+                                "coils or another packing", "no cap")
+        elif isinstance(coils, str) and coils == "all":
+            chosen = full
+        elif isinstance(coils, str):
+            raise bad_value("coils", "'fit', 'all' or a list of cap indices", coils)
+        else:
+            chosen = full.subset(coils, name="coils")
+        design = cls(rotor=rotor_packing, polarity=polarity, stator=chosen, stator_axis=axis,
+                     cap_half_angle=cap_half_angle, **sizes, **options)
+        if check_fit:
+            check_fits(design)
+        return design
 
     # --- design files ---------------------------------------------------------------------------------
     @classmethod
     def load(cls, path) -> "MotorDesign":
-        """Read a design file, YAML or ``.toml`` (see :mod:`spherestep.design_file`)."""
-        from ..design_file import load
+        """Read a design file, YAML or ``.toml`` (see :mod:`spherestep.design_file`); DesignFileError naming
+        the file's field otherwise."""
+        from .. import design_file  # pydantic and YAML only when a file is read (design_file never imports motor)
 
-        return load(path)
+        return design_file.build(design_file.read(path), cls)
+
+    @classmethod
+    def loads(cls, text: str, fmt: str = "yaml", source: str = "<design>") -> "MotorDesign":
+        """The design written in ``text`` (``fmt`` 'yaml' or 'toml'; ``source`` names it in errors)."""
+        from .. import design_file
+
+        return design_file.build(design_file.parse(text, fmt, source), cls)
+
+    def dumps(self) -> str:
+        """This design as the YAML text of a design file (checked to load back)."""
+        from .. import design_file
+
+        return design_file.dumps(self)
 
     def save(self, path):
         """Write this design to a YAML design file, atomically; returns the path."""
-        from ..design_file import save
+        from .. import design_file
 
-        return save(self, path)
+        return design_file.save(self, path)
 
     # --- geometry -------------------------------------------------------------------------------------
     @property
@@ -133,12 +267,12 @@ class MotorDesign:
     @property
     def magnet_angle(self) -> float:
         """Angular radius (rad) of a rotor magnet's face seen from the centre: ``atan(d_m / 2 / R)``."""
-        return math.atan(0.5 * self.magnet_diameter / self.radius)
+        return disc_angle(self.magnet_diameter, self.radius)
 
     @property
     def coil_angle(self) -> float:
         """Angular radius (rad) of a coil face at ``R + gap`` seen from the centre: ``atan(d_c / 2 / (R + g))``."""
-        return math.atan(0.5 * self.coil_diameter / (self.radius + self.air_gap))
+        return disc_angle(self.coil_diameter, self.radius + self.air_gap)
 
     @property
     def state_tol(self) -> float:
@@ -216,15 +350,20 @@ class MotorDesign:
 
 
 def check_fits(design: MotorDesign) -> None:
-    """Raise InputError when magnets or coils overlap physically (their faces closer than their sizes)."""
+    """Raise InputError (``field`` 'rotor' or 'stator') when magnets or coils overlap physically: two centres
+    closer than the angular size of their faces."""
     from ..packing.core import arc_from_chord
 
-    for label, pk, half in (("rotor", design.rotor, design.magnet_angle), ("stator", design.stator, design.coil_angle)):
-        if len(pk) < 2:
+    for label, part, packing_, half in (("rotor", "magnet", design.rotor, design.magnet_angle),
+                                        ("stator", "coil", design.stator, design.coil_angle)):
+        if len(packing_) < 2:
             continue
-        dist, idx = pk.tree.query(pk.centers, k=2)
+        dist, idx = packing_.tree.query(packing_.centers, k=2)
         sep = arc_from_chord(dist[:, 1])
         k = int(np.argmin(sep))
         if sep[k] < 2 * half - 1e-12:
-            raise InputError(f"{label} poles {k} and {int(idx[k, 1])} overlap: centres {np.degrees(sep[k]):.3f}° "
-                             f"apart but each face spans {np.degrees(half):.3f}°; use smaller parts or fewer poles")
+            error = InputError(f"{label} poles {k} and {int(idx[k, 1])} overlap: centres {np.degrees(sep[k]):.3f}° "
+                               f"apart but each face spans {np.degrees(half):.3f}°; use smaller parts "
+                               f"({part}_diameter) or fewer poles")
+            error.field = label
+            raise error

@@ -19,41 +19,19 @@ from __future__ import annotations
 
 import math
 
-import numpy as np
-
-from .. import packing as pk
-from ..units import length
-from .design import MotorDesign
+from .design import MotorDesign, PolarityRule
 
 ROTOR_PACKING = "truncated-icosahedron"
 STATOR_PACKING = "truncated-cuboctahedron"
 CAP_HALF_ANGLE_DEG = 80.0
 
 
-def stator_in_cap(stator: pk.Packing, axis, cap_half_angle: float, min_radius: float = 0.0) -> pk.Packing:
-    """The caps of ``stator`` whose centres lie within ``cap_half_angle`` of ``axis`` and whose radius is at
-    least ``min_radius`` (room for a coil), in the packing's order."""
-    axis = np.asarray(axis, dtype=float)
-    axis = axis / np.linalg.norm(axis)
-    inside = (stator.centers @ axis >= math.cos(cap_half_angle) - 1e-12) & (stator.radii >= min_radius)
-    return pk.Packing(stator.centers[inside], stator.radii[inside], name=stator.name, family=stator.family,
-                      level=stator.level)
-
-
 def prototype() -> MotorDesign:
     """The prototype motor of the paper with the choices of this module's docstring."""
-    rotor = pk.refine(pk.by_name(ROTOR_PACKING), levels=1)
-    base_count = len(pk.by_name(ROTOR_PACKING))
-    polarity = np.where(np.arange(len(rotor)) < base_count, 1, -1)
-    sphere_diameter = length("12 in")
-    air_gap = length("0.005 in")
-    coil_diameter = length("2 in")
-    coil_angle = math.atan(0.5 * coil_diameter / (0.5 * sphere_diameter + air_gap))
-    axis = np.array([0.0, 0.0, -1.0])
-    cap = math.radians(CAP_HALF_ANGLE_DEG)
-    stator = stator_in_cap(pk.refine(pk.by_name(STATOR_PACKING), levels=1), axis, cap, min_radius=coil_angle)
-    return MotorDesign(
-        rotor=rotor, polarity=polarity, stator=stator, stator_axis=axis, cap_half_angle=cap,
-        sphere_diameter=sphere_diameter, magnet_diameter=length("1 in"), magnet_length=length("0.5 in"),
-        coil_diameter=coil_diameter, coil_length=length("1.625 in"), air_gap=air_gap, name="prototype",
+    return MotorDesign.from_packings(
+        rotor=ROTOR_PACKING, rotor_refine=1, polarity=PolarityRule(primary=1, filled=-1),
+        stator=STATOR_PACKING, stator_refine=1, stator_axis=[0.0, 0.0, -1.0],
+        cap_half_angle=math.radians(CAP_HALF_ANGLE_DEG), coils="fit",
+        sphere_diameter="12 in", magnet_diameter="1 in", magnet_length="0.5 in", coil_diameter="2 in",
+        coil_length="1.625 in", air_gap="0.005 in", name="prototype",
     )

@@ -1,5 +1,9 @@
 """Circle packings on the sphere: Platonic, the 21 semiregular ones, recursive refinement (Sec. II-B)."""
 
+import functools
+
+import numpy as np
+
 from ..errors import bad_value
 from .congruence import aligning_rotations, congruent, distinct, symmetry_rotations
 from .core import Packing
@@ -9,7 +13,7 @@ from .wythoff import CONSTRUCTIONS, NAMES, fundamental_triangle, reflection_grou
 
 __all__ = [
     "CONSTRUCTIONS", "NAMES", "PLATONIC", "Packing", "aligning_rotations", "by_name", "congruent", "distinct",
-    "fill_holes", "fundamental_triangle", "holes", "names", "platonic", "reflection_group", "refine",
+    "fill_holes", "fundamental_triangle", "holes", "named", "names", "platonic", "reflection_group", "refine",
     "semiregular", "symmetry_rotations", "wythoff",
 ]
 
@@ -25,3 +29,18 @@ def by_name(name: str) -> Packing:
         if name in family_names:
             return wythoff(family, CONSTRUCTIONS[family_names.index(name)])
     raise bad_value("packing name", f"one of {', '.join(names())}", name)
+
+
+def named(name: str, level: int = 0) -> Packing:
+    """The base packing ``name`` refined ``level`` times, ``refine(by_name(name), levels=level)``, computed once
+    per process (packings are immutable, so every caller shares the same object)."""
+    if not isinstance(name, str) or name not in names():
+        raise bad_value("packing name", f"one of {', '.join(names())}", name)
+    if isinstance(level, bool) or not isinstance(level, (int, np.integer)) or level < 0:
+        raise bad_value("level", "a non-negative integer number of refinement levels", level)
+    return _named(name, int(level))
+
+
+@functools.lru_cache(maxsize=None)
+def _named(name: str, level: int) -> Packing:
+    return refine(by_name(name), levels=level)

@@ -14,7 +14,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from ..errors import InputError, bad_value
-from ..sphere import _as_points, _as_radii, cap_area
+from ..sphere import as_points, as_radii, cap_area
 
 CONTACT_TOL = 1e-9
 
@@ -42,10 +42,10 @@ class Packing:
     _tree: cKDTree = field(init=False, repr=False, compare=False)
 
     def __post_init__(self):
-        centers = _as_points(self.centers, "centers", min_ndim=2)
+        centers = as_points(self.centers, "centers", min_ndim=2)
         if centers.ndim != 2:
             raise bad_value("centers", "an array of shape (N, 3)", f"shape {centers.shape}")
-        radii = _as_radii(np.broadcast_to(self.radii, centers.shape[:1]).copy(), "radii")
+        radii = as_radii(np.broadcast_to(self.radii, centers.shape[:1]).copy(), "radii")
         if self.family not in (None, "T", "O", "I"):
             raise bad_value("family", "'T', 'O', 'I' or None", self.family)
         norm = np.linalg.norm(centers, axis=1, keepdims=True)
@@ -71,6 +71,36 @@ class Packing:
     def tree(self) -> cKDTree:
         """KD-tree on the centres (built once)."""
         return self._tree
+
+    def subset(self, indices, name: str = "indices") -> "Packing":
+        """The caps ``indices`` (in that order), keeping name, family and level; InputError naming ``name``
+        for an index out of range or repeated (``field`` is ``name[k]``)."""
+        idx = np.asarray(indices)
+        if idx.ndim != 1 or (idx.size and not np.issubdtype(idx.dtype, np.integer)):
+            raise bad_value(name, "a list of cap indices", indices)
+        for k, i in enumerate(idx.tolist()):
+            if not 0 <= i < len(self):
+                raise bad_value(f"{name}[{k}]", f"a cap index 0..{len(self) - 1} of {self.label}", i)
+        unique, first = np.unique(idx, return_index=True)
+        if len(unique) != len(idx):
+            k = int(np.setdiff1d(np.arange(len(idx)), first)[0])
+            raise bad_value(f"{name}[{k}]", f"a cap not listed before (cap {int(idx[k])} repeats; list each cap "
+                            "once)", int(idx[k]))
+        return Packing(self.centers[idx], self.radii[idx], name=self.name, family=self.family, level=self.level)
+
+    def within_cap(self, axis, half_angle: float, min_radius: float = 0.0) -> "Packing":
+        """The caps whose centres lie within ``half_angle`` (rad) of the unit vector ``axis``
+        (``c · axis ≥ cos half_angle − 1e-12``) and whose radius is at least ``min_radius`` (room for a part),
+        in this packing's order, keeping name, family and level."""
+        axis = as_points(axis, "axis")
+        if axis.shape != (3,):
+            raise bad_value("axis", "one unit 3-vector", f"shape {axis.shape}")
+        axis = axis / np.linalg.norm(axis)
+        if isinstance(half_angle, bool) or not isinstance(half_angle, (int, float)) or not 0 <= half_angle <= np.pi:
+            raise bad_value("half_angle", "an angle in [0, π] radians", half_angle)
+        inside = (self.centers @ axis >= np.cos(half_angle) - 1e-12) & (self.radii >= min_radius)
+        return Packing(self.centers[inside], self.radii[inside], name=self.name, family=self.family,
+                       level=self.level)
 
     # --- metrics -------------------------------------------------------------------------------------
     def neighbour_pairs(self, slack: float = 0.0) -> tuple[np.ndarray, np.ndarray]:

@@ -1,0 +1,103 @@
+"""Quantities with units in design files: ``"12 in"``, ``"80 deg"``, ``"1.32 T"`` → SI, and back.
+
+Reading requires the unit (a bare number is refused, so a file never mixes metres and inches silently); the
+length units are :data:`spherestep.units.METRES_PER_UNIT`. Writing gives the shortest decimal that converts
+back to the same float, so a saved design loads back bit for bit. The parsers raise ``ValueError`` with a
+message saying what was expected (the schema turns it into a :class:`DesignFileError` naming the field).
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from typing import Any
+
+from ..units import METRES_PER_UNIT
+
+LENGTH_UNITS = METRES_PER_UNIT
+ANGLE_UNITS = ("deg", "°", "rad")
+TESLA_UNITS = {"T": 1.0, "mT": 1e-3}
+_QUANTITY = re.compile(r"^\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*(\S*)\s*$")
+
+
+def show(value: Any) -> str:
+    text = repr(value)
+    return text if len(text) <= 60 else text[:57] + "..."
+
+
+# --- quantities with units ---------------------------------------------------------------------------------
+
+def split_quantity(value: Any, what: str, example: str) -> tuple[float, str]:
+    """``(number, unit)`` of a string like ``"12 in"``; ValueError saying what was expected otherwise."""
+    match = _QUANTITY.match(value) if isinstance(value, str) else None
+    if match is None or not match.group(2):
+        raise ValueError(f"must be {what} with its unit, like {example!r}; instead received {show(value)}")
+    return float(match.group(1)), match.group(2)
+
+
+def parse_length(value: Any, *, allow_zero: bool = False) -> float:
+    number, unit = split_quantity(value, "a length", "12 in")
+    unit = unit.lower()
+    if unit not in LENGTH_UNITS:
+        raise ValueError(f"must be a length with unit one of m, cm, mm, um, in, ft, like '12 in'; instead received "
+                         f"{show(value)}")
+    metres = number * LENGTH_UNITS[unit]
+    if not math.isfinite(metres) or metres < 0 or (metres == 0 and not allow_zero):
+        raise ValueError(f"must be a finite {'non-negative' if allow_zero else 'positive'} length; "
+                         f"instead received {show(value)}")
+    return metres
+
+
+def parse_angle(value: Any) -> float:
+    number, unit = split_quantity(value, "an angle", "80 deg")
+    unit = unit.lower()
+    if unit not in ANGLE_UNITS:
+        raise ValueError(f"must be an angle with unit deg or rad, like '80 deg'; instead received {show(value)}")
+    radians = number if unit == "rad" else math.radians(number)
+    if not math.isfinite(radians):
+        raise ValueError(f"must be a finite angle; instead received {show(value)}")
+    return radians
+
+
+def parse_tesla(value: Any) -> float:
+    if isinstance(value, (int, float)) and not isinstance(value, bool):
+        tesla = float(value)
+    else:
+        number, unit = split_quantity(value, "a flux density", "1.32 T")
+        if unit not in TESLA_UNITS:
+            raise ValueError(f"must be a flux density in T or mT, like '1.32 T'; instead received {show(value)}")
+        tesla = number * TESLA_UNITS[unit]
+    if not (math.isfinite(tesla) and tesla > 0):
+        raise ValueError(f"must be a finite positive flux density, like '1.32 T'; instead received {show(value)}")
+    return tesla
+
+
+def _shortest(guess: float, target: float, back) -> str | None:
+    """The shortest decimal ``text`` of ``guess`` with ``back(float(text)) == target`` exactly, or None."""
+    for digits in range(1, 18):
+        text = repr(float(f"{guess:.{digits}g}")).removesuffix(".0")
+        if back(float(text)) == target:
+            return text
+    return None
+
+
+def length_text(metres: float) -> str:
+    """``metres`` as the shortest exact string in inches, millimetres or metres (``"12 in"``)."""
+    for unit in ("in", "mm", "m"):
+        factor = LENGTH_UNITS[unit]
+        text = _shortest(metres / factor, metres, lambda x, f=factor: x * f)
+        if text is not None:
+            return f"{text} {unit}"
+    return f"{metres!r} m"
+
+
+def angle_text(radians: float) -> str:
+    """``radians`` as the shortest exact string in degrees (``"80 deg"``), else in radians."""
+    text = _shortest(math.degrees(radians), radians, math.radians)
+    return f"{text} deg" if text is not None else f"{radians!r} rad"
+
+
+def tesla_text(tesla: float) -> str:
+    """``tesla`` as an exact string ``"1.32 T"``."""
+    return f"{_shortest(tesla, tesla, float)} T"
+
