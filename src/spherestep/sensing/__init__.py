@@ -1,0 +1,32 @@
+"""Orientation from the rotor's own field: magnetometer arrays, estimation on SO(3), symmetry, IMU fusion.
+
+* :mod:`.parts`: datasheet figures (TMAG5273A2 magnetometer, BMI270 + BMM150 IMU).
+* :mod:`.array`: :class:`SensorArray` (positions, axes, part), candidate positions clear of the coils.
+* :mod:`.field`: :class:`FieldTable`, the rotor's field at the sensors from one 1-D table per radius, with
+  its Jacobian on SO(3); :class:`CoilField` and the :class:`KnownField` protocol for subtracted fields.
+* :mod:`.readings`: simulated readings (magpylib, noise, saturation, LSB, current-sense error).
+* :mod:`.estimate`: :class:`Estimator` (Gauss–Newton / Levenberg–Marquardt on SO(3), global start).
+* :mod:`.symmetry`: :func:`symmetry_group`, :func:`marked_design`.
+* :mod:`.placement`: :func:`greedy_placement` (worst-case Fisher information), :func:`accuracy`.
+* :mod:`.imu`: :class:`Imu`, :class:`Mekf`, :class:`ImuSensor`, :class:`FusedSensor`.
+* :mod:`.sensor`: :class:`HallSensor`, :class:`IdealSensor` — ``measure(R_true, currents, R_prev) -> R``.
+"""
+
+from .array import SensorArray, candidate_positions, coil_collisions, fibonacci_directions, radial_frames
+from .estimate import Estimate, Estimator, super_fibonacci
+from .field import CoilField, FieldTable, KnownField, axial_field_table, rotor_field
+from .imu import FusedSensor, Imu, ImuSensor, Mekf, triad
+from .parts import BMI270_BMM150, TMAG5273A2, ImuPart, MagnetometerPart
+from .placement import Accuracy, Placement, accuracy, default_array, greedy_placement, smallest_eigenvalue
+from .readings import actual_currents, sense, true_field
+from .sensor import HallSensor, IdealSensor
+from .symmetry import marked_design, symmetry_group
+
+__all__ = [
+    "Accuracy", "BMI270_BMM150", "CoilField", "Estimate", "Estimator", "FieldTable", "FusedSensor", "HallSensor",
+    "IdealSensor", "Imu", "ImuPart", "ImuSensor", "KnownField", "MagnetometerPart", "Mekf", "Placement",
+    "SensorArray", "TMAG5273A2", "accuracy", "actual_currents", "axial_field_table", "candidate_positions",
+    "coil_collisions", "default_array", "fibonacci_directions", "greedy_placement", "marked_design",
+    "radial_frames", "rotor_field", "sense", "smallest_eigenvalue", "super_fibonacci", "symmetry_group",
+    "triad", "true_field",
+]

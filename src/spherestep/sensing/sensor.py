@@ -1,0 +1,78 @@
+"""Sensors for the servo loop: ``measure(R_true, currents, R_prev) -> R_estimate``.
+
+* :class:`HallSensor`: the stator's magnetometer array and the SO(3) estimator (readings simulated from the
+  true orientation and the currents that flow; the estimate tracks from ``R_prev`` by one Gauss–Newton step,
+  or starts globally when there is no ``R_prev``).
+* :class:`IdealSensor`: returns the true orientation (the reference).
+
+The IMU alternatives (:class:`~spherestep.sensing.imu.ImuSensor`, :class:`~spherestep.sensing.imu.FusedSensor`)
+have the same ``measure`` plus the time step they need for their gyro.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .. import so3
+from ..errors import bad_value
+from .array import SensorArray
+from .estimate import Estimate, Estimator
+from .field import CoilField, FieldTable
+from .readings import actual_currents, sense
+
+
+class IdealSensor:
+    """The true orientation, as if measured perfectly."""
+
+    def measure(self, R_true, currents=None, R_prev=None) -> np.ndarray:
+        return so3.as_rotations(R_true, "R_true").reshape(3, 3).copy()
+
+
+class HallSensor:
+    """Magnetometer array + estimator for ``design`` (module doc).
+
+    ``array``: a :class:`SensorArray` (default :func:`spherestep.sensing.default_array`); ``known``: extra known
+    fields beside the coils (e.g. an iron model's); ``current_error``: RMS relative error of the currents the
+    controller believes flow (the coil-field subtraction's residual); ``truth``: ``"table"`` simulates the
+    rotor's field with the estimator's table (max error 1e-7 T, fast for loops) or ``"magpylib"``;
+    ``iterations``: Gauss–Newton steps per update; ``seed``: noise."""
+
+    def __init__(self, design, array: SensorArray | None = None, known=(), current_error: float = 0.0,
+                 truth: str = "table", iterations: int = 1, seed=None):
+        from .placement import default_array
+        if truth not in ("table", "magpylib"):
+            raise bad_value("truth", "'table' or 'magpylib'", truth)
+        self.design = design
+        self.array = array if array is not None else default_array(design)
+        self.array.check_fits(design)
+        self.coils = CoilField.build(design, self.array.positions)
+        self.table = FieldTable.build(design, self.array.positions)
+        self.estimator = Estimator(self.table, self.array.axes, self.array.part, (self.coils, *known))
+        self.current_error = current_error
+        self.truth = truth
+        self.iterations = int(iterations)
+        self.rng = np.random.default_rng(seed)
+        self.last: Estimate | None = None
+
+    def readings(self, R_true, currents=None) -> np.ndarray:
+        """One set of readings ``(S, 3)`` for the true orientation and the commanded currents."""
+        R = np.asarray(R_true, dtype=float)
+        if R.shape != (3, 3):
+            raise bad_value("R_true", "one rotation matrix (3, 3)", f"shape {R.shape}")
+        if self.truth == "table":
+            B = self.table.field(R)
+        else:
+            from .field import rotor_field
+            B = rotor_field(self.design, self.array.positions, R)[0]
+        if currents is not None:
+            B = B + self.coils.field(actual_currents(currents, self.current_error, self.rng))
+        return sense(self.array, B, self.rng)
+
+    def measure(self, R_true, currents=None, R_prev=None) -> np.ndarray:
+        """The estimated orientation ``(3, 3)`` from one set of readings."""
+        m = self.readings(R_true, currents)
+        if R_prev is None:
+            self.last = self.estimator.initialise(m, currents)
+        else:
+            self.last = self.estimator.track(m, R_prev, currents, self.iterations)
+        return self.last.R

@@ -1,0 +1,71 @@
+"""The rotor's symmetry, which its field cannot see through, and the marker that breaks it.
+
+A rotation ``g`` (body frame) with ``g u_j = u_{π(j)}`` and ``p_{π(j)} = p_j`` for every pole maps the rotor's
+magnets onto themselves (each magnet is axisymmetric about its own radius), so the rotor at ``R g`` is the same
+object as at ``R`` and every field reading is identical: orientations are determined only up to the group
+``{g}``. :func:`symmetry_group` finds it (for the prototype: the 60 rotations of the icosahedron). The fix
+offered here, :func:`marked_design`, reverses the polarity of one pole with a trivial stabiliser (a pole of the
+primary, 60-member orbit), which leaves no symmetry; tracking from a known start is the other option (the
+nearest copy is 72° away for the icosahedral group, so a tracking loop never jumps to it).
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+
+from ..errors import bad_value
+
+
+def _frame(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Orthonormal frame (columns) from two non-parallel unit vectors: ``a``, ``(a × b)/|…|``, and their cross."""
+    e2 = np.cross(a, b)
+    e2 /= np.linalg.norm(e2)
+    return np.stack([a, e2, np.cross(a, e2)], axis=1)
+
+
+def symmetry_group(design, tol: float = 1e-6) -> np.ndarray:
+    """Rotations ``g (G, 3, 3)`` (body frame) mapping every pole onto a pole of the same polarity, identity
+    first. Candidates map pole 0 and its nearest non-antipodal neighbour onto every pole pair at the same
+    angle; a candidate is kept if every pole lands within ``tol`` of a like pole."""
+    u, p = design.rotor.centers, np.asarray(design.polarity)
+    dots = u @ u[0]
+    dots[0] = -2.0
+    j = int(np.argmax(np.where(np.abs(dots) < 1 - 1e-9, dots, -2.0)))
+    F0 = _frame(u[0], u[j])
+    found = []
+    pair = u @ u.T
+    for a in np.nonzero(p == p[0])[0]:
+        for b in np.nonzero((np.abs(pair[a] - u[0] @ u[j]) < 1e-9) & (p == p[j]))[0]:
+            if a == b:
+                continue
+            g = _frame(u[a], u[b]) @ F0.T
+            image = u @ g.T
+            nearest = np.argmax(image @ u.T, axis=1)
+            if np.all(np.linalg.norm(image - u[nearest], axis=1) < tol) and np.all(p[nearest] == p):
+                if not any(np.abs(g - h).max() < 1e-9 for h in found):
+                    found.append(g)
+    G = np.stack(found)
+    order = np.argsort(np.abs(G - np.eye(3)).max(axis=(1, 2)))
+    return G[order]
+
+
+def marked_design(design, pole: int | None = None):
+    """``design`` with the polarity of ``pole`` reversed (default: the first pole whose stabiliser in the
+    symmetry group is trivial), named ``<name>-marked``; its symmetry group is then the identity alone."""
+    G = symmetry_group(design)
+    u = design.rotor.centers
+    if pole is None:
+        counts = np.zeros(len(u), int)
+        for g in G[1:]:
+            counts += np.linalg.norm(u @ g.T - u, axis=1) < 1e-6
+        free = np.nonzero(counts == 0)[0]
+        if not len(free):
+            raise bad_value("pole", "a pole to mark (this rotor has no pole with a trivial stabiliser)", None)
+        pole = int(free[0])
+    if isinstance(pole, bool) or not isinstance(pole, (int, np.integer)) or not 0 <= pole < len(u):
+        raise bad_value("pole", f"a pole index in [0, {len(u) - 1}]", pole)
+    polarity = np.array(design.polarity, copy=True)
+    polarity[pole] = -polarity[pole]
+    return replace(design, polarity=polarity, name=f"{design.name}-marked")
