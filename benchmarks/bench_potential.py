@@ -1,26 +1,34 @@
-"""Timings of spherestep.potential for the prototype, measured side by side in one run (medians of repeats).
+"""Timings of spherestep.potential for the prototype: the exact forms, the fast path and ducc0, side by side.
 
-Run: ``.venv/bin/python benchmarks/bench_potential.py``. Rows: the energy of eq. (4) in the harmonic form
-(Plancherel with the corrected eq. (16)), in the pairwise form, the torque, energy and torque together, the
-Hessian, and brute-force quadrature over the sphere (the baseline: what eq. (4) costs without the paper's
-harmonic analysis); batches of 1000 orientations, with a state's 4 coils energised and with random currents on
-all 29 coils. Quadrature runs on 5 orientations and is scaled to 1000. ``ratio`` is quadrature time / row time,
-``max rel diff`` the largest relative difference from the quadrature on the common orientations. Also: single
-calls (the latency a simulation step sees), equilibria, and the energy on the full SO(3) grid.
+Run: ``.venv/bin/python benchmarks/bench_potential.py`` (``OPENBLAS_NUM_THREADS=1`` recommended on a shared
+machine; the header prints it).
 
-BLAS threads matter for the harmonic form (many small matrix products): the header prints
-``OPENBLAS_NUM_THREADS``; on a loaded 2-core machine one thread is several times faster.
+Table (batches of 1000 random orientations, random currents on all 29 coils and a state's 4 coils): the energy
+of eq. (4) in the harmonic form (Plancherel with the corrected eq. (16)), the pairwise form (energy, energy +
+torque, energy + torque + Hessian, the torque matrix ``K(R)``), the same through the fast path (the rotor
+function ``F`` at the coils' body-frame directions, :mod:`spherestep.rotor_field`), and the anchor: ducc0's
+``synthesis_general`` of ``F`` alone at the same points (library time only, positions precomputed).
+``vs ducc0`` is row time / anchor time, ``vs exact`` the matching exact row's time / row time, ``max rel diff``
+the largest difference from the exact pairwise form (energy: relative; torque: relative to the torque
+reference; ``K``: relative to its peak). Quadrature over the sphere (the brute-force baseline) runs on 5
+orientations and is scaled to 1000.
+
+Then single calls (the latency a simulation step sees), ducc0 with 1 and 2 threads and BLAS with 1 and 2
+threads, equilibria of 10⁴ starts, the potential planner (steps/s over one 360° turn) and the dynamics
+(multiples of real time at the tuned step), each with the fast path and the exact forms.
 """
 
 from __future__ import annotations
 
 import datetime
+import math
 import os
 import platform
 import time
 
 import numpy as np
 import scipy
+from threadpoolctl import threadpool_limits
 
 from _timing import median_seconds
 from spherestep import so3
@@ -28,10 +36,24 @@ from spherestep.motor import prototype
 from spherestep.potential import MotorPotential, coil_currents
 from spherestep.statics import equilibrium
 
+K = 1000
 
-def repeat_single(func, R, c, count: int = 2000):
+
+def repeat_single(func, R, c, count: int = 300):
     for i in range(count):
         func(R[i % len(R)], c)
+
+
+def anchor(model: MotorPotential, R: np.ndarray, c: np.ndarray):
+    """ducc0's synthesis of ``F`` at the energised coils' body-frame directions (positions precomputed)."""
+    from ducc0.sht import synthesis_general
+
+    field = model.rotor_field
+    x = (model.coils[np.flatnonzero(c)] @ R).reshape(-1, 3)
+    phi = np.arctan2(x[:, 1], x[:, 0])
+    loc = np.stack([np.arccos(np.clip(x[:, 2], -1, 1)), np.where(phi < 0, phi + 2 * np.pi, phi)], axis=-1)
+    return lambda: synthesis_general(alm=field.alm, spin=0, lmax=field.lmax, loc=loc, epsilon=field.epsilon,
+                                     nthreads=field.nthreads)
 
 
 def main() -> None:
@@ -39,51 +61,145 @@ def main() -> None:
     design = prototype()
     states = design.states()
     start = time.perf_counter()
-    model = MotorPotential(design)
+    fast = MotorPotential(design)
+    fast.rotor_field  # noqa: B018  (built on first use; timed with the model)
     build = time.perf_counter() - start
-    K = 1000
+    exact = MotorPotential(design, fast=False)
     R = so3.random(K, rng)
-    few = 5
-    currents = {
-        "state 0 (4 coils)": coil_currents(design, states.coils(0)),
-        "random, 29 coils": rng.uniform(-1.0, 1.0, len(design.stator)),
-    }
+    currents = {"29 coils": rng.uniform(-1.0, 1.0, len(design.stator)),
+                "4 coils": coil_currents(design, states.coils(0))}
     rows = []
     for label, c in currents.items():
-        quadrature = median_seconds(1, model.energy_quadrature, R[:few], c) * K / few
-        reference = model.energy_quadrature(R[:few], c)
-        tasks = (("energy (harmonic)", model.energy, 3), ("energy (pairwise)", model.energy_pairwise, 7),
-                 ("torque", model.torque, 7), ("energy + torque", model.energy_and_torque, 7),
-                 ("Hessian", model.hessian, 5))
-        for name, func, reps in tasks:
-            seconds = median_seconds(reps, func, R, c)
-            if name.startswith("energy ("):
-                error = float(np.max(np.abs(func(R[:few], c) - reference) / reference))
+        E0, t0, H0 = exact.evaluate_pairwise(R, c, 2)
+        ref = exact.torque_reference(c)
+        anchor_time = median_seconds(5, anchor(fast, R, c))
+        quadrature = median_seconds(1, exact.energy_quadrature, R[:5], c) * K / 5
+        tasks = [
+            ("energy, harmonic (exact)", lambda: exact.energy_harmonic(R, c), None, "E"),
+            ("energy, pairwise (exact)", lambda: exact.energy_pairwise(R, c), None, "E"),
+            ("energy + torque, pairwise (exact)", lambda: exact.evaluate_pairwise(R, c, 1), None, "E"),
+            ("E, τ, Hessian, pairwise (exact)", lambda: exact.evaluate_pairwise(R, c, 2), None, "E"),
+            ("energy, fast", lambda: fast.energy(R, c), "energy, pairwise (exact)", "E"),
+            ("torque, fast", lambda: fast.torque(R, c), "energy + torque, pairwise (exact)", "T"),
+            ("energy + torque, fast", lambda: fast.energy_and_torque(R, c), "energy + torque, pairwise (exact)",
+             "ET"),
+            ("E, τ, Hessian, fast", lambda: fast.evaluate(R, c, 2), "E, τ, Hessian, pairwise (exact)", "ETH"),
+        ]
+        if label == "29 coils":
+            tasks[4:4] = [("K(R), pairwise (exact)", lambda: exact.torque_matrix_pairwise(R), None, "K")]
+            tasks.append(("K(R), fast", lambda: fast.torque_matrix(R), "K(R), pairwise (exact)", "K"))
+        times = {}
+        for name, func, versus, kind in tasks:
+            seconds = median_seconds(3, func)
+            times[name] = seconds
+            out = func()
+            if kind == "E":
+                diff = np.max(np.abs((out[0] if isinstance(out, tuple) else out) - E0) / np.abs(E0))
+            elif kind == "T":
+                diff = np.max(np.linalg.norm(out - t0, axis=-1) / ref)
+            elif kind in ("ET", "ETH"):
+                diff = max(np.max(np.abs(out[0] - E0) / np.abs(E0)), np.max(np.linalg.norm(out[1] - t0, axis=-1) / ref))
+                if kind == "ETH":
+                    diff = max(diff, np.max(np.abs(out[2] - H0)) / np.max(np.abs(H0)))
             else:
-                error = float("nan")
-            rows.append((f"{name}, {label}", seconds, quadrature, error))
-        rows.append((f"energy (quadrature), {label}", quadrature, quadrature, 0.0))
+                K0 = exact.torque_matrix_pairwise(R)
+                diff = np.max(np.abs(out - K0)) / np.max(np.abs(K0))
+            ratio = times[versus] / seconds if versus else float("nan")
+            rows.append((f"{name}, {label}", seconds, seconds / anchor_time, ratio, diff))
+        rows.append((f"ducc0 synthesis of F (anchor), {label}", anchor_time, 1.0, float("nan"), float("nan")))
+        rows.append((f"quadrature (5 orientations, scaled), {label}", quadrature, quadrature / anchor_time,
+                     float("nan"), float("nan")))
 
-    c4 = currents["state 0 (4 coils)"]
-    single = median_seconds(3, repeat_single, model.energy_and_torque, R, c4) / 2000
-    starts = states.rotations[:200]
-    cs = np.stack([coil_currents(design, states.coils(i)) for i in range(200)])
-    eq_time = median_seconds(3, equilibrium, model, starts, cs)
-    grid_time = median_seconds(1, model.energy_grid, c4)
+    c4, c29 = currents["4 coils"], currents["29 coils"]
+    single = [(f"single call {what}, {label}", median_seconds(3, repeat_single, func, R, c) / 300)
+              for label, c in (("4 coils", c4), ("29 coils", c29))
+              for what, func in (("energy + torque, fast", fast.energy_and_torque),
+                                 ("energy + torque, pairwise", lambda r, cc: exact.evaluate_pairwise(r, cc, 1)),
+                                 ("torque, fast", fast.torque),
+                                 ("E, τ, Hessian, fast", lambda r, cc: fast.evaluate(r, cc, 2)))]
 
-    threads = os.environ.get("OPENBLAS_NUM_THREADS", "unset")
+    two = MotorPotential(design, nthreads=2)
+    threads = [("ducc0 1 thread, energy + torque, 29 coils", median_seconds(3, fast.energy_and_torque, R, c29)),
+               ("ducc0 2 threads, energy + torque, 29 coils", median_seconds(3, two.energy_and_torque, R, c29))]
+    for n in (1, 2):
+        with threadpool_limits(limits=n, user_api="blas"):
+            threads.append((f"BLAS {n} thread(s), harmonic energy (exact), 29 coils",
+                            median_seconds(3, exact.energy_harmonic, R, c29)))
+            threads.append((f"BLAS {n} thread(s), E, τ, Hessian fast, 29 coils",
+                            median_seconds(3, fast.evaluate, R, c29, 2)))
+
+    # equilibria of 10⁴ starts: every state's coils, the start turned 2° off the state
+    count = 10_000
+    pick = rng.integers(len(states), size=count)
+    starts = so3.exp(np.radians(2.0) * _unit(rng, count)) @ states.rotations[pick]
+    table = np.stack([coil_currents(design, states.coils(i)) for i in range(len(states))])
+    cs = table[pick]
+    eq_fast = median_seconds(1, equilibrium, fast, starts, cs)
+    eq_exact = median_seconds(1, equilibrium, exact, starts[:1000], cs[:1000]) * count / 1000
+    converged = float(np.mean(equilibrium(fast, starts, cs).converged))
+
+    planner = {name: _planner(design, model) for name, model in (("fast", fast), ("exact", exact))}
+    dynamics = {name: _dynamics(design, model) for name, model in (("fast", fast), ("exact", exact))}
+
     print(f"spherestep.potential benchmarks — {datetime.date.today()}, {platform.machine()}, {os.cpu_count()} cores, "
-          f"load average {os.getloadavg()[0]:.1f}, OPENBLAS_NUM_THREADS={threads}, "
-          f"Python {platform.python_version()}, NumPy {np.__version__}, SciPy {scipy.__version__}")
-    print(f"prototype: {len(design.rotor)} poles, {len(design.stator)} coils, band limit L = {model.bandlimit}, "
-          f"model built in {build:.2f} s; kernel table {model.kernel.intervals} intervals")
-    print(f"{'task (1000 orientations)':<46} {'ms':>9} {'per second':>11} {'vs quadrature':>14} {'max rel diff':>13}")
-    for task, seconds, quadrature, error in rows:
-        print(f"{task:<46} {seconds * 1e3:>9.1f} {K / seconds:>11.0f} {quadrature / seconds:>13.0f}x {error:>13.1e}")
-    print(f"{'single call energy + torque, 4 coils':<46} {single * 1e6:>8.0f}µs {1 / single:>11.0f}")
-    print(f"{'equilibrium, 200 states (batched Newton)':<46} {eq_time * 1e3:>9.1f} {200 / eq_time:>11.0f}")
-    print(f"{'energy_grid, L = 68 (137 × 69 × 137 rotations)':<46} {grid_time * 1e3:>9.1f} "
-          f"{137 * 69 * 137 / grid_time:>11.0f}")
+          f"load average {os.getloadavg()[0]:.1f}, OPENBLAS_NUM_THREADS="
+          f"{os.environ.get('OPENBLAS_NUM_THREADS', 'unset')}, Python {platform.python_version()}, "
+          f"NumPy {np.__version__}, SciPy {scipy.__version__}, ducc0 {_ducc0_version()}")
+    print(f"prototype: {len(design.rotor)} poles, {len(design.stator)} coils, band limit L = {fast.bandlimit}, "
+          f"model + rotor function built in {build:.2f} s; ducc0 epsilon {fast.rotor_field.epsilon:g}, "
+          f"direct sum below {fast.rotor_field.direct_below} points")
+    print(f"{'task (1000 orientations)':<52} {'µs/orient.':>10} {'per second':>11} {'vs ducc0':>9} "
+          f"{'vs exact':>9} {'max rel diff':>13}")
+    for task, seconds, vs_anchor, vs_exact, diff in rows:
+        print(f"{task:<52} {seconds / K * 1e6:>10.2f} {K / seconds:>11.0f} {vs_anchor:>8.2f}x {vs_exact:>8.1f}x "
+              f"{diff:>13.1e}")
+    for task, seconds in single:
+        print(f"{task:<52} {seconds * 1e6:>9.0f}µs {1 / seconds:>11.0f}")
+    for task, seconds in threads:
+        print(f"{task:<52} {seconds / K * 1e6:>10.2f} {K / seconds:>11.0f}")
+    print(f"{'equilibria of 10⁴ starts, fast':<52} {eq_fast:>9.2f}s {count / eq_fast:>11.0f}  "
+          f"({100 * converged:.1f} % converged)")
+    print(f"{'equilibria of 10⁴ starts, exact (1000 run, scaled)':<52} {eq_exact:>9.2f}s {count / eq_exact:>11.0f}")
+    for name in ("fast", "exact"):
+        print(f"{'potential planner, 360° turn, ' + name:<52} {planner[name]:>8.0f} steps/s")
+    for name in ("fast", "exact"):
+        dt, factor = dynamics[name]
+        print(f"{'dynamics at the tuned step, ' + name:<52} {factor:>8.1f}x real time (dt {1e3 * dt:.2f} ms)")
+
+
+def _unit(rng, count):
+    v = rng.normal(size=(count, 3))
+    return v / np.linalg.norm(v, axis=1, keepdims=True)
+
+
+def _planner(design, model) -> float:
+    from spherestep.commutation import about_axis, plan_potential, steps_for
+
+    states = design.states()
+    T = about_axis([1.0, 2.0, 3.0], 2 * math.pi, steps_for(2 * math.pi, 0.5 * design.max_step),
+                   start=states.rotations[0])
+    start = time.perf_counter()
+    plan = plan_potential(design, T, model)
+    return (len(plan.steps) - 1) / (time.perf_counter() - start)
+
+
+def _dynamics(design, model) -> tuple[float, float]:
+    from spherestep.dynamics import Integrator, currents_of, tune
+
+    states = design.states()
+    tuning = tune(design, model)
+    c = currents_of(states.coils(0), len(design.stator))
+    R0 = so3.exp(np.radians([3.0, 0.0, 0.0])) @ states.rotations[0]
+    duration = 0.5
+    start = time.perf_counter()
+    Integrator(model, tuning.rotor, tuning.dt).run(R0, np.zeros(3), c, duration, record_every=10)
+    return tuning.dt, duration / (time.perf_counter() - start)
+
+
+def _ducc0_version() -> str:
+    import ducc0
+
+    return ducc0.__version__
 
 
 if __name__ == "__main__":

@@ -26,7 +26,7 @@ def _unit(rng, n):
 def exact_field(model):
     """The prototype's rotor function with the exact Legendre series as the direct kernel."""
     k = model.kernel
-    return RotorField(model.poles, model.polarity, lambda t, order: tuple(k.series(t, i) for i in range(order + 1)),
+    return RotorField(model.poles, model.polarity, lambda t, orders: tuple(k.series(t, n) for n in orders),
                       model.bandlimit, exact=k.value)
 
 
@@ -129,3 +129,33 @@ def test_bad_input(proto, model):
         model.rotor_field.fields(np.array([[0.0, 0.0, 1.0]]), 1, method="fft")
     with pytest.raises(InputError, match="currents"):
         model.torque(np.eye(3), np.ones(3))
+
+
+@pytest.fixture(scope="module")
+def torque_map(proto):
+    from spherestep.magnetics import TorqueMap
+
+    return TorqueMap.build(proto)
+
+
+def test_torque_map_through_the_rotor_function(torque_map):
+    """The map's energy, torque and K(R) through the rotor function equal its pair sums (to rounding); its
+    analytic Hessian matches central differences of the torque; the torque is minus the energy's gradient."""
+    rng = np.random.default_rng(7)
+    R = so3.random(40, rng)
+    c = rng.uniform(-1.0, 1.0, (40, torque_map.coil_count))
+    E, tau, H = torque_map.evaluate(R, c, 2)
+    ref = torque_map.torque_reference(c)
+    assert np.max(np.abs(E - torque_map.energy_pairwise(R, c))) <= 1e-12 * np.max(np.abs(E))
+    assert np.max(np.linalg.norm(tau - torque_map.torque_pairwise(R, c), axis=-1) / ref) <= 1e-12
+    K, K_pair = torque_map.torque_matrix(R), torque_map.torque_matrix_pairwise(R)
+    assert np.max(np.abs(K - K_pair)) <= 1e-12 * np.max(np.abs(K_pair))
+    fd = finite_difference_hessian(torque_map, R, c)
+    assert np.max(np.abs(H - fd)) <= 1e-6 * np.max(np.abs(H))
+    h = 1e-6
+    turns = so3.exp(np.concatenate([h * np.eye(3), -h * np.eye(3)]))
+    Es = torque_map.energy(np.einsum("sab,kbc->ksac", turns, R).reshape(-1, 3, 3), np.repeat(c, 6, axis=0))
+    Es = Es.reshape(-1, 6)
+    assert np.max(np.abs(-(Es[:, :3] - Es[:, 3:]) / (2 * h) - tau)) <= 1e-6 * np.min(ref)
+    single = torque_map.evaluate(R[0], c[0], 2)
+    assert [a.shape for a in single] == [(), (3,), (3, 3)] and torque_map.torque_matrix(R[0]).shape == (3, 29)

@@ -22,8 +22,8 @@ symmetric ``A`` turns the Hessian's ``[x]×ᵀ Hess F [x]×`` into the bracket a
 
 Two evaluators return the same fields (``F``, ``g``, ``Hess F`` at unit vectors ``x``):
 
-* ``"ducc0"``: ``F`` is band-limited (degree ``lmax``: exact for the potential, whose kernel is a Legendre
-  series of degree ``L``; a truncation with a measured error for the map). Its coefficients ``f_lm`` come once
+* ``"ducc0"``: for a band-limited ``F`` (degree ``lmax``: the potential, whose kernel is a Legendre series of
+  degree ``L``, so the representation is exact). Its coefficients ``f_lm`` come once
   from exact samples on a Gauss–Legendre grid (:func:`ducc0.sht.experimental.analysis_2d`). Each call then
   synthesises at the points with :func:`ducc0.sht.synthesis_general` (non-uniform FFT, accuracy ``epsilon``):
   spin 0 for ``F``; spin 1 (``DERIV1``, the gradient ``(∂_θ F, ∂_φ F / sin θ)``) for ``g``; for the Hessian
@@ -31,8 +31,9 @@ Two evaluators return the same fields (``F``, ``g``, ``Hess F`` at unit vectors 
   ``ð²F``, in the ``θ̂, φ̂`` basis). Each synthesis has a fixed cost (a Legendre transform and an FFT of about
   ``(2 lmax)²`` points, ~0.7 ms for ``lmax = 68``) and then ~0.15 µs per point, so it wins for large batches.
 * ``"direct"``: the sum over the poles with the model's own kernel ``h, h', h''`` (``O(M)`` per point, no
-  fixed cost): used below ``direct_below`` points, where it is faster, and as the reference of the harmonic
-  evaluator.
+  fixed cost): used below ``direct_below`` points, where it is faster, for fields given without ``lmax``
+  (the torque map: its spline kernel is not band-limited, and its harmonic series converges slowly — with
+  ``lmax = 384`` still 7e-5 of the peak torque off), and as the reference of the harmonic evaluator.
 
 ``nthreads`` (ducc0's threads) is set deliberately: 1 by default (one core per process on a shared machine);
 results do not depend on it beyond rounding.
@@ -48,7 +49,7 @@ DIRECT_BELOW = 400  # points: below this the direct sum is faster than ducc0's s
 SPIN2_SIGN = -1.0  # ducc0's spin-2 (Q, U) are minus the trace-free Hessian's (θθ − φφ, 2θφ) parts (tests/test_fast_path.py)
 
 
-def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+def cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """``a × b`` over the last axis (broadcasting), without ``np.cross``'s per-call overhead."""
     a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
     b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
@@ -58,30 +59,37 @@ def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 class RotorField:
     """``F(x) = Σ_j p_j h(x · u_j)`` on the unit sphere with its tangential gradient and intrinsic Hessian.
 
-    ``poles (M, 3)`` unit vectors ``u_j`` and ``polarity (M,)`` ``p_j`` (body frame); ``kernel(t, order)`` returns
-    ``(h, h', …)`` up to ``order`` (0, 1 or 2) at ``t`` (any shape), used by the direct evaluator;
-    ``exact(t)`` (default ``kernel(t, 0)[0]``) the most accurate ``h``, used once to sample ``F`` for its
-    spherical-harmonic coefficients up to degree ``lmax`` on a Gauss–Legendre grid of ``rings ≥ lmax + 1``
-    rings. ``epsilon``: ducc0's synthesis accuracy; ``nthreads``: ducc0's threads; ``direct_below``: batches
-    of fewer points use the direct sum (see the module docstring).
+    ``poles (M, 3)`` unit vectors ``u_j`` and ``polarity (M,)`` ``p_j`` (body frame); ``kernel(t, orders)`` returns
+    the derivatives of ``h`` of the given ``orders`` (a tuple from 0, 1, 2) at ``t`` (any shape), used by the
+    direct evaluator.
+    With ``lmax``: the ducc0 evaluator; ``exact(t)`` (default ``kernel(t, 0)[0]``) the most accurate ``h``,
+    used once to sample ``F`` for its spherical-harmonic coefficients up to degree ``lmax`` on a
+    Gauss–Legendre grid of ``rings ≥ lmax + 1`` rings; ``epsilon``: ducc0's synthesis accuracy; ``nthreads``:
+    ducc0's threads. Without ``lmax``, only the direct sum. ``direct_below``: batches of fewer points use the
+    direct sum (see the module docstring).
     """
 
-    def __init__(self, poles, polarity, kernel, lmax: int, *, exact=None, rings: int | None = None,
+    def __init__(self, poles, polarity, kernel, lmax: int | None = None, *, exact=None, rings: int | None = None,
                  epsilon: float = 1e-13, nthreads: int = 1, direct_below: int = DIRECT_BELOW):
-        import ducc0
-
         self.poles = np.ascontiguousarray(poles, dtype=float)
         self.polarity = np.ascontiguousarray(polarity, dtype=float)
         self.kernel = kernel
-        self.lmax = int(lmax)
+        self.lmax = None if lmax is None else int(lmax)
         self.epsilon = float(epsilon)
         self.nthreads = threads(nthreads)
         self.direct_below = int(direct_below)
         self._pu = self.polarity[:, None] * self.poles  # p_j u_j
+        if self.lmax is not None:
+            self._build_harmonic(exact, rings)
+
+    def _build_harmonic(self, exact, rings) -> None:
+        import ducc0
+
+        kernel = self.kernel
         rings = self.lmax + 1 if rings is None else int(rings)
         if rings < self.lmax + 1:
             raise bad_value("rings", f"at least lmax + 1 = {self.lmax + 1}", rings)
-        h = (lambda t: kernel(t, 0)[0]) if exact is None else exact
+        h = (lambda t: kernel(t, (0,))[0]) if exact is None else exact
         nodes = np.polynomial.legendre.leggauss(rings)[0][::-1]  # cos θ, θ ascending (ducc0's GL order)
         phi = 2 * np.pi * np.arange(2 * self.lmax + 2) / (2 * self.lmax + 2)
         sin = np.sqrt(1.0 - nodes**2)
@@ -98,19 +106,21 @@ class RotorField:
     def fields(self, x: np.ndarray, order: int = 1, value: bool = True, method: str | None = None):
         """``(F, g, Hess F)`` at unit vectors ``x (P, 3)``: ``F (P,)`` if ``value`` (else ``None``),
         ``g (P, 3)`` the tangential gradient for ``order ≥ 1``, for ``order = 2`` the pair ``(ΔF (P,),
-        Hess F (P, 3, 3))``. ``method``: ``"ducc0"``, ``"direct"`` or ``None`` (by the batch size)."""
+        Hess F (P, 3, 3))``. ``method``: ``"ducc0"``, ``"direct"`` or ``None`` (the direct sum below ``direct_below``
+        points or without ``lmax``)."""
         if method is None:
-            method = "direct" if len(x) < self.direct_below else "ducc0"
+            method = "direct" if self.lmax is None or len(x) < self.direct_below else "ducc0"
         if method == "direct":
             return self._direct(x, order, value)
-        if method == "ducc0":
+        if method == "ducc0" and self.lmax is not None:
             return self._harmonic(x, order, value)
-        raise bad_value("method", "'ducc0', 'direct' or None", method)
+        raise bad_value("method", "'direct', 'ducc0' (for a field built with lmax) or None", method)
 
     # --- direct sum over the poles -----------------------------------------------------------------------
     def _direct(self, x: np.ndarray, order: int, value: bool):
         t = x @ self.poles.T  # (P, M)
-        hs = self.kernel(t, order)
+        orders = tuple(range(0 if value else 1, order + 1))
+        hs = dict(zip(orders, self.kernel(t, orders)))
         F = hs[0] @ self.polarity if value else None
         if order == 0:
             return F, None, None
@@ -187,7 +197,7 @@ def fast_evaluate(field: RotorField, sign: float, coils: np.ndarray, R: np.ndarr
         energy += sign * np.sum(cl * F.reshape(K, n), axis=-1)
     if order >= 1:
         g = g.reshape(K, n, 3)
-        body = np.einsum("kn,kna->ka", cl, _cross(x, g))
+        body = np.einsum("kn,kna->ka", cl, cross(x, g))
         out.append(sign * np.einsum("kab,kb->ka", Rf, body))
     if order >= 2:
         lap, hess = second
@@ -209,5 +219,5 @@ def fast_torque_matrix(field: RotorField, sign: float, coils: np.ndarray, failed
     x = coils[live] @ Rf  # (K, n, 3)
     g = field.fields(x.reshape(-1, 3), 1, value=False)[1].reshape(x.shape)
     out = np.zeros((len(Rf), 3, len(coils)))
-    out[:, :, live] = sign * (Rf @ np.swapaxes(_cross(x, g), -1, -2))
+    out[:, :, live] = sign * (Rf @ np.swapaxes(cross(x, g), -1, -2))
     return out.reshape(lead + (3, len(coils)))

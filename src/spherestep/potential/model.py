@@ -54,6 +54,7 @@ import dataclasses
 from .. import so3
 from ..errors import bad_value
 from ..rotor_field import RotorField, fast_evaluate, fast_torque_matrix, threads
+from ..rotor_field import cross as _cross
 from ..statics import TorqueModelBase
 from ..harmonics import SO3Grid, half_pi_matrix, s2_rotate, so3_grid, so3_inverse, sph_harm_u
 from . import _checks
@@ -198,11 +199,18 @@ class MotorPotential(TorqueModelBase):
         """``F(x) = Σ_j p_j G(x · u_j)`` (body frame), so ``V = ‖Â‖² + cᵀSc − 2 Σ_k c_k F(Rᵀ v_k)``; built on first
         use (exact: ``F`` has degree ``L``)."""
         if self._field is None:
-            kernel = self.kernel
-            self._field = RotorField(self.poles, self.polarity,
-                                     lambda t, order: (kernel.value(t),) if order == 0 else kernel.evaluate(t, order),
-                                     self.bandlimit, nthreads=self.nthreads)
+            self._field = RotorField(self.poles, self.polarity, self._kernel_derivatives, self.bandlimit,
+                                     nthreads=self.nthreads)
         return self._field
+
+    def _kernel_derivatives(self, t: np.ndarray, orders: tuple[int, ...]) -> tuple[np.ndarray, ...]:
+        """``G^(n)(t)`` for ``n`` in ``orders``, from one look-up of the kernel's table."""
+        if orders == (0,):
+            return (self.kernel.value(t),)
+        if orders == (1,):
+            return (self.kernel.derivative(t),)
+        values = self.kernel.evaluate(t, max(orders))
+        return tuple(values[n] for n in orders)
 
     def _fast(self, R: np.ndarray, c: np.ndarray, order: int, value: bool = True) -> tuple[np.ndarray, ...]:
         constant = self._constant(c, pairwise=True) if value else None
@@ -466,13 +474,6 @@ def _full(a: np.ndarray, shape: tuple) -> np.ndarray:
     """``a`` as an array of exactly ``shape`` (broadcast copy only when needed)."""
     a = np.asarray(a)
     return a if a.shape == shape else np.broadcast_to(a, shape).copy()
-
-
-def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """``a × b`` over the last axis (broadcasting), without ``np.cross``'s per-call overhead."""
-    a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
-    b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
-    return np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], axis=-1)
 
 
 def _real_times_complex(real: np.ndarray, cplx: np.ndarray) -> np.ndarray:
