@@ -12,8 +12,11 @@ is in :mod:`spherestep.dynamics`.
 
 from .allocation import Allocation, allocate, allocate_matrix, allocate_relay, closest_reachable, least_power_box
 from .capability import Capability, available_torque, feasible_support, figure_capability, torque_capability
+from .controller import GeometricPD, Observer
 from .limits import DriveLimits
+from .trajectory import Segment, Trajectory, bang_bang_time, path_capability, plan_turn
 
-__all__ = ["Allocation", "Capability", "DriveLimits", "available_torque", "feasible_support", "figure_capability",
+__all__ = ["Allocation", "Capability", "DriveLimits", "GeometricPD", "Observer", "Segment", "Trajectory",
+           "bang_bang_time", "path_capability", "plan_turn", "available_torque", "feasible_support", "figure_capability",
            "torque_capability", "allocate", "allocate_matrix", "allocate_relay", "closest_reachable",
            "least_power_box"]

@@ -1,0 +1,223 @@
+"""Trajectories on SO(3) in time: rest-to-rest turns about fixed axes with trapezoidal speed profiles.
+
+A segment turns the rotor from ``R₀`` about the fixed unit axis ``n`` by ``θ``: ``R(t) = exp(s(t) [n]×) R₀``, so
+the angular velocity (fixed frame) is ``ω = ṡ n`` and the angular acceleration ``α = s̈ n``. ``s(t)`` is the
+trapezoidal profile: constant acceleration ``a`` up to the speed ``v`` (or to the midpoint, a triangle, when
+``θ < v²/a``), cruise, constant deceleration ``a`` to rest. It is the time-optimal rest-to-rest profile under
+``|s̈| ≤ a``, ``|ṡ| ≤ v`` (bang–coast–bang). It is *not* jerk-limited: the torque steps at the profile's corners,
+which the coils follow within a few electrical time constants (``L/R`` ≈ 0.8 ms).
+A path through waypoints is a chain of such segments, each along the geodesic between consecutive waypoints
+(the rotor stops at each waypoint).
+
+The acceleration comes from the torque the drive guarantees along the path: ``a = margin · min_path r(R) / I``
+with ``r`` the torque available in every direction (:func:`~spherestep.control.capability.available_torque`),
+sampled at the segment's orientations; the rest (``1 − margin``) is left to the feedback. For a rotor of
+isotropic inertia ``I`` (the paper's balanced ball) the gyroscopic torque ``ω × Iω`` vanishes and the
+feed-forward torque is ``I α``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .. import so3
+from ..errors import bad_value
+from .capability import available_torque, feasible_support
+from .limits import DriveLimits
+
+MARGIN = 0.7  # share of the guaranteed torque the trajectory may use; the rest is the feedback's
+
+
+def _positive(value, name: str) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.floating)) or not math.isfinite(value) \
+            or value <= 0:
+        raise bad_value(name, "a finite positive number", value)
+    return float(value)
+
+
+def _axis(axis) -> np.ndarray:
+    n = np.asarray(axis, dtype=float)
+    if n.shape != (3,) or not np.all(np.isfinite(n)) or np.linalg.norm(n) == 0:
+        raise bad_value("axis", "a non-zero vector X,Y,Z", axis)
+    return n / np.linalg.norm(n)
+
+
+@dataclass(frozen=True)
+class Segment:
+    """One rest-to-rest turn: from ``start (3, 3)`` about ``axis (3,)`` by ``angle`` (rad, ≥ 0) beginning at
+    ``t0`` (s); ``acceleration`` (rad/s²), ``peak_speed`` (rad/s, reached), ``ramp`` and ``cruise`` (s)."""
+
+    start: np.ndarray
+    axis: np.ndarray
+    angle: float
+    t0: float
+    acceleration: float
+    peak_speed: float
+    ramp: float
+    cruise: float
+
+    @property
+    def duration(self) -> float:
+        return 2.0 * self.ramp + self.cruise
+
+    @property
+    def end(self) -> np.ndarray:
+        return so3.exp(self.angle * self.axis) @ self.start
+
+    def profile(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``(s, ṡ, s̈)`` at times ``t`` (s, absolute), clamped to rest before and after the segment."""
+        tau = np.clip(np.asarray(t, dtype=float) - self.t0, 0.0, self.duration)
+        a, v, ta, tc = self.acceleration, self.peak_speed, self.ramp, self.cruise
+        up, coast = tau < ta, tau < ta + tc
+        down = self.duration - tau
+        s = np.where(up, 0.5 * a * tau ** 2, np.where(coast, 0.5 * a * ta ** 2 + v * (tau - ta),
+                                                       self.angle - 0.5 * a * down ** 2))
+        sd = np.where(up, a * tau, np.where(coast, v, a * down))
+        inside = (np.asarray(t) - self.t0 >= 0) & (np.asarray(t) - self.t0 < self.duration)
+        sdd = np.where(inside, np.where(up, a, np.where(coast, 0.0, -a)), 0.0)
+        return s, sd, sdd
+
+
+def segment(start, axis, angle: float, acceleration: float, speed: float | None = None, t0: float = 0.0) -> Segment:
+    """A trapezoidal turn (see the module); a negative ``angle`` turns about ``−axis``."""
+    n = _axis(axis)
+    if not math.isfinite(angle):
+        raise bad_value("angle", "a finite angle in radians", angle)
+    if angle < 0:
+        n, angle = -n, -angle
+    a = _positive(acceleration, "acceleration")
+    v = math.inf if speed is None else _positive(speed, "speed")
+    if angle * a <= v * v:  # triangle
+        ta = math.sqrt(angle / a)
+        return Segment(so3.as_rotations(start, "start"), n, float(angle), float(t0), a, a * ta, ta, 0.0)
+    return Segment(so3.as_rotations(start, "start"), n, float(angle), float(t0), a, v, v / a, angle / v - v / a)
+
+
+@dataclass(frozen=True)
+class Trajectory:
+    """A chain of :class:`Segment` (each starting where the previous ends, at rest)."""
+
+    segments: tuple[Segment, ...]
+
+    @property
+    def duration(self) -> float:
+        last = self.segments[-1]
+        return last.t0 + last.duration
+
+    @property
+    def start(self) -> np.ndarray:
+        return self.segments[0].start
+
+    @property
+    def end(self) -> np.ndarray:
+        return self.segments[-1].end
+
+    def sample(self, t) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``(R (..., 3, 3), ω (..., 3) rad/s, α (..., 3) rad/s²)`` at times ``t`` (s); before the start the
+        rotor rests at the start, after the end at the end."""
+        t = np.asarray(t, dtype=float)
+        starts = np.array([s.t0 for s in self.segments])
+        idx = np.clip(np.searchsorted(starts, t, side="right") - 1, 0, len(self.segments) - 1)
+        R = np.empty(t.shape + (3, 3))
+        w = np.empty(t.shape + (3,))
+        a = np.empty(t.shape + (3,))
+        for k, seg in enumerate(self.segments):
+            m = idx == k
+            if not np.any(m):
+                continue
+            s, sd, sdd = seg.profile(t[m])
+            R[m] = so3.exp(s[..., None] * seg.axis) @ seg.start
+            w[m] = sd[..., None] * seg.axis
+            a[m] = sdd[..., None] * seg.axis
+        return R, w, a
+
+    @classmethod
+    def turn(cls, start, axis, angle: float, acceleration: float, speed: float | None = None) -> "Trajectory":
+        """One trapezoidal turn of ``angle`` (rad) about the fixed ``axis`` from ``start``."""
+        return cls((segment(start, axis, angle, acceleration, speed),))
+
+    @classmethod
+    def through(cls, waypoints, acceleration: float, speed: float | None = None) -> "Trajectory":
+        """Geodesic segments through ``waypoints (W, 3, 3)`` (``W ≥ 2``), at rest at each."""
+        W = so3.as_rotations(waypoints, "waypoints")
+        if W.ndim != 3 or len(W) < 2:
+            raise bad_value("waypoints", "at least two rotations, shape (W, 3, 3)", f"shape {W.shape}")
+        segs, t0 = [], 0.0
+        for Ra, Rb in zip(W[:-1], W[1:]):
+            rv = so3.log(Rb @ Ra.T)
+            angle = float(np.linalg.norm(rv))
+            if angle == 0:
+                continue
+            seg = segment(Ra, rv, angle, acceleration, speed, t0)
+            segs.append(seg)
+            t0 += seg.duration
+        if not segs:
+            raise bad_value("waypoints", "at least two different orientations", "all equal")
+        return cls(tuple(segs))
+
+
+def path_capability(model, start, axis, angle: float, limits: DriveLimits | None = None, samples: int = 48
+                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Along the turn ``exp(s n) R₀``, ``s ∈ [0, θ]`` (``samples`` points): the torque available in every
+    direction ``r`` (N·m) and the largest torques about ``+n`` and ``−n`` (the support ``h_S(±n)``, N·m)."""
+    limits = DriveLimits() if limits is None else limits
+    n = _axis(axis)
+    s = np.linspace(0.0, float(angle), samples)
+    R = so3.exp(s[:, None] * n) @ so3.as_rotations(start, "start")
+    K = np.asarray(model.torque_matrix(R), dtype=float)
+    bias = np.asarray(model.torque(R, np.zeros((len(R), model.coil_count))), dtype=float)
+    r = available_torque(K, limits, bias=bias, failed=model.failed)[0]
+    u = np.full(K.shape[-1], limits.per_unit_bound)
+    if len(model.failed):
+        u[list(model.failed)] = 0.0
+    rho = limits.per_unit_power_radius
+    plus = feasible_support(np.einsum("kan,a->kn", K, n), u, rho)[0] + bias @ n
+    minus = feasible_support(np.einsum("kan,a->kn", K, -n), u, rho)[0] - bias @ n
+    return r, plus, minus
+
+
+def plan_turn(model, start, axis, angle: float, inertia: float, limits: DriveLimits | None = None, *,
+              margin: float = MARGIN, damping: float = 0.0, speed: float | None = None, samples: int = 48
+              ) -> Trajectory:
+    """The fastest trapezoidal turn whose feed-forward torque ``I α + b ω`` stays within ``margin`` of the torque
+    guaranteed in every direction along the path, ``τ_g = margin · min r`` (see the module). Without damping
+    ``a = τ_g/I`` and no speed limit (a triangle unless ``speed`` is given); with viscous damping ``b`` the
+    cruise speed ``v`` and acceleration ``a = (τ_g − b v)/I`` minimise ``T = θ/v + v/a``."""
+    if not 0 < margin <= 1:
+        raise bad_value("margin", "a fraction in (0, 1]", margin)
+    if not (math.isfinite(damping) and damping >= 0):
+        raise bad_value("damping", "a non-negative viscous damping (N·m·s/rad)", damping)
+    I = _positive(inertia, "inertia")
+    r = path_capability(model, start, axis, angle, limits, samples)[0]
+    guaranteed = margin * float(r.min())
+    if guaranteed <= 0:
+        raise bad_value("axis", "a turn along which the drive can give torque in every direction",
+                        f"{float(r.min()):.3g} N·m available")
+    if damping == 0:
+        return Trajectory.turn(start, axis, angle, guaranteed / I, speed)
+    from scipy.optimize import minimize_scalar
+
+    theta = abs(float(angle))
+    v_top = guaranteed / damping if speed is None else min(speed, guaranteed / damping)
+    best = minimize_scalar(lambda v: theta / v + v * I / (guaranteed - damping * v), bounds=(1e-6 * v_top,
+                           (1 - 1e-6) * v_top), method="bounded", options={"xatol": 1e-9 * v_top})
+    v = float(best.x)
+    return Trajectory.turn(start, axis, angle, (guaranteed - damping * v) / I, v)
+
+
+def bang_bang_time(model, start, axis, angle: float, inertia: float, limits: DriveLimits | None = None,
+                   samples: int = 48) -> float:
+    """A lower bound (s) on the rest-to-rest time of the turn: accelerate with the largest torque about ``n``
+    anywhere on the path (``a₊ = max h_S(n)/I``), brake with the largest about ``−n`` (``a₋``):
+    ``v = √(2θ a₊a₋/(a₊ + a₋))``, ``T = v/a₊ + v/a₋`` (no damping; damping only lengthens it)."""
+    _, plus, minus = path_capability(model, start, axis, angle, limits, samples)
+    if angle < 0:
+        plus, minus = minus, plus
+    I = _positive(inertia, "inertia")
+    ap, am = float(plus.max()) / I, float(minus.max()) / I
+    theta = abs(float(angle))
+    v = math.sqrt(2.0 * theta * ap * am / (ap + am))
+    return v / ap + v / am
