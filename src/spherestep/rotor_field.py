@@ -79,6 +79,7 @@ class RotorField:
         self.nthreads = threads(nthreads)
         self.direct_below = int(direct_below)
         self._pu = self.polarity[:, None] * self.poles  # p_j u_j
+        self._puu = (self._pu[:, :, None] * self.poles[:, None, :]).reshape(-1, 9)  # p_j u_j u_jᵀ, flattened
         if self.lmax is not None:
             self._build_harmonic(exact, rings)
 
@@ -129,7 +130,7 @@ class RotorField:
         g = S - radial[:, None] * x
         if order == 1:
             return F, g, None
-        M = np.einsum("pj,ja,jb->pab", hs[2], self._pu, self.poles)  # Σ p h'' u uᵀ
+        M = (hs[2] @ self._puu).reshape(-1, 3, 3)  # Σ p h'' u uᵀ
         P = np.eye(3) - x[:, :, None] * x[:, None, :]
         hess = P @ M @ P - radial[:, None, None] * P
         return F, g, (np.trace(hess, axis1=1, axis2=2), hess)
@@ -178,35 +179,36 @@ def fast_evaluate(field: RotorField, sign: float, coils: np.ndarray, R: np.ndarr
                   constant, value: bool = True) -> tuple[np.ndarray, ...]:
     """``(E,)``, ``(E, τ)`` or ``(E, τ, H)`` of ``E = constant + sign Σ_k c_k F(Rᵀ v_k)`` (module docstring) for
     validated ``R (..., 3, 3)`` and ``c (..., N)`` (leading axes broadcast), ``coils (N, 3)`` the ``v_k``.
-    Only coils with a current somewhere in the batch are evaluated. ``value=False`` skips ``F`` (the returned
-    energy is then ``None``: for callers that need only the torque)."""
+    Only the (orientation, coil) pairs with a non-zero current are evaluated (a planner's batch of candidate
+    activations energises a few coils each). ``value=False`` skips ``F`` (the returned energy is then ``None``:
+    for callers that need only the torque)."""
     lead = np.broadcast_shapes(R.shape[:-2], c.shape[:-1])
     Rf = (R if R.shape[:-2] == lead else np.broadcast_to(R, lead + (3, 3))).reshape(-1, 3, 3)
     cf = (c if c.shape[:-1] == lead else np.broadcast_to(c, lead + c.shape[-1:])).reshape(-1, c.shape[-1])
     energy = np.array(np.broadcast_to(constant, lead), dtype=float).reshape(-1) if value else None
-    live = np.flatnonzero(np.any(cf != 0, axis=0))
-    out = [energy]
-    if len(live) == 0:
-        out += [np.zeros((len(Rf), 3)), np.zeros((len(Rf), 3, 3))][:order]
+    rows, cols = np.nonzero(cf)  # row-major: rows ascending
+    out = [energy, np.zeros((len(Rf), 3)), np.zeros((len(Rf), 3, 3))][:order + 1]
+    if len(rows) == 0:
         return tuple(None if a is None else a.reshape(lead + a.shape[1:]) for a in out)
-    cl = cf[:, live]
-    x = coils[live] @ Rf  # (K, n, 3): x_k = Rᵀ v_k
-    F, g, second = field.fields(x.reshape(-1, 3), order, value)
-    K, n = cl.shape
+    w = cf[rows, cols]
+    Rp = Rf[rows]
+    x = np.einsum("pba,pb->pa", Rp, coils[cols])  # x = Rᵀ v per energised pair
+    F, g, second = field.fields(x, order, value)
+    starts = np.flatnonzero(np.concatenate([[True], rows[1:] != rows[:-1]]))
+    present = rows[starts]
     if value:
-        energy += sign * np.sum(cl * F.reshape(K, n), axis=-1)
+        energy[present] += sign * np.add.reduceat(w * F, starts)
     if order >= 1:
-        g = g.reshape(K, n, 3)
-        body = np.einsum("kn,kna->ka", cl, cross(x, g))
-        out.append(sign * np.einsum("kab,kb->ka", Rf, body))
+        body = np.add.reduceat(w[:, None] * cross(x, g), starts, axis=0)
+        out[1][present] = sign * np.einsum("kab,kb->ka", Rf[present], body)
     if order >= 2:
         lap, hess = second
-        lap, hess = lap.reshape(K, n), hess.reshape(K, n, 3, 3)
-        xx = x[..., :, None] * x[..., None, :]
-        gx = g[..., :, None] * x[..., None, :]
-        per = lap[..., None, None] * (np.eye(3) - xx) - hess + 0.5 * (gx + np.swapaxes(gx, -1, -2))
-        Hb = np.einsum("kn,knab->kab", cl, per)
-        out.append(sign * (Rf @ Hb @ np.swapaxes(Rf, -1, -2)))
+        xx = x[:, :, None] * x[:, None, :]
+        gx = g[:, :, None] * x[:, None, :]
+        per = lap[:, None, None] * (np.eye(3) - xx) - hess + 0.5 * (gx + np.swapaxes(gx, -1, -2))
+        Hb = np.add.reduceat(w[:, None, None] * per, starts, axis=0)
+        Rq = Rf[present]
+        out[2][present] = sign * (Rq @ Hb @ np.swapaxes(Rq, -1, -2))
     return tuple(None if a is None else a.reshape(lead + a.shape[1:]) for a in out)
 
 
