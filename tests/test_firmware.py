@@ -16,12 +16,13 @@ GXX = shutil.which("g++")
 pytestmark = pytest.mark.skipif(GXX is None, reason="g++ is not installed: the firmware harness cannot be built")
 
 
-def build_and_run(tmp_path: Path, source: str, *args: str) -> tuple[int, str]:
+def build_and_run(tmp_path: Path, source: str, *args: str, extra: tuple[str, ...] = ()) -> tuple[int, str]:
     exe = tmp_path / Path(source).stem
     build = subprocess.run(
         [GXX, "-std=c++11", "-Wall", "-Wextra", "-Werror", "-pedantic", "-I", str(FIRMWARE / "spherestep"),
          "-I", str(FIRMWARE / "test" / "arduino"), str(FIRMWARE / "test" / source),
-         str(FIRMWARE / "spherestep" / "protocol.cpp"), "-o", str(exe)],
+         str(FIRMWARE / "spherestep" / "protocol.cpp"), *(str(FIRMWARE / "spherestep" / e) for e in extra),
+         "-o", str(exe)],
         capture_output=True, text=True, timeout=120)
     assert build.returncode == 0, build.stderr
     run = subprocess.run([str(exe), *args], capture_output=True, text=True, timeout=60)
@@ -30,6 +31,16 @@ def build_and_run(tmp_path: Path, source: str, *args: str) -> tuple[int, str]:
 
 def test_protocol_core_passes_the_vectors(tmp_path):
     code, out = build_and_run(tmp_path, "test_protocol.cpp", str(FIRMWARE / "test" / "vectors.txt"))
+    assert code == 0, out
+    passed, failed = map(int, re.search(r"^(\d+) passed, (\d+) failed$", out, re.M).groups())
+    assert failed == 0 and passed >= 130, out
+
+
+def test_current_device_passes_the_vectors(tmp_path):
+    """drive.cpp (protocol version 2, PI loops, limits) against vectors2.txt, which the Python CurrentDevice
+    also passes (tests/test_hardware_drive.py)."""
+    code, out = build_and_run(tmp_path, "test_drive.cpp", str(FIRMWARE / "test" / "vectors2.txt"),
+                              extra=("drive.cpp",))
     assert code == 0, out
     passed, failed = map(int, re.search(r"^(\d+) passed, (\d+) failed$", out, re.M).groups())
     assert failed == 0 and passed >= 130, out

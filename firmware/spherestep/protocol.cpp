@@ -1,116 +1,24 @@
 // spherestep coil controller: line protocol parser and state machine. See protocol.h and docs/protocol.md.
 #include "protocol.h"
 
+#include "wire.h"
+
 namespace spherestep {
 
 namespace {
 
+using wire::parseDecimal;
+using wire::parseHex;
+using wire::same;
+
 const size_t MAX_FIELDS = 8;  // sequence, verb and up to six arguments are kept; more are only counted
 
-int hexValue(char c) {
-  if (c >= '0' && c <= '9') return c - '0';
-  if (c >= 'A' && c <= 'F') return c - 'A' + 10;
-  if (c >= 'a' && c <= 'f') return c - 'a' + 10;
-  return -1;
-}
-
-// A NUL-terminated field of minDigits..maxDigits hex digits and nothing else.
-bool parseHex(const char* s, size_t minDigits, size_t maxDigits, uint64_t* value) {
-  uint64_t v = 0;
-  size_t n = 0;
-  for (; s[n] != '\0'; ++n) {
-    int d = hexValue(s[n]);
-    if (d < 0 || n >= maxDigits) return false;
-    v = (v << 4) | (uint64_t)d;
-  }
-  if (n < minDigits) return false;
-  *value = v;
-  return true;
-}
-
-// A NUL-terminated field of 1..maxDigits decimal digits and nothing else.
-bool parseDecimal(const char* s, size_t maxDigits, uint32_t* value) {
-  uint32_t v = 0;
-  size_t n = 0;
-  for (; s[n] != '\0'; ++n) {
-    if (s[n] < '0' || s[n] > '9' || n >= maxDigits) return false;
-    v = v * 10 + (uint32_t)(s[n] - '0');
-  }
-  if (n < 1) return false;
-  *value = v;
-  return true;
-}
-
-bool same(const char* a, const char* b) {
-  while (*a != '\0' && *a == *b) {
-    ++a;
-    ++b;
-  }
-  return *a == *b;
-}
-
-const char HEX_DIGITS[] = "0123456789ABCDEF";
-
-// Builds "$SS,..." into a caller's buffer of MAX_REPLY bytes and seals it with "*CCCC\n".
-class Reply {
+class Reply : public wire::Reply {
  public:
-  Reply(char* buffer, int seq) : buf_(buffer), len_(0) {
-    put('$');
-    if (seq < 0) {
-      put('-');
-      put('-');
-    } else {
-      put(HEX_DIGITS[(seq >> 4) & 0xF]);
-      put(HEX_DIGITS[seq & 0xF]);
-    }
-  }
-  void field(const char* s) {
-    put(',');
-    while (*s != '\0') put(*s++);
-  }
-  void hexField(uint64_t v) {
-    char digits[16];
-    size_t n = 0;
-    do {
-      digits[n++] = HEX_DIGITS[v & 0xF];
-      v >>= 4;
-    } while (v != 0);
-    put(',');
-    while (n > 0) put(digits[--n]);
-  }
-  void decimalField(uint32_t v) {
-    char digits[10];
-    size_t n = 0;
-    do {
-      digits[n++] = (char)('0' + v % 10);
-      v /= 10;
-    } while (v != 0);
-    put(',');
-    while (n > 0) put(digits[--n]);
-  }
-  size_t finish() {
-    uint16_t crc = crc16(buf_ + 1, len_ - 1);
-    put('*');
-    for (int shift = 12; shift >= 0; shift -= 4) put(HEX_DIGITS[(crc >> shift) & 0xF]);
-    put('\n');
-    buf_[len_] = '\0';
-    return len_;
-  }
-
- private:
-  void put(char c) {
-    if (len_ < MAX_REPLY - 1) buf_[len_++] = c;
-  }
-  char* buf_;
-  size_t len_;
+  Reply(char* buffer, int seq) : wire::Reply(buffer, MAX_REPLY, seq) {}
 };
 
-size_t nak(char* reply, int seq, const char* code) {
-  Reply r(reply, seq);
-  r.field("NAK");
-  r.field(code);
-  return r.finish();
-}
+size_t nak(char* reply, int seq, const char* code) { return wire::nak(reply, MAX_REPLY, seq, code); }
 
 }  // namespace
 

@@ -106,3 +106,68 @@ class ThermalGuard:
         for spans in self._history.values():
             while spans and spans[0][1] < horizon:
                 spans.popleft()
+
+
+@dataclass(frozen=True)
+class CurrentLimits:
+    """Limits of a current-driven stator (protocol version 2), enforced by the device and checked by the host.
+
+    ``max_current`` A: largest setpoint magnitude per coil; a measured current above ``trip_ratio ×
+    max_current`` switches everything off. ``max_duty``: largest PWM duty magnitude (0–1]. ``max_power`` W:
+    largest ``Σ_k R i_k²`` of a set of setpoints. Heating is the I²t model of :func:`heating_step` with
+    ``continuous_current`` A (the current the coil carries forever at its rated temperature rise) and
+    ``thermal_time`` s (the winding's thermal time constant). ``resistance`` Ω per coil.
+
+    Defaults: the drive of :class:`spherestep.control.DriveLimits` (1000-turn 24 Ω coils, 1 A nominal, 24 V,
+    100 W); :meth:`from_drive` takes any other.
+    """
+
+    max_current: float = 1.0
+    max_duty: float = 0.95
+    max_power: float = 100.0
+    continuous_current: float = 1.0
+    thermal_time: float = 60.0
+    resistance: float = 24.0
+    trip_ratio: float = 1.25
+
+    @classmethod
+    def from_drive(cls, drive, *, max_duty: float = 0.95, thermal_time: float = 60.0,
+                   trip_ratio: float = 1.25) -> "CurrentLimits":
+        """The device limits for a :class:`spherestep.control.DriveLimits`: its current, power and resistance;
+        the coil is rated for its nominal current continuously."""
+        return cls(max_current=drive.max_current, max_duty=max_duty, max_power=drive.supply_power,
+                   continuous_current=drive.nominal_current, thermal_time=thermal_time,
+                   resistance=drive.resistance, trip_ratio=trip_ratio)
+
+    def __post_init__(self):
+        for name in ("max_current", "max_power", "continuous_current", "thermal_time", "resistance"):
+            value = getattr(self, name)
+            if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
+                raise bad_value(name, "a positive finite number", value)
+        if not (isinstance(self.max_duty, (int, float)) and 0 < self.max_duty <= 1):
+            raise bad_value("max_duty", "a fraction in (0, 1]", self.max_duty)
+        if not (isinstance(self.trip_ratio, (int, float)) and math.isfinite(self.trip_ratio) and self.trip_ratio >= 1):
+            raise bad_value("trip_ratio", "a number >= 1", self.trip_ratio)
+
+    def check_setpoints(self, currents) -> None:
+        """Raise :class:`ThermalLimitError` if a setpoint (A) exceeds ``max_current`` or all of them together
+        ``max_power`` (the device refuses the same frame with ``NAK,LIMIT``)."""
+        worst = max((abs(float(i)) for i in currents), default=0.0)
+        if worst > self.max_current:
+            raise ThermalLimitError(f"a coil current of {worst:.3f} A was asked, over max_current = "
+                                    f"{self.max_current:g} A; lower the gains or the trajectory's speed")
+        power = self.resistance * sum(float(i) ** 2 for i in currents)
+        if power > self.max_power:
+            raise ThermalLimitError(f"the coil currents would dissipate {power:.1f} W, over max_power = "
+                                    f"{self.max_power:g} W; lower the gains or the trajectory's speed")
+
+
+def heating_step(heat: float, current: float, dt: float, limits: CurrentLimits) -> float:
+    """One step of the I²t thermal model: ``h ← a h + (1 − a)(i / i_c)²``, ``a = exp(−dt / τ)``.
+
+    ``h`` is the winding's temperature rise over the rise at the continuous current ``i_c`` (the exact
+    solution of ``τ ḣ = (i / i_c)² − h`` for a current held over ``dt``); a coil overheats when ``h > 1``.
+    The firmware (``firmware/spherestep/drive.cpp``) runs the same update each control period.
+    """
+    a = math.exp(-dt / limits.thermal_time)
+    return a * heat + (1.0 - a) * (current / limits.continuous_current) ** 2

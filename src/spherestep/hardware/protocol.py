@@ -98,24 +98,25 @@ def parse_decimal(text: str, max_digits: int) -> int | None:
     return int(text)
 
 
-def encode(seq: int | None, verb: str, *args: object) -> bytes:
+def encode(seq: int | None, verb: str, *args: object, max_frame: int = MAX_FRAME) -> bytes:
     """The complete frame ``$SS,VERB,ARGS*CCCC\\n`` as bytes (``seq`` None → ``--``)."""
     head = "--" if seq is None else f"{seq & 0xFF:02X}"
     body = ",".join([head, verb, *map(str, args)]).encode("ascii")
-    if len(body) + 5 > MAX_FRAME:
-        raise ValueError(f"frame body must fit in {MAX_FRAME} bytes; instead received {len(body) + 5}")
+    if len(body) + 5 > max_frame:
+        raise ValueError(f"frame body must fit in {max_frame} bytes; instead received {len(body) + 5}")
     return b"$" + body + b"*" + f"{crc16(body):04X}".encode("ascii") + b"\n"
 
 
-def decode(line: bytes) -> Frame:
-    """Decode the bytes between ``$`` and the end of line (neither included, ``\\r`` already removed).
+def decode(line: bytes, max_frame: int = MAX_FRAME) -> Frame:
+    """Decode the bytes between ``$`` and the end of line (neither included, ``\\r`` already removed);
+    ``max_frame`` is the longest body accepted (protocol version 2 allows :data:`~.protocol2.MAX_FRAME2`).
 
     Raises :class:`FrameError` with code ``FRAME`` or ``CRC``, checked in the firmware's order: printable
     ASCII, a ``*`` followed by exactly four hex digits, the checksum, a sequence field of two hex digits (or
     ``--``) and a verb.
     """
-    if len(line) > MAX_FRAME:
-        raise FrameError("FRAME", f"longer than {MAX_FRAME} bytes")
+    if len(line) > max_frame:
+        raise FrameError("FRAME", f"longer than {max_frame} bytes")
     if any(b < 0x20 or b > 0x7E for b in line):
         raise FrameError("FRAME", "non-printable byte")
     star = line.rfind(b"*")
@@ -143,10 +144,12 @@ class LineReader:
     """Split a byte stream into frame bodies by the framing rules: ``$`` starts, ``\\n`` ends, ``\\r`` ignored.
 
     :meth:`feed` returns the completed bodies; an over-long body is returned truncated to ``MAX_FRAME + 1``
-    bytes so that :func:`decode` rejects it with ``FRAME``. Bytes outside a frame are dropped.
+    bytes so that :func:`decode` rejects it with ``FRAME``. Bytes outside a frame are dropped. ``max_frame``
+    is the longest body kept (``MAX_FRAME`` for version 1).
     """
 
-    def __init__(self) -> None:
+    def __init__(self, max_frame: int = MAX_FRAME) -> None:
+        self.max_frame = max_frame
         self._buf = bytearray()
         self._in_frame = False
 
@@ -163,6 +166,6 @@ class LineReader:
                 done.append(bytes(self._buf))
                 self._buf.clear()
                 self._in_frame = False
-            elif len(self._buf) <= MAX_FRAME:
+            elif len(self._buf) <= self.max_frame:
                 self._buf.append(byte)
         return done

@@ -1,0 +1,346 @@
+// spherestep current-mode coil controller. See drive.h and docs/protocol.md; the Python counterpart
+// (spherestep/hardware/current_device.py) is written line for line alike and both pass vectors2.txt.
+#include "drive.h"
+
+#include <math.h>
+
+#include "wire.h"
+
+namespace spherestep {
+
+namespace {
+
+using wire::parseDecimal;
+using wire::parseHex;
+using wire::same;
+
+const size_t MAX_FIELDS = 8;
+
+class Reply : public wire::Reply {
+ public:
+  Reply(char* buffer, int seq) : wire::Reply(buffer, MAX_REPLY2, seq) {}
+};
+
+size_t nak(char* reply, int seq, const char* code) { return wire::nak(reply, MAX_REPLY2, seq, code); }
+
+double clampAbs(double x, double bound) { return x > bound ? bound : (x < -bound ? -bound : x); }
+
+int32_t clamp16(int32_t v) { return v > 32767 ? 32767 : (v < -32767 ? -32767 : v); }
+
+// A block of exactly 4*count hex digits: signed 16-bit values (two's complement).
+bool parseBlock(const char* s, size_t count, int32_t* out) {
+  for (size_t k = 0; k < count; ++k) {
+    int32_t v = 0;
+    for (size_t d = 0; d < 4; ++d) {
+      int h = wire::hexValue(s[4 * k + d]);
+      if (h < 0) return false;
+      v = (v << 4) | h;
+    }
+    out[k] = (v & 0x8000) ? v - 0x10000 : v;
+  }
+  return s[4 * count] == '\0';
+}
+
+size_t length(const char* s) {
+  size_t n = 0;
+  while (s[n] != '\0') ++n;
+  return n;
+}
+
+}  // namespace
+
+CurrentDevice::CurrentDevice(Bridges& bridges, uint8_t coils, uint8_t sensors, uint16_t watchdogMs,
+                             const Limits& limits, const Loop& loop, const char* name)
+    : bridges_(bridges),
+      coils_(coils),
+      sensors_(sensors),
+      watchdogMs_(watchdogMs),
+      limits_(limits),
+      loop_(loop),
+      name_(name),
+      enable_(0),
+      polarity_(0),
+      enabled_(false),
+      version_(0),
+      tripped_(0),
+      trips_(0),
+      tripCoil_(-1),
+      badFrames_(0),
+      lastValidUs_(0),
+      len_(0),
+      inFrame_(false),
+      overflow_(false) {
+  const double h = loop.periodUs * 1e-6;
+  kp_ = loop.bandwidth * loop.inductance / loop.supply;
+  ki_ = kp_ * limits.resistance / loop.inductance * h;
+  decay_ = exp(-h / limits.thermalTime);
+  followSteps_ = (FOLLOW_MS * 1000 + loop.periodUs / 2) / loop.periodUs;
+  if (followSteps_ < 1) followSteps_ = 1;
+  for (uint8_t k = 0; k < MAX_COILS; ++k) {
+    heat_[k] = 0.0;
+    measured_[k] = 0;
+  }
+  allOff();
+}
+
+void CurrentDevice::allOff() {
+  for (uint8_t k = 0; k < MAX_COILS; ++k) {
+    setpoint_[k] = 0.0;
+    integral_[k] = 0.0;
+    duty_[k] = 0.0;
+    follow_[k] = 0;
+    frozen_[k] = 0;
+  }
+  enable_ = 0;
+  polarity_ = 0;
+  enabled_ = false;
+  bridges_.drive(duty_, false);
+}
+
+void CurrentDevice::trip(const char* code, int coil) {
+  allOff();
+  version_ = 0;
+  tripped_ = code;
+  tripCoil_ = coil;
+  ++trips_;
+}
+
+void CurrentDevice::tick(uint32_t nowUs) {
+  if (session() && (uint32_t)(nowUs - lastValidUs_) >= (uint32_t)watchdogMs_ * 1000u) trip("WDOG", -1);
+}
+
+void CurrentDevice::step(uint32_t nowUs) {
+  tick(nowUs);
+  int32_t ma[MAX_COILS];
+  bridges_.measure(ma);
+  double amps[MAX_COILS];
+  for (uint8_t k = 0; k < coils_; ++k) {
+    amps[k] = ma[k] / 1000.0;
+    const double x = amps[k] / limits_.continuousCurrent;
+    heat_[k] = decay_ * heat_[k] + (1.0 - decay_) * (x * x);
+  }
+  if (!session()) {
+    for (uint8_t k = 0; k < coils_; ++k) measured_[k] = ma[k];
+    return;
+  }
+  const double overMa = limits_.tripRatio * limits_.maxCurrent * 1000;
+  for (uint8_t k = 0; k < coils_; ++k) {
+    if ((ma[k] < 0 ? -ma[k] : ma[k]) > overMa) return trip("OVER", k);
+  }
+  for (uint8_t k = 0; k < coils_; ++k) {
+    if (heat_[k] > 1.0) return trip("HEAT", k);
+  }
+  const double dmax = limits_.maxDuty;
+  for (uint8_t k = 0; k < coils_; ++k) {
+    const double e = setpoint_[k] - amps[k];
+    integral_[k] = clampAbs(integral_[k] + ki_ * e, dmax);
+    duty_[k] = clampAbs(kp_ * e + integral_[k], dmax);
+    const bool lagging = fabs(duty_[k]) >= dmax && fabs(e) > 0.05 + 0.1 * fabs(setpoint_[k]);
+    follow_[k] = lagging ? follow_[k] + 1 : 0;
+    const bool frozen = ma[k] == measured_[k] && (ma[k] < 0 ? -ma[k] : ma[k]) >= 50 && fabs(duty_[k]) > FROZEN_DUTY;
+    frozen_[k] = frozen ? frozen_[k] + 1 : 0;
+    measured_[k] = ma[k];
+  }
+  for (uint8_t k = 0; k < coils_; ++k) {
+    if (follow_[k] >= followSteps_) return trip((ma[k] < 0 ? -ma[k] : ma[k]) < 50 ? "OPEN" : "STUCK", k);
+  }
+  for (uint8_t k = 0; k < coils_; ++k) {
+    if (frozen_[k] >= followSteps_) return trip("STUCK", k);
+  }
+  enabled_ = true;
+  bridges_.drive(duty_, true);
+}
+
+size_t CurrentDevice::receive(char c, uint32_t nowUs, char* reply) {
+  if (c == '$') {
+    len_ = 0;
+    inFrame_ = true;
+    overflow_ = false;
+    return 0;
+  }
+  if (!inFrame_ || c == '\r') return 0;
+  if (c == '\n') {
+    inFrame_ = false;
+    return process(nowUs, reply);
+  }
+  if (len_ < MAX_FRAME2) {
+    buf_[len_++] = c;
+  } else {
+    overflow_ = true;
+  }
+  return 0;
+}
+
+size_t CurrentDevice::damaged(const char* code, uint32_t nowUs, char* reply) {
+  (void)nowUs;
+  if (badFrames_ < 255) ++badFrames_;
+  if (session() && badFrames_ >= CRC_STORM) trip("CRCS", -1);
+  return nak(reply, -1, code);
+}
+
+bool CurrentDevice::setMa(const int32_t* ma) {
+  double amps[MAX_COILS];
+  double power = 0.0;
+  for (uint8_t k = 0; k < coils_; ++k) {
+    if ((ma[k] < 0 ? -ma[k] : ma[k]) > limits_.maxCurrent * 1000) return false;
+    amps[k] = ma[k] / 1000.0;
+  }
+  for (uint8_t k = 0; k < coils_; ++k) power += amps[k] * amps[k];
+  if (limits_.resistance * power > limits_.maxPower) return false;
+  for (uint8_t k = 0; k < coils_; ++k) setpoint_[k] = amps[k];
+  return true;
+}
+
+size_t CurrentDevice::state(const char* verb, int seq, uint32_t nowUs, char* reply) {
+  int32_t counts[3 * MAX_SENSORS];
+  int32_t ma[MAX_COILS];
+  const uint32_t stale = bridges_.sense(counts);
+  bridges_.measure(ma);
+  Reply r(reply, seq);
+  r.field("ACK");
+  r.field(verb);
+  r.comma();
+  r.hexDigits(nowUs, 8);
+  r.hexField(stale);
+  r.comma();
+  for (uint8_t k = 0; k < coils_; ++k) r.hexDigits((uint32_t)clamp16(ma[k]) & 0xFFFF, 4);
+  r.comma();
+  for (uint8_t k = 0; k < 3 * sensors_; ++k) r.hexDigits((uint32_t)clamp16(counts[k]) & 0xFFFF, 4);
+  return r.finish();
+}
+
+size_t CurrentDevice::process(uint32_t nowUs, char* reply) {
+  tick(nowUs);
+  if (overflow_) return damaged("FRAME", nowUs, reply);
+  buf_[len_] = '\0';
+  size_t star = len_;
+  for (size_t i = 0; i < len_; ++i) {
+    if (buf_[i] < 0x20 || buf_[i] > 0x7E) return damaged("FRAME", nowUs, reply);
+    if (buf_[i] == '*') star = i;
+  }
+  uint64_t received = 0;
+  if (star == len_ || !parseHex(buf_ + star + 1, 4, 4, &received)) return damaged("FRAME", nowUs, reply);
+  if (crc16(buf_, star) != (uint16_t)received) return damaged("CRC", nowUs, reply);
+  buf_[star] = '\0';
+  const char* fields[MAX_FIELDS];
+  size_t count = 1;
+  fields[0] = buf_;
+  for (size_t i = 0; i < star; ++i) {
+    if (buf_[i] == ',') {
+      buf_[i] = '\0';
+      if (count < MAX_FIELDS) fields[count] = buf_ + i + 1;
+      ++count;
+    }
+  }
+  if (count < 2 || fields[1][0] == '\0') return damaged("FRAME", nowUs, reply);
+  uint64_t seq64 = 0;
+  if (!parseHex(fields[0], 2, 2, &seq64)) return damaged("FRAME", nowUs, reply);
+  badFrames_ = 0;
+  const int s = (int)seq64;
+  const char* verb = fields[1];
+  const size_t nargs = count - 2;
+  const char* const* args = fields + 2;
+  const char* refusal = tripped_ ? tripped_ : "SESSION";
+
+  if (same(verb, "HELLO")) {
+    uint32_t version = 0;
+    if (nargs != 1 || !parseDecimal(args[0], 3, &version)) return nak(reply, s, "ARGS");
+    if ((version != 1 && version != DRIVE_VERSION) || (version == 1 && 2 * coils_ > 64)) {
+      return nak(reply, s, "VERSION");
+    }
+    for (uint8_t k = 0; k < coils_; ++k) {
+      if (heat_[k] > 0.9) return nak(reply, s, "HEAT");
+    }
+    allOff();
+    version_ = (uint8_t)version;
+    tripped_ = 0;
+    lastValidUs_ = nowUs;
+    Reply r(reply, s);
+    r.field("ACK");
+    r.field("HELLO");
+    if (version == 1) {
+      r.decimalField(1);
+      r.decimalField(2u * coils_);
+      r.decimalField(watchdogMs_);
+    } else {
+      r.decimalField(DRIVE_VERSION);
+      r.decimalField(coils_);
+      r.decimalField(sensors_);
+      r.decimalField(watchdogMs_);
+      r.decimalField(loop_.periodUs);
+      r.decimalField((uint32_t)lround(limits_.maxCurrent * 1000));
+      r.decimalField((uint32_t)lround(limits_.maxPower));
+      r.decimalField(loop_.fieldLsbNt);
+    }
+    r.field(name_);
+    return r.finish();
+  }
+  if (same(verb, "OFF")) {
+    if (nargs != 0) return nak(reply, s, "ARGS");
+    const bool v2 = version_ == DRIVE_VERSION;
+    allOff();
+    if (session()) lastValidUs_ = nowUs;
+    Reply r(reply, s);
+    r.field("ACK");
+    r.field("OFF");
+    if (!v2) {
+      r.hexField(0);
+      r.hexField(0);
+    }
+    return r.finish();
+  }
+  if (same(verb, "PING")) {
+    if (nargs != 0) return nak(reply, s, "ARGS");
+    if (!session()) return nak(reply, s, refusal);
+    lastValidUs_ = nowUs;
+    Reply r(reply, s);
+    r.field("ACK");
+    r.field("PING");
+    if (version_ == 1) {
+      r.hexField(enable_);
+      r.hexField(polarity_);
+    }
+    return r.finish();
+  }
+  if (same(verb, "SET")) {
+    uint64_t enable = 0;
+    uint64_t polarity = 0;
+    if (nargs != 2 || !parseHex(args[0], 1, 16, &enable) || !parseHex(args[1], 1, 16, &polarity)) {
+      return nak(reply, s, "ARGS");
+    }
+    if (version_ != 1) return nak(reply, s, version_ == DRIVE_VERSION ? "VERB" : refusal);
+    const unsigned channels = 2u * coils_;
+    if (channels < 64 && ((enable | polarity) >> channels) != 0) return nak(reply, s, "RANGE");
+    int32_t ma[MAX_COILS];
+    for (uint8_t k = 0; k < coils_; ++k) {
+      const bool on = (enable >> k) & 1u;
+      const bool reversed = (polarity >> (coils_ + k)) & 1u;
+      ma[k] = on ? (reversed ? -loop_.nominalMa : loop_.nominalMa) : 0;
+    }
+    if (!setMa(ma)) return nak(reply, s, "LIMIT");
+    enable_ = enable;
+    polarity_ = polarity;
+    lastValidUs_ = nowUs;
+    Reply r(reply, s);
+    r.field("ACK");
+    r.field("SET");
+    r.hexField(enable_);
+    r.hexField(polarity_);
+    return r.finish();
+  }
+  const bool isDrive = same(verb, "DRIVE");
+  if (isDrive || same(verb, "READ")) {
+    int32_t ma[MAX_COILS];
+    if (isDrive && (nargs != 1 || length(args[0]) != 4u * coils_ || !parseBlock(args[0], coils_, ma))) {
+      return nak(reply, s, "ARGS");
+    }
+    if (!isDrive && nargs != 0) return nak(reply, s, "ARGS");
+    if (version_ != DRIVE_VERSION) return nak(reply, s, version_ == 1 ? "VERB" : refusal);
+    if (isDrive && !setMa(ma)) return nak(reply, s, "LIMIT");
+    lastValidUs_ = nowUs;
+    return state(verb, s, nowUs, reply);
+  }
+  return nak(reply, s, "VERB");
+}
+
+}  // namespace spherestep

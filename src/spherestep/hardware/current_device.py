@@ -1,0 +1,266 @@
+"""The current-mode coil controller in Python: the counterpart of ``firmware/spherestep/drive.cpp``.
+
+:class:`CurrentDevice` speaks protocol version 2 (:mod:`~spherestep.hardware.protocol2`) and, for relay
+plans, version 1 (``SET`` masks become ± the nominal current, coil ``k`` on enable bit ``k`` and polarity bit
+``N + k``). Each control period (:meth:`CurrentDevice.step`) it reads the coil currents, runs one PI current
+loop per coil and writes the PWM duties to a :class:`Bridges` plant, and checks the limits of
+:class:`~spherestep.hardware.limits.CurrentLimits`:
+
+* over-current: a measured ``|i| > trip_ratio · max_current`` → trip ``OVER``;
+* heating: the I²t model (:func:`~spherestep.hardware.limits.heating_step`) of any coil above 1 → ``HEAT``;
+* following: duty at ``±max_duty`` while ``|i_set − i| > 50 mA + 0.1 |i_set|`` for 20 ms → ``OPEN`` when
+  ``|i| < 50 mA`` (no current sensed: an open coil, or a sense stuck at zero), else ``STUCK``;
+* frozen reading: the same non-zero reading (``|i| ≥ 50 mA``) for 20 ms while ``|duty| > 0.05`` → ``STUCK``;
+* 8 damaged frames in a row during a session → ``CRCS``; no accepted command for the watchdog period → ``WDOG``.
+
+A trip switches every bridge off (duty 0, drivers asleep, supply cut), ends the session and is answered to
+every later command but ``HELLO``/``OFF``. The PI loop cancels the coil's pole: ``duty = k_p e + Σ k_i e``,
+``k_p = ω_c L / V``, ``k_i = k_p (R / L) h`` (anti-windup: the sum is clamped to ``±max_duty``), so the
+closed loop is first order with bandwidth ``ω_c`` when ``L``, ``R`` are right. Both implementations pass
+``firmware/test/vectors2.txt`` with integer mA and µs, so they answer byte for byte alike.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Protocol
+
+import numpy as np
+
+from ..errors import bad_value
+from .limits import CurrentLimits
+from .protocol import FrameError, LineReader, decode, encode, format_mask, parse_decimal, parse_hex
+from .protocol2 import MAX_COILS, MAX_FRAME2, MAX_SENSORS, VERSION2, decode_block, format_state
+
+_NAME_CHARS = frozenset("ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789._-")
+CRC_STORM = 8  # damaged frames in a row that trip a session
+FOLLOW_MS = 20  # duty saturated without the current following, or a frozen reading, this long → trip
+FROZEN_DUTY = 0.05  # a reading is only judged frozen while |duty| exceeds this
+
+
+class Bridges(Protocol):
+    """What the device drives and reads: one H-bridge with a current sense per coil, and magnetometers."""
+
+    def measure(self) -> np.ndarray:
+        """Coil currents now, integer mA ``(N,)`` (sampled with the magnetometers for a reply, and each step)."""
+
+    def drive(self, duty: np.ndarray, enabled: bool) -> None:
+        """Apply duties ``(N,)`` in ``[−1, 1]``; ``enabled`` False puts every bridge to sleep and cuts the supply."""
+
+    def sense(self) -> tuple[np.ndarray, int]:
+        """Latest magnetometer counts ``(S, 3)`` (integers) and the mask of stale sensors."""
+
+
+class CurrentDevice:
+    """The device state machine for ``coils`` H-bridges and ``sensors`` magnetometers (see the module).
+
+    ``watchdog_ms`` (1–65535), control ``period_us``, ``limits``, ``supply`` V, coil ``inductance`` H and
+    ``resistance`` (from ``limits``) for the PI gains, closed-loop ``bandwidth`` rad/s, ``nominal_ma`` the
+    current of a relay-mode coil, ``field_lsb_nt`` the magnetometers' nT per count (TMAG5273A2 at ±266 mT). ``trips`` lists ``(code, coil or -1, time µs)``.
+    """
+
+    def __init__(self, bridges: Bridges, coils: int, sensors: int, *, watchdog_ms: int = 100,
+                 period_us: int = 1000, limits: CurrentLimits | None = None, supply: float = 24.0,
+                 inductance: float = 18.7e-3, bandwidth: float = 2 * math.pi * 100, nominal_ma: int = 1000,
+                 field_lsb_nt: int = 8118, name: str = "spherestep-t41"):
+        if not isinstance(coils, int) or not 1 <= coils <= MAX_COILS:
+            raise bad_value("coils", f"an integer 1..{MAX_COILS}", coils)
+        if not isinstance(sensors, int) or not 0 <= sensors <= MAX_SENSORS:
+            raise bad_value("sensors", f"an integer 0..{MAX_SENSORS}", sensors)
+        if not isinstance(watchdog_ms, int) or not 1 <= watchdog_ms <= 65535:
+            raise bad_value("watchdog_ms", "an integer 1..65535 (milliseconds)", watchdog_ms)
+        if not isinstance(period_us, int) or not 50 <= period_us <= 100000:
+            raise bad_value("period_us", "an integer 50..100000 (microseconds)", period_us)
+        if not 1 <= len(name) <= 16 or not set(name) <= _NAME_CHARS:
+            raise bad_value("name", "1-16 characters from A-Z a-z 0-9 . _ -", name)
+        self.bridges, self.coils, self.sensors = bridges, coils, sensors
+        self.watchdog_ms, self.period_us, self.name = watchdog_ms, period_us, name
+        self.limits = limits if limits is not None else CurrentLimits()
+        lim = self.limits
+        self.nominal_ma = int(nominal_ma)
+        self.field_lsb_nt = int(field_lsb_nt)
+        if not 0 < self.nominal_ma <= lim.max_current * 1000:
+            raise bad_value("nominal_ma", "a current in mA within the current limit", nominal_ma)
+        h = period_us * 1e-6
+        self.kp = bandwidth * inductance / supply
+        self.ki = self.kp * lim.resistance / inductance * h
+        self.decay = math.exp(-h / lim.thermal_time)
+        self.follow_steps = max(1, round(FOLLOW_MS * 1000 / period_us))
+        self.setpoint = np.zeros(coils)  # A
+        self.integral = np.zeros(coils)
+        self.duty = np.zeros(coils)
+        self.measured = np.zeros(coils, dtype=np.int64)  # mA, at the last control step
+        self.heat = np.zeros(coils)
+        self._follow = np.zeros(coils, dtype=np.int64)
+        self._frozen = np.zeros(coils, dtype=np.int64)
+        self.version = 0  # 0: no session, 1: relay session, 2: current session
+        self.enable = self.polarity = 0  # relay-mode masks
+        self.tripped: str | None = None
+        self.trips: list[tuple[str, int, int]] = []
+        self.bad_frames = 0
+        self.last_valid_us = 0
+        self._reader = LineReader(MAX_FRAME2)
+        self._all_off()
+
+    # -- outputs and trips --------------------------------------------------------------------------------------
+    @property
+    def session(self) -> bool:
+        return self.version != 0
+
+    def _all_off(self) -> None:
+        self.setpoint[:] = 0.0
+        self.integral[:] = 0.0
+        self.duty[:] = 0.0
+        self._follow[:] = 0
+        self._frozen[:] = 0
+        self.enable = self.polarity = 0
+        self.bridges.drive(self.duty.copy(), False)
+
+    def _trip(self, code: str, coil: int, now_us: int) -> None:
+        self._all_off()
+        self.version = 0
+        self.tripped = code
+        self.trips.append((code, coil, now_us))
+
+    def tick(self, now_us: int) -> None:
+        """Watchdog: a session with no accepted command for ``watchdog_ms`` → all off, trip ``WDOG``."""
+        if self.session and ((now_us - self.last_valid_us) & 0xFFFFFFFF) >= self.watchdog_ms * 1000:
+            self._trip("WDOG", -1, now_us)
+
+    def step(self, now_us: int) -> None:
+        """One control period at ``now_us``: read currents, update heat, run the PI loops, check, drive."""
+        self.tick(now_us)
+        lim = self.limits
+        ma = np.asarray(self.bridges.measure(), dtype=np.int64)
+        i = ma / 1000.0
+        self.heat = self.decay * self.heat + (1.0 - self.decay) * (i / lim.continuous_current) ** 2
+        if not self.session:
+            self.measured = ma
+            return
+        over = np.flatnonzero(np.abs(ma) > lim.trip_ratio * lim.max_current * 1000)
+        if len(over):
+            return self._trip("OVER", int(over[0]), now_us)
+        hot = np.flatnonzero(self.heat > 1.0)
+        if len(hot):
+            return self._trip("HEAT", int(hot[0]), now_us)
+        e = self.setpoint - i
+        dmax = lim.max_duty
+        self.integral = np.clip(self.integral + self.ki * e, -dmax, dmax)
+        self.duty = np.clip(self.kp * e + self.integral, -dmax, dmax)
+        lagging = (np.abs(self.duty) >= dmax) & (np.abs(e) > 0.05 + 0.1 * np.abs(self.setpoint))
+        self._follow = np.where(lagging, self._follow + 1, 0)
+        frozen = (ma == self.measured) & (np.abs(ma) >= 50) & (np.abs(self.duty) > FROZEN_DUTY)
+        self._frozen = np.where(frozen, self._frozen + 1, 0)
+        self.measured = ma
+        lost = np.flatnonzero(self._follow >= self.follow_steps)
+        if len(lost):
+            k = int(lost[0])
+            return self._trip("OPEN" if abs(ma[k]) < 50 else "STUCK", k, now_us)
+        stuck = np.flatnonzero(self._frozen >= self.follow_steps)
+        if len(stuck):
+            return self._trip("STUCK", int(stuck[0]), now_us)
+        self.bridges.drive(self.duty.copy(), True)
+
+    # -- frames -------------------------------------------------------------------------------------------------
+    def receive(self, data: bytes, now_us: int) -> bytes:
+        """Consume received bytes at ``now_us``; return the replies to send back."""
+        return b"".join(self._process(body, now_us) for body in self._reader.feed(data))
+
+    def _state(self, now_us: int) -> tuple[str, ...]:
+        counts, stale = self.bridges.sense()
+        return format_state(now_us, stale, self.bridges.measure(), np.asarray(counts).reshape(-1))
+
+    def _damaged(self, code: str, now_us: int) -> bytes:
+        self.bad_frames += 1
+        if self.session and self.bad_frames >= CRC_STORM:
+            self._trip("CRCS", -1, now_us)
+        return encode(None, "NAK", code)
+
+    def _process(self, body: bytes, now_us: int) -> bytes:
+        self.tick(now_us)
+        try:
+            frame = decode(body, MAX_FRAME2)
+        except FrameError as exc:
+            return self._damaged(exc.code, now_us)
+        if frame.seq is None:
+            return self._damaged("FRAME", now_us)
+        self.bad_frames = 0
+        seq, verb, args = frame.seq, frame.verb, frame.args
+
+        def nak(code: str) -> bytes:
+            return encode(seq, "NAK", code)
+
+        def accepted(*data: object) -> bytes:
+            if self.session:
+                self.last_valid_us = now_us
+            return encode(seq, "ACK", verb, *data, max_frame=MAX_FRAME2)
+
+        def refused() -> bytes:
+            return nak(self.tripped or "SESSION")
+
+        if verb == "HELLO":
+            version = parse_decimal(args[0], 3) if len(args) == 1 else None
+            if version is None:
+                return nak("ARGS")
+            if version not in (1, VERSION2) or (version == 1 and 2 * self.coils > 64):
+                return nak("VERSION")
+            if np.any(self.heat > 0.9):
+                return nak("HEAT")
+            self._all_off()
+            self.version, self.tripped = version, None
+            if version == 1:
+                return accepted(1, 2 * self.coils, self.watchdog_ms, self.name)
+            lim = self.limits
+            return accepted(VERSION2, self.coils, self.sensors, self.watchdog_ms, self.period_us,
+                            round(lim.max_current * 1000), round(lim.max_power), self.field_lsb_nt, self.name)
+        if verb == "OFF":
+            if args:
+                return nak("ARGS")
+            self._all_off()
+            return accepted() if self.version == VERSION2 else accepted(0, 0)
+        if verb == "PING":
+            if args:
+                return nak("ARGS")
+            if not self.session:
+                return refused()
+            return accepted() if self.version == VERSION2 else accepted(format_mask(self.enable),
+                                                                       format_mask(self.polarity))
+        if verb == "SET":
+            masks = [parse_hex(a, 1, 16) for a in args] if len(args) == 2 else [None]
+            if None in masks:
+                return nak("ARGS")
+            if self.version != 1:
+                return nak("VERB") if self.version == VERSION2 else refused()
+            enable, polarity = masks
+            if (enable | polarity) >> (2 * self.coils):
+                return nak("RANGE")
+            n = self.coils
+            on = np.array([(enable >> k) & 1 for k in range(n)], dtype=float)
+            sign = np.array([1.0 - 2.0 * ((polarity >> (n + k)) & 1) for k in range(n)])
+            if not self._set(on * sign * self.nominal_ma):
+                return nak("LIMIT")
+            self.enable, self.polarity = enable, polarity
+            return accepted(format_mask(enable), format_mask(polarity))
+        if verb in ("DRIVE", "READ"):
+            block = None
+            if verb == "DRIVE" and len(args) == 1:
+                block = decode_block(args[0], self.coils)
+            if (verb == "DRIVE" and block is None) or (verb == "READ" and args):
+                return nak("ARGS")
+            if self.version != VERSION2:
+                return nak("VERB") if self.version == 1 else refused()
+            if block is not None and not self._set(block):
+                return nak("LIMIT")
+            return accepted(*self._state(now_us))
+        return nak("VERB")
+
+    def _set(self, ma) -> bool:
+        """Take setpoints in mA if within the current and power limits; False (nothing changed) otherwise."""
+        lim = self.limits
+        amps = [float(m) / 1000.0 for m in ma]
+        if any(abs(m) > lim.max_current * 1000 for m in ma):
+            return False
+        if lim.resistance * sum(a * a for a in amps) > lim.max_power:  # summed in order, as the firmware does
+            return False
+        self.setpoint = np.array(amps)
+        return True

@@ -1,0 +1,184 @@
+"""Protocol version 2 and the device-side limits: the Python device against the firmware's shared vectors
+(the C++ device runs the same file in tests/test_firmware.py), the wire format, and the host-side limits."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from spherestep.errors import InputError
+from spherestep.hardware.current_device import CurrentDevice
+from spherestep.hardware.limits import CurrentLimits, ThermalLimitError, heating_step
+from spherestep.hardware.protocol import crc16, encode
+from spherestep.hardware.protocol2 import MAX_FRAME2, decode_block, encode_block, frame_bytes, parse_state
+
+VECTORS2 = Path(__file__).resolve().parents[1] / "firmware" / "test" / "vectors2.txt"
+
+
+class TablePlant:
+    """The sense reads what the vectors say; the bridges record what the device drives."""
+
+    def __init__(self, coils: int, sensors: int):
+        self.ma = np.zeros(coils, dtype=np.int64)
+        self.counts = np.zeros((sensors, 3), dtype=np.int64)
+        self.stale = 0
+        self.duty = np.zeros(coils)
+        self.enabled = False
+
+    def measure(self):
+        return self.ma.copy()
+
+    def drive(self, duty, enabled):
+        self.duty, self.enabled = np.asarray(duty, dtype=float), enabled
+
+    def sense(self):
+        return self.counts.copy(), self.stale
+
+
+def frame(body: str) -> bytes:
+    return b"$" + body.encode() + f"*{crc16(body.encode()):04X}\n".encode()
+
+
+def unescape(text: str) -> bytes:
+    return text.encode().decode("unicode_escape").encode("latin-1")
+
+
+def permille(x: float) -> int:
+    return int(math.copysign(math.floor(abs(x) * 1000 + 0.5), x))
+
+
+DEFAULT_LIMITS = dict(max_current=1.0, max_duty=0.95, max_power=100.0, continuous_current=1.0,
+                      thermal_time=60.0, resistance=24.0)
+
+
+def test_python_device_passes_the_shared_vectors():
+    """Every line of firmware/test/vectors2.txt, as firmware/test/test_drive.cpp runs it."""
+    limits = dict(DEFAULT_LIMITS)
+    dev = plant = None
+    now = 0
+    replies: list[bytes] = []
+    checked = 0
+    for number, raw in enumerate(VECTORS2.read_text().splitlines(), 1):
+        line = raw.strip()
+        if not line or line.startswith("#"):
+            continue
+        where = f"vectors2.txt:{number}: {line}"
+        op, _, rest = line.partition(" ")
+        words = rest.split()
+        if op == "crc":
+            assert f"{crc16(words[0].encode()):04X}" == words[1], where
+        elif op == "limits":
+            ma, duty, watts, cont, thermal, res = map(float, words)
+            limits = dict(max_current=ma / 1000, max_duty=duty / 1000, max_power=watts, continuous_current=cont / 1000,
+                          thermal_time=thermal / 1000, resistance=res / 1000)
+        elif op == "device2":
+            coils, sensors, watchdog, period = map(int, words[:4])
+            plant = TablePlant(coils, sensors)
+            dev = CurrentDevice(plant, coils, sensors, watchdog_ms=watchdog, period_us=period,
+                                limits=CurrentLimits(**limits), supply=24.0, inductance=18.7e-3, bandwidth=125.0,
+                                nominal_ma=1000, field_lsb_nt=8118, name=words[4])
+            limits, now, replies = dict(DEFAULT_LIMITS), 0, []
+        elif op == "meas":
+            plant.ma = np.array([int(x) for x in rest.split(",")])
+        elif op == "field":
+            plant.stale = int(words[0], 16)
+            plant.counts = np.array([int(x) for x in words[1].split(",")]).reshape(-1, 3)
+        elif op == "@":
+            now = int(rest)
+            dev.tick(now)
+        elif op == "step":
+            at, count = map(int, words)
+            for i in range(count):
+                now = at + i * dev.period_us
+                dev.step(now)
+        elif op in (">", ">raw"):
+            assert not replies, f"{where} (previous send left {replies[0]!r} unchecked)"
+            data = frame(rest) if op == ">" else unescape(rest)
+            out = dev.receive(data, now)
+            replies = [b"$" + r for r in out.split(b"$") if r]
+        elif op == "<":
+            assert replies and replies.pop(0) == frame(rest), f"{where} (got {replies})"
+        elif op == "-":
+            assert not replies, where
+        elif op == "=":
+            what = words[0]
+            if what == "duty":
+                assert [permille(d) for d in plant.duty] == [int(x) for x in words[1].split(",")], \
+                    f"{where} (got {[permille(d) for d in plant.duty]})"
+            elif what == "enabled":
+                assert plant.enabled == (words[1] == "1"), where
+            elif what == "trip":
+                if words[1] == "-":
+                    assert dev.tripped is None, f"{where} (got {dev.tripped})"
+                else:
+                    assert dev.tripped == words[1] and dev.trips[-1][1] == int(words[2]), \
+                        f"{where} (got {dev.trips[-1:]})"
+            else:
+                raise AssertionError(f"{where}: unknown check")
+        else:
+            raise AssertionError(f"{where}: unknown operation")
+        checked += 1
+    assert checked > 150
+
+
+def test_blocks_round_trip_signed_16_bit_values():
+    values = np.array([0, 1, -1, 500, -1000, 32767, -32767])
+    text = encode_block(values)
+    assert text == "00000001FFFF01F4FC187FFF8001"
+    assert np.array_equal(decode_block(text, 7), values)
+    assert decode_block(text.lower(), 7) is not None
+    assert decode_block(text[:-1], 7) is None and decode_block("G" * 28, 7) is None
+    assert np.array_equal(decode_block(encode_block([40000, -40000]), 2), [32767, -32767])  # clipped
+
+
+def test_frame_sizes_for_the_prototype_match_encoded_frames():
+    """29 coils, 8 sensors: the byte counts docs/protocol.md quotes, checked against real frames."""
+    sizes = frame_bytes(29, 8)
+    drive = encode(0, "DRIVE", encode_block(np.zeros(29)), max_frame=MAX_FRAME2)
+    answer = encode(0, "ACK", "DRIVE", "00000000", "0", encode_block(np.zeros(29)), encode_block(np.zeros(24)),
+                    max_frame=MAX_FRAME2)
+    assert (len(drive), len(answer)) == (sizes["drive"], sizes["answer"]) == (132, 244)
+    assert sizes["round_trip"] == 376
+    # 115200 baud, 10 bits per byte: at most 30 round trips a second
+    assert 115200 / 10 / sizes["round_trip"] == pytest.approx(30.6, abs=0.1)
+
+
+def test_state_is_parsed_in_si_units_and_flags_saturation():
+    body = ("00001194", "1", encode_block([100, -250]), encode_block([1000, -2, 32767, 0, 0, 0]))
+    state = parse_state(body, 2, 2, 8.118e-6)
+    assert state.time_us == 4500 and state.stale == 1
+    assert np.allclose(state.currents, [0.1, -0.25])
+    assert state.field[0, 0] == pytest.approx(8.118e-3)
+    assert state.saturated.tolist() == [True, False]
+
+
+def test_heating_step_is_the_exact_first_order_solution():
+    """Held current i for time T in n steps equals one step of T, and tends to (i / i_c)²."""
+    lim = CurrentLimits(thermal_time=10.0, continuous_current=1.0)
+    h = 0.0
+    for _ in range(100):
+        h = heating_step(h, 1.5, 0.1, lim)
+    assert h == pytest.approx(heating_step(0.0, 1.5, 10.0, lim), rel=1e-12)
+    assert h == pytest.approx(2.25 * (1 - math.exp(-1.0)), rel=1e-12)
+
+
+def test_host_limits_refuse_what_the_device_refuses():
+    lim = CurrentLimits()
+    lim.check_setpoints([1.0, -1.0, 0.5])  # 54 W
+    with pytest.raises(ThermalLimitError, match="max_current"):
+        lim.check_setpoints([1.001, 0, 0])
+    with pytest.raises(ThermalLimitError, match="max_power"):
+        lim.check_setpoints([0.9] * 6)  # 117 W
+    with pytest.raises(InputError, match="max_duty"):
+        CurrentLimits(max_duty=1.5)
+
+
+def test_device_rejects_bad_configuration():
+    plant = TablePlant(3, 1)
+    with pytest.raises(InputError, match="coils"):
+        CurrentDevice(plant, 40, 1)
+    with pytest.raises(InputError, match="nominal_ma"):
+        CurrentDevice(plant, 3, 1, nominal_ma=5000)
