@@ -133,7 +133,7 @@ def test_closed_loop_recovers_missed_steps(proto, wells):
     run = run_closed_loop(proto, targets, wells, dwell=0.6, noise=math.radians(0.2), missed=0.1,
                           rotor=Rotor.from_design(proto, damping=0.6), dt=2e-3, rng=11)
     assert run.missed.sum() >= 2
-    assert run.final_error < proto.metrics(samples=5000)["resolution_p95"]
+    assert run.final_error < proto.metrics(samples=5000).resolution_p95_rad
 
 
 @pytest.mark.parametrize("kwargs, field", [(dict(noise=-1.0), "noise"), (dict(missed=1.0), "missed")])

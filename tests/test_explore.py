@@ -127,11 +127,11 @@ def test_measured_row_agrees_with_the_motor_metrics():
     metrics = build_design(point).metrics(samples=500, seed=3)
     assert row["status"] == "ok" and row["reason"] == ""
     assert row["coils"] == 16 and row["rotor_poles"] == 60
-    assert row["states"] == metrics["states"]
-    assert row["resolution_median_deg"] == math.degrees(metrics["resolution_median"])
-    assert row["resolution_max_deg"] == math.degrees(metrics["resolution_max"])
-    assert row["escape_violations"] == len(metrics["escape_violations"])
-    assert row["reaches_all"] is metrics["reaches_all"]
+    assert row["states"] == metrics.states
+    assert row["resolution_median_deg"] == math.degrees(metrics.resolution_median_rad)
+    assert row["resolution_max_deg"] == math.degrees(metrics.resolution_max_rad)
+    assert row["escape_violations"] == len(metrics.escape_violations)
+    assert row["reaches_all"] is metrics.reaches_all
     assert row["inertia_isotropy"] == pk.by_name("truncated-icosahedron").inertia_isotropy()
     assert row["family_rule"] == "different" and json.loads(row["params"]) == point.params
 

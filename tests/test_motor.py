@@ -120,14 +120,22 @@ def test_nearest_matches_brute_force(proto):
 
 def test_metrics(proto, proto_metrics):
     m = proto_metrics
-    assert m["states"] == len(proto.states())
-    assert 0 < m["resolution_median"] < m["resolution_p95"] <= m["resolution_max"] < m["max_step"]
-    assert m["range_fraction"] == 1.0 and m["state_graph_components"] == 1 and m["reaches_all"]
-    assert math.isclose(m["max_step"], proto.coil_angle + proto.magnet_angle)
+    assert m.states == len(proto.states())
+    assert 0 < m.resolution_median_rad < m.resolution_p95_rad <= m.resolution_max_rad < m.max_step_rad
+    assert m.range_fraction == 1.0 and m.state_graph_components == 1 and m.reaches_all
+    assert math.isclose(m.max_step_rad, proto.coil_angle + proto.magnet_angle)
     # resolution against brute force on a subsample
     R = so3.random(40, 99)
     brute = so3.distance(R[:, None], proto.states().rotations[None]).min(axis=1)
-    assert np.quantile(brute, 0.5) < m["resolution_p95"]
+    assert np.quantile(brute, 0.5) < m.resolution_p95_rad
+    # one dict for people: the *_rad fields in degrees, named *_deg; the rest as is
+    people, raw = m.to_dict(), m.to_dict(degrees=False)
+    assert people["resolution_median_deg"] == math.degrees(m.resolution_median_rad)
+    assert people["max_step_deg"] == math.degrees(raw["max_step_rad"])
+    assert not any(k.endswith("_rad") for k in people) and not any(k.endswith("_deg") for k in raw)
+    assert people["held_pairs_histogram"] == list(m.held_pairs_histogram) and sum(m.held_pairs_histogram) == m.states
+    with pytest.raises(AttributeError):
+        m.states = 0  # frozen
 
 
 def test_largest_empty_cone_against_sampling():
@@ -148,7 +156,7 @@ def test_largest_empty_cone_against_sampling():
 
 def test_escape_violations_agree_with_direct_computation(proto, proto_metrics):
     states = proto.states()
-    violators = set(proto_metrics["escape_violations"])
+    violators = set(proto_metrics.escape_violations)
     rng = np.random.default_rng(4)
     for i in rng.integers(0, len(states), 25):
         near = states.within(states.rotations[i], proto.max_step)
@@ -169,3 +177,123 @@ def test_failed_coils_are_never_used(proto):
     states = broken.states()
     assert not np.isin(states.pairs[:, 1], [0, 5]).any()
     assert len(states) < len(proto.states())
+
+
+# --- the one builder ---------------------------------------------------------------------------------------
+
+SMALL = dict(rotor="icosidodecahedron", stator="truncated-octahedron", stator_axis=[0, 0, -1],
+             cap_half_angle=math.radians(70), sphere_diameter="12 in", magnet_diameter="1 in",
+             magnet_length="0.5 in", coil_diameter="2 in", coil_length="1.625 in", air_gap="0.005 in")
+
+
+def test_from_packings_builds_the_prototype_bit_for_bit(proto):
+    """Independent construction: refine, select the caps and assign polarities by hand."""
+    from spherestep import packing as pk
+    from spherestep.motor import MotorDesign
+
+    rotor = pk.refine(pk.by_name("truncated-icosahedron"), levels=1)
+    full = pk.refine(pk.by_name("truncated-cuboctahedron"), levels=1)
+    R, g, d = 6 * 0.0254, 0.005 * 0.0254, 2 * 0.0254
+    coil_angle = math.atan(0.5 * d / (R + g))
+    keep = (full.centers @ [0, 0, -1] >= math.cos(math.radians(80)) - 1e-12) & (full.radii >= coil_angle)
+    assert np.array_equal(proto.rotor.centers, rotor.centers) and np.array_equal(proto.stator.centers, full.centers[keep])
+    assert np.array_equal(proto.polarity, np.where(np.arange(92) < 60, 1, -1))
+    assert proto.coil_angle == coil_angle and len(proto.stator) == 29
+    # the same design from explicit packings, cap indices and a per-pole polarity list
+    again = MotorDesign.from_packings(**(SMALL | dict(rotor=rotor, stator=full, cap_half_angle=math.radians(80),
+                                                      magnet_diameter="1 in", polarity=proto.polarity.tolist(),
+                                                      coils=np.flatnonzero(keep).tolist())))
+    assert np.array_equal(again.stator.centers, proto.stator.centers) and np.array_equal(again.polarity, proto.polarity)
+    # the named packings are shared, not rebuilt
+    assert MotorDesign.from_packings(**SMALL).rotor is pk.named("icosidodecahedron", 0)
+
+
+@pytest.mark.parametrize("change, field", [
+    (dict(cap_half_angle=math.radians(95)), "cap_half_angle"),
+    (dict(cap_half_angle="80 deg"), "cap_half_angle"),
+    (dict(stator_axis=[0, 0, 2]), "stator_axis"),
+    (dict(rotor="football"), "rotor"),
+    (dict(rotor_refine=-1), "rotor_refine"),
+    (dict(coils=[0, 99]), "coils[1]"),
+    (dict(coils=[3, 3]), "coils[1]"),
+    (dict(coils="some"), "coils"),
+    (dict(coil_diameter="20 in"), "coil_diameter"),
+    (dict(coil_diameter="11 in", cap_half_angle=math.radians(20)), "coils"),
+    (dict(magnet_diameter="13 in"), "magnet_diameter"),
+    (dict(air_gap="-1 mm"), "air_gap"),
+    (dict(sphere_diameter="12 furlongs"), "sphere_diameter"),
+    (dict(polarity=[1, -1]), "polarity"),
+    (dict(polarity={"primary": 2}), "polarity.primary"),
+    (dict(magnet_diameter="5 in"), "rotor"),
+    (dict(max_coils=3), "stator"),
+    (dict(coils=[0], cap_half_angle=math.radians(10)), "stator[0]"),
+])
+def test_from_packings_errors_carry_the_field(change, field):
+    from spherestep.motor import MotorDesign
+
+    with pytest.raises(InputError) as err:
+        MotorDesign.from_packings(**(SMALL | change))
+    assert err.value.field == field and "\n" not in str(err.value)
+
+
+def test_polarity_rule_and_explicit_rotor():
+    from spherestep import packing as pk
+    from spherestep.motor import MotorDesign, PolarityRule
+
+    design = MotorDesign.from_packings(**(SMALL | dict(rotor_refine=1, polarity={"primary": -1})))
+    base = len(pk.named("icosidodecahedron", 0))
+    assert np.array_equal(design.polarity, np.where(np.arange(len(design.rotor)) < base, -1, 1))
+    assert np.array_equal(PolarityRule(1, 1).signs(5, 2), np.ones(5))
+    custom = pk.Packing(pk.named("icosidodecahedron", 0).centers, 0.1, name="custom")
+    with pytest.raises(InputError) as err:  # a rule needs a named rotor
+        MotorDesign.from_packings(**(SMALL | dict(rotor=custom)))
+    assert err.value.field == "polarity"
+
+
+# --- results and helpers -------------------------------------------------------------------------------------
+
+def test_single_coil_failures_are_the_metrics_without_that_coil():
+    from spherestep.motor import MotorDesign, single_coil_failures
+
+    design = MotorDesign.from_packings(**SMALL)
+    rows = single_coil_failures(design, samples=300, seed=1)
+    assert [r.coil for r in rows] == list(range(len(design.stator)))
+    for r in rows[:3]:
+        m = design.without_coils([r.coil]).metrics(samples=300, seed=1, escape=False)
+        assert (r.states, r.range_fraction, r.reaches_all, r.resolution_median_rad) == \
+            (m.states, m.range_fraction, m.reaches_all, m.resolution_median_rad)
+        assert m.escape_violations is None
+        assert r.to_dict()["resolution_median_deg"] == math.degrees(r.resolution_median_rad)
+    assert rows[0].states < design.metrics(samples=300, escape=False).states  # a failed coil loses states
+
+
+def test_coil_currents_is_the_one_current_vector(proto):
+    from spherestep.motor import coil_currents
+
+    states = proto.states()
+    c = proto.coil_currents(states.coils(0))
+    assert c.shape == (29,) and set(np.flatnonzero(c)) == {k for _, k in states.held(0)}
+    assert all(c[k] == proto.polarity[j] for j, k in states.held(0))
+    assert np.array_equal(coil_currents({2: 0.5}, 4), [0, 0, 0.5, 0])
+    for bad, field in (({29: 1}, "coils"), ({1: float("nan")}, "coils"), ({1: "x"}, "coils[1]"), (5, "coils")):
+        with pytest.raises(InputError) as err:
+            proto.coil_currents(bad)
+        assert err.value.field == field
+    with pytest.raises(InputError, match="failed coils"):
+        proto.without_coils([3]).coil_currents({3: 1})
+
+
+def test_within_takes_one_rotation_or_a_batch(proto):
+    states = proto.states()
+    R = states.rotations[:4].reshape(2, 2, 3, 3)
+    batch = states.within(R, proto.max_step)
+    assert batch.shape == (2, 2)
+    for i in range(4):
+        one = states.within(states.rotations[i], proto.max_step)
+        assert np.array_equal(batch.reshape(-1)[i], one) and i in one
+        brute = np.flatnonzero(so3.distance(states.rotations[i], states.rotations) <= proto.max_step)
+        assert np.array_equal(one, brute)
+    for call in (lambda: states.within(2 * np.eye(3), 0.1), lambda: states.nearest(np.eye(2)),
+                 lambda: states.within(np.eye(3), -1.0)):
+        with pytest.raises(InputError):
+            call()

@@ -15,11 +15,18 @@ from spherestep.commutation import about_axis, plan_geometric
 from spherestep.dynamics import Rotor, simulate
 from spherestep.errors import InputError
 from spherestep.harmonics import so3_grid
+from spherestep.motor import DesignMetrics
 from spherestep.report import (MAX_FRAMES, build_report, energy_figure, frame_steps, resolution_distances,
                                trajectory_figure, write_report)
 
 AXIS = np.array([1.0, 0.5, 2.0])
 PLOTLY_JS = len(plotly.offline.get_plotlyjs())
+
+# metrics of a design without states: the report leaves out what needs them
+NO_STATES = DesignMetrics(states=0, samples=0, max_step_rad=0.2, resolution_median_rad=math.inf,
+                          resolution_p95_rad=math.inf, resolution_max_rad=math.inf, range_fraction=0.0,
+                          state_graph_components=0, reaches_all=False, held_pairs_histogram=(),
+                          escape_violations=None)
 
 
 class Wells:
@@ -114,15 +121,15 @@ def test_long_plans_are_animated_on_evenly_spaced_steps(proto):
     assert np.all(np.diff(shown) >= 41) and np.all(np.diff(shown) <= 42)
     start = proto.states().rotations[0]
     plan = plan_geometric(proto, about_axis(AXIS, 8 * math.pi, 2 * MAX_FRAMES, start=start))
-    text, info = build_report(proto, {"states": 0}, plan, axis=AXIS)
+    text, info = build_report(proto, NO_STATES, plan, axis=AXIS)
     assert info["frames"] == MAX_FRAMES and f"{MAX_FRAMES} evenly spaced steps of {2 * MAX_FRAMES + 1}" in text
     assert len(text) - PLOTLY_JS < 3_500_000
 
 
 def test_histogram_draws_the_metrics_samples(proto, proto_metrics):
     dist = resolution_distances(proto, 20_000, 7)
-    assert np.median(dist) == proto_metrics["resolution_median"]
-    assert np.quantile(dist, 0.95) == proto_metrics["resolution_p95"]
+    assert np.median(dist) == proto_metrics.resolution_median_rad
+    assert np.quantile(dist, 0.95) == proto_metrics.resolution_p95_rad
 
 
 def test_simulation_and_energy_map_sections(proto, tmp_path):
@@ -137,7 +144,7 @@ def test_simulation_and_energy_map_sections(proto, tmp_path):
         c[k] = sign
     energy = model.energy(rotations.reshape(-1, 3, 3), np.broadcast_to(c, (21 * 21, len(c)))).reshape(21, 21).T
     grid = {"x": np.degrees(a), "y": np.degrees(a), "energy": energy, "x_label": "about x (°)", "title": "well"}
-    info = write_report(tmp_path / "r.html", proto, {"states": 0}, plan, sim, grid)
+    info = write_report(tmp_path / "r.html", proto, NO_STATES, plan, sim, grid)
     assert info["sections"] == ["motor", "design", "commutation", "simulation", "energy"]
     text = (tmp_path / "r.html").read_text()
     assert "Energy map" in text and "Simulated run" in text and '"text":"well"' in text
@@ -148,9 +155,9 @@ def test_simulation_and_energy_map_sections(proto, tmp_path):
     assert abs(simulated.y[-1] - planned.y[-1]) < 3.0
     assert len(simulated.x) == len(sim.times) and simulated.x[-1] == pytest.approx(sim.times[-1])
     with pytest.raises(InputError, match="energy_map"):
-        build_report(proto, {"states": 0}, energy_map={"energy": np.zeros(5)})
+        build_report(proto, NO_STATES, energy_map={"energy": np.zeros(5)})
     with pytest.raises(InputError, match="energy_map"):
-        build_report(proto, {"states": 0}, energy_map={"energy": np.zeros((3, 4)), "x": np.arange(3)})
+        build_report(proto, NO_STATES, energy_map={"energy": np.zeros((3, 4)), "x": np.arange(3)})
 
 
 def test_report_is_written_atomically(proto, tmp_path):
@@ -158,9 +165,9 @@ def test_report_is_written_atomically(proto, tmp_path):
     path.write_text("old report")
     old = path.open("rb")
     with pytest.raises(InputError):
-        write_report(path, proto, {"states": 0}, energy_map={"energy": None})
+        write_report(path, proto, NO_STATES, energy_map={"energy": None})
     assert path.read_text() == "old report" and sorted(p.name for p in tmp_path.iterdir()) == ["report.html"]
-    write_report(path, proto, {"states": 0})
+    write_report(path, proto, NO_STATES)
     # the new file replaced the old one by rename: a reader of the old file still sees all of it
     assert old.read() == b"old report"
     old.close()

@@ -25,17 +25,12 @@ DEMO_AXIS = "1,0.5,2"
 STEP_FRACTION = 0.35  # default desired step, as a fraction of the max step (finer steps land more reliably)
 
 
-def metrics_for_people(design: MotorDesign, metrics: dict) -> dict:
-    """The design's summary and metrics with angles in degrees."""
-    out = design.summary()
-    for key, value in metrics.items():
-        if key in ("resolution_median", "resolution_p95", "resolution_max", "max_step"):
-            out[f"{key}_deg"] = math.degrees(value)
-        elif key == "escape_violations":
-            out["escape_violations"] = len(value)
-            out["escape_violation_states"] = value[:50]
-        else:
-            out[key] = value
+def metrics_for_people(design: MotorDesign, metrics) -> dict:
+    """The design's summary and :class:`~spherestep.motor.metrics.DesignMetrics` with angles in degrees."""
+    out = design.summary() | metrics.to_dict(degrees=True)
+    states = out.pop("escape_violations") or []
+    out["escape_violations"] = len(states)
+    out["escape_violation_states"] = states[:50]
     return out
 
 

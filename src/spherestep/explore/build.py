@@ -161,13 +161,13 @@ def holding_torques(design: MotorDesign, count: int, seed: int) -> np.ndarray:
     axes is its holding torque (:func:`spherestep.statics.holding_torque`). States whose equilibrium search
     does not converge are left out.
     """
-    from ..magnetics import equilibrium, state_currents, torque_map
+    from ..magnetics import equilibrium, torque_map
     from ..statics import holding_torque
 
     states = design.states()
     idx = np.sort(np.random.default_rng(seed).choice(len(states), size=min(count, len(states)), replace=False))
     tmap = torque_map(design)
-    currents = np.array([state_currents(design, i) for i in idx])
+    currents = np.array([design.coil_currents(states.coils(int(i))) for i in idx])
     eq = equilibrium(tmap, states.rotations[idx], currents)
     return holding_torque(tmap, eq.rotation, currents).torque[np.asarray(eq.converged, dtype=bool)]
 
@@ -213,15 +213,15 @@ def evaluate(point: DesignPoint, limits: Limits = Limits()) -> dict:
             metrics = design.metrics(samples=point.samples, seed=point.seed)
         except Exception as exc:  # noqa: BLE001 (a design that breaks the metrics is recorded, not fatal)
             raise Unbuildable("failed", f"{type(exc).__name__}: {exc}") from None
-        if metrics["states"] == 0:
+        if metrics.states == 0:
             raise Unbuildable("no_states", "no orientation holds two poles on two coils")
         row.update(
-            status="ok", reason="", states=metrics["states"],
-            resolution_median_deg=math.degrees(metrics["resolution_median"]),
-            resolution_p95_deg=math.degrees(metrics["resolution_p95"]),
-            resolution_max_deg=math.degrees(metrics["resolution_max"]),
-            range_fraction=metrics["range_fraction"], state_graph_components=metrics["state_graph_components"],
-            reaches_all=metrics["reaches_all"], escape_violations=len(metrics["escape_violations"]),
+            status="ok", reason="", states=metrics.states,
+            resolution_median_deg=math.degrees(metrics.resolution_median_rad),
+            resolution_p95_deg=math.degrees(metrics.resolution_p95_rad),
+            resolution_max_deg=math.degrees(metrics.resolution_max_rad),
+            range_fraction=metrics.range_fraction, state_graph_components=metrics.state_graph_components,
+            reaches_all=metrics.reaches_all, escape_violations=len(metrics.escape_violations),
         )
         if point.torque_states:
             try:

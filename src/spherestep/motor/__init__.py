@@ -3,7 +3,9 @@
 
 from .design import DEFAULT_TOL, MAX_COILS, MotorDesign, PolarityRule, check_fits, default_channel_map
 from .prototype import prototype
-from .states import StepperStates, find_states
+from .metrics import CoilFailure, DesignMetrics, design_metrics, single_coil_failures
+from .states import StepperStates, coil_currents, find_states
 
-__all__ = ["DEFAULT_TOL", "MAX_COILS", "MotorDesign", "PolarityRule", "StepperStates", "check_fits",
-           "default_channel_map", "find_states", "prototype"]
+__all__ = ["DEFAULT_TOL", "MAX_COILS", "CoilFailure", "DesignMetrics", "MotorDesign", "PolarityRule",
+           "StepperStates", "check_fits", "coil_currents", "default_channel_map", "design_metrics",
+           "find_states", "prototype", "single_coil_failures"]

@@ -295,6 +295,13 @@ class MotorDesign:
         """Indices of the coils that work (all but ``failed_coils``)."""
         return np.setdiff1d(np.arange(len(self.stator)), np.array(self.failed_coils, dtype=int))
 
+    def coil_currents(self, coils) -> np.ndarray:
+        """Currents ``(N,)`` of a mapping coil → current (e.g. ``self.states().coils(i)``): the one helper,
+        :func:`spherestep.motor.states.coil_currents`, checked against this motor's coils and failed coils."""
+        from .states import coil_currents
+
+        return coil_currents(coils, len(self.stator), self.failed_coils)
+
     def without_coils(self, coils) -> "MotorDesign":
         """The same motor with the given coils failed (they are never energised)."""
         return replace(self, failed_coils=tuple(self.failed_coils) + tuple(int(k) for k in coils))
@@ -323,8 +330,9 @@ class MotorDesign:
             raise bad_value("tol", "an angle in (0, 0.5) radians", tol)
         return find_states(self, float(tol))
 
-    def metrics(self, samples: int = 20_000, seed: int = 0, escape: bool = True) -> dict:
-        """Design metrics (see :func:`spherestep.motor.metrics.design_metrics`)."""
+    def metrics(self, samples: int = 20_000, seed: int = 0, escape: bool = True):
+        """Design metrics, a :class:`~spherestep.motor.metrics.DesignMetrics` (angles in radians, ``*_rad``;
+        ``.to_dict()`` in degrees); see :func:`spherestep.motor.metrics.design_metrics`."""
         from .metrics import design_metrics
 
         return design_metrics(self, samples=samples, seed=seed, escape=escape)

@@ -12,6 +12,7 @@
 from __future__ import annotations
 
 import math
+from dataclasses import asdict, dataclass, fields
 
 import numpy as np
 from scipy.sparse import coo_matrix
@@ -87,47 +88,93 @@ def escape_violations(design, states, cone: float = ESCAPE_CONE) -> np.ndarray:
     return np.flatnonzero(bad[rep_of])
 
 
-def design_metrics(design, samples: int = 20_000, seed: int = 0, escape: bool = True) -> dict:
-    """The metrics of ``design`` as a dict (radians for angles; see the module docstring).
+@dataclass(frozen=True)
+class DesignMetrics:
+    """How finely and how far a design moves (see the module docstring); angles in radians, named ``*_rad``.
 
-    ``escape=False`` skips the escape-direction check (the slowest part), leaving ``escape_violations``
-    out of the dict."""
+    ``escape_violations`` is None when the escape check was skipped. :meth:`to_dict` gives a JSON-ready dict
+    with the angles in degrees (``*_deg``) or radians (``*_rad``).
+    """
+
+    states: int
+    samples: int
+    max_step_rad: float
+    resolution_median_rad: float
+    resolution_p95_rad: float
+    resolution_max_rad: float
+    range_fraction: float
+    state_graph_components: int
+    reaches_all: bool
+    held_pairs_histogram: tuple[int, ...]
+    escape_violations: tuple[int, ...] | None
+
+    def to_dict(self, degrees: bool = True) -> dict:
+        """The metrics as a dict: ``*_rad`` fields become ``*_deg`` in degrees when ``degrees``; tuples lists."""
+        out = {}
+        for f in fields(self):
+            value = getattr(self, f.name)
+            if f.name.endswith("_rad") and degrees:
+                out[f.name.removesuffix("_rad") + "_deg"] = math.degrees(value)
+            else:
+                out[f.name] = list(value) if isinstance(value, tuple) else value
+        return out
+
+
+@dataclass(frozen=True)
+class CoilFailure:
+    """The design with one ``coil`` failed (no escape check): its states, range, state-graph components,
+    whether it still reaches all of SO(3), and its median resolution (rad)."""
+
+    coil: int
+    states: int
+    range_fraction: float
+    state_graph_components: int
+    reaches_all: bool
+    resolution_median_rad: float
+
+    def to_dict(self, degrees: bool = True) -> dict:
+        """JSON-ready dict, the resolution in degrees (``resolution_median_deg``) when ``degrees``."""
+        out = asdict(self)
+        if degrees:
+            out["resolution_median_deg"] = math.degrees(out.pop("resolution_median_rad"))
+        return out
+
+
+def design_metrics(design, samples: int = 20_000, seed: int = 0, escape: bool = True) -> DesignMetrics:
+    """The :class:`DesignMetrics` of ``design`` from ``samples`` random orientations (``seed``);
+    ``escape=False`` skips the escape-direction check (the slowest part)."""
     states = design.states()
     rng = np.random.default_rng(seed)
-    out = {"states": len(states), "max_step": design.max_step, "samples": samples}
     if len(states) == 0:
-        out.update(resolution_median=math.inf, resolution_p95=math.inf, resolution_max=math.inf,
-                   range_fraction=0.0, state_graph_components=0, escape_violations=[], reaches_all=False)
-        return out
+        return DesignMetrics(states=0, samples=samples, max_step_rad=design.max_step, resolution_median_rad=math.inf,
+                             resolution_p95_rad=math.inf, resolution_max_rad=math.inf, range_fraction=0.0,
+                             state_graph_components=0, reaches_all=False, held_pairs_histogram=(),
+                             escape_violations=() if escape else None)
     dist, _ = states.nearest(so3.random(samples, rng))
     dist = dist[:, 0]
     pairs = states.neighbour_pairs(design.max_step)
     graph = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(len(states),) * 2)
     components, _ = connected_components(graph, directed=False)
-    if escape:
-        out["escape_violations"] = escape_violations(design, states).tolist()
-    out.update(
-        resolution_median=float(np.median(dist)),
-        resolution_p95=float(np.quantile(dist, 0.95)),
-        resolution_max=float(dist.max()),
+    return DesignMetrics(
+        states=len(states), samples=samples, max_step_rad=design.max_step,
+        resolution_median_rad=float(np.median(dist)),
+        resolution_p95_rad=float(np.quantile(dist, 0.95)),
+        resolution_max_rad=float(dist.max()),
         range_fraction=float(np.mean(dist <= design.max_step)),
         state_graph_components=int(components),
         reaches_all=bool(np.all(dist <= design.max_step) and components == 1),
-        held_pairs_histogram=np.bincount(states.counts).tolist(),
+        held_pairs_histogram=tuple(np.bincount(states.counts).tolist()),
+        escape_violations=tuple(escape_violations(design, states).tolist()) if escape else None,
     )
-    return out
 
 
-def single_coil_failures(design, samples: int = 5000, seed: int = 0) -> list[dict]:
-    """For each working coil: the metrics of the design with that coil failed (no escape check).
-
-    Each row: ``coil``, ``states``, ``range_fraction``, ``state_graph_components``, ``reaches_all``,
-    ``resolution_median``. The fraction of rows with ``reaches_all`` is how often all of SO(3) stays
-    reachable after one coil fails.
-    """
+def single_coil_failures(design, samples: int = 5000, seed: int = 0) -> list[CoilFailure]:
+    """For each working coil, the :class:`CoilFailure` of the design with that coil failed (no escape check).
+    The fraction with ``reaches_all`` is how often all of SO(3) stays reachable after one coil fails."""
     rows = []
     for k in design.active_coils:
         m = design_metrics(design.without_coils([int(k)]), samples=samples, seed=seed, escape=False)
-        rows.append({"coil": int(k), **{key: m[key] for key in ("states", "range_fraction", "state_graph_components",
-                                                                  "reaches_all", "resolution_median")}})
+        rows.append(CoilFailure(coil=int(k), states=m.states, range_fraction=m.range_fraction,
+                                state_graph_components=m.state_graph_components, reaches_all=m.reaches_all,
+                                resolution_median_rad=m.resolution_median_rad))
     return rows

@@ -20,6 +20,7 @@ from scipy.spatial import cKDTree
 from scipy.spatial.transform import Rotation
 
 from ..errors import bad_value
+from ..so3 import as_rotations
 from ..sphere import NearestPointGrid
 
 CHUNK = 2048
@@ -66,6 +67,32 @@ def park_of_chord(chord) -> np.ndarray:
     return 4.0 * np.arcsin(np.clip(0.5 * np.asarray(chord), 0.0, 1.0))
 
 
+def coil_currents(coils, coil_count: int, failed=(), name: str = "coils") -> np.ndarray:
+    """The current vector ``(coil_count,)`` of a mapping ``coil index → current`` (per unit of the nominal
+    current, e.g. :meth:`StepperStates.coils`; coils not listed carry 0): the one "coils → currents" helper.
+    InputError naming ``name`` for an index outside ``0..coil_count−1``, a non-finite current, or a current
+    on one of the ``failed`` coils."""
+    try:
+        items = dict(coils).items()
+    except (TypeError, ValueError):
+        raise bad_value(name, "a mapping from coil index to current", coils) from None
+    out = np.zeros(coil_count)
+    for k, value in items:
+        if isinstance(k, bool) or not isinstance(k, (int, np.integer)) or not 0 <= k < coil_count:
+            raise bad_value(name, f"coil indices 0..{coil_count - 1}", k)
+        try:
+            out[int(k)] = float(value)
+        except (TypeError, ValueError):
+            raise bad_value(f"{name}[{int(k)}]", "a real current", value) from None
+    if not np.all(np.isfinite(out)):
+        raise bad_value(name, "finite currents", "NaN or infinite currents")
+    bad = [int(k) for k in failed if out[int(k)] != 0]
+    if bad:
+        raise bad_value(name, f"no current on the failed coils {sorted(int(k) for k in failed)}",
+                        f"current on coil {bad[0]}")
+    return out
+
+
 @dataclass(frozen=True, eq=False)
 class StepperStates:
     """``rotations (K, 3, 3)`` with their held pairs: ``pairs[offsets[i]:offsets[i+1]]`` are the
@@ -99,7 +126,9 @@ class StepperStates:
 
     def nearest(self, R, k: int = 1) -> tuple[np.ndarray, np.ndarray]:
         """Park distances ``(..., k)`` and indices of the ``k`` states nearest to each rotation ``R (..., 3, 3)``."""
-        R = np.asarray(R, dtype=float)
+        R = as_rotations(R, "R")
+        if isinstance(k, bool) or not isinstance(k, (int, np.integer)) or k < 1:
+            raise bad_value("k", "a positive integer", k)
         if len(self) == 0:
             raise bad_value("design", "a design with at least one stepper state", "none")
         tree, n = self._tree
@@ -118,12 +147,24 @@ class StepperStates:
         shape = R.shape[:-2] + (k_eff,)
         return out_d.reshape(shape), out_i.reshape(shape)
 
-    def within(self, R, radius: float) -> np.ndarray:
-        """Indices of the states within Park distance ``radius`` of the single rotation ``R``."""
-        tree, n = self._tree
-        q = Rotation.from_matrix(np.asarray(R, dtype=float)).as_quat()
-        hits = tree.query_ball_point(q, chord_of_park(radius))
-        return np.unique(np.asarray(hits, dtype=np.int64) % n)
+    def within(self, R, radius: float):
+        """Indices of the states within Park distance ``radius`` (rad) of ``R``: an int array for one rotation
+        ``(3, 3)``; for a batch ``(..., 3, 3)`` an object array of shape ``(...)`` holding one int array per
+        rotation (as :meth:`scipy.spatial.cKDTree.query_ball_point`)."""
+        R = as_rotations(R, "R")
+        if isinstance(radius, bool) or not isinstance(radius, (int, float, np.floating)) or not 0 <= radius <= np.pi:
+            raise bad_value("radius", "a Park distance in [0, π] radians", radius)
+        if len(self) == 0:
+            found = [np.zeros(0, dtype=np.int64) for _ in range(int(np.prod(R.shape[:-2])))]
+        else:
+            tree, n = self._tree
+            hits = tree.query_ball_point(Rotation.from_matrix(R.reshape(-1, 3, 3)).as_quat(), chord_of_park(radius))
+            found = [np.unique(np.asarray(h, dtype=np.int64) % n) for h in hits]
+        if R.ndim == 2:
+            return found[0]
+        out = np.empty(len(found), dtype=object)
+        out[:] = found
+        return out.reshape(R.shape[:-2])
 
     def neighbour_pairs(self, radius: float) -> np.ndarray:
         """All pairs ``(a, b)``, ``a < b``, of states within Park distance ``radius`` of each other.

@@ -79,7 +79,7 @@ def _div(fig, div_id: str, height: int) -> str:
                        auto_play=False, default_height=f"{height}px", validate=False)
 
 
-def design_tables(design, metrics: dict) -> str:
+def design_tables(design, metrics) -> str:
     """HTML: the design's dimensions, its two packings side by side, and its metrics (degrees for angles)."""
     s = design.summary()
     dims = [
@@ -103,19 +103,18 @@ def design_tables(design, metrics: dict) -> str:
               ("min_separation_deg", "min centre separation (°)"), ("symmetry_order", "symmetry rotations"),
               ("inertia_isotropy", "inertia isotropy (max/min)")]
     packing_rows = [(label, _fmt(rotor[key]), _fmt(stator[key])) for key, label in labels]
-    m = metrics
+    m = metrics.to_dict(degrees=True)
     rows = [("stepper states", m["states"])]
     if m["states"]:
-        deg = {k: math.degrees(m[k]) for k in ("resolution_median", "resolution_p95", "resolution_max", "max_step")}
-        hist = m.get("held_pairs_histogram", [])
+        hist = m["held_pairs_histogram"]
         rows += [
-            ("resolution median / 95% / max", f"{deg['resolution_median']:.3f}° / {deg['resolution_p95']:.3f}° / "
-                                              f"{deg['resolution_max']:.3f}°"),
-            ("random orientations sampled", m.get("samples", "")),
+            ("resolution median / 95% / max", f"{m['resolution_median_deg']:.3f}° / {m['resolution_p95_deg']:.3f}° / "
+                                              f"{m['resolution_max_deg']:.3f}°"),
+            ("random orientations sampled", m["samples"]),
             ("range: orientations within one step of a state", f"{100 * m['range_fraction']:.2f}%"),
             ("state graph components (states one step apart linked)", m["state_graph_components"]),
             ("reaches all of SO(3)", _fmt(m["reaches_all"])),
-            ("states with a 45° cone of no escape", "not checked" if m.get("escape_violations") is None
+            ("states with a 45° cone of no escape", "not checked" if m["escape_violations"] is None
              else f"{len(m['escape_violations'])} of {m['states']}"),
             ("states by held pairs", ", ".join(f"{n} pairs: {c}" for n, c in enumerate(hist) if c) or "none"),
         ]
@@ -183,7 +182,7 @@ def build_report(design, metrics=None, plan=None, simulation=None, energy_map=No
     if metrics is None:
         say("measuring resolution, range and escape directions")
         metrics = design.metrics(samples=samples, seed=seed)
-    samples = int(metrics.get("samples", samples))
+    samples = metrics.samples
     if axis is not None:
         axis = np.asarray(axis, dtype=float)
         if axis.shape != (3,) or not np.all(np.isfinite(axis)) or not np.any(axis):
@@ -203,12 +202,12 @@ def build_report(design, metrics=None, plan=None, simulation=None, energy_map=No
                      + (" Rotor at the plan's first state." if plan is not None else "") + "</p>" +
                      _div(motor_figure(design, plan.steps[0].achieved if plan is not None else None), "motor3d", 600)))
     sections_html.append(("design", "Design, packings and metrics", design_tables(design, metrics)))
-    if metrics["states"]:
+    if metrics.states:
         say("measuring the resolution histogram")
         dist = resolution_distances(design, samples, seed)
         sections_html.append(("resolution", "Resolution",
                          f'<p class="note">Park distance D(R, R̃) = θ(RᵀR̃) from {samples} orientations drawn '
-                         f"uniformly on SO(3) (seed {seed}) to the nearest of the {metrics['states']} stepper states. "
+                         f"uniformly on SO(3) (seed {seed}) to the nearest of the {metrics.states} stepper states. "
                          "A state is in reach when it lies within one max step.</p>" +
                          _div(resolution_figure(design, dist), "resolution", 360)))
     frames = 0
