@@ -609,3 +609,47 @@ def test_holes_rejects_hemispherical_caps():
     p = Packing(np.array([[0, 0, 1.0], [0, 0, -1.0]]), math.pi / 2)
     with pytest.raises(ValueError, match=r"^packing must be caps of radius below 90°"):
         holes(p)
+
+
+# --- helpers that live with the packings ----------------------------------------------------------------------
+
+def test_named_is_refine_by_name_computed_once():
+    from spherestep.packing import named
+
+    first = named("truncated-octahedron", 1)
+    assert first is named("truncated-octahedron", 1)  # cached: the same immutable object
+    direct = refine(by_name("truncated-octahedron"), levels=1)
+    assert np.array_equal(first.centers, direct.centers) and np.array_equal(first.radii, direct.radii)
+    assert first.label == direct.label == "truncated-octahedron/L1"
+    for bad, field in ((("football", 0), "packing name"), (("cube", -1), "level"), ((["cube"], 0), "packing name"),
+                       (("cube", True), "level")):
+        with pytest.raises(InputError) as err:
+            named(*bad)
+        assert err.value.field == field
+
+
+def test_within_cap_against_brute_force_angles():
+    p = refine(by_name("truncated-cuboctahedron"), levels=1)
+    axis = np.array([0.0, 0.6, -0.8])
+    for half, min_radius in ((math.radians(80), 0.0), (math.radians(80), 0.15), (math.radians(30), 0.0),
+                             (math.pi, 0.0)):
+        angles = np.degrees(np.arccos(np.clip(p.centers @ axis, -1, 1)))
+        keep = (angles <= math.degrees(half) + 1e-9) & (p.radii >= min_radius)
+        cut = p.within_cap(axis, half, min_radius)
+        assert np.array_equal(cut.centers, p.centers[keep]) and np.array_equal(cut.radii, p.radii[keep])
+        assert (cut.name, cut.family, cut.level) == (p.name, p.family, p.level)
+    assert len(p.within_cap(axis, 0.0)) == 0
+    for args, field in (((axis * 2, 1.0), "axis"), ((axis, -0.1), "half_angle"), ((axis, "80 deg"), "half_angle")):
+        with pytest.raises(InputError) as err:
+            p.within_cap(*args)
+        assert err.value.field == field
+
+
+def test_subset_keeps_order_and_refuses_bad_indices():
+    p = by_name("cuboctahedron")
+    sub = p.subset([5, 0, 3])
+    assert np.array_equal(sub.centers, p.centers[[5, 0, 3]]) and sub.name == p.name
+    for idx, field in (([0, 12], "coils[1]"), ([1, 2, 1], "coils[2]"), ([0.5], "coils"), ([-1], "coils[0]")):
+        with pytest.raises(InputError) as err:
+            p.subset(idx, name="coils")
+        assert err.value.field == field

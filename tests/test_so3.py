@@ -459,3 +459,24 @@ def test_rot_rejects_zero_or_nan_axis_and_nan_angle():
 def test_exp_rejects_bad_rotation_vectors(bad):
     with pytest.raises(InputError, match=r"^rotvec must be "):
         so3.exp(bad)
+
+
+@pytest.mark.parametrize("bad, words", [
+    (5 * np.eye(3), "not a rotation"), (np.diag([1.0, 1.0, -1.0]), "not a rotation"),
+    (np.eye(3) + 2e-6, "not a rotation"), ("abc", "shape (..., 3, 3)"), (np.eye(2), "shape (2, 2)"),
+])
+def test_as_rotations_refuses_non_rotations_naming_the_argument(bad, words):
+    with pytest.raises(InputError) as err:
+        so3.as_rotations(bad, "start")
+    assert err.value.field == "start" and str(err.value).startswith("start must be ") and words in str(err.value)
+
+
+def test_as_rotations_accepts_batches_and_rounding():
+    R = so3.random(6, 3).reshape(2, 3, 3, 3)
+    assert so3.as_rotations(R) is R  # a float array passes through untouched
+    nearly = np.eye(3) + 5e-7 * np.array([[0, 1, 0], [-1, 0, 0], [0, 0, 0]])  # orthogonal to 2.5e-13
+    assert np.array_equal(so3.as_rotations(nearly), nearly)
+    assert so3.as_rotations(np.zeros((0, 3, 3))).shape == (0, 3, 3)
+    # the example: a scaled identity is no rotation, so no distance
+    with pytest.raises(InputError, match="^R2 must be"):
+        so3.distance(np.eye(3), 5 * np.eye(3))

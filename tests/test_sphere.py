@@ -617,3 +617,28 @@ def test_nearest_point_grid_against_a_kd_tree():
     expected = np.where(2 * np.arcsin(dist / 2) <= tol, idx, -1)
     assert np.array_equal(grid.match(q), expected)
     assert (expected >= 0).sum() > 5000
+
+
+# --------------------------------------------------------------------------------------------------
+# the public input contract for points
+# --------------------------------------------------------------------------------------------------
+def test_as_points_keeps_batches_and_values():
+    u = S.point(np.linspace(0, 3, 24).reshape(2, 3, 4), 1.0)
+    assert S.as_points(u).shape == (2, 3, 4, 3) and np.array_equal(S.as_points(u), u)
+    assert S.as_points([0, 0, 1]).dtype == float
+
+
+@pytest.mark.parametrize("bad, words", [
+    ([0, 0, 2], "norm 2"), ([0, 0, 1 + 2e-9], "within 1e-09"), ([0, 0, 0], "zero vector"),
+    ([0, np.nan, 1], "finite"), ([1, 0], "shape (2,)"), ("xyz", "unit 3-vectors"), ([[1, 0, 0], [0, 3, 0]], "norm 3"),
+])
+def test_as_points_refuses_what_is_not_a_unit_vector_naming_the_argument(bad, words):
+    with pytest.raises(InputError) as err:
+        S.as_points(bad, "axis")
+    assert err.value.field == "axis" and str(err.value).startswith("axis must be ") and words in str(err.value)
+
+
+def test_disc_angle_is_the_half_angle_seen_from_the_centre():
+    # a 2-in disc 6 in away: tan θ = 1/6
+    assert math.isclose(S.disc_angle(2.0, 6.0), math.atan(1 / 6), rel_tol=1e-15)
+    assert math.isclose(math.tan(S.disc_angle(0.3, 0.15)), 1.0, rel_tol=1e-15)
