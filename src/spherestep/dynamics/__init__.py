@@ -4,6 +4,12 @@ from .rotor import Rotor
 from .closed_loop import ClosedLoopRun, run_closed_loop
 from .simulate import Integrator, Simulation, currents_of, simulate
 from .tuning import Tuning, stiffness, tune
+from .electrics import CoilDrive, rl_step
+from .servo import NoisySensor, OrientationSensor, ServoRun, hold, simulate_servo
+from .ramped import PullOut, RampedRun, pull_out_rate, run_ramped, step_intervals
+from .drives import DriveComparison, DriveResult, compare_drives
 
 __all__ = ["ClosedLoopRun", "Integrator", "Rotor", "Simulation", "Tuning", "currents_of", "run_closed_loop", "simulate",
-           "stiffness", "tune"]
+           "stiffness", "tune", "CoilDrive", "rl_step", "NoisySensor", "OrientationSensor", "ServoRun", "hold",
+           "simulate_servo", "PullOut", "RampedRun", "pull_out_rate", "run_ramped", "step_intervals",
+           "DriveComparison", "DriveResult", "compare_drives"]

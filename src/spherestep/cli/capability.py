@@ -1,0 +1,53 @@
+"""``spherestep capability``: the torque the drive can give in every direction, over SO(3)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import typer
+from rich.table import Table
+
+from .app import app
+from .common import console, design_from, number, print_json, usable, write_json
+
+
+@app.command()
+def capability(
+    design_path: Path = typer.Option(None, "--design", help="Design file; default the built-in prototype."),
+    samples: int = typer.Option(1000, "--samples", callback=number("orientations", 1, 200_000,
+                                                                   what="a number of orientations"),
+                                help="Orientations drawn uniformly on SO(3)."),
+    seed: int = typer.Option(0, "--seed", help="Random seed of the orientations."),
+    threshold: float = typer.Option(1.0, "--threshold", callback=number("N·m", 0, 1000, what="a torque"),
+                                    help="Torque (N·m) whose coverage of SO(3) the plot marks."),
+    out: Path = typer.Option(Path("spherestep-capability"), "--out", help="Output folder."),
+    as_json: bool = typer.Option(False, "--json", help="Print the summary as JSON."),
+) -> None:
+    """Torque available in every direction (N·m) and the conditioning of the torque-per-current matrix over SO(3),
+    for the 24 V / 100 W supply: percentiles, coverage, a map (capability.png) and a summary (capability.json).
+
+    Example: [bold]spherestep capability --samples 2000 --out cap[/bold]
+    """
+    from .. import plots
+    from ..control import figure_capability, torque_capability
+
+    design = usable(design_from(design_path))
+    cap = torque_capability(design, samples=int(samples), seed=seed)
+    summary = cap.to_dict() | {"threshold_N_m": threshold, "fraction_at_threshold": cap.fraction_at_least(threshold)}
+    written = [write_json(out / "capability.json", summary),
+               plots.save_figure(figure_capability(cap, threshold), out / "capability.png")]
+    if as_json:
+        print_json(summary | {"files": [str(p) for p in written]})
+        return
+    table = Table(title=f"torque capability over SO(3), {len(cap.radius)} uniform orientations")
+    table.add_column("percentile", justify="right")
+    table.add_column("torque in every direction (N·m)", justify="right")
+    table.add_column("σ_min of K (N·m per unit current)", justify="right")
+    table.add_column("condition number", justify="right")
+    r, s, k = summary["available_torque_N_m"], summary["sigma_min_N_m_per_unit_current"], summary["condition_number"]
+    for q in r:
+        table.add_row(f"{q}", f"{r[q]:.3f}", f"{s[q]:.3f}", f"{k[q]:.2f}")
+    console.print(table)
+    for key, frac in summary["fraction_at_least"].items():
+        console.print(f"at least {key.replace('_N_m', ' N·m')} in every direction: {100 * frac:.1f} % of SO(3)")
+    console.print(f"wrote {len(written)} files to {out}/")

@@ -1,0 +1,140 @@
+"""Coil electrics, the servo loop, ramped relay stepping (spherestep.dynamics: electrics, servo, ramped)."""
+
+import math
+from dataclasses import replace
+
+import numpy as np
+import pytest
+from scipy.integrate import quad
+
+from spherestep import so3
+from spherestep.control import DriveLimits, Trajectory
+from spherestep.dynamics import (CoilDrive, NoisySensor, OrientationSensor, Rotor, hold, rl_step, simulate_servo,
+                                 step_intervals)
+from spherestep.errors import InputError
+from spherestep.magnetics import torque_map
+from spherestep.motor import prototype
+
+LIMITS = DriveLimits()
+HOLD = math.radians(0.05)
+
+
+@pytest.fixture(scope="module")
+def design():
+    return prototype()
+
+
+@pytest.fixture(scope="module")
+def tmap(design):
+    return torque_map(design)
+
+
+def test_rl_step_is_the_exact_solution():
+    R, L, V = LIMITS.resistance, LIMITS.inductance, 24.0
+    tau = L / R
+    i, t = 0.0, 0.0
+    for _ in range(37):  # composition of exact steps of 0.1 ms
+        i, mean = rl_step(i, V, 1.5, R, L, 1e-4)
+        t += 1e-4
+    assert float(i) == pytest.approx((V - 1.5) / R * (1 - math.exp(-t / tau)), rel=1e-12)
+    i0 = 0.3
+    i1, mean = rl_step(i0, -V, 0.0, R, L, 2e-4)
+    exact = quad(lambda s: -V / R + (i0 + V / R) * math.exp(-s / tau), 0, 2e-4)[0] / 2e-4
+    assert float(mean) == pytest.approx(exact, rel=1e-10)
+
+
+def test_full_voltage_step_follows_the_l_over_r_curve():
+    # a step to V/R saturates the bridge at +V (integral frozen), so the current is the open-loop L/R rise
+    drive = CoilDrive(LIMITS)
+    N = 3
+    i, integral = np.zeros(N), np.zeros(N)
+    ref = np.full(N, LIMITS.supply_voltage / LIMITS.resistance)
+    t, tau = 0.0, LIMITS.time_constant
+    for _ in range(30):
+        i, integral, _, v_mean, energy = drive.run(i, integral, ref, np.zeros(N), 1e-4)
+        t += 1e-4
+        np.testing.assert_allclose(i, ref * (1 - math.exp(-t / tau)), rtol=1e-12)
+        np.testing.assert_allclose(v_mean, LIMITS.supply_voltage)
+
+
+def test_current_loop_tracks_a_small_step_with_its_bandwidth():
+    drive = CoilDrive(LIMITS)
+    i, integral = np.zeros(1), np.zeros(1)
+    ref = np.array([0.05])
+    out = []
+    for _ in range(40):  # 4 ms at 0.1 ms
+        i, integral, *_ = drive.run(i, integral, ref, np.zeros(1), 1e-4)
+        out.append(float(i[0]))
+    # the first period: the PI's voltage R i_ref + L ω_i i_ref, on the PWM's grid, drives the L/R rise
+    V, R = LIMITS.supply_voltage, LIMITS.resistance
+    v = round((R * 0.05 + LIMITS.inductance * drive.bandwidth * 0.05) / V * 512) / 512 * V
+    assert out[0] == pytest.approx(v / R * (1 - math.exp(-1e-4 / LIMITS.time_constant)), rel=1e-12)
+    assert out[2] > 0.05 * 0.9 and max(out) < 0.05 * 1.2  # settles within a few periods, little overshoot
+    quantum = 2 * LIMITS.supply_voltage / 2 ** drive.pwm_bits / LIMITS.resistance
+    assert abs(out[-1] - 0.05) <= quantum
+
+
+def test_noisy_sensor_statistics_rate_and_latency():
+    sensor = NoisySensor(math.radians(0.02), rate=500.0, latency=0.004, rng=3)
+    assert isinstance(sensor, OrientationSensor)
+    R = so3.random(1, 1)[0]
+    got = [(k * 1e-3, sensor.measure(k * 1e-3, R, np.zeros(29))) for k in range(2000)]
+    times = [t for t, m in got if m is not None]
+    assert times[0] == pytest.approx(0.004)
+    assert np.diff(times) == pytest.approx(0.002)  # one sample every 2 ms
+    err = np.array([so3.log(m @ R.T) for _, m in got if m is not None])
+    assert err.std(axis=0) == pytest.approx(np.full(3, math.radians(0.02)), rel=0.1)
+    with pytest.raises(InputError, match="noise"):
+        NoisySensor(-1.0)
+
+
+@pytest.mark.slow
+def test_servo_holds_an_arbitrary_orientation_under_noise(design, tmap):
+    target = so3.random(1, 21)[0]  # not a stepper state
+    assert float(np.ravel(design.states().nearest(target)[0])[0]) > math.radians(0.5)  # far from every state
+    start = so3.exp(math.radians(1.0) * np.array([0.6, -0.8, 0.0])) @ target
+    run = hold(design, target, tmap, duration=0.35, start=start,
+               sensor=NoisySensor(math.radians(0.02), rng=5))
+    err = run.tracking_error
+    assert err[0] == pytest.approx(math.radians(1.0), rel=1e-9)
+    last = err[run.times >= 0.25]
+    assert last.max() <= HOLD
+    assert run.reachable.all()  # a 1° correction at 30 rad/s needs ~1 N·m: within reach
+    assert run.summary()["mean_power_W"] < 100.0
+
+
+@pytest.mark.slow
+def test_servo_tracks_a_turn_with_a_failed_coil(design, tmap):
+    R0 = so3.random(1, 4)[0]
+    K = tmap.torque_matrix(R0)
+    failed = (int(np.argmax(np.linalg.norm(K, axis=0))),)
+    broken = replace(tmap, failed=failed)
+    rotor = Rotor.from_design(design)
+    traj = Trajectory.turn(R0, [1.0, 0.5, 2.0], math.radians(20), acceleration=10.0)
+    run = simulate_servo(design, traj, broken, rotor=rotor, sensor=NoisySensor(math.radians(0.02), rng=6),
+                         settle=0.15)
+    assert np.all(run.currents[:, failed[0]] == 0) and np.all(run.references[:, failed[0]] == 0)
+    assert run.tracking_error.max() < math.radians(0.2)
+    assert run.final_error <= HOLD
+    # the rotor really turned: 20° about the axis
+    assert so3.distance(run.orientations[-1], R0) == pytest.approx(math.radians(20), abs=math.radians(0.05))
+
+
+def test_servo_rejects_bad_input(design, tmap):
+    traj = Trajectory.turn(np.eye(3), [0, 0, 1], 0.1, 1.0)
+    with pytest.raises(InputError, match="rate"):
+        simulate_servo(design, traj, tmap, rate=-5)
+    with pytest.raises(InputError, match="trajectory"):
+        simulate_servo(design, "fast", tmap)
+
+
+def test_step_intervals_follow_the_ramp():
+    n, fmax, f0, ramp = 40, 12.0, 2.0, 8
+    dt = step_intervals(n, fmax, f0, ramp)
+    rate = 1 / dt
+    A = (fmax ** 2 - f0 ** 2) / (2 * ramp)
+    assert rate[0] == pytest.approx(f0)
+    assert rate[3] == pytest.approx(math.sqrt(f0 ** 2 + 2 * A * 3))
+    assert rate[n // 2] == pytest.approx(fmax)
+    np.testing.assert_allclose(rate, rate[::-1])  # symmetric decelerations
+    assert rate.max() == pytest.approx(fmax)
