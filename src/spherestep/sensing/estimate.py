@@ -31,7 +31,7 @@ from ..errors import bad_value
 from .field import FieldTable
 
 PSI = 1.533751168755204288118041  # the super-Fibonacci constant (Alexa 2022), with √2
-GRID = 8000  # rotations in the global start's grid (success rate measured in docs/sensing.md)
+GRID = 2000  # rotations in the global start's grid (success rate measured in docs/sensing.md)
 CHUNK = 250  # grid rotations per vectorised block
 
 
@@ -168,8 +168,13 @@ class Estimator:
         channels = self.table.positions.size if weight is None else weight.sum()
         return Estimate(R, H / self.noise_T ** 2, math.sqrt(cost / max(channels, 1.0)), iterations, converged)
 
-    def initialise(self, readings, currents=None, grid: int = GRID, candidates: int = 6) -> Estimate:
-        """Global estimate from no prior (module doc): grid scores, then LM from the best ``candidates``."""
+    def initialise(self, readings, currents=None, grid: int = GRID, candidates: int = 6,
+                   near_symmetry=None) -> Estimate:
+        """Global estimate from no prior (module doc): grid scores, then LM from the best ``candidates``.
+        ``near_symmetry (G, 3, 3)``: body-frame rotations under which the rotor is almost the same (a marked
+        rotor's unmarked pattern, :func:`~spherestep.sensing.symmetry.symmetry_group` with
+        ``polarity=False``); the best estimate ``R`` is then compared with every ``R g`` and the cheapest is
+        refined, since the grid's best basins are often the wrong copies."""
         b, weight = self._prepare(readings, currents)
         G = super_fibonacci(int(grid))
         cost = np.empty(len(G))
@@ -183,4 +188,9 @@ class Estimator:
             est = self._solve(b, weight, G[k], 30, 1e-10)
             if best is None or est.residual_T < best.residual_T:
                 best = est
+        if near_symmetry is not None:
+            copies = best.R @ np.asarray(near_symmetry, dtype=float)
+            pred = np.einsum("sij,ksj->ksi", self.axes_T, self.table.field(copies))
+            k = int(np.argmin(np.sum(((bs - pred) * w) ** 2, axis=(1, 2))))
+            best = self._solve(b, weight, copies[k], 30, 1e-10)
         return best

@@ -17,8 +17,10 @@ from .. import so3
 from ..errors import bad_value
 from .array import SensorArray
 from .estimate import Estimate, Estimator
-from .field import CoilField, FieldTable
+from .field import CoilField, FieldTable, rotor_field
+from .placement import default_array
 from .readings import actual_currents, sense
+from .symmetry import symmetry_group
 
 
 class IdealSensor:
@@ -35,11 +37,13 @@ class HallSensor:
     fields beside the coils (e.g. an iron model's); ``current_error``: RMS relative error of the currents the
     controller believes flow (the coil-field subtraction's residual); ``truth``: ``"table"`` simulates the
     rotor's field with the estimator's table (max error 1e-7 T, fast for loops) or ``"magpylib"``;
-    ``iterations``: Gauss–Newton steps per update; ``seed``: noise."""
+    ``iterations``: Gauss–Newton steps per update; ``start_readings``: readings averaged for the global start
+    (the rotor at rest at power-up); ``seed``: noise. A rotor whose field has a symmetry group (the unmarked
+    prototype's 60 rotations) is found only up to that group from no prior; a marked rotor is found exactly,
+    the marker's near-symmetry resolved by :meth:`Estimator.initialise`."""
 
     def __init__(self, design, array: SensorArray | None = None, known=(), current_error: float = 0.0,
-                 truth: str = "table", iterations: int = 1, seed=None):
-        from .placement import default_array
+                 truth: str = "table", iterations: int = 1, start_readings: int = 32, seed=None):
         if truth not in ("table", "magpylib"):
             raise bad_value("truth", "'table' or 'magpylib'", truth)
         self.design = design
@@ -52,6 +56,9 @@ class HallSensor:
         self.truth = truth
         self.iterations = int(iterations)
         self.rng = np.random.default_rng(seed)
+        self.start_readings = int(start_readings)
+        places = symmetry_group(design, polarity=False)
+        self.near_symmetry = places if len(places) > len(symmetry_group(design)) else None
         self.last: Estimate | None = None
 
     def readings(self, R_true, currents=None) -> np.ndarray:
@@ -62,7 +69,6 @@ class HallSensor:
         if self.truth == "table":
             B = self.table.field(R)
         else:
-            from .field import rotor_field
             B = rotor_field(self.design, self.array.positions, R)[0]
         if currents is not None:
             B = B + self.coils.field(actual_currents(currents, self.current_error, self.rng))
@@ -70,9 +76,10 @@ class HallSensor:
 
     def measure(self, R_true, currents=None, R_prev=None) -> np.ndarray:
         """The estimated orientation ``(3, 3)`` from one set of readings."""
-        m = self.readings(R_true, currents)
         if R_prev is None:
-            self.last = self.estimator.initialise(m, currents)
+            m = np.mean([self.readings(R_true, currents) for _ in range(max(self.start_readings, 1))], axis=0)
+            self.last = self.estimator.initialise(m, currents, near_symmetry=self.near_symmetry)
         else:
+            m = self.readings(R_true, currents)
             self.last = self.estimator.track(m, R_prev, currents, self.iterations)
         return self.last.R

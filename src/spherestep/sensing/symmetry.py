@@ -25,11 +25,13 @@ def _frame(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return np.stack([a, e2, np.cross(a, e2)], axis=1)
 
 
-def symmetry_group(design, tol: float = 1e-6) -> np.ndarray:
-    """Rotations ``g (G, 3, 3)`` (body frame) mapping every pole onto a pole of the same polarity, identity
-    first. Candidates map pole 0 and its nearest non-antipodal neighbour onto every pole pair at the same
-    angle; a candidate is kept if every pole lands within ``tol`` of a like pole."""
-    u, p = design.rotor.centers, np.asarray(design.polarity)
+def symmetry_group(design, tol: float = 1e-6, polarity: bool = True) -> np.ndarray:
+    """Rotations ``g (G, 3, 3)`` (body frame) mapping every pole onto a pole of the same polarity (any pole if
+    ``polarity`` is False: the symmetry of the magnets' places, which a marker leaves as a near-symmetry),
+    identity first. Candidates map pole 0 and its nearest non-antipodal neighbour onto every pole pair at
+    the same angle; a candidate is kept if every pole lands within ``tol`` of a like pole."""
+    u = design.rotor.centers
+    p = np.asarray(design.polarity) if polarity else np.ones(len(u), int)
     dots = u @ u[0]
     dots[0] = -2.0
     j = int(np.argmax(np.where(np.abs(dots) < 1 - 1e-9, dots, -2.0)))

@@ -1,0 +1,190 @@
+"""Tests of spherestep.sensing: field table, estimator on SO(3), symmetry, placement, coil subtraction, IMU."""
+
+from __future__ import annotations
+
+import math
+
+import magpylib as magpy
+import numpy as np
+import pytest
+
+from spherestep import so3
+from spherestep.errors import InputError
+from spherestep.magnetics import rotor_collection, stator_coils
+from spherestep.motor import prototype
+from spherestep import sensing
+
+
+@pytest.fixture(scope="module")
+def design():
+    return prototype()
+
+
+@pytest.fixture(scope="module")
+def array(design):
+    return sensing.default_array(design)
+
+
+@pytest.fixture(scope="module")
+def estimator(design, array):
+    table = sensing.FieldTable.build(design, array.positions)
+    return sensing.Estimator(table, array.axes, array.part, (sensing.CoilField.build(design, array.positions),))
+
+
+def test_default_array_fits_and_stays_in_range(design, array):
+    assert len(array) == 24
+    array.check_fits(design)  # clear of every coil, outside the ball
+    r = np.linalg.norm(array.positions, axis=1)
+    np.testing.assert_allclose(r, design.radius + sensing.array.STANDOFF, rtol=1e-12)
+    # worst field over 300 random orientations stays below the part's range (no saturation by the rotor)
+    B = sensing.rotor_field(design, array.positions, so3.random(300, 7))
+    assert np.abs(B).max() < array.part.range_T
+
+
+def test_collision_check(design):
+    v = design.stator.centers[0]
+    inside = v * (design.radius + design.air_gap + 0.5 * design.coil_length)
+    assert sensing.coil_collisions(design, inside[None])[0]
+    with pytest.raises(InputError, match="positions"):
+        sensing.SensorArray.at(inside[None]).check_fits(design)
+    cand = sensing.candidate_positions(design)
+    assert len(cand) > 100 and not sensing.coil_collisions(design, cand).any()
+
+
+def test_bad_array_input():
+    with pytest.raises(InputError, match="positions"):
+        sensing.SensorArray(np.zeros((2, 2)), np.zeros((2, 3, 3)))
+    with pytest.raises(InputError, match="axes"):
+        sensing.SensorArray(np.ones((1, 3)), np.ones((1, 3, 3)))
+
+
+def test_table_matches_magpylib(design, array, estimator):
+    """The 1-D table against magpylib's field of the whole rotor: within 1e-6 T (noise is 1e-4 T)."""
+    R = so3.random(40, 3)
+    exact = np.asarray(rotor_collection(design, R).getB(array.positions))
+    np.testing.assert_allclose(estimator.table.field(R), exact, atol=1e-6, rtol=0)
+
+
+def test_jacobian_matches_finite_differences(estimator):
+    R = so3.random(1, 11)[0]
+    _, J = estimator.table.field_and_jacobian(R)
+    h = 1e-6
+    fd = np.stack([(estimator.table.field(so3.exp(h * e) @ R) - estimator.table.field(so3.exp(-h * e) @ R))
+                   / (2 * h) for e in np.eye(3)], axis=-1)
+    np.testing.assert_allclose(J, fd, atol=1e-6 * np.abs(J).max())
+
+
+def test_noiseless_recovery(design, array, estimator):
+    """Random orientations from exact magpylib readings, starting 5° off: error below 1e-6 rad."""
+    rng = np.random.default_rng(0)
+    R = so3.random(15, rng)
+    m = np.einsum("sji,ksj->ksi", array.axes, sensing.rotor_field(design, array.positions, R))
+    for k in range(len(R)):
+        axis = rng.normal(size=3)
+        R0 = so3.exp(math.radians(5.0) * axis / np.linalg.norm(axis)) @ R[k]
+        est = estimator.solve(m[k], R0)
+        assert est.converged
+        assert so3.distance(est.R, R[k]) < 1e-6
+
+
+def test_noise_propagates_as_fisher_predicts(array, estimator):
+    """1000 noisy readings at one orientation: the covariance of the error matches σ² (JᵀJ)⁻¹ within 20 %
+    along each of its principal axes."""
+    rng = np.random.default_rng(1)
+    R = so3.random(1, rng)[0]
+    B = estimator.table.field(R)
+    errors = np.empty((1000, 3))
+    for k in range(1000):
+        est = estimator.solve(sensing.sense(array, B, rng), R, tol=1e-12)
+        errors[k] = so3.log(est.R @ R.T)
+    predicted = estimator.solve(sensing.sense(array, B, noise=False), R).covariance
+    w, V = np.linalg.eigh(predicted)
+    empirical = np.cov(errors.T)
+    ratio = np.diag(V.T @ empirical @ V) / w
+    assert np.all(np.abs(ratio - 1.0) < 0.2), ratio
+
+
+def test_coil_fields_subtracted_with_coils_energised(design, array, estimator):
+    """Readings of the rotor with 6 coils at ±1 (magpylib, rotor and coils in one collection): with the
+    coils' field subtracted the estimate is exact; without, it is off by far more than the noise."""
+    rng = np.random.default_rng(2)
+    c = np.zeros(len(design.stator))
+    c[rng.choice(len(c), 6, replace=False)] = rng.choice([-1.0, 1.0], 6)
+    R = so3.random(1, rng)[0]
+    scene = magpy.Collection(rotor_collection(design, R[None]), *stator_coils(design, currents=c))
+    m = np.einsum("sji,sj->si", array.axes, np.asarray(scene.getB(array.positions)).reshape(-1, 3))
+    # the same field built the library's way
+    np.testing.assert_allclose(sensing.true_field(design, array, R[None], c)[0],
+                               np.einsum("sij,sj->si", array.axes, m), atol=1e-12)
+    good = estimator.solve(m, R, currents=c)
+    bad = estimator.solve(m, R, currents=None)
+    assert so3.distance(good.R, R) < 1e-6
+    assert so3.distance(bad.R, R) > math.radians(0.01)
+
+
+def test_symmetry_group_and_identical_readings(design, array):
+    G = sensing.symmetry_group(design)
+    assert len(G) == 60
+    products = np.einsum("aij,bjk->abik", G, G).reshape(-1, 3, 3)
+    assert max(np.abs(G - P).max(axis=(1, 2)).min() for P in products) < 1e-12  # closed
+    R = so3.random(1, 4)[0]
+    B = sensing.rotor_field(design, array.positions, R @ G)  # magpylib, 60 orientations
+    assert np.abs(B - B[0]).max() < 1e-12 < np.abs(B).max()
+    marked = sensing.marked_design(design)
+    assert np.sum(marked.polarity != design.polarity) == 1
+    assert len(sensing.symmetry_group(marked)) == 1
+    assert len(sensing.symmetry_group(marked, polarity=False)) == 60
+
+
+def test_global_initialiser(design, array, estimator):
+    """From no prior: the prototype's orientation up to its 60 symmetries; the marked rotor's exactly."""
+    rng = np.random.default_rng(3)
+    G = sensing.symmetry_group(design)
+    for _ in range(3):
+        R = so3.random(1, rng)[0]
+        est = estimator.initialise(sensing.sense(array, estimator.table.field(R), rng))
+        assert so3.distance(est.R[None], R @ G).min() < math.radians(0.05)
+    marked = sensing.marked_design(design)
+    hall = sensing.HallSensor(marked, array=array, seed=5)
+    for _ in range(3):
+        R = so3.random(1, rng)[0]
+        assert so3.distance(hall.measure(R), R) < math.radians(0.05)
+
+
+def test_smallest_eigenvalue_and_greedy(design):
+    A = np.random.default_rng(0).normal(size=(200, 3, 3))
+    F = A @ np.swapaxes(A, 1, 2)
+    np.testing.assert_allclose(sensing.smallest_eigenvalue(F), np.linalg.eigvalsh(F)[:, 0], atol=1e-10)
+    cand = sensing.candidate_positions(design, count=600)
+    pl = sensing.greedy_placement(design, 6, candidates=cand, rotations=30)
+    assert len(set(pl.order.tolist())) == 6
+    assert np.all(np.diff(pl.worst_information) >= 0)
+
+
+def test_tracking_loop_and_fusion(design, array):
+    """A 1 rad/s turn sampled at 1 kHz from a known start: the array tracks it, the IMU+array filter too."""
+    rng = np.random.default_rng(4)
+    dt, axis = 1e-3, rng.normal(size=3)
+    axis /= np.linalg.norm(axis)
+    R0 = so3.random(1, rng)[0]
+    path = [R0 @ so3.exp(axis * dt * k) for k in range(300)]
+    c = np.zeros(len(design.stator))
+    c[[2, 9]] = [1.0, -1.0]
+    hall = sensing.HallSensor(design, array=array, current_error=0.01, seed=6)
+    fused = sensing.FusedSensor(design, sensing.HallSensor(design, array=array, seed=7), dt, seed=8)
+    R_est, err_h, err_f = R0, [], []
+    for k, R in enumerate(path):
+        R_est = hall.measure(R, c, R_est)
+        err_h.append(so3.distance(R_est, R))
+        err_f.append(so3.distance(fused.measure(R, c, R0 if k == 0 else None), R))
+    assert max(err_h) < math.radians(0.03)
+    assert max(err_f[50:]) < math.radians(0.03)
+
+
+def test_imu_alone_sees_tilt_and_heading(design):
+    """The AHRS from a BMI270 + BMM150 model at rest: within a few degrees (its biases), not exact."""
+    imu = sensing.ImuSensor(design, 1e-3, seed=9)
+    R = so3.random(1, 10)[0]
+    for _ in range(200):
+        R_est = imu.measure(R)
+    assert so3.distance(R_est, R) < math.radians(10.0)
