@@ -181,7 +181,7 @@ def build(document: Document, design_type):
         return design_type.from_packings(**document.arguments())
     except InputError as exc:
         message, field = str(exc), file_field(exc.field)
-        if exc.field is not None and message.startswith(exc.field + " "):
+        if exc.field is not None and message.startswith(exc.field + " must be "):
             message = field + message[len(exc.field):]
         elif field is not None:
             message = f"{field}: {message}"

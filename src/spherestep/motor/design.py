@@ -16,7 +16,7 @@ import numpy as np
 
 from .. import packing as pk
 from ..channels import MAX_COILS, as_channel_map, default_channel_map
-from ..errors import InputError, bad_value
+from ..errors import bad_value
 from ..packing import Packing
 from ..sphere import as_points, disc_angle
 from ..units import length
@@ -359,7 +359,7 @@ class MotorDesign:
 
 def check_fits(design: MotorDesign) -> None:
     """Raise InputError (``field`` 'rotor' or 'stator') when magnets or coils overlap physically: two centres
-    closer than the angular size of their faces."""
+    closer than the angular size of their faces (``2 × magnet_angle`` or ``2 × coil_angle``)."""
     from ..packing.core import arc_from_chord
 
     for label, part, packing_, half in (("rotor", "magnet", design.rotor, design.magnet_angle),
@@ -370,8 +370,6 @@ def check_fits(design: MotorDesign) -> None:
         sep = arc_from_chord(dist[:, 1])
         k = int(np.argmin(sep))
         if sep[k] < 2 * half - 1e-12:
-            error = InputError(f"{label} poles {k} and {int(idx[k, 1])} overlap: centres {np.degrees(sep[k]):.3f}° "
-                               f"apart but each face spans {np.degrees(half):.3f}°; use smaller parts "
-                               f"({part}_diameter) or fewer poles")
-            error.field = label
-            raise error
+            raise bad_value(label, f"{part}s that do not overlap (use smaller {part}s, {part}_diameter, or fewer "
+                            "of them)", f"{part}s {k} and {int(idx[k, 1])} {np.degrees(sep[k]):.3f}° apart, each "
+                            f"face spanning {np.degrees(half):.3f}°")
