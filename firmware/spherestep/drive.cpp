@@ -61,6 +61,7 @@ CurrentDevice::CurrentDevice(Bridges& bridges, uint8_t coils, uint8_t sensors, u
       enable_(0),
       polarity_(0),
       enabled_(false),
+      driving_(false),
       version_(0),
       tripped_(0),
       trips_(0),
@@ -94,6 +95,7 @@ void CurrentDevice::allOff() {
   enable_ = 0;
   polarity_ = 0;
   enabled_ = false;
+  driving_ = false;
   bridges_.drive(duty_, false);
 }
 
@@ -119,7 +121,7 @@ void CurrentDevice::step(uint32_t nowUs) {
     const double x = amps[k] / limits_.continuousCurrent;
     heat_[k] = decay_ * heat_[k] + (1.0 - decay_) * (x * x);
   }
-  if (!session()) {
+  if (!session() || !driving_) {
     for (uint8_t k = 0; k < coils_; ++k) measured_[k] = ma[k];
     return;
   }
@@ -188,6 +190,7 @@ bool CurrentDevice::setMa(const int32_t* ma) {
   for (uint8_t k = 0; k < coils_; ++k) power += amps[k] * amps[k];
   if (limits_.resistance * power > limits_.maxPower) return false;
   for (uint8_t k = 0; k < coils_; ++k) setpoint_[k] = amps[k];
+  driving_ = true;
   return true;
 }
 

@@ -110,6 +110,7 @@ class CurrentDevice {
   uint64_t enable_;
   uint64_t polarity_;
   bool enabled_;
+  bool driving_;  // setpoints taken since the last all-off: the PI loops and monitors run
   uint8_t version_;
   const char* tripped_;
   uint32_t trips_;

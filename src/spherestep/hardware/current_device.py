@@ -14,7 +14,8 @@ loop per coil and writes the PWM duties to a :class:`Bridges` plant, and checks 
 * 8 damaged frames in a row during a session → ``CRCS``; no accepted command for the watchdog period → ``WDOG``.
 
 A trip switches every bridge off (duty 0, drivers asleep, supply cut), ends the session and is answered to
-every later command but ``HELLO``/``OFF``. The PI loop cancels the coil's pole: ``duty = k_p e + Σ k_i e``,
+every later command but ``HELLO``/``OFF``. ``OFF`` (and ``HELLO``) leave the bridges asleep too, session kept,
+until the next ``DRIVE`` (or ``SET``): the loops and the monitors run only while driving. The PI loop cancels the coil's pole: ``duty = k_p e + Σ k_i e``,
 ``k_p = ω_c L / V``, ``k_i = k_p (R / L) h`` (anti-windup: the sum is clamped to ``±max_duty``), so the
 closed loop is first order with bandwidth ``ω_c`` when ``L``, ``R`` are right. Both implementations pass
 ``firmware/test/vectors2.txt`` with integer mA and µs, so they answer byte for byte alike.
@@ -56,7 +57,8 @@ class CurrentDevice:
 
     ``watchdog_ms`` (1–65535), control ``period_us``, ``limits``, ``supply`` V, coil ``inductance`` H and
     ``resistance`` (from ``limits``) for the PI gains, closed-loop ``bandwidth`` rad/s, ``nominal_ma`` the
-    current of a relay-mode coil, ``field_lsb_nt`` the magnetometers' nT per count (TMAG5273A2 at ±266 mT). ``trips`` lists ``(code, coil or -1, time µs)``.
+    current of a relay-mode coil, ``field_lsb_nt`` the magnetometers' nT per count (TMAG5273A2 at ±266 mT).
+    ``off_us`` is the time the coils last went from driven to all off (a trip, ``OFF`` or ``HELLO``). ``trips`` lists ``(code, coil or -1, time µs)``.
     """
 
     def __init__(self, bridges: Bridges, coils: int, sensors: int, *, watchdog_ms: int = 100,
@@ -107,7 +109,10 @@ class CurrentDevice:
     def session(self) -> bool:
         return self.version != 0
 
-    def _all_off(self) -> None:
+    def _all_off(self, now_us: int = 0) -> None:
+        if not hasattr(self, "off_us") or np.any(self.setpoint != 0) or np.any(self.duty != 0):
+            self.off_us = now_us  # the moment the coils went from driven to off
+        self.driving = False
         self.setpoint[:] = 0.0
         self.integral[:] = 0.0
         self.duty[:] = 0.0
@@ -117,7 +122,7 @@ class CurrentDevice:
         self.bridges.drive(self.duty.copy(), False)
 
     def _trip(self, code: str, coil: int, now_us: int) -> None:
-        self._all_off()
+        self._all_off(now_us)
         self.version = 0
         self.tripped = code
         self.trips.append((code, coil, now_us))
@@ -134,7 +139,7 @@ class CurrentDevice:
         ma = np.asarray(self.bridges.measure(), dtype=np.int64)
         i = ma / 1000.0
         self.heat = self.decay * self.heat + (1.0 - self.decay) * (i / lim.continuous_current) ** 2
-        if not self.session:
+        if not self.session or not self.driving:
             self.measured = ma
             return
         over = np.flatnonzero(np.abs(ma) > lim.trip_ratio * lim.max_current * 1000)
@@ -206,7 +211,7 @@ class CurrentDevice:
                 return nak("VERSION")
             if np.any(self.heat > 0.9):
                 return nak("HEAT")
-            self._all_off()
+            self._all_off(now_us)
             self.version, self.tripped = version, None
             if version == 1:
                 return accepted(1, 2 * self.coils, self.watchdog_ms, self.name)
@@ -216,7 +221,7 @@ class CurrentDevice:
         if verb == "OFF":
             if args:
                 return nak("ARGS")
-            self._all_off()
+            self._all_off(now_us)
             return accepted() if self.version == VERSION2 else accepted(0, 0)
         if verb == "PING":
             if args:
@@ -263,4 +268,5 @@ class CurrentDevice:
         if lim.resistance * sum(a * a for a in amps) > lim.max_power:  # summed in order, as the firmware does
             return False
         self.setpoint = np.array(amps)
+        self.driving = True
         return True

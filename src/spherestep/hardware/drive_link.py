@@ -1,0 +1,213 @@
+"""The host side of protocol version 2 over a serial port: coil currents out, sensor state back.
+
+Same discipline as the relay link (:class:`~spherestep.hardware.Serial`): stop-and-wait, a timeout or ``NAK
+CRC``/``FRAME`` retransmits the same frame up to ``retries`` times, anything else ends the link. A device
+that tripped answers with its trip code (:data:`~spherestep.hardware.protocol2.TRIP_CODES`), raised as
+:class:`DeviceTrip`. Timeouts default to 20 ms so that ``timeout × (retries + 1)`` stays under the device's
+watchdog period (100 ms) and a lost frame costs one loop period, not the session. See ``docs/protocol.md``.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import time
+from collections import Counter, deque
+from dataclasses import dataclass
+
+import numpy as np
+import serial as pyserial
+
+from ..errors import InputError, bad_value
+from .backend import LinkError
+from .protocol import BAUDRATE, NAK_CODES, RETRYABLE, Frame, FrameError, LineReader, decode, encode, \
+    parse_decimal
+from .protocol2 import MAX_FRAME2, NAK_CODES2, TRIP_CODES, VERSION2, State, encode_block, parse_state
+from .serialport import NakError
+from .transcript import Transcript
+
+_POLL = 0.002  # seconds one read waits before the deadline is checked again
+
+
+class DeviceTrip(NakError):
+    """The device switched every coil off by itself (watchdog, CRC storm, over-current, open or stuck coil,
+    heat) and says so; ``code`` is the trip code."""
+
+
+@dataclass(frozen=True)
+class DriveInfo:
+    """What a current-mode device reports in the handshake (SI units)."""
+
+    name: str
+    coils: int
+    sensors: int
+    watchdog: float
+    period: float
+    max_current: float
+    max_power: float
+    field_lsb: float
+
+
+class DriveLink:
+    """The current-mode controller on serial port ``port`` (a USB CDC device, a pty's slave name).
+
+    :meth:`open` shakes hands with ``HELLO,2``; :meth:`drive` sends every coil's current (A) and returns the
+    :class:`~spherestep.hardware.protocol2.State` (measured currents, magnetometers); :meth:`read` the state
+    alone; :meth:`off` switches every coil off. ``stats`` counts frames, retransmissions, timeouts, NAKs.
+    """
+
+    def __init__(self, port: str, *, baudrate: int = BAUDRATE, timeout: float = 0.02, retries: int = 2,
+                 open_timeout: float = 3.0, transcript: Transcript | None = None):
+        if not isinstance(port, str) or not port.strip():
+            raise bad_value("port", "a serial device name such as /dev/ttyACM0 or COM3", port)
+        for name, value in (("timeout", timeout), ("open_timeout", open_timeout)):
+            if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
+                raise bad_value(name, "a positive number of seconds", value)
+        if not isinstance(retries, int) or retries < 0:
+            raise bad_value("retries", "a non-negative integer", retries)
+        self.port, self.baudrate, self.timeout, self.retries = port, baudrate, float(timeout), retries
+        self.open_timeout = float(open_timeout)
+        self.transcript = transcript
+        self.stats: Counter[str] = Counter()
+        self.info: DriveInfo | None = None
+        self._link: pyserial.Serial | None = None
+        self._reader = LineReader(MAX_FRAME2)
+        self._bodies: deque[bytes] = deque()
+        self._seq = 0
+
+    def __enter__(self) -> DriveLink:
+        self.open()
+        return self
+
+    def __exit__(self, *exc) -> None:
+        """``OFF`` if the link still answers (if not, the device's watchdog switches off), then close."""
+        try:
+            if self._link is not None:
+                self.off()
+        except LinkError:
+            pass
+        finally:
+            self.close()
+
+    def open(self) -> DriveInfo:
+        """Open the port and shake hands; the device reports coils, sensors, watchdog, period and limits."""
+        try:
+            self._link = pyserial.Serial(self.port, self.baudrate, timeout=_POLL, write_timeout=self.timeout,
+                                         exclusive=True)
+        except (pyserial.SerialException, OSError, ValueError) as exc:
+            reason = os.strerror(exc.errno) if getattr(exc, "errno", None) else str(exc)
+            raise InputError(f"port {self.port!r} could not be opened ({reason}); give the serial device of the "
+                             "coil controller, such as /dev/ttyACM0") from None
+        try:
+            self._link.reset_input_buffer()
+            ack = self._transact("HELLO", VERSION2, attempts=max(1, math.ceil(self.open_timeout / 0.25)),
+                                 timeout=0.25)
+            self.info = self._device_info(ack)
+        except BaseException:
+            self.close()
+            raise
+        return self.info
+
+    def _device_info(self, ack: Frame) -> DriveInfo:
+        d = ack.args[1:]
+        nums = [parse_decimal(x, 9) for x in d[:8]] if len(d) == 9 else [None]
+        if None in nums or nums[0] != VERSION2 or not nums[1] or not nums[3] or not nums[4]:
+            raise LinkError(f"device on {self.port} answered HELLO,2 with {','.join(d)!r}; expected version 2, "
+                            "coils, sensors, watchdog_ms, period_us, max_mA, max_W, field_nT, name")
+        _, coils, sensors, wd, period, ma, watts, lsb = nums
+        return DriveInfo(d[8], coils, sensors, wd / 1000, period * 1e-6, ma / 1000, float(watts), lsb * 1e-9)
+
+    def close(self) -> None:
+        link, self._link = self._link, None
+        if link is not None:
+            try:
+                link.close()
+            except (pyserial.SerialException, OSError):
+                pass
+
+    def drive(self, currents) -> State:
+        """Set every coil's current (A, ``(N,)``) and return the device's state."""
+        c = np.asarray(currents, dtype=float)
+        if self.info is None:
+            raise LinkError(f"serial link to {self.port} is not open")
+        if c.shape != (self.info.coils,) or not np.all(np.isfinite(c)):
+            raise bad_value("currents", f"{self.info.coils} finite coil currents in A", f"shape {c.shape}")
+        ack = self._transact("DRIVE", encode_block(1000.0 * c))
+        return self._state(ack)
+
+    def read(self) -> State:
+        """The device's state (measured currents, magnetometers) without changing the setpoints."""
+        return self._state(self._transact("READ"))
+
+    def off(self) -> None:
+        """Every coil off (obeyed in any state, even after a trip)."""
+        self._transact("OFF")
+
+    def _state(self, ack: Frame) -> State:
+        try:
+            return parse_state(ack.args[1:], self.info.coils, self.info.sensors, self.info.field_lsb)
+        except FrameError as exc:
+            raise LinkError(f"device on {self.port} sent a malformed state ({exc.detail})") from None
+
+    # -- frames -------------------------------------------------------------------------------------------------
+    def _log(self, kind: str, text: str) -> None:
+        if self.transcript is not None:
+            self.transcript.add(time.monotonic(), kind, text)
+
+    def _lost(self, verb: str, exc: Exception) -> LinkError:
+        reason = os.strerror(exc.errno) if getattr(exc, "errno", None) else str(exc)
+        self._log("NOTE", f"link lost during {verb}: {reason}")
+        return LinkError(f"serial link to {self.port} lost during {verb} ({reason})")
+
+    def _answer(self, seq: int, verb: str, timeout: float) -> Frame | None:
+        deadline = time.monotonic() + timeout
+        while True:
+            try:
+                while not self._bodies:
+                    if time.monotonic() >= deadline:
+                        self.stats["timeouts"] += 1
+                        return None
+                    self._bodies.extend(self._reader.feed(self._link.read(max(1, self._link.in_waiting))))
+            except (pyserial.SerialException, OSError) as exc:
+                raise self._lost(verb, exc) from None
+            body = self._bodies.popleft()
+            self._log("RX", "$" + body.decode("latin-1"))
+            try:
+                frame = decode(body, MAX_FRAME2)
+            except FrameError:
+                self.stats["ignored"] += 1
+                continue
+            code = frame.args[0] if frame.args else ""
+            if frame.verb == "NAK" and (frame.seq == seq or (frame.seq is None and code in RETRYABLE)):
+                self.stats["naks"] += 1
+                if code in RETRYABLE:
+                    return None
+                meaning = {**NAK_CODES, **NAK_CODES2}.get(code, "unknown code")
+                error = DeviceTrip if code in TRIP_CODES else NakError
+                raise error(f"device refused {verb}: NAK {code} ({meaning})", code)
+            if frame.verb == "ACK" and frame.seq == seq and frame.args[:1] == (verb,):
+                return frame
+            self.stats["ignored"] += 1
+
+    def _transact(self, verb: str, *args: object, attempts: int | None = None, timeout: float | None = None) -> Frame:
+        if self._link is None:
+            raise LinkError(f"serial link to {self.port} is not open")
+        seq, self._seq = self._seq, (self._seq + 1) & 0xFF
+        frame = encode(seq, verb, *args, max_frame=MAX_FRAME2)
+        attempts = self.retries + 1 if attempts is None else attempts
+        for attempt in range(attempts):
+            if attempt:
+                self.stats["retransmissions"] += 1
+            self._log("TX", frame.decode("ascii"))
+            self.stats["frames"] += 1
+            try:
+                self._link.write(frame)
+            except pyserial.SerialTimeoutException:
+                pass
+            except (pyserial.SerialException, OSError) as exc:
+                raise self._lost(verb, exc) from None
+            ack = self._answer(seq, verb, self.timeout if timeout is None else timeout)
+            if ack is not None:
+                return ack
+        raise LinkError(f"no valid answer from the device on {self.port} to {verb} after {attempts} attempts "
+                        f"({self.stats['timeouts']} timeouts, {self.stats['naks']} NAKs so far)")

@@ -1,0 +1,333 @@
+"""The pseudo-terminal device grows a motor: coil electrics, the rotor and the magnetometers behind
+:class:`~spherestep.hardware.current_device.CurrentDevice`, served on a real pseudo-terminal.
+
+:class:`EmulatedMotor` is the device's :class:`~spherestep.hardware.current_device.Bridges`:
+
+* Coils: ``L di/dt = d V − R i`` per coil (``R``, ``L``, ``V`` of a :class:`spherestep.control.DriveLimits`),
+  solved exactly over each control period with the duty ``d`` held (``i ← a i + (1 − a) d V / R``,
+  ``a = e^{−R h / L}``; the back-EMF of the turning rotor is neglected). Asleep (``enabled`` False) the bridges'
+  diodes return the current to the supply, ``L di/dt = −V sign(i) − R i``, until it is zero. The sense reads
+  ``round(1000 (i + noise))`` mA, ``current_noise`` A RMS.
+* Rotor: :class:`spherestep.dynamics.Rotor` under the torque model's ``K(R) ī`` (currents per unit of the
+  nominal current), one step per ``torque_refresh`` s (20 ms), with ``K`` at the orientation predicted for the
+  middle of the step and ``ī`` the coils' mean current over it; in between, the sensors see
+  :meth:`EmulatedMotor.orientation`, the last step continued to second order.
+* Magnetometers: the sensing room's :class:`~spherestep.sensing.field.FieldTable` (rotor) plus
+  :class:`~spherestep.sensing.field.CoilField` (coils, at the measured currents), read in each sensor's own
+  axes, with the part's noise, quantised to its LSB and clipped to ±32767 counts.
+
+:class:`MotorFaults` injects the faults the servo must survive: an open coil, a coil stuck at full current (a
+shorted bridge, which only the supply cut stops), a frozen current reading, a magnetometer that stops (stale)
+or returns garbage, and link loss (the device vanishes, or stops reading). :class:`MotorPty` runs device and
+motor on the master end of ``os.openpty()``; a host opens :attr:`MotorPty.port` like a USB serial device.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import select
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from .. import so3
+from ..errors import bad_value
+from .current_device import CurrentDevice
+from .limits import CurrentLimits
+from .protocol2 import FULL_SCALE
+
+
+@dataclass(frozen=True)
+class MotorFaults:
+    """Faults by emulated time (s since the device started): each a ``(index, time)`` pair or None.
+
+    ``open_coil``: the coil's circuit opens (no current). ``stuck_coil``: its bridge shorts to the supply (full
+    current whatever the duty, until the supply is cut). ``frozen_reading``: its current sense repeats the last
+    value. ``sensor_stops``: the magnetometer stops answering (repeats its last sample, flagged stale).
+    ``sensor_garbage``: it returns random counts (not flagged: the host must notice). ``vanish_at`` s: the
+    device closes its end of the line; ``deaf_at`` s: it stops reading the line (the watchdog still runs).
+    """
+
+    open_coil: tuple[int, float] | None = None
+    stuck_coil: tuple[int, float] | None = None
+    frozen_reading: tuple[int, float] | None = None
+    sensor_stops: tuple[int, float] | None = None
+    sensor_garbage: tuple[int, float] | None = None
+    vanish_at: float | None = None
+    deaf_at: float | None = None
+
+
+K_REUSE = 2e-3  # rad: the torque matrix is re-evaluated when the rotor has turned further than this
+
+
+def _active(fault: tuple[int, float] | None, t: float) -> int | None:
+    return fault[0] if fault is not None and t >= fault[1] else None
+
+
+class EmulatedMotor:
+    """Coils, rotor and magnetometers of ``design`` under ``model`` (a torque model with ``torque_matrix``);
+    see the module. ``sensors`` a :class:`~spherestep.sensing.SensorArray`; ``R0`` the start orientation."""
+
+    def __init__(self, design, model, sensors, *, rotor=None, drive=None, current_noise: float = 0.002,
+                 R0=None, faults: MotorFaults | None = None, period: float = 2e-3, torque_refresh: float = 2e-2,
+                 seed: int = 0):
+        from ..control import DriveLimits
+        from ..dynamics import Rotor
+        from ..sensing.field import CoilField, FieldTable
+
+        self.design, self.model, self.sensors = design, model, sensors
+        self.rotor = rotor if rotor is not None else Rotor.from_design(design, damping=0.01)
+        self.drive_limits = drive if drive is not None else DriveLimits()
+        self.current_noise = float(current_noise)
+        self.faults = faults if faults is not None else MotorFaults()
+        self.nominal = self.drive_limits.nominal_current  # A per unit current
+        self.period, self.torque_refresh = float(period), float(torque_refresh)
+        self.rng = np.random.default_rng(seed)
+        self.field_table = FieldTable.build(design, sensors.positions)
+        self.coil_field = CoilField.build(design, sensors.positions)
+        n = len(design.stator)
+        self.t = 0.0
+        self.R = np.eye(3) if R0 is None else so3.as_rotations(R0).reshape(3, 3).copy()
+        self.w = np.zeros(3)
+        self.i = np.zeros(n)
+        self.duty = np.zeros(n)
+        self.enabled = False
+        self._rotor_t = 0.0
+        self._charge = np.zeros(n)
+        self.alpha = np.zeros(3)
+        self._K = self._K_at = None
+        self._last_ma = np.zeros(n, dtype=np.int64)
+        self._last_counts = np.zeros((len(sensors), 3), dtype=np.int64)
+
+    # -- the device's view (Bridges) --------------------------------------------------------------------------------
+    def measure(self) -> np.ndarray:
+        noise = self.current_noise * self.rng.standard_normal(len(self.i))
+        ma = np.rint(1000.0 * (self.i + noise)).astype(np.int64)
+        frozen = _active(self.faults.frozen_reading, self.t)
+        if frozen is not None:
+            ma[frozen] = self._last_ma[frozen]
+        self._last_ma = ma
+        return ma
+
+    def drive(self, duty: np.ndarray, enabled: bool) -> None:
+        self.duty = np.asarray(duty, dtype=float).copy()
+        self.enabled = bool(enabled)
+
+    def sense(self) -> tuple[np.ndarray, int]:
+        part = self.sensors.part
+        B = self.field_table.field(self.orientation()) + self.coil_field.field(self.i / self.nominal)  # (S, 3), fixed frame
+        local = np.einsum("sab,sa->sb", self.sensors.axes, B)  # A_sᵀ B
+        local = local + part.noise_T * self.rng.standard_normal(local.shape)
+        counts = np.clip(np.rint(local / part.lsb_T), -FULL_SCALE, FULL_SCALE).astype(np.int64)
+        stale = 0
+        stopped = _active(self.faults.sensor_stops, self.t)
+        if stopped is not None:
+            counts[stopped] = self._last_counts[stopped]
+            stale |= 1 << stopped
+        garbage = _active(self.faults.sensor_garbage, self.t)
+        if garbage is not None:
+            counts[garbage] = self.rng.integers(-FULL_SCALE, FULL_SCALE + 1, 3)
+        self._last_counts = counts
+        return counts, stale
+
+    # -- physics ----------------------------------------------------------------------------------------------------
+    def advance_to(self, t: float) -> None:
+        """Integrate the coils from :attr:`t` to ``t`` in steps of at most one control period; the rotor follows
+        in chunks of ``torque_refresh`` (and is brought up to date by :meth:`sync`)."""
+        while self.t < t - 1e-12:
+            self._advance_coils(min(self.period, t - self.t))
+            if self.t - self._rotor_t >= self.torque_refresh - 1e-12:
+                self.sync()
+
+    def _advance_coils(self, h: float) -> None:
+        e, f = self.drive_limits, self.faults
+        a = math.exp(-h / e.time_constant)
+        i0 = self.i
+        stuck = _active(f.stuck_coil, self.t)
+        if self.enabled:
+            v = self.duty * e.supply_voltage
+            if stuck is not None:
+                v[stuck] = e.supply_voltage
+            i1 = a * i0 + (1.0 - a) * v / e.resistance
+        else:
+            i1 = a * i0 - (1.0 - a) * np.sign(i0) * e.supply_voltage / e.resistance
+            i1 = np.where(np.sign(i1) != np.sign(i0), 0.0, i1)  # the diodes stop at zero
+        opened = _active(f.open_coil, self.t)
+        if opened is not None:
+            i1[opened] = 0.0
+        self._charge += 0.5 * h * (i0 + i1)  # ∫ i dt, trapezoidal
+        self.i = i1
+        self.t += h
+
+    def sync(self) -> None:
+        """Bring the rotor up to the coils' time: one :meth:`Rotor.step` under ``K(R_mid) ī`` (``ī`` the mean
+        current since the last sync, ``R_mid`` the orientation predicted for the middle of the interval; ``K``
+        is reused while ``R_mid`` stays within ``K_REUSE`` rad of where it was evaluated)."""
+        h = self.t - self._rotor_t
+        if h <= 0:
+            return
+        mid = so3.exp(0.5 * h * self.w) @ self.R
+        if self._K is None or np.linalg.norm(so3.vect(mid @ self._K_at.T)) > K_REUSE:
+            self._K, self._K_at = self.model.torque_matrix(mid), mid
+        tau = (self._K @ (self._charge / (h * self.nominal)))[None]
+        R, w, _ = self.rotor.step(self.R[None], self.w[None], lambda _R: tau, h, tau)
+        self.alpha = (w[0] - self.w) / h
+        self.R, self.w = R[0], w[0]
+        self._charge = np.zeros_like(self.i)
+        self._rotor_t = self.t
+
+    def orientation(self) -> np.ndarray:
+        """The rotor now, between two rotor steps: ``exp(Δt ω + ½ Δt² α) R`` from the last step."""
+        dt = self.t - self._rotor_t
+        return so3.exp(dt * self.w + 0.5 * dt * dt * self.alpha) @ self.R
+
+
+@dataclass(frozen=True)
+class Truth:
+    """The emulated motor as the device process last published it: orientation ``R``, angular velocity ``w``
+    (rad/s), coil currents ``i`` (A), emulated time ``t`` (s, from :attr:`MotorPty.started`), bridges
+    ``enabled``, ``off_at`` (s) the last time the device switched every coil off, and the device's ``trips``
+    ``(code, coil, time s)``."""
+
+    R: np.ndarray
+    w: np.ndarray
+    i: np.ndarray
+    t: float
+    enabled: bool
+    off_at: float
+    trips: tuple[tuple[str, int, float], ...]
+
+
+_TRIP_ORDER = ("WDOG", "CRCS", "OVER", "OPEN", "STUCK", "HEAT")
+_MAX_TRIPS = 8
+PUBLISH_EVERY = 2e-3  # s of emulated time between two publications of the truth
+
+
+class MotorPty:
+    """A :class:`CurrentDevice` driving an :class:`EmulatedMotor`, served on a pseudo-terminal by a separate
+    process (forked; as a real board, it does not share the host's interpreter and its lock).
+
+    The device's control step runs every ``motor.period`` of wall time (catching up when the process was held
+    up, so emulated time follows the wall clock); frames are answered as they complete. :meth:`truth` returns
+    the :class:`Truth` the process publishes after every step and frame. ``device_options`` go to
+    :class:`CurrentDevice` (``watchdog_ms``, ``limits``...). POSIX only.
+    """
+
+    def __init__(self, motor: EmulatedMotor, **device_options):
+        import multiprocessing as mp
+        import tty
+
+        e = motor.drive_limits
+        options = dict(limits=CurrentLimits.from_drive(e), supply=e.supply_voltage, inductance=e.inductance,
+                       period_us=round(motor.period * 1e6), bandwidth=0.25 / motor.period,
+                       nominal_ma=round(1000 * motor.nominal),
+                       field_lsb_nt=round(motor.sensors.part.lsb_T * 1e9))
+        options.update(device_options)
+        self.motor = motor
+        self.device = CurrentDevice(motor, len(motor.design.stator), len(motor.sensors), **options)
+        self._master, self._slave = os.openpty()
+        tty.setraw(self._slave)
+        self.port = os.ttyname(self._slave)
+        ctx = mp.get_context("fork")
+        n = len(motor.i)
+        self._shared = ctx.Array("d", 9 + 3 + n + 4 + 3 * _MAX_TRIPS, lock=True)
+        self.started: float | None = None  # time.monotonic() at emulated time 0
+        self._stop = ctx.Event()
+        self._process = ctx.Process(target=self._serve, name=f"MotorPty {self.port}", daemon=True)
+
+    def truth(self) -> Truth:
+        """The emulated motor now (see :class:`Truth`)."""
+        n = len(self.motor.i)
+        with self._shared.get_lock():
+            v = np.array(self._shared[:])
+        count = int(v[14 + n])
+        rows = v[16 + n:].reshape(_MAX_TRIPS, 3)[:min(count, _MAX_TRIPS)]
+        trips = tuple((_TRIP_ORDER[int(c)], int(k), float(t)) for c, k, t in rows)
+        return Truth(v[:9].reshape(3, 3), v[9:12], v[12:12 + n], float(v[12 + n]), bool(v[13 + n]),
+                     float(v[15 + n]), trips)
+
+    def start(self) -> MotorPty:
+        self.motor.sense()  # first calls (spline set-up, caches) here, inherited by the device process
+        self.motor.sync()
+        self._publish()
+        self.started = time.monotonic() - self.motor.t
+        self._process.start()
+        return self
+
+    def stop(self) -> None:
+        self._stop.set()
+        if self._process.is_alive():
+            self._process.join(timeout=5)
+            if self._process.is_alive():
+                self._process.kill()
+                self._process.join()
+        for fd in (self._master, self._slave):
+            if fd is not None:
+                os.close(fd)
+        self._master = self._slave = None
+
+    def __enter__(self) -> MotorPty:
+        return self.start()
+
+    def __exit__(self, *exc) -> None:
+        self.stop()
+
+    # -- the device process -------------------------------------------------------------------------------------
+    def _publish(self) -> None:
+        m, n = self.motor, len(self.motor.i)
+        trips = self.device.trips[:_MAX_TRIPS]
+        rows = [(_TRIP_ORDER.index(c), k, us * 1e-6) for c, k, us in trips]
+        rows += [(0.0, 0.0, 0.0)] * (_MAX_TRIPS - len(rows))
+        values = np.concatenate([m.R.ravel(), m.w, m.i, [m.t, float(m.enabled), len(self.device.trips),
+                                                         self.device.off_us * 1e-6], np.ravel(rows)])
+        with self._shared.get_lock():
+            self._shared[:] = values.tolist()
+
+    def _steps_to(self, t: float, master) -> None:
+        """Control steps up to emulated time ``t``, answering frames between steps as they come."""
+        m, dev = self.motor, self.device
+        while m.t + m.period <= t + 1e-12:
+            self._answer(master)
+            m.advance_to(m.t + m.period)
+            dev.step(round(m.t * 1e6))
+
+    def _answer(self, master) -> None:
+        """Answer the bytes waiting on the line at the device's current time."""
+        if master is None or not select.select([master], [], [], 0)[0]:
+            return
+        try:
+            data = os.read(master, 4096)
+        except OSError:  # no host has the slave open yet
+            return
+        reply = self.device.receive(data, round(self.motor.t * 1e6))
+        if reply:
+            try:
+                os.write(master, reply)
+            except OSError:
+                pass
+
+    def _serve(self) -> None:
+        """Step the device up to the wall clock, answering frames between steps, then wait for bytes at most one
+        period. Frames are taken at the earliest time they can have arrived, so that a stall of this process
+        (not of the host) does not trip the watchdog."""
+        m, f = self.motor, self.motor.faults
+        t0 = self.started
+        master = self._master
+        published = m.t
+        while not self._stop.is_set():
+            t = time.monotonic() - t0
+            if master is not None and f.vanish_at is not None and t >= f.vanish_at:
+                os.close(master)
+                master = None
+            listening = master if master is not None and (f.deaf_at is None or t < f.deaf_at) else None
+            self._answer(listening)
+            self._steps_to(t, listening)
+            if m.t - published >= PUBLISH_EVERY:
+                self._publish()
+                published = m.t
+            if listening is not None:
+                select.select([listening], [], [], m.period)
+            else:
+                time.sleep(m.period)
