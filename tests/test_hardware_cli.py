@@ -36,9 +36,12 @@ def test_dry_run_prints_and_logs_what_would_be_sent(tmp_path, capsys):
     log = tmp_path / "logs" / "dry.log"
     assert main(["run", str(plan), "--rate", "4", "--dry-run", "--log", str(log)]) == 0
     out = capsys.readouterr().out
-    assert "dry run: 5 steps at 4 Hz would take 1.250 s on a 32-channel controller; nothing was sent" in out
+    assert ("dry run: 5 frames (the start and 4 steps) at 4 Hz would take 1.250 s on a 8-channel controller (the "
+            "channels the plan uses); nothing was sent; final state all coils off") in out
     assert "0x9" in out and "0- 3+" in out and "all off" in out
     lines = log.read_text().splitlines()
+    assert lines[-1].split(None, 2)[1:] == ["NOTE", "end: 5 frames streamed; all coils off"]
+    lines = lines[:-1]
     assert [line.split()[2].split(",")[1].split("*")[0] for line in lines] == ["HELLO"] + ["SET"] * 5 + ["OFF"]
     assert [float(line.split()[0]) for line in lines] == pytest.approx([0, 0, 0.25, 0.5, 0.75, 1.0, 1.25])
     assert not list(log.parent.glob(".*.tmp"))
@@ -52,8 +55,9 @@ def test_run_streams_to_a_device_and_logs_acknowledgements(tmp_path, capsys):
         state, frames = dev.state(), dev.frames
     assert code == 0
     out = capsys.readouterr().out
-    assert f"streamed 6 steps at 30 Hz to {dev.port} (device 'spherestep-emu', protocol 1, 32 channels)" in out
-    assert "8 frames acknowledged, 0 retransmissions" in out and "all coils off" in out
+    assert (f"streamed 6 frames (the start and 5 steps) at 30 Hz to {dev.port} (device 'spherestep-emu', protocol 1, "
+            "32 channels)") in out
+    assert "8 frames acknowledged, 0 retransmissions" in out and "final state all coils off, acknowledged" in out
     assert state == (0, 0) and frames == 8
     text = log.read_text()
     assert text.count(" TX ") == 8 and text.count(",ACK,") == 8 and "ACK,OFF,0,0" in text
@@ -68,7 +72,7 @@ def test_bad_port_is_one_line_and_exit_2(tmp_path, capsys):
 
 @pytest.mark.parametrize("content, message", [
     ("{not json", "plan must be a JSON plan file"),
-    (json.dumps({"format": "spherestep-plan", "version": 1, "coil_count": 4}), "plan file is malformed"),
+    (json.dumps({"format": "spherestep-plan", "version": 1, "coil_count": 4}), "plan.channel_map must be present"),
     (json.dumps({"format": "something-else"}), "plan.format must be"),
 ])
 def test_malformed_plan_is_one_line_and_exit_2(tmp_path, capsys, content, message):
@@ -80,17 +84,17 @@ def test_malformed_plan_is_one_line_and_exit_2(tmp_path, capsys, content, messag
 
 def test_dry_run_stands_in_for_the_given_channel_count(tmp_path, capsys):
     plan = write_plan(tmp_path / "plan.json", 2, coil_count=20)  # 40 channels
-    assert main(["run", str(plan), "--rate", "5", "--dry-run"]) == 2
+    assert main(["run", str(plan), "--rate", "5", "--dry-run", "--channels", "32"]) == 2
     assert "uses relay channel 39, but device 'dry-run' has 32 channels" in one_error_line(capsys.readouterr().err)
-    assert main(["run", str(plan), "--rate", "5", "--dry-run", "--channels", "40"]) == 0
-    assert "on a 40-channel controller" in capsys.readouterr().out
+    assert main(["run", str(plan), "--rate", "5", "--dry-run"]) == 0  # default: the channels the plan uses
+    assert "on a 40-channel controller (the channels the plan uses)" in capsys.readouterr().out
 
 
 @pytest.mark.parametrize("args, message", [
     (["--rate", "5"], "--port must be the controller's serial device"),
     (["--rate", "5", "--port", "/dev/ttyUSB0", "--channels", "64"], "--channels must be given only with --dry-run"),
     (["--rate", "5", "--dry-run", "--channels", "65"], "--channels must be a channel count 1..64"),
-    (["--rate", "0", "--dry-run"], "--rate must be a positive number"),
+    (["--rate", "0", "--dry-run"], "--rate must be a positive number of steps per second"),
     (["--rate", "5", "--dry-run", "--max-duty", "1.5"], "--max-duty must be a fraction in (0, 1]"),
     (["--rate", "5", "--dry-run", "--max-on", "-1"], "--max-on must be a positive number of seconds"),
     (["--rate", "0.5", "--dry-run", "--max-on", "1.5"],
@@ -143,7 +147,7 @@ def test_ctrl_c_switches_every_coil_off(tmp_path):
             proc.kill()
         state, trips, trace = dev.state(), dev.emulator.trips, list(dev.emulator.trace)
     assert proc.returncode == 130
-    assert one_error_line(err) == "spherestep: interrupted"
+    assert one_error_line(err) == "spherestep: interrupted (SIGINT): all coils off, acknowledged by the device"
     assert state == (0, 0) and trips == 0 and trace[-2:] == [("enable", 0), ("polarity", 0)]
     lines = log.read_text().splitlines()
     last_tx = max(i for i, line in enumerate(lines) if " TX " in line)

@@ -1,8 +1,7 @@
 """spherestep: kinematic design, commutation and control of spherical stepper motors (Chirikjian & Stein, 1999).
 
-Every room is reachable from here. The light ones are imported with the package; the heavy ones (those that
-load magpylib, matplotlib, plotly, Dask, pyserial, or large tables) on first use, through the module
-``__getattr__``, so ``import spherestep`` stays fast::
+Every room is reachable from here, imported on first use through the module ``__getattr__`` (even the light
+ones: the ``spherestep`` command imports this package, and its ``--help`` must not wait for SciPy)::
 
     >>> import spherestep as ss
     >>> design = ss.motor.prototype()
@@ -14,10 +13,9 @@ from __future__ import annotations
 
 import importlib
 
-from . import commutation, errors, harmonics, motor, packing, potential, so3, sphere, statics, units
-
-_LAZY = ("atomic", "control", "design_file", "dynamics", "explore", "export", "hardware", "magnetics", "plots",
-         "report", "sensing")
+_LAZY = ("atomic", "commutation", "control", "design_file", "dynamics", "errors", "explore", "export", "hardware",
+         "harmonics", "magnetics", "motor", "packing", "plots", "potential", "report", "sensing", "so3", "sphere",
+         "statics", "units")  # every room loads on first use: `spherestep --help` must not wait for SciPy
 
 __all__ = ["atomic", "commutation", "control", "design_file", "dynamics", "errors", "explore", "export", "hardware",
            "harmonics", "magnetics", "motor", "packing", "plots", "potential", "report", "sensing", "so3", "sphere",

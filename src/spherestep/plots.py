@@ -108,6 +108,26 @@ def save_figure(fig: Figure, path: str | Path, dpi: int = 130) -> Path:
     return path
 
 
+def figure_closed_loop(run, axis) -> Figure:
+    """Desired and true rotation angle about ``axis`` (degrees) per controller step of a closed-loop run,
+    missed steps marked."""
+    from . import so3
+
+    fig = Figure(figsize=(7, 3.2))
+    ax = fig.add_subplot()
+    steps = np.arange(len(run.targets))
+    true = np.degrees(so3.turned_angle(run.true, axis))
+    ax.step(steps, np.degrees(so3.turned_angle(run.targets, axis)), where="post", color="0.6", lw=1.0,
+            label="desired Rᵢ")
+    ax.plot(steps, true, color="k", lw=1.0, marker=".", ms=3, label="true (simulated)")
+    ax.plot(steps[run.missed], true[run.missed], "x", color="#c0392b", ms=5, label="missed step")
+    ax.set_xlabel("controller step")
+    ax.set_ylabel("rotation about the axis (°)")
+    ax.legend(fontsize=7)
+    fig.tight_layout()
+    return fig
+
+
 def figure_simulation(sim, plan, axis, dwell: float) -> Figure:
     """Desired, planned and simulated rotation angle about ``axis`` (degrees) against time."""
     from . import so3

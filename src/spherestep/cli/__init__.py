@@ -1,20 +1,34 @@
-"""The ``spherestep`` command: thin, parses and prints, calls the library.
+"""The ``spherestep`` command: thin, parses, calls one library function, prints.
 
-Errors a user can cause (:class:`~spherestep.errors.SpherestepError`, bad options) print one line on stderr
-and exit with status 2; a failed computation exits 1; ``--debug`` shows the traceback instead.
+Exit status: 0 success; 2 a user mistake (bad option, bad file, unusable output location: one line on stderr,
+``spherestep: error: …``); 1 a failure of the computation or of the machine (a full disk says "N of M files
+written"), ``spherestep: failed: …``; 130 interrupted (Ctrl-C or SIGTERM, after all coils are off).
+``--debug`` shows the traceback instead of the line. ``spherestep`` alone prints the usage (exit 0).
+
+The command modules import only Typer and Rich at load time; the library loads inside the command that runs,
+so ``spherestep --help`` stays fast.
 """
 
 from __future__ import annotations
 
+import errno
 import sys
 
 import typer
-from typer.exceptions import TyperException
+from typer._click.exceptions import NoArgsIsHelpError  # Typer vendors Click; this one has no public alias
 
 from ..errors import ComputationError, SpherestepError
-from . import design, export, motor, packings, report, simulate  # noqa: F401  (registers commands)
-from . import explore, forces, run  # noqa: F401
+from . import design, explore, export, forces, motor, packings, report, run, simulate  # noqa: F401 (registers)
+from . import capability, move  # noqa: F401 (registers)
+from . import sense  # noqa: F401 (registers)
 from .app import app
+
+DISK_FULL = (errno.ENOSPC, errno.EDQUOT, errno.EFBIG)
+
+
+def _error(kind: str, text: str) -> None:
+    line = " ".join(str(text).split())  # one line, whatever the message held
+    print(f"spherestep: {kind}: {line}", file=sys.stderr)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -28,26 +42,47 @@ def main(argv: list[str] | None = None) -> int:
         result = command.main(args=args, prog_name="spherestep", standalone_mode=False)
         # outside standalone mode Typer returns the code of an Exit (130 for Ctrl-C) instead of exiting
         code = result if isinstance(result, int) else 0
+    except NoArgsIsHelpError as exc:  # `spherestep` or `spherestep design` alone: the usage
+        print(exc.ctx.get_help())
+        code = 0
     except typer.Exit as exc:
         code = exc.exit_code
-    except TyperException as exc:  # bad usage (exit_code 2) and Typer's own errors
+    except typer.TyperException as exc:  # bad usage (exit_code 2): Click's errors, vendored by Typer
         if debug:
             raise
-        print(f"spherestep: error: {exc.format_message()}", file=sys.stderr)
+        _error("error", exc.format_message())
         code = exc.exit_code
     except ComputationError as exc:
         if debug:
             raise
-        print(f"spherestep: failed: {exc}", file=sys.stderr)
+        _error("failed", exc)
         code = 1
     except SpherestepError as exc:
         if debug:
             raise
-        print(f"spherestep: error: {exc}", file=sys.stderr)
+        _error("error", exc)
         code = 2
     except (KeyboardInterrupt, typer.Abort):
         print("spherestep: interrupted", file=sys.stderr)
         code = 130
+    except OSError as exc:  # a path the command did not check (it should have): still one line
+        if debug:
+            raise
+        where = f" ({exc.filename})" if exc.filename else ""
+        full = exc.errno in DISK_FULL
+        _error("failed" if full else "error", f"{exc.strerror or exc}{where}")
+        code = 1 if full else 2
+    except MemoryError:
+        if debug:
+            raise
+        _error("failed", "out of memory; ask for a smaller computation")
+        code = 1
+    except Exception as exc:  # a bug: one line and exit 1; --debug shows where
+        if debug:
+            raise
+        _error("failed", f"internal error {type(exc).__name__}: {exc} (run again with --debug for the traceback, "
+                         "and report it)")
+        code = 1
     if argv is None:
         sys.exit(code)
     return code

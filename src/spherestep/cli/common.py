@@ -1,28 +1,102 @@
-"""Shared parsing and printing for the command modules."""
+"""Shared parsing and printing for the command modules (light: no NumPy or library import at load time)."""
 
 from __future__ import annotations
 
 import json
+import math
 import sys
+from pathlib import Path
 
-import numpy as np
+import typer
 from rich.console import Console
 
 from ..errors import bad_value
 
-console = Console(width=None if sys.stdout.isatty() else 120)
+console = Console(width=None if sys.stdout.isatty() else 120, stderr=False)
 
 
-def parse_vector(text: str, name: str) -> np.ndarray:
+def number(expected: str, low: float | None = None, high: float | None = None, *, low_open: bool = False,
+           nonzero: bool = False, what: str | None = None):
+    """A Typer option callback that checks a number while the command line is parsed, before any work: finite,
+    in ``[low, high]`` (``(low, …`` with ``low_open``), non-zero if asked. ``expected`` states the quantity with
+    its unit and range for the message, "--rate must be <expected>; instead received …" (exit 2); with
+    ``what``, ``expected`` is just the unit and the message reads "<what> in <unit>, <range>"."""
+    if what is not None:
+        bounds = ([f"{'>' if low_open else '≥'} {low:g}"] if low is not None else []) + \
+                 ([f"≤ {high:g}"] if high is not None else [])
+        expected = f"{what} in {expected}" + (f", {' and '.join(bounds)}" if bounds else "")
+
+    def check(ctx: typer.Context, param: typer.CallbackParam, value):
+        if value is None or ctx.resilient_parsing:
+            return value
+        name = param.opts[0] if param.opts else param.name
+        if isinstance(value, float) and not math.isfinite(value):
+            raise bad_value(name, f"finite: {expected}", value)
+        if (low is not None and (value < low or (low_open and value == low))) or \
+                (high is not None and value > high) or (nonzero and value == 0):
+            raise bad_value(name, expected, value)
+        return value
+
+    return check
+
+
+def parse_vector(text: str, name: str):
     """Parse ``"X,Y,Z"`` into a non-zero 3-vector; InputError naming ``name`` otherwise."""
+    import numpy as np
+
     try:
         values = [float(v) for v in text.split(",")]
     except ValueError:
         raise bad_value(name, "three comma-separated numbers like 1,0,0.5", text) from None
     vec = np.array(values)
     if vec.shape != (3,) or not np.all(np.isfinite(vec)) or not np.any(vec):
-        raise bad_value(name, "three comma-separated numbers, not all zero, like 1,0,0.5", text)
+        raise bad_value(name, "three finite comma-separated numbers, not all zero, like 1,0,0.5", text)
     return vec
+
+
+def check_axis(ctx: typer.Context, param: typer.CallbackParam, value):
+    """Option callback: ``--axis X,Y,Z`` checked while parsing (the string is kept)."""
+    if value is not None and not ctx.resilient_parsing:
+        try:
+            parse_vector(value, param.opts[0])
+        except ValueError as exc:
+            raise typer.BadParameter(str(exc).split(" ", 1)[1]) from None
+    return value
+
+
+def input_file(path: Path, name: str) -> Path:
+    """``path`` if it is an existing regular file (a FIFO would block the read, a folder or device cannot be
+    parsed); InputError naming ``name`` otherwise."""
+    if not path.exists():
+        raise bad_value(name, "an existing file", str(path))
+    if not path.is_file():
+        raise bad_value(name, "a regular file (not a folder, pipe or device)", str(path))
+    return path
+
+
+def design_from(path: Path | None, name: str = "--design"):
+    """The design in the file at ``path`` (a regular file), or the built-in prototype."""
+    from ..motor import MotorDesign, prototype
+
+    return prototype() if path is None else MotorDesign.load(input_file(path, name))
+
+
+def usable(design, option: str = "--design"):
+    """``design`` if it can step; otherwise an InputError naming ``option`` with the reasons and the fields to
+    change (:func:`spherestep.motor.diagnosis.unusable_reasons`)."""
+    from ..motor.diagnosis import unusable_reasons
+
+    reasons = unusable_reasons(design)
+    if reasons:
+        raise bad_value(option, f"a design that can step, but {'; '.join(reasons)}", design.name)
+    return design
+
+
+def write_json(path: Path, data) -> Path:
+    """Write ``data`` as indented JSON to ``path``, atomically; returns the path."""
+    from ..atomic import write_text
+
+    return write_text(path, json.dumps(data, indent=1))
 
 
 def print_json(data) -> None:

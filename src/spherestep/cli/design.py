@@ -5,14 +5,10 @@ from __future__ import annotations
 from pathlib import Path
 
 import typer
-from rich.table import Table
 
-from .. import design_file
-from ..atomic import write_text
 from ..errors import InputError
-from ..motor import MotorDesign
 from .app import app
-from .common import console, print_json
+from .common import console, input_file, print_json, usable
 
 design_app = typer.Typer(
     name="design",
@@ -35,29 +31,35 @@ def new(
 
     Example: [bold]spherestep design new mymotor.yaml --from prototype[/bold]
     """
+    from .. import design_file
+    from ..atomic import write_text
+    from ..motor import MotorDesign
+    from ..outputs import Outputs, output_file
+
     if file.suffix.lower() == ".toml":
         raise InputError(f"FILE {str(file)!r}: design files are written as YAML; use a name ending in .yaml")
-    if file.is_dir():
-        raise InputError(f"FILE {str(file)!r} is a folder; give a file name such as {str(file / 'motor.yaml')!r}")
-    if file.exists() and not force:
-        raise InputError(f"FILE {str(file)!r} exists; give --force to overwrite it, or choose another name")
+    file = output_file(file, "FILE", suffixes=(".yaml", ".yml"), force=force)
     if source == "prototype":
         text = design_file.prototype_text()
         design = MotorDesign.loads(text, source="prototype")
     else:
-        design = MotorDesign.load(source)
+        design = MotorDesign.load(input_file(Path(source), "--from"))
         text = design.dumps()
-    write_text(file, text)
+    with Outputs(file.parent, [file.name], "FILE"):
+        write_text(file, text)
     print(f"wrote {file}: design {design.name!r}, {len(design.rotor)} poles, {len(design.stator)} coils")
 
 
 @design_app.command("validate")
 def validate(file: Path = typer.Argument(..., help="Design file (.yaml, .yml or .toml).")) -> None:
-    """Check a design file: 'valid: N poles, M coils' (exit 0), or one line naming the field and the fix (exit 2).
+    """Check a design file: 'valid: N poles, M coils' (exit 0), or one line naming the field
+    and the fix (exit 2). Every check a command runs on a design is run here, stepper states included.
 
     Example: [bold]spherestep design validate mymotor.yaml[/bold]
     """
-    design = MotorDesign.load(file)
+    from ..motor import MotorDesign
+
+    design = usable(MotorDesign.load(input_file(file, "FILE")), "FILE")
     print(f"valid: {len(design.rotor)} poles, {len(design.stator)} coils")
 
 
@@ -78,7 +80,11 @@ def show(
 
     Example: [bold]spherestep design show mymotor.yaml --json[/bold]
     """
-    info = MotorDesign.load(file).summary()
+    from rich.table import Table
+
+    from ..motor import MotorDesign
+
+    info = MotorDesign.load(input_file(file, "FILE")).summary()
     if as_json:
         print_json(info)
         return

@@ -7,14 +7,8 @@ import math
 from pathlib import Path
 
 import typer
-from rich import box
-from rich.progress import (BarColumn, MofNCompleteColumn, Progress, SpinnerColumn, TextColumn, TimeElapsedColumn,
-                           TimeRemainingColumn)
-from rich.table import Table
 
 from ..errors import ComputationError, InputError, bad_value
-from ..explore.build import Limits
-from ..explore.grid import default_grid, quick_grid
 from .app import app
 from .common import console, print_json
 
@@ -28,10 +22,12 @@ OPTION_OF = {  # library field -> the option that sets it, so a refusal names wh
 
 
 def _as_option(exc: InputError) -> InputError:
+    """The library's error with its field (``exc.field``) renamed to the option that sets it."""
     text = str(exc)
-    field = text.split(" ", 1)[0].rstrip(":")
-    if field in OPTION_OF:
-        return InputError(OPTION_OF[field] + text[len(field):])
+    if exc.field in OPTION_OF and text.startswith(exc.field):
+        error = InputError(OPTION_OF[exc.field] + text[len(exc.field):])
+        error.field = OPTION_OF[exc.field]
+        return error
     return exc
 
 
@@ -55,6 +51,8 @@ def _names(text: str) -> str:
 def build_grid(quick: bool, rotors, stators, rotor_levels, stator_levels, caps, tols, primary_ratio, same_family,
                samples, torque_states):
     """The grid of the command line: the default or ``--quick`` one, with the given axes replaced."""
+    from ..explore.grid import default_grid, quick_grid
+
     changes = {"same_family": same_family}
     for value, field, option, convert, example in (
             (rotors, "rotors", "--rotors", _names, "truncated-icosahedron,dodecahedron"),
@@ -86,6 +84,9 @@ def build_grid(quick: bool, rotors, stators, rotor_levels, stator_levels, caps, 
 
 def print_front(front, budget: int) -> None:
     """Rich table of the proposed designs (their files are numbered as the rows)."""
+    from rich import box
+    from rich.table import Table
+
     torque = "holding_torque_median_Nm" in front.columns and front["holding_torque_median_Nm"].notna().any()
     table = Table(title=f"Pareto set within {budget} coils (design files numbered as the rows)", box=box.SIMPLE_HEAD,
                   show_edge=False, pad_edge=False, collapse_padding=True)
@@ -152,9 +153,14 @@ def explore(
 
     Example: [bold]spherestep explore --budget-coils 32 --out explore-out --workers 2[/bold]
     """
+    from rich.progress import (BarColumn, MofNCompleteColumn, Progress, SpinnerColumn, TextColumn,
+                               TimeElapsedColumn, TimeRemainingColumn)
+
+    from ..explore.build import Limits
     from ..explore.outputs import propose  # pandas, pyarrow and Dask load only for this command
     from ..explore.run import dask_client, run_sweep
     from ..explore.store import ResultStore
+    from ..outputs import output_folder
 
     grid = build_grid(quick, rotors, stators, rotor_levels, stator_levels, caps, tols, primary_ratio, same_family,
                       samples, torque_states)
@@ -163,12 +169,15 @@ def explore(
                         max_lookup_voxels=max_lookup_voxels)
     except InputError as exc:
         raise _as_option(exc) from None
-    if out.exists() and not out.is_dir():
-        raise InputError(f"--out {str(out)!r} is a file; give a folder")
     points = grid.points()
     if not points:
         raise InputError("the grid is empty: no rotor and stator pair passes --primary-ratio and --same-family; "
                          "widen --primary-ratio or add packings")
+    out = output_folder(out, "--out")  # before Dask starts
+    for sub in ("results", "designs"):
+        if (out / sub).exists() and not (out / sub).is_dir():
+            raise InputError(f"--out {str(out)!r} holds a file named {sub!r} where the sweep keeps a folder; move it "
+                             "or give another --out")
     store = ResultStore(out / "results")
     show = not (quiet or as_json)
     columns = (SpinnerColumn(), TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(),

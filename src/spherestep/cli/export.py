@@ -6,10 +6,10 @@ from pathlib import Path
 
 import typer
 
-from ..errors import bad_value
-from ..export import UNITS, write_exports
-from ..motor import MotorDesign
 from .app import app
+from .common import input_file
+
+FILES = ("magnets.csv", "coils.csv", "layout.json", "layout.stl")
 
 
 @app.command("export")
@@ -24,9 +24,16 @@ def export(
 
     Example: [bold]spherestep export mymotor.yaml --out build --unit in[/bold]
     """
+    from ..errors import bad_value
+    from ..export import UNITS, write_exports
+    from ..motor import MotorDesign
+    from ..outputs import Outputs, output_folder
+
     if unit not in UNITS:
         raise bad_value("--unit", f"one of {', '.join(UNITS)}", unit)
-    design = MotorDesign.load(file)
-    written = write_exports(design, out, unit=unit, sphere=sphere)
+    out = output_folder(out, "--out")
+    design = MotorDesign.load(input_file(file, "FILE"))
+    with Outputs(out, FILES):
+        written = write_exports(design, out, unit=unit, sphere=sphere)
     print(f"wrote {len(written)} files to {out}/: {len(design.rotor)} magnets, {len(design.stator)} coils, "
           f"unit {unit}")

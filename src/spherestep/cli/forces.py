@@ -6,17 +6,11 @@ import json
 from contextlib import nullcontext
 from pathlib import Path
 
-import numpy as np
 import typer
-from rich.table import Table
 
-from .. import magnetics as mg
-from ..atomic import write_text
 from ..errors import bad_value
-from ..motor import MotorDesign, prototype
-from ..plots import save_figure
 from .app import app
-from .common import console, print_json
+from .common import console, design_from, print_json, usable
 
 
 @app.command()
@@ -33,12 +27,21 @@ def forces(
 
     Example: [bold]spherestep forces --out forces --states 10[/bold]
     """
+    import numpy as np
+    from rich.table import Table
+
+    from .. import magnetics as mg
+    from ..atomic import write_text
+    from ..outputs import Outputs, output_folder
+    from ..plots import save_figure
+
     if states < 1 or states > 10_000:
         raise bad_value("--states", "a number of states from 1 to 10000", states)
-    design = prototype() if design_path is None else MotorDesign.load(design_path)
+    if seed < 0:
+        raise bad_value("--seed", "a whole number ≥ 0", seed)
+    out = output_folder(out, "--out")
+    design = usable(design_from(design_path))
     st = design.states()
-    if len(st) == 0:
-        raise bad_value("--design", "a design with at least one stepper state", "none")
     with console.status("simulating the Fig. 6 curve and calibrating", spinner="dots") if not as_json \
             else nullcontext():
         cal = mg.calibrate(design)
@@ -46,10 +49,11 @@ def forces(
     idx = np.sort(np.random.default_rng(seed).choice(len(st), min(states, len(st)), replace=False))
     with console.status("holding and step torques", spinner="dots") if not as_json else nullcontext():
         rows = mg.state_torques(design, tmap, idx)
-    out.mkdir(parents=True, exist_ok=True)
+    files = Outputs(out, ("force_curve.csv", "force_curve.png", "forces.json"))
     csv_path = out / "force_curve.csv"
-    cal.curve.save(csv_path, design.name)
-    png_path = save_figure(mg.figure_force_curve(cal, design.name), out / "force_curve.png")
+    with files:
+        cal.curve.save(csv_path, design.name)
+        png_path = save_figure(mg.figure_force_curve(cal, design.name), out / "force_curve.png")
     curve = cal.curve
     peak = int(np.argmin(curve.lateral))
     info = {
@@ -64,7 +68,8 @@ def forces(
                   "fitted_stator_profile": {"kappa": cal.fit.stator.kappa, "amplitude": cal.fit.stator.amplitude}},
         "states": rows,
     }
-    json_path = write_text(out / "forces.json", json.dumps(info, indent=1))
+    with files:
+        json_path = write_text(out / "forces.json", json.dumps(info, indent=1))
     info["files"] = [str(csv_path), str(png_path), str(json_path)]
     if as_json:
         print_json(info)

@@ -2,40 +2,36 @@
 
 from __future__ import annotations
 
-import csv
-import io
-import json
 import math
+import sys
 from pathlib import Path
 
-import numpy as np
 import typer
-from rich.progress import Progress, SpinnerColumn, TextColumn, TimeElapsedColumn
-from rich.table import Table
 
-from .. import plots, so3
-from ..atomic import write_text
-from ..commutation import about_axis, plan_geometric, steps_for
-from ..errors import bad_value
-from ..motor import MotorDesign, prototype
 from .app import app
-from .common import console, parse_vector, print_json
+from .common import check_axis, console, design_from, number, parse_vector, print_json, usable, write_json
 
 DEMO_AXIS = "1,0.5,2"
-STEP_FRACTION = 0.35  # default desired step, as a fraction of the max step (finer steps land more reliably)
+SHOWN_ESCAPE_STATES = 50  # escape-violating states listed on stdout (all of them are in summary.json)
+PLAN_FILES = ("plan.csv", "plan.json", "commutation_steps.png", "motor_3d.png", "plan_error.png")
+SIMULATION_FILES = ("trajectory.csv", "simulation.png")
+ANGLE = number("a non-zero angle in degrees, at most 36000 (100 turns) in size", -36_000, 36_000, nonzero=True)
 
 
-def metrics_for_people(design: MotorDesign, metrics) -> dict:
-    """The design's summary and :class:`~spherestep.motor.metrics.DesignMetrics` with angles in degrees."""
+def metrics_for_people(design, metrics) -> dict:
+    """The design's summary and :class:`~spherestep.motor.metrics.DesignMetrics` with angles in degrees: the
+    count of escape-violating states and every one of them listed."""
     out = design.summary() | metrics.to_dict(degrees=True)
     states = out.pop("escape_violations") or []
     out["escape_violations"] = len(states)
-    out["escape_violation_states"] = states[:50]
+    out["escape_violation_states"] = states
     return out
 
 
 def print_summary(info: dict) -> None:
     """Rich table of a design's summary and metrics."""
+    from rich.table import Table
+
     table = Table(title=f"{info['name']}: rotor {info['rotor']} ({info['rotor_poles']} poles), "
                         f"stator {info['stator']} ({info['coils']} coils)")
     table.add_column("metric", no_wrap=True)
@@ -57,110 +53,48 @@ def print_summary(info: dict) -> None:
     console.print(table)
 
 
-def design_from(path: Path | None) -> MotorDesign:
-    """The design in the file at ``path``, or the built-in prototype."""
-    return prototype() if path is None else MotorDesign.load(path)
+def warn(text: str) -> None:
+    """A warning on stderr: the result exists but must not be taken for a clean success."""
+    print(f"spherestep: warning: {text}", file=sys.stderr)
 
 
-def targets_for(design: MotorDesign, axis: np.ndarray, angle_deg: float, steps: int | None) -> np.ndarray:
-    """A turn of ``angle_deg`` about ``axis`` from the stepper state nearest the identity, at ``steps`` equal
-    steps (default: steps of :data:`STEP_FRACTION` of a max step)."""
-    if not math.isfinite(angle_deg) or angle_deg == 0 or abs(angle_deg) > 36000:
-        raise bad_value("--angle", "a non-zero angle in degrees, at most 36000 in size", angle_deg)
-    states = design.states()
-    start = states.rotations[int(states.nearest(np.eye(3))[1].ravel()[0])]
-    angle = math.radians(angle_deg)
-    n = steps if steps is not None else steps_for(abs(angle), STEP_FRACTION * design.max_step)
-    return about_axis(axis, angle, n, start=start)
+def write_plan_files(design, plan, axis, out: Path) -> None:
+    """The plan (CSV, JSON) and its figures (:data:`PLAN_FILES`) into ``out``."""
+    from .. import plots
+
+    plan.to_csv(out / "plan.csv")
+    plan.to_json(out / "plan.json")
+    plots.save_figure(plots.figure_steps(design, plan, axis), out / "commutation_steps.png")
+    plots.save_figure(plots.figure_motor_3d(design, plan.steps[0].achieved), out / "motor_3d.png")
+    plots.save_figure(plots.figure_plan_error(plan), out / "plan_error.png")
 
 
-def commutate(design: MotorDesign, axis: np.ndarray, angle_deg: float, steps: int | None,
-              planner: str = "geometric"):
-    """Plan a turn (see :func:`targets_for`) with the geometric or the potential planner."""
-    targets = targets_for(design, axis, angle_deg, steps)
-    if planner == "potential":
-        from ..commutation import plan_potential
-        from ..potential import MotorPotential
-
-        return plan_potential(design, targets, MotorPotential(design))
-    return plan_geometric(design, targets)
-
-
-def write_plan_outputs(design: MotorDesign, plan, axis: np.ndarray, out: Path) -> list[Path]:
-    """Plan (CSV, JSON) and its figures into ``out``; returns the paths written."""
-    written = [out / "plan.csv", out / "plan.json"]
-    plan.to_csv(written[0])
-    plan.to_json(written[1])
-    figures = {
-        "commutation_steps.png": plots.figure_steps(design, plan, axis),
-        "motor_3d.png": plots.figure_motor_3d(design, plan.steps[0].achieved),
-        "plan_error.png": plots.figure_plan_error(plan),
-    }
-    for name, fig in figures.items():
-        written.append(plots.save_figure(fig, out / name))
-    return written
-
-
-def trajectory_csv(sim, axis) -> str:
-    """Time, unit quaternion (w, x, y, z), angular velocity, angle turned about the axis, energised coils."""
-    from scipy.spatial.transform import Rotation
-
-    q = Rotation.from_matrix(sim.orientations).as_quat(scalar_first=True)
-    angle = np.degrees(so3.turned_angle(sim.orientations, axis))
-    buf = io.StringIO()
-    w = csv.writer(buf, lineterminator="\n")
-    w.writerow(["t_s", "qw", "qx", "qy", "qz", "wx_rad_s", "wy_rad_s", "wz_rad_s", "turned_deg", "coils"])
-    for t, qq, om, a, c in zip(sim.times, q, sim.angular_velocity, angle, sim.active_coils):
-        coils = ";".join(f"{k}:{int(c[k]):+d}" for k in np.flatnonzero(c))
-        w.writerow([f"{t:.6f}", *(f"{x:.12f}" for x in qq), *(f"{x:.9f}" for x in om), f"{a:.6f}", coils])
-    return buf.getvalue()
-
-
-def simulate_plan(design: MotorDesign, plan, axis: np.ndarray, out: Path, physics=None, tuning=None):
-    """Run ``plan`` on the rotor under the magnets' torque map (tuned damping and dwell); write
-    ``trajectory.csv`` and ``simulation.png``. Returns ``(simulation, summary dict, paths written)``."""
+def simulate_and_write(design, plan, axis, out: Path, physics=None, tuning=None):
+    """Run ``plan`` on the rotor under the magnets' torque map (tuned damping, dwell and time step); write
+    :data:`SIMULATION_FILES`. Returns ``(simulation, summary dict)``."""
+    from .. import plots, so3
     from ..dynamics import simulate, tune
     from ..magnetics import torque_map
 
     physics = torque_map(design) if physics is None else physics
     tuning = tune(design, physics) if tuning is None else tuning
     sim = simulate(design, plan, physics, dwell=tuning.dwell, rotor=tuning.rotor, dt=tuning.dt, record_every=1)
-    written = [write_text(out / "trajectory.csv", trajectory_csv(sim, axis)),
-               plots.save_figure(plots.figure_simulation(sim, plan, axis, tuning.dwell), out / "simulation.png")]
-    err = np.degrees(sim.step_errors)
-    summary = {"steps": len(plan.steps) - 1, "executed": sim.executed, "dwell_s": tuning.dwell,
-               "damping_N_m_s": tuning.rotor.damping, "settled_error_median_deg": float(np.median(err)),
-               "settled_error_max_deg": float(err.max()),
-               "steps_off_by_more_than_0_5_deg": sim.missed_steps.tolist(),
-               "final_error_to_target_deg": math.degrees(float(so3.distance(sim.settled[-1], plan.targets[-1]))),
-               "simulated_s": float(sim.times[-1])}
-    return sim, summary, written
-
-
-def plan_summary(plan) -> dict:
-    """Counts and errors of a plan (degrees)."""
-    err = np.degrees(plan.errors)
-    achieved = plan.achieved
-    return {
-        "steps": len(plan.steps) - 1,
-        "moves": int(np.sum(so3.distance(achieved[:-1], achieved[1:]) > 0)),
-        "settle_steps": sum(s.status.startswith("settle") for s in plan.steps),
-        "holds": sum(s.status == "hold" for s in plan.steps),
-        "detours": sum(s.status.startswith("detour") for s in plan.steps),
-        "blocked": len(plan.failures),
-        "error_median_deg": float(np.median(err)),
-        "error_max_deg": float(err.max()),
-        "error_final_deg": float(err[-1]),
-        "max_coils_per_step": max(len(s.coils) for s in plan.steps),
-    }
+    sim.to_csv(out / "trajectory.csv", axis)
+    plots.save_figure(plots.figure_simulation(sim, plan, axis, tuning.dwell), out / "simulation.png")
+    summary = sim.summary() | {
+        "dwell_s": tuning.dwell, "damping_N_m_s": tuning.rotor.damping,
+        "final_error_to_target_deg": math.degrees(float(so3.distance(sim.settled[-1], plan.targets[-1])))}
+    return sim, summary
 
 
 @app.command()
 def demo(
     out: Path = typer.Option(Path("spherestep-out"), "--out", help="Output folder."),
-    axis: str = typer.Option(DEMO_AXIS, "--axis", help="Rotation axis X,Y,Z (fixed frame)."),
-    angle: float = typer.Option(360.0, "--angle", help="Rotation angle in degrees."),
-    as_json: bool = typer.Option(False, "--json", help="Print the summary as JSON."),
+    axis: str = typer.Option(DEMO_AXIS, "--axis", callback=check_axis, help="Rotation axis X,Y,Z (fixed frame)."),
+    angle: float = typer.Option(360.0, "--angle", callback=ANGLE, help="Rotation angle in degrees."),
+    as_json: bool = typer.Option(False, "--json", help="Print the summary as JSON (the escape-violating states "
+                                                       f"cut to the first {SHOWN_ESCAPE_STATES}, as it says; all "
+                                                       "in summary.json)."),
     quiet: bool = typer.Option(False, "--quiet", help="Print nothing but errors."),
 ) -> None:
     """The main job on the built-in prototype: states, resolution, range, a commutated 360° turn about a
@@ -168,11 +102,18 @@ def demo(
 
     Example: [bold]spherestep demo --out spherestep-out[/bold]
     """
+    from rich.progress import Progress, SpinnerColumn, TextColumn, TimeElapsedColumn
+
+    from ..commutation import turn
+    from ..motor import prototype
+    from ..outputs import Outputs, output_folder
     from ..report import write_report  # plotly loads only when a report is written
 
+    out = output_folder(out, "--out")
     axis_vec = parse_vector(axis, "--axis")
-    with Progress(SpinnerColumn(), TextColumn("{task.description}"), TimeElapsedColumn(), console=console,
-                  disable=quiet or as_json, transient=True) as progress:
+    files = Outputs(out, PLAN_FILES + SIMULATION_FILES + ("report.html", "summary.json"))
+    with files, Progress(SpinnerColumn(), TextColumn("{task.description}"), TimeElapsedColumn(), console=console,
+                         disable=quiet or as_json, transient=True) as progress:
         task = progress.add_task("building the prototype", total=None)
         design = prototype()
         progress.update(task, description="enumerating stepper states")
@@ -181,55 +122,73 @@ def demo(
         metrics = design.metrics()
         info = metrics_for_people(design, metrics)
         progress.update(task, description="commutating")
-        plan = commutate(design, axis_vec, angle, None)
+        plan = turn(design, axis_vec, angle)
         progress.update(task, description="writing plan and figures")
-        written = write_plan_outputs(design, plan, axis_vec, out)
+        write_plan_files(design, plan, axis_vec, out)
         progress.update(task, description="simulating the plan on the magnets' torque map")
-        sim, info["simulation"], more = simulate_plan(design, plan, axis_vec, out)
-        written += more
+        sim, info["simulation"] = simulate_and_write(design, plan, axis_vec, out)
         progress.update(task, description="writing the HTML report")
-        written.append(Path(write_report(out / "report.html", design, metrics, plan, simulation=sim,
-                                         axis=axis_vec)["path"]))
-    info["plan"] = plan_summary(plan) | {"axis": (axis_vec / np.linalg.norm(axis_vec)).tolist(), "angle_deg": angle}
-    written.append(write_text(out / "summary.json", json.dumps(info, indent=1)))
-    info["files"] = [str(p) for p in written]
+        write_report(out / "report.html", design, metrics, plan, simulation=sim, axis=axis_vec)
+        summary = plan.summary(max_step=design.max_step)
+        info["plan"] = summary.to_dict() | {"axis": (axis_vec / math.sqrt(axis_vec @ axis_vec)).tolist(),
+                                            "angle_deg": angle}
+        info["files"] = [str(p) for p in files.paths]
+        write_json(out / "summary.json", info)
+    for text in summary.warnings:
+        warn(text)
+    shown = info["escape_violation_states"][:SHOWN_ESCAPE_STATES]
+    if len(shown) < info["escape_violations"]:
+        info["escape_violation_states"] = shown
+        info["escape_violation_states_note"] = (f"the first {len(shown)} of {info['escape_violations']}; all of "
+                                                f"them in {out / 'summary.json'}")
     if as_json:
         print_json(info)
     elif not quiet:
         print_summary(info)
-        p = info["plan"]
-        console.print(f"commutated {angle:g}° about ({', '.join(f'{a:.3f}' for a in info['plan']['axis'])}): "
-                      f"{p['steps']} steps, {p['moves']} moves, {p['holds']} holds, {p['blocked']} blocked; "
-                      f"error median {p['error_median_deg']:.2f}°, max {p['error_max_deg']:.2f}°, "
-                      f"final {p['error_final_deg']:.2f}°")
+        axis_text = ", ".join(f"{a:.3f}" for a in info["plan"]["axis"])
+        console.print(f"commutated {angle:g}° about ({axis_text}): {summary.line()}")
         r = info["simulation"]
-        console.print(f"simulated {r['simulated_s']:.0f} s on the magnets' torque map: {r['steps'] - len(r['steps_off_by_more_than_0_5_deg'])} "
-                      f"of {r['steps']} steps settled within 0.5° of the plan (median {r['settled_error_median_deg']:.2f}°, "
-                      f"max {r['settled_error_max_deg']:.2f}°); final pose {r['final_error_to_target_deg']:.2f}° from the target")
-        console.print(f"wrote {len(written)} files to {out}/")
+        console.print(f"simulated {r['simulated_s']:.0f} s on the magnets' torque map: "
+                      f"{r['steps'] - len(r['missed_steps'])} of {r['steps']} steps settled within "
+                      f"{r['tolerance_deg']:g}° of the plan (median {r['settled_error_median_deg']:.2f}°, max "
+                      f"{r['settled_error_max_deg']:.2f}°); final pose {r['final_error_to_target_deg']:.2f}° from "
+                      "the target")
+        console.print(f"wrote {len(files.paths)} files to {out}/")
 
 
 @app.command()
 def plan(
-    axis: str = typer.Option(..., "--axis", help="Rotation axis X,Y,Z in the fixed (stator) frame."),
-    angle: float = typer.Option(..., "--angle", help="Rotation angle in degrees (sign gives the sense)."),
-    steps: int = typer.Option(None, "--steps", min=1, max=100_000, help="Number of steps (default: 0.35 of a max step each)."),
+    axis: str = typer.Option(..., "--axis", callback=check_axis, help="Rotation axis X,Y,Z in the fixed (stator) "
+                                                                      "frame."),
+    angle: float = typer.Option(..., "--angle", callback=ANGLE, help="Rotation angle in degrees (sign gives the "
+                                                                     "sense)."),
+    steps: int = typer.Option(None, "--steps", callback=number("a whole number of steps, 1 to 100000", 1, 100_000),
+                              help="Number of steps (default: 0.35 of a max step each; more than the angle over "
+                                   "the max step is warned about)."),
     out: Path = typer.Option(Path("spherestep-out"), "--out", help="Output folder."),
     as_json: bool = typer.Option(False, "--json", help="Print the plan summary as JSON."),
     design_path: Path = typer.Option(None, "--design", help="Design file (YAML/TOML); default the built-in prototype."),
 ) -> None:
     """Commutate a rotation about an axis on the prototype (or --design FILE): plan CSV/JSON (relay masks) and figures.
 
+    The summary counts the steps asked for; `spherestep run` streams one frame more (the start is held too).
+
     Example: [bold]spherestep plan --axis 0,1,1 --angle 90 --steps 20 --out plan90 --design mymotor.yaml[/bold]
     """
+    from ..commutation import turn
+    from ..outputs import Outputs, output_folder
+
+    out = output_folder(out, "--out")
     axis_vec = parse_vector(axis, "--axis")
-    design = design_from(design_path)
-    result = commutate(design, axis_vec, angle, steps)
-    written = write_plan_outputs(design, result, axis_vec, out)
-    summary = plan_summary(result) | {"files": [str(p) for p in written]}
+    design = usable(design_from(design_path))
+    result = turn(design, axis_vec, angle, steps)
+    files = Outputs(out, PLAN_FILES)
+    with files:
+        write_plan_files(design, result, axis_vec, out)
+    summary = result.summary(max_step=design.max_step)
+    for text in summary.warnings:
+        warn(text)
     if as_json:
-        print_json(summary)
+        print_json(summary.to_dict() | {"files": [str(p) for p in files.paths]})
     else:
-        console.print(f"{summary['steps']} steps: {summary['moves']} moves, {summary['holds']} holds, "
-                      f"{summary['blocked']} blocked; final error {summary['error_final_deg']:.2f}°; "
-                      f"wrote {len(written)} files to {out}/")
+        console.print(f"{summary.line()}; wrote {len(files.paths)} files to {out}/")

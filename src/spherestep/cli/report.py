@@ -4,23 +4,19 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import numpy as np
 import typer
-from rich.progress import Progress, SpinnerColumn, TextColumn, TimeElapsedColumn
 
-from ..errors import InputError
-from ..motor import MotorDesign, prototype
 from .app import app
-from .common import console, parse_vector, print_json
-from .motor import DEMO_AXIS, commutate
+from .common import check_axis, console, design_from, parse_vector, print_json, usable
+from .motor import ANGLE, DEMO_AXIS
 
 
 @app.command()
 def report(
     file: Path = typer.Argument(None, help="Design file (YAML/TOML); default the built-in prototype."),
     out: Path = typer.Option(Path("report.html"), "-o", "--out", help="HTML file to write."),
-    axis: str = typer.Option(DEMO_AXIS, "--axis", help="Rotation axis X,Y,Z of the commutation shown (fixed frame)."),
-    angle: float = typer.Option(360.0, "--angle", help="Rotation angle in degrees (sign gives the sense)."),
+    axis: str = typer.Option(DEMO_AXIS, "--axis", callback=check_axis, help="Rotation axis X,Y,Z of the commutation shown (fixed frame)."),
+    angle: float = typer.Option(360.0, "--angle", callback=ANGLE, help="Rotation angle in degrees (sign gives the sense)."),
     as_json: bool = typer.Option(False, "--json", help="Print a JSON summary of what was written."),
     quiet: bool = typer.Option(False, "--quiet", help="Print nothing but errors."),
 ) -> None:
@@ -29,19 +25,23 @@ def report(
 
     Example: [bold]spherestep report mymotor.yaml -o report.html --axis 0,1,1 --angle 90[/bold]
     """
+    from rich.progress import Progress, SpinnerColumn, TextColumn, TimeElapsedColumn
+
+    from ..commutation import turn
+    from ..outputs import Outputs, output_file
     from ..report import write_report  # plotly loads only for this command
 
-    if out.is_dir():
-        raise InputError(f"--out {str(out)!r} is a folder; give a file name such as {str(out / 'report.html')!r}")
+    out = output_file(out, "--out", suffixes=(".html", ".htm"))
     axis_vec = parse_vector(axis, "--axis")
-    design = prototype() if file is None else MotorDesign.load(file)
+    design = usable(design_from(file, "FILE"), "FILE")
     with Progress(SpinnerColumn(), TextColumn("{task.description}"), TimeElapsedColumn(), console=console,
                   disable=quiet or as_json, transient=True) as progress:
         task = progress.add_task("enumerating stepper states", total=None)
-        plan = commutate(design, axis_vec, angle, None)
-        info = write_report(out, design, plan=plan, axis=axis_vec,
-                            progress=lambda text: progress.update(task, description=text))
-    info |= {"design": design.name, "axis": (axis_vec / np.linalg.norm(axis_vec)).tolist(), "angle_deg": angle}
+        plan = turn(design, axis_vec, angle)
+        with Outputs(out.parent, [out.name]):
+            info = write_report(out, design, plan=plan, axis=axis_vec,
+                                progress=lambda text: progress.update(task, description=text))
+    info |= {"design": design.name, "axis": (axis_vec / (axis_vec @ axis_vec) ** 0.5).tolist(), "angle_deg": angle}
     if as_json:
         print_json(info)
     elif not quiet:

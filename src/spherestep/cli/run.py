@@ -1,22 +1,63 @@
-"""``spherestep run PLAN``: stream a commutation plan to the coil controller (or dry-run it)."""
+"""``spherestep run PLAN``: stream a commutation plan to the coil controller (or dry-run or simulate it).
+
+The operator's path: every option and the plan are checked before anything is switched; the log (``--log``)
+is written line by line as the run goes, so a killed run leaves its evidence; SIGTERM (``timeout``, systemd,
+``kill``) is handled like Ctrl-C — every coil off, then exit (130 for SIGINT, 143 for SIGTERM); the last line
+always states the final coil state.
+"""
 
 from __future__ import annotations
 
-import math
+import re
+import signal
 import sys
+import threading
+from contextlib import contextmanager
 from pathlib import Path
 
-import numpy as np
 import typer
-from rich.table import Table
 
-from ..commutation import Plan
 from ..errors import InputError, bad_value
-from ..hardware import DryRun, Serial, ThermalLimits, Transcript, play
 from .app import app
-from .common import console
+from .common import console, number, print_json
 
-_DEFAULT = ThermalLimits()
+LOG_LINE = re.compile(r"^\s*-?\d+\.\d{6} (TX|RX|NOTE) ")  # a line of Transcript.lines()
+
+
+class Terminated(KeyboardInterrupt):
+    """SIGTERM, raised in the main thread so that it unwinds like Ctrl-C (every coil switched off)."""
+
+
+@contextmanager
+def sigterm_as_interrupt():
+    """While inside, SIGTERM raises :class:`Terminated` in the main thread (like Ctrl-C raises
+    KeyboardInterrupt); the previous handler is restored on leaving."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+
+    def handler(signum, frame):
+        raise Terminated()
+
+    previous = signal.signal(signal.SIGTERM, handler)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+
+
+def check_log(path: Path, force: bool) -> Path:
+    """``--log``: a writable file; an existing file that is not a spherestep log is kept unless ``--force``."""
+    from ..outputs import output_file
+
+    path = output_file(path, "--log")
+    if path.exists() and path.stat().st_size and not force:
+        with open(path, "rb") as f:
+            first = f.readline(200).decode("utf-8", "replace")
+        if not LOG_LINE.match(first):
+            raise InputError(f"--log {str(path)!r} exists and is not a spherestep log; give --force to overwrite it, "
+                             "or another file name")
+    return path
 
 
 def _simulated(design_path, plan):
@@ -25,32 +66,32 @@ def _simulated(design_path, plan):
     from ..dynamics import tune
     from ..hardware import Simulated
     from ..magnetics import torque_map
-    from .motor import design_from
+    from .common import design_from, usable
 
     design = design_from(design_path)
     if len(design.stator) != plan.coil_count:
         raise bad_value("--design", f"the design the plan was made for ({plan.coil_count} coils)",
                         f"a design with {len(design.stator)} coils")
+    design = usable(design)
     model = torque_map(design)
     tuning = tune(design, model)
     return Simulated(design, model, plan.steps[0].achieved, rotor=tuning.rotor, dt=tuning.dt)
 
 
-def _positive(value: float, flag: str, expected: str) -> float:
-    if not (math.isfinite(value) and value > 0):
-        raise bad_value(flag, expected, value)
-    return value
+def _progress(total: int, show: bool):
+    """Live progress on stderr (step counter, energised coils) as ``on_step`` for :func:`play`."""
+    if not show:
+        return None, None
+    from rich.console import Console
+    from rich.live import Live
 
+    live = Live("", console=Console(stderr=True), transient=True, refresh_per_second=8)
 
-def _save_log(transcript: Transcript, path: Path, during_error: bool) -> None:
-    """Write the transcript; a failure is an error, or a warning when another error is being reported."""
-    try:
-        transcript.write(path)
-    except OSError as exc:
-        if not during_error:
-            raise InputError(f"--log {str(path)!r} could not be written ({exc.strerror or exc}); "
-                             "give a file in a writable folder") from None
-        print(f"spherestep: warning: the log could not be written to {path} ({exc.strerror or exc})", file=sys.stderr)
+    def on_step(i, step):
+        coils = " ".join(f"{k}{'+' if v > 0 else '-'}" for k, v in sorted(step.coils.items())) or "none"
+        live.update(f"step {i + 1} of {total}: coils {coils}")
+
+    return live, on_step
 
 
 @app.command()
@@ -58,7 +99,8 @@ def run(
     plan: Path = typer.Argument(..., help="Plan file: JSON written by `spherestep plan` or Plan.to_json."),
     port: str = typer.Option(None, "--port", help="Serial device of the coil controller: /dev/ttyUSB0, "
                                                    "/dev/ttyACM0, COM3 (not needed with --dry-run)."),
-    rate: float = typer.Option(..., "--rate", help="Steps per second (Hz); each step is held for 1/RATE s."),
+    rate: float = typer.Option(..., "--rate", callback=number("a positive number of steps per second (Hz), at most 1000", 0, 1000, low_open=True),
+                               help="Steps per second (Hz); each step is held for 1/RATE s."),
     dry_run: bool = typer.Option(False, "--dry-run", help="Send nothing; print what would be sent to a "
                                                           "controller with --channels channels."),
     simulate: bool = typer.Option(False, "--simulate", help="Run the plan on the simulated rotor (magnets' torque "
@@ -66,21 +108,24 @@ def run(
     design_path: Path = typer.Option(None, "--design", help="With --simulate: the design file (default the "
                                                             "built-in prototype)."),
     channels: int = typer.Option(None, "--channels", help="With --dry-run: relay channels of the controller it "
-                                                           "stands in for (default 32; a device reports its own)."),
-    log: Path = typer.Option(None, "--log", help="Write every frame sent and received, time-stamped, to FILE "
-                                                 "(also when the run fails)."),
-    max_on: float = typer.Option(_DEFAULT.max_on, "--max-on", help="Longest a coil may stay on without a break "
-                                                                   "(seconds)."),
-    max_duty: float = typer.Option(_DEFAULT.max_duty, "--max-duty", help="Largest fraction of any duty window "
-                                                                         "a coil may be on, in (0, 1]."),
-    duty_window: float = typer.Option(_DEFAULT.window, "--duty-window", help="Length of the sliding window of "
-                                                                             "--max-duty (seconds)."),
+                                                           "stands in for, 1..64 (default: as many as the plan "
+                                                           "uses; a device reports its own)."),
+    log: Path = typer.Option(None, "--log", help="Write every frame sent and received, time-stamped, to FILE as "
+                                                 "the run goes (also when it fails or is stopped)."),
+    force: bool = typer.Option(False, "--force", help="Let --log overwrite a file that is not a spherestep log."),
+    max_on: float = typer.Option(None, "--max-on", callback=number("a positive number of seconds", 0, low_open=True),
+                                 help="Longest a coil may stay on without a break (seconds; default 5)."),
+    max_duty: float = typer.Option(None, "--max-duty", help="Largest fraction of any duty window a coil may be "
+                                                            "on, in (0, 1] (default 0.5)."),
+    duty_window: float = typer.Option(None, "--duty-window", callback=number("a positive number of seconds", 0, low_open=True),
+                                      help="Length of the sliding window of --max-duty (seconds; default 30)."),
+    as_json: bool = typer.Option(False, "--json", help="Print the result as JSON."),
 ) -> None:
     """Stream a commutation plan to the coil controller, one step every 1/RATE seconds.
 
     The plan is checked against the coils' thermal limits before anything is switched.
 
-    Every coil is switched off after the last step, on any error and on Ctrl-C.
+    Every coil is switched off after the last step, on any error, on Ctrl-C and on SIGTERM.
 
     The controller's watchdog switches them off if the host falls silent (protocol: docs/protocol.md).
 
@@ -102,34 +147,84 @@ def run(
         raise bad_value("--channels", "given only with --dry-run (a device reports its own channel count)", channels)
     if channels is not None and not 1 <= channels <= 64:
         raise bad_value("--channels", "a channel count 1..64", channels)
-    _positive(rate, "--rate", "a positive number of steps per second, such as 5")
-    _positive(max_on, "--max-on", "a positive number of seconds")
-    _positive(duty_window, "--duty-window", "a positive number of seconds")
-    if not (0 < max_duty <= 1):
+    if max_duty is not None and not (0 < max_duty <= 1):
         raise bad_value("--max-duty", "a fraction in (0, 1], such as 0.5", max_duty)
-    if log is not None and log.is_dir():
-        raise bad_value("--log", "a file name, not a folder", str(log))
-    steps = Plan.from_json(plan)
-    limits = ThermalLimits(max_on=max_on, max_duty=max_duty, window=duty_window)
-    transcript = Transcript()
-    if dry_run:
-        backend = DryRun(channels=32 if channels is None else channels, transcript=transcript)
-    elif simulate:
-        backend = _simulated(design_path, steps)
-    else:
-        backend = Serial(port, transcript=transcript)
-    try:
-        report = play(steps, backend, rate, limits)
-    except BaseException as exc:
-        if log is not None:
-            _save_log(transcript, log, during_error=True)
-        if isinstance(exc, KeyboardInterrupt):  # the coils are off by now; report it as an interruption
-            raise typer.Abort() from None
-        raise
+    from ..commutation import Plan
+    from ..hardware import DryRun, Serial, ThermalLimits, Transcript, play
+
     if log is not None:
-        _save_log(transcript, log, during_error=False)
+        log = check_log(log, force)
+    steps = Plan.from_json(plan)
+    given = {"max_on": max_on, "max_duty": max_duty, "window": duty_window}
+    limits = ThermalLimits(**{k: v for k, v in given.items() if v is not None})
+    limits.check_plan(steps, rate)  # refused before a log is opened or the device touched
+    needed = int(steps.channel_map.max()) + 1
+    if log is not None:
+        log.parent.mkdir(parents=True, exist_ok=True)
+    sink = open(log, "w", encoding="utf-8") if log is not None else None  # noqa: SIM115 (closed below)
+    transcript = Transcript(sink=sink)
+    outcome = "all coils off"
+    live, on_step = _progress(len(steps.steps), show=not as_json and sys.stderr.isatty())
+    try:
+        with sigterm_as_interrupt():
+            if dry_run:
+                backend = DryRun(channels=needed if channels is None else channels, transcript=transcript)
+            elif simulate:
+                backend = _simulated(design_path, steps)
+            else:
+                backend = Serial(port, transcript=transcript)
+            if live is not None:
+                live.start()
+            try:
+                report = play(steps, backend, rate, limits, on_step=on_step)
+            finally:
+                if live is not None:
+                    live.stop()
+        acknowledged = "all coils off, acknowledged by the device" if not (dry_run or simulate) else outcome
+        transcript.add(backend.clock(), "NOTE", f"end: {len(steps.steps)} frames streamed; {acknowledged}")
+    except BaseException as exc:
+        why = {Terminated: "stopped by SIGTERM", KeyboardInterrupt: "interrupted by Ctrl-C"}.get(type(exc), None)
+        transcript.add(transcript.entries[-1][0] if transcript.entries else 0.0, "NOTE",
+                       f"{why or 'failed'}: {' '.join(str(exc).split()) or type(exc).__name__}")
+        if sink is not None:
+            sink.close()
+        if isinstance(exc, KeyboardInterrupt):  # the coils are off by now (the driver switched them off)
+            off = "all coils off, acknowledged by the device" if not (dry_run or simulate) else outcome
+            signame = "SIGTERM" if isinstance(exc, Terminated) else "SIGINT"
+            print(f"spherestep: interrupted ({signame}): {off}", file=sys.stderr)
+            raise typer.Exit(143 if isinstance(exc, Terminated) else 130) from None
+        raise
+    if sink is not None:
+        sink.close()
     dev = report.device
+    frames = f"{report.steps} frames (the start and {report.steps - 1} steps)"
+    result = {"plan": str(plan), "frames": report.steps, "steps": report.steps - 1, "rate_hz": rate,
+              "elapsed_s": report.elapsed, "max_lag_s": report.max_lag, "device": dev.name,
+              "channels": dev.channels, "log": None if log is None else str(log), "final_state": "all coils off"}
     if dry_run:
+        result |= {"mode": "dry-run", "sent": [{"t_s": s.t, "enable": hex(s.enable), "polarity": hex(s.polarity),
+                                                "coils": {str(k): v for k, v in sorted(s.coils.items())}}
+                                               for s in backend.sent]}
+    elif simulate:
+        import numpy as np
+
+        from .. import so3
+
+        settled = np.array([R for _, R in backend.orientations])
+        planned = steps.achieved[:len(settled)]  # play holds every step, the first one included
+        err = np.degrees(so3.distance(settled, planned))
+        result |= {"mode": "simulated", "settled_within_0_5_deg": int(np.sum(err <= 0.5)),
+                   "settled_error_median_deg": float(np.median(err)), "settled_error_max_deg": float(err.max())}
+    else:
+        stats = backend.stats
+        result |= {"mode": "serial", "port": port, "protocol": dev.protocol, "acknowledged": stats["acked"],
+                   "retransmissions": stats["retransmissions"], "final_state": "all coils off, acknowledged"}
+    if as_json:
+        print_json(result)
+        return
+    if dry_run:
+        from rich.table import Table
+
         table = Table(title=f"dry run of {plan.name}")
         for col in ("t (s)", "enable", "polarity", "coils"):
             table.add_column(col, justify="right" if col == "t (s)" else "left", no_wrap=True)
@@ -137,21 +232,16 @@ def run(
             coils = " ".join(f"{k}{'+' if v > 0 else '-'}" for k, v in sorted(s.coils.items())) or "all off"
             table.add_row(f"{s.t:.3f}", hex(s.enable), hex(s.polarity), coils)
         console.print(table)
-        print(f"dry run: {report.steps} steps at {rate:g} Hz would take {report.elapsed:.3f} s on a "
-              f"{dev.channels}-channel controller; nothing was sent")
-        return
-    if simulate:
-        from .. import so3
-
-        settled = np.array([R for _, R in backend.orientations])
-        planned = steps.achieved[:len(settled)]  # play holds every step, the first one included
-        err = np.degrees(so3.distance(settled, planned))
-        print(f"simulated {report.steps} steps at {rate:g} Hz ({report.elapsed:.1f} s of rotor time): "
-              f"{int(np.sum(err <= 0.5))} settled within 0.5° of the plan (median {np.median(err):.2f}°, "
-              f"max {err.max():.2f}°); all coils off")
-        return
-    stats = backend.stats
-    print(f"streamed {report.steps} steps at {rate:g} Hz to {port} (device {dev.name!r}, protocol {dev.protocol}, "
-          f"{dev.channels} channels) in {report.elapsed:.3f} s: {stats['acked']} frames acknowledged, "
-          f"{stats['retransmissions']} retransmissions, worst step lateness {report.max_lag * 1000:.1f} ms; "
-          "all coils off")
+        print(f"dry run: {frames} at {rate:g} Hz would take {report.elapsed:.3f} s on a {dev.channels}-channel "
+              f"controller{' (the channels the plan uses)' if channels is None else ''}; nothing was sent; "
+              "final state all coils off")
+    elif simulate:
+        print(f"simulated {frames} at {rate:g} Hz ({report.elapsed:.1f} s of rotor time): "
+              f"{result['settled_within_0_5_deg']} settled within 0.5° of the plan (median "
+              f"{result['settled_error_median_deg']:.2f}°, max {result['settled_error_max_deg']:.2f}°); "
+              "final state all coils off")
+    else:
+        print(f"streamed {frames} at {rate:g} Hz to {port} (device {dev.name!r}, protocol {dev.protocol}, "
+              f"{dev.channels} channels) in {report.elapsed:.3f} s: {result['acknowledged']} frames acknowledged, "
+              f"{result['retransmissions']} retransmissions, worst step lateness {report.max_lag * 1000:.1f} ms; "
+              "final state all coils off, acknowledged")

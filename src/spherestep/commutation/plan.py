@@ -15,13 +15,14 @@ import csv
 import io
 import json
 import math
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
 import numpy as np
 
+from .. import so3
 from ..atomic import write_text
-from ..errors import InputError, bad_value
+from ..errors import bad_value
 
 FORMAT = "spherestep-plan"
 VERSION = 1
@@ -62,6 +63,47 @@ class Step:
         return coil_masks(self.coils, channel_map)
 
 
+@dataclass(frozen=True)
+class PlanSummary:
+    """Counts and errors of a plan (angles in radians; :meth:`to_dict` gives degrees).
+
+    ``steps`` counts the moves asked for (``len(plan.steps) − 1``: step 0 is the start, which a driver also
+    holds, so it streams ``steps + 1`` frames); ``moves`` the steps whose state differs from the previous one;
+    ``error_*``: Park distance between target and achieved state (median, max, final); ``target_step_max``: the
+    largest desired step ``D(R_{i−1}, R_i)``; ``warnings``: what makes the plan untrustworthy although it exists
+    (a desired step beyond the design's max step, blocked steps, detours).
+    """
+
+    steps: int
+    moves: int
+    settle_steps: int
+    holds: int
+    detours: int
+    blocked: int
+    error_median: float
+    error_max: float
+    error_final: float
+    target_step_max: float
+    max_coils_per_step: int
+    warnings: tuple[str, ...] = ()
+
+    def to_dict(self, degrees: bool = True) -> dict:
+        """JSON-ready dict; angles as ``…_deg`` in degrees (or ``…_rad`` with ``degrees=False``)."""
+        out = asdict(self)
+        for key in ("error_median", "error_max", "error_final", "target_step_max"):
+            value = out.pop(key)
+            out[f"{key}_deg" if degrees else f"{key}_rad"] = math.degrees(value) if degrees else value
+        out["warnings"] = list(self.warnings)
+        return out
+
+    def line(self) -> str:
+        """One line for people: counts, errors (degrees) and warnings."""
+        text = (f"{self.steps} steps: {self.moves} moves, {self.holds} holds, {self.detours} detours, "
+                f"{self.blocked} blocked; error max {math.degrees(self.error_max):.2f}°, final "
+                f"{math.degrees(self.error_final):.2f}°")
+        return text + "".join(f"; WARNING: {w}" for w in self.warnings)
+
+
 @dataclass
 class Plan:
     """A sequence of :class:`Step` for one design; ``failures`` lists ``(step index, reason)``."""
@@ -91,6 +133,31 @@ class Plan:
     def failures(self) -> list[tuple[int, str]]:
         """Steps at which the planner could not move as the target required (status ``blocked: …``)."""
         return [(s.index, s.status) for s in self.steps if s.status.startswith("blocked")]
+
+    def summary(self, max_step: float | None = None) -> PlanSummary:
+        """Counts, errors and warnings of this plan (:class:`PlanSummary`); with the design's ``max_step``
+        (radians) a desired step longer than it is a warning."""
+        err = self.errors
+        achieved, targets = self.achieved, self.targets
+        target_step = float(np.max(so3.distance(targets[:-1], targets[1:]))) if len(targets) > 1 else 0.0
+        detours = sum(s.status.startswith("detour") for s in self.steps)
+        blocked = len(self.failures)
+        warnings = []
+        if max_step is not None and target_step > max_step + 1e-9:
+            warnings.append(f"a desired step of {math.degrees(target_step):.2f}° exceeds the design's max step "
+                            f"{math.degrees(max_step):.2f}°; use more steps")
+        if blocked:
+            warnings.append(f"{blocked} steps blocked")
+        if detours:
+            warnings.append(f"{detours} detours (the target's nearest states were out of reach)")
+        return PlanSummary(
+            steps=len(self.steps) - 1,
+            moves=int(np.sum(so3.distance(achieved[:-1], achieved[1:]) > 0)),
+            settle_steps=sum(s.status.startswith("settle") for s in self.steps),
+            holds=sum(s.status == "hold" for s in self.steps), detours=detours, blocked=blocked,
+            error_median=float(np.median(err)), error_max=float(err.max()), error_final=float(err[-1]),
+            target_step_max=target_step, max_coils_per_step=max(len(s.coils) for s in self.steps),
+            warnings=tuple(warnings))
 
     def to_dict(self) -> dict:
         """The JSON-ready form (see the module docstring)."""
@@ -149,40 +216,25 @@ class Plan:
         return text
 
     @classmethod
-    def from_dict(cls, data: dict) -> "Plan":
-        """Inverse of :meth:`to_dict`; raises InputError naming the field on malformed input."""
+    def from_dict(cls, data: dict) -> Plan:
+        """Inverse of :meth:`to_dict`; raises InputError naming the field (``plan.steps[3].target`` …) on
+        malformed input, and refuses relay masks that disagree with the step's coils and the channel map."""
         if not isinstance(data, dict) or data.get("format") != FORMAT:
             raise bad_value("plan.format", f'"{FORMAT}"', data.get("format") if isinstance(data, dict) else data)
         if data.get("version") != VERSION:
             raise bad_value("plan.version", str(VERSION), data.get("version"))
-        try:
-            coil_count = int(data["coil_count"])
-            cmap = np.array([[c["enable"], c["polarity"]] for c in data["channel_map"]], dtype=int).reshape(-1, 2)
-            steps = []
-            for i, s in enumerate(data["steps"]):
-                coils = {int(k): int(v) for k, v in s["coils"].items()}
-                if any(k < 0 or k >= coil_count for k in coils) or any(v not in (-1, 1) for v in coils.values()):
-                    raise bad_value(f"plan.steps[{i}].coils", f"coil indices 0..{coil_count - 1} with polarity ±1",
-                                    s["coils"])
-                steps.append(Step(
-                    index=int(s["index"]),
-                    target=np.array(s["target"], dtype=float).reshape(3, 3),
-                    achieved=np.array(s["achieved"], dtype=float).reshape(3, 3),
-                    error=math.radians(float(s["error_deg"])),
-                    coils=coils,
-                    held=[(int(a), int(b)) for a, b in s.get("held", [])],
-                    next_pole=None if s.get("next_pole") is None else int(s["next_pole"]),
-                    status=str(s.get("status", "ok")),
-                ))
-        except InputError:
-            raise
-        except (KeyError, TypeError, ValueError) as exc:
-            raise InputError(f"plan file is malformed ({type(exc).__name__}: {exc}); "
-                             "write it with Plan.to_json or `spherestep plan`") from None
-        if cmap.shape[0] != coil_count:
-            raise bad_value("plan.channel_map", f"{coil_count} entries (one per coil)", f"{cmap.shape[0]} entries")
-        if np.any(cmap < 0) or len(np.unique(cmap)) != cmap.size:
-            raise bad_value("plan.channel_map", "distinct non-negative channels for every coil", cmap.tolist())
+        for key in ("coil_count", "channel_map", "steps"):
+            if key not in data:
+                raise bad_value(f"plan.{key}", "present (write plans with Plan.to_json or `spherestep plan`)",
+                                "nothing")
+        coil_count = data["coil_count"]
+        if isinstance(coil_count, bool) or not isinstance(coil_count, int) or not 1 <= coil_count <= 4096:
+            raise bad_value("plan.coil_count", "a whole number of coils 1..4096", coil_count)
+        cmap = _channel_map(data["channel_map"], coil_count)
+        raw = data["steps"]
+        if not isinstance(raw, list) or not raw:
+            raise bad_value("plan.steps", "a non-empty list of steps", raw if not isinstance(raw, list) else [])
+        steps = [_step(s, f"plan.steps[{i}]", coil_count, cmap) for i, s in enumerate(raw)]
         return cls(steps=steps, coil_count=coil_count, channel_map=cmap,
                    design=str(data.get("design", "design")), planner=str(data.get("planner", "geometric")))
 
@@ -190,6 +242,8 @@ class Plan:
     def from_json(cls, path: str | Path) -> "Plan":
         """Read a plan written by :meth:`to_json`."""
         path = Path(path)
+        if path.exists() and not path.is_file():  # a folder, or a FIFO that would block the read
+            raise bad_value("plan", "a regular JSON plan file (not a folder, pipe or device)", str(path))
         try:
             text = path.read_text(encoding="utf-8")
         except FileNotFoundError:
@@ -201,3 +255,78 @@ class Plan:
         except json.JSONDecodeError as exc:
             raise bad_value("plan", "a JSON plan file", f"{path} (line {exc.lineno}: {exc.msg})") from None
         return cls.from_dict(data)
+
+
+def _channel_map(entries, coil_count: int) -> np.ndarray:
+    """The ``(N, 2)`` channel map of a plan file's ``channel_map`` list; InputError naming the entry."""
+    if not isinstance(entries, list) or len(entries) != coil_count:
+        raise bad_value("plan.channel_map", f"a list of {coil_count} entries (one per coil)",
+                        f"{len(entries)} entries" if isinstance(entries, list) else entries)
+    rows = []
+    for k, entry in enumerate(entries):
+        name = f"plan.channel_map[{k}]"
+        if not isinstance(entry, dict) or entry.get("coil", k) != k:
+            raise bad_value(name, f'{{"coil": {k}, "enable": E, "polarity": P}}', entry)
+        for role in ("enable", "polarity"):
+            value = entry.get(role)
+            if isinstance(value, bool) or not isinstance(value, int) or value < 0:
+                raise bad_value(f"{name}.{role}", "a relay channel number ≥ 0", value)
+        rows.append((entry["enable"], entry["polarity"]))
+    cmap = np.array(rows, dtype=int)
+    if len(np.unique(cmap)) != cmap.size:
+        raise bad_value("plan.channel_map", "distinct channels for every coil and role", cmap.tolist())
+    return cmap
+
+
+def _matrix(value, name: str) -> np.ndarray:
+    try:
+        m = np.array(value, dtype=float)
+    except (TypeError, ValueError):
+        m = None
+    if m is None or m.shape != (3, 3) or not np.all(np.isfinite(m)):
+        raise bad_value(name, "a 3×3 rotation matrix (a list of three rows of three numbers)", value)
+    return so3.as_rotations(m, name)
+
+
+def _step(s, name: str, coil_count: int, cmap: np.ndarray) -> Step:
+    """One step of a plan file; InputError naming the field, also when its masks disagree with its coils."""
+    if not isinstance(s, dict):
+        raise bad_value(name, "an object with index, coils, masks, target and achieved", s)
+    for key in ("index", "coils", "target", "achieved", "error_deg"):
+        if key not in s:
+            raise bad_value(f"{name}.{key}", "present", "nothing")
+    coils = s["coils"]
+    try:
+        coils = {int(k): v for k, v in coils.items()}
+    except (AttributeError, TypeError, ValueError):
+        raise bad_value(f"{name}.coils", 'an object of coil number → polarity, like {"3": 1, "7": -1}',
+                        coils) from None
+    if any(k < 0 or k >= coil_count for k in coils) or any(v not in (-1, 1) or isinstance(v, bool)
+                                                           for v in coils.values()):
+        raise bad_value(f"{name}.coils", f"coil numbers 0..{coil_count - 1} with polarity +1 or -1", s["coils"])
+    coils = {k: int(v) for k, v in coils.items()}
+    enable, polarity = coil_masks(coils, cmap)
+    for key, expected in (("enable_mask", enable), ("polarity_mask", polarity)):
+        if key in s:
+            try:
+                given = int(str(s[key]), 0)
+            except ValueError:
+                raise bad_value(f"{name}.{key}", "a hexadecimal mask like 0x1a", s[key]) from None
+            if given != expected:
+                raise bad_value(f"{name}.{key}", f"{hex(expected)}, the mask of the step's coils under the "
+                                "plan's channel_map (the file disagrees with itself: re-plan it)", s[key])
+    index, error = s["index"], s["error_deg"]
+    if isinstance(index, bool) or not isinstance(index, int):
+        raise bad_value(f"{name}.index", "a whole number", index)
+    if isinstance(error, bool) or not isinstance(error, (int, float)) or not math.isfinite(error) or error < 0:
+        raise bad_value(f"{name}.error_deg", "a finite angle ≥ 0 in degrees", error)
+    held = s.get("held", [])
+    if not isinstance(held, list) or not all(isinstance(p, list) and len(p) == 2 and
+                                             all(isinstance(x, int) for x in p) for p in held):
+        raise bad_value(f"{name}.held", "a list of [pole, coil] pairs", held)
+    next_pole = s.get("next_pole")
+    if next_pole is not None and (isinstance(next_pole, bool) or not isinstance(next_pole, int)):
+        raise bad_value(f"{name}.next_pole", "a pole number or null", next_pole)
+    return Step(index=index, target=_matrix(s["target"], f"{name}.target"),
+                achieved=_matrix(s["achieved"], f"{name}.achieved"), error=math.radians(error), coils=coils,
+                held=[(a, b) for a, b in held], next_pole=next_pole, status=str(s.get("status", "ok")))

@@ -42,6 +42,28 @@ class ClosedLoopRun:
         """Park distance (rad) between the true orientation and the target, per controller step."""
         return so3.distance(self.true, self.targets)
 
+    def to_csv(self, path=None, axis=None) -> str:
+        """One row per controller step: ``step``, ``missed`` (0/1), ``error_deg`` (D(true, target)) and, with
+        ``axis``, the desired and true angles turned about it (degrees, :func:`so3.turned_angle`). Written
+        atomically to ``path`` when given; returns the text."""
+        import csv
+        import io
+
+        buf = io.StringIO()
+        w = csv.writer(buf, lineterminator="\n")
+        w.writerow(["step", "missed", "error_deg"] + ([] if axis is None else ["turned_desired_deg",
+                                                                               "turned_true_deg"]))
+        angles = [] if axis is None else [np.degrees(so3.turned_angle(self.targets, axis)),
+                                          np.degrees(so3.turned_angle(self.true, axis))]
+        for i, (m, e) in enumerate(zip(self.missed, np.degrees(self.errors))):
+            w.writerow([i, int(m), f"{e:.6f}"] + [f"{a[i]:.6f}" for a in angles])
+        text = buf.getvalue()
+        if path is not None:
+            from ..atomic import write_text
+
+            write_text(path, text)
+        return text
+
 
 @single_blas_thread
 def run_closed_loop(design, targets, model, *, dwell: float = 0.5, noise: float = 0.0, missed: float = 0.0,

@@ -59,6 +59,42 @@ class Simulation:
         """Indices of the steps that did not settle within ``tolerance``."""
         return np.flatnonzero(self.step_errors > self.tolerance)
 
+    def summary(self) -> dict:
+        """Steps, execution, settling errors (degrees), the steps that missed the tolerance and the simulated
+        time, JSON-ready."""
+        err = np.degrees(self.step_errors)
+        return {"steps": len(self.planned) - 1, "executed": self.executed,
+                "settled_error_median_deg": float(np.median(err)), "settled_error_max_deg": float(err.max()),
+                "tolerance_deg": math.degrees(self.tolerance), "missed_steps": self.missed_steps.tolist(),
+                "simulated_s": float(self.times[-1])}
+
+    def to_csv(self, path=None, axis=None) -> str:
+        """One row per recorded sample: ``t_s``, unit quaternion ``qw, qx, qy, qz`` (scalar first), angular
+        velocity (rad/s, fixed frame), the angle turned about ``axis`` (degrees, :func:`so3.turned_angle`; the
+        column is left out without ``axis``) and the energised coils (``k:+1;…``). Written atomically to
+        ``path`` when given; returns the text."""
+        import csv
+        import io
+
+        from scipy.spatial.transform import Rotation
+
+        q = Rotation.from_matrix(self.orientations).as_quat(scalar_first=True)
+        turned = None if axis is None else np.degrees(so3.turned_angle(self.orientations, axis))
+        buf = io.StringIO()
+        w = csv.writer(buf, lineterminator="\n")
+        w.writerow(["t_s", "qw", "qx", "qy", "qz", "wx_rad_s", "wy_rad_s", "wz_rad_s"]
+                   + ([] if axis is None else ["turned_deg"]) + ["coils"])
+        for i, (t, qq, om, c) in enumerate(zip(self.times, q, self.angular_velocity, self.active_coils)):
+            coils = ";".join(f"{k}:{int(c[k]):+d}" for k in np.flatnonzero(c))
+            w.writerow([f"{t:.6f}", *(f"{x:.12f}" for x in qq), *(f"{x:.9f}" for x in om)]
+                       + ([] if turned is None else [f"{turned[i]:.6f}"]) + [coils])
+        text = buf.getvalue()
+        if path is not None:
+            from ..atomic import write_text
+
+            write_text(path, text)
+        return text
+
 
 class Integrator:
     """Integrates one rotor under ``model`` (``torque``/``energy`` of ``(R, currents)``) with time step ``dt``."""

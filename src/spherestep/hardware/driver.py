@@ -24,15 +24,16 @@ from .limits import ThermalGuard, ThermalLimitError, ThermalLimits
 
 @contextmanager
 def _ctrl_c_ignored():
-    """Ignore SIGINT (in the main thread) while the coils are being switched off."""
-    previous = signal.getsignal(signal.SIGINT) if threading.current_thread() is threading.main_thread() else None
-    if previous is not None:
-        signal.signal(signal.SIGINT, signal.SIG_IGN)
+    """Ignore SIGINT and SIGTERM (in the main thread) while the coils are being switched off."""
+    main = threading.current_thread() is threading.main_thread()
+    previous = {sig: signal.getsignal(sig) for sig in (signal.SIGINT, signal.SIGTERM)} if main else {}
+    for sig in previous:
+        signal.signal(sig, signal.SIG_IGN)
     try:
         yield
     finally:
-        if previous is not None:
-            signal.signal(signal.SIGINT, previous)
+        for sig, handler in previous.items():
+            signal.signal(sig, handler if handler is not None else signal.SIG_DFL)
 
 
 class CoilDriver:

@@ -2,9 +2,10 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
-from ..commutation import Plan
+from ..commutation import Plan, Step
 from ..errors import bad_value
 from .backend import Backend, DeviceInfo
 from .driver import CoilDriver
@@ -22,13 +23,14 @@ class PlayReport:
     device: DeviceInfo
 
 
-def play(plan: Plan, backend: Backend, rate: float, limits: ThermalLimits | None = None) -> PlayReport:
+def play(plan: Plan, backend: Backend, rate: float, limits: ThermalLimits | None = None,
+         on_step: Callable[[int, Step], None] | None = None) -> PlayReport:
     """Drive ``plan`` through ``backend`` at ``rate`` steps per second.
 
     Step ``i`` is applied at ``t0 + i / rate`` and held until ``t0 + (i + 1) / rate`` on the back end's clock
     (a late step is held only to its scheduled end, so lateness never accumulates); every coil is off after
     the last step, on any error and on Ctrl-C. The whole plan is checked against ``limits`` before anything is
-    switched.
+    switched. ``on_step(i, step)`` is called after step ``i`` is applied (live progress).
     """
     if not plan.steps:
         raise bad_value("plan.steps", "at least one step", [])
@@ -43,6 +45,8 @@ def play(plan: Plan, backend: Backend, rate: float, limits: ThermalLimits | None
             now = backend.clock()
             max_lag = max(max_lag, now - start)
             driver.apply(step, duration=max(0.0, end - now))
+            if on_step is not None:
+                on_step(i, step)
             driver.hold(max(0.0, end - backend.clock()))
         elapsed = backend.clock() - t0
     return PlayReport(steps=len(plan.steps), rate=rate, elapsed=elapsed, max_lag=max_lag, device=driver.info)

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TextIO
 
 from ..atomic import write_text
 
@@ -17,10 +18,19 @@ class Transcript:
     """
 
     entries: list[tuple[float, str, str]] = field(default_factory=list)
+    sink: TextIO | None = None  # a text file each line is also written (and flushed) to as it happens
 
     def add(self, t: float, kind: str, text: str) -> None:
-        """Append one line; ``text`` is stripped of its line ending."""
+        """Append one line; ``text`` is stripped of its line ending. With a ``sink`` the line is written and
+        flushed at once, so a run that is killed still leaves its log."""
         self.entries.append((t, kind, text.rstrip("\r\n")))
+        if self.sink is not None:
+            self.sink.write(self._line(*self.entries[-1]) + "\n")
+            self.sink.flush()
+
+    def _line(self, t: float, kind: str, text: str) -> str:
+        t0 = self.entries[0][0] if self.entries else 0.0
+        return f"{t - t0:11.6f} {kind:<4} {text}"
 
     def count(self, kind: str, prefix: str = "") -> int:
         """How many entries of ``kind`` have text starting with ``prefix``."""
@@ -28,8 +38,7 @@ class Transcript:
 
     def lines(self) -> list[str]:
         """``"   0.012345 TX   $01,SET,3,0*1A2B"``: seconds since the first entry, kind, text."""
-        t0 = self.entries[0][0] if self.entries else 0.0
-        return [f"{t - t0:11.6f} {kind:<4} {text}" for t, kind, text in self.entries]
+        return [self._line(*entry) for entry in self.entries]
 
     def write(self, path: str | Path) -> Path:
         """Write :meth:`lines` to ``path`` (atomically, UTF-8, one entry per line)."""

@@ -12,7 +12,7 @@ import numpy as np
 import plotly.io as pio
 import plotly.offline
 
-from .. import __version__, so3
+from .. import __version__
 from ..atomic import write_text
 from ..errors import bad_value
 from ..fig10 import plane_basis
@@ -146,17 +146,6 @@ def plan_table(plan, axis) -> str:
             "".join(rows) + "</table></div>")
 
 
-def plan_numbers(plan) -> dict:
-    """Steps, moves, holds, blocked steps and errors (degrees) of a plan."""
-    err = np.degrees(plan.errors)
-    achieved = plan.achieved
-    return {"steps": len(plan.steps) - 1,
-            "moves": int(np.sum(so3.distance(achieved[:-1], achieved[1:]) > 0)),
-            "holds": sum(s.status == "hold" for s in plan.steps), "blocked": len(plan.failures),
-            "error_median_deg": float(np.median(err)), "error_max_deg": float(err.max()),
-            "error_final_deg": float(err[-1])}
-
-
 @dataclass(frozen=True)
 class Section:
     """A section of the page: ``anchor`` (HTML id), ``heading``, ``note`` (HTML above the figure), ``figure``
@@ -214,7 +203,7 @@ def build_report(design, metrics=None, plan=None, simulation=None, energy_map=No
     summary = {}
     if plan is not None:
         say("animating the commutation")
-        numbers = plan_numbers(plan)
+        numbers = plan.summary().to_dict()
         fig = commutation_figure(design, plan, axis)
         frames = len(fig["frames"])
         thinned = (f" The animation shows {frames} evenly spaced steps of {len(plan.steps)}."
