@@ -20,13 +20,13 @@ from .parts import BMI270_BMM150, TMAG5273A2, ImuPart, MagnetometerPart
 from .placement import Accuracy, Placement, accuracy, default_array, greedy_placement, smallest_eigenvalue
 from .readings import actual_currents, sense, true_field
 from .sensor import HallSensor, IdealSensor
-from .symmetry import marked_design, symmetry_group
+from .symmetry import MarkerEffect, marked_design, marker_effect, symmetry_group
 
 __all__ = [
     "Accuracy", "BMI270_BMM150", "CoilField", "Estimate", "Estimator", "FieldTable", "FusedSensor", "HallSensor",
-    "IdealSensor", "Imu", "ImuPart", "ImuSensor", "KnownField", "MagnetometerPart", "Mekf", "Placement",
+    "IdealSensor", "Imu", "ImuPart", "ImuSensor", "KnownField", "MagnetometerPart", "MarkerEffect", "Mekf", "Placement",
     "SensorArray", "TMAG5273A2", "accuracy", "actual_currents", "axial_field_table", "candidate_positions",
-    "coil_collisions", "default_array", "fibonacci_directions", "greedy_placement", "marked_design",
+    "coil_collisions", "default_array", "fibonacci_directions", "greedy_placement", "marked_design", "marker_effect",
     "radial_frames", "rotor_field", "sense", "smallest_eigenvalue", "super_fibonacci", "symmetry_group",
     "triad", "true_field",
 ]

@@ -143,7 +143,7 @@ class Estimator:
             small = float(delta @ delta) < tol * tol
             R_new = so3.exp(delta) @ R
             H_new, g_new, cost_new = self._normal_equations(R_new, b, weight)
-            if cost_new <= cost or small:
+            if cost_new <= cost * (1.0 + 1e-9) or small:  # a rise at rounding level is convergence, not a failure
                 R, H, g, cost = R_new, H_new, g_new, cost_new
                 lam = 0.0 if lam < 1e-6 else lam * 0.1
                 if small:
@@ -151,6 +151,9 @@ class Estimator:
                     break
             else:
                 lam = max(10.0 * lam, 1e-4)
+                if lam > 1e8:  # no step lowers the cost: a minimum to rounding
+                    converged = True
+                    break
         U, _, Vt = np.linalg.svd(R)  # re-orthonormalise against rounding drift
         return self._estimate(U @ Vt, H, cost, weight, it, converged)
 

@@ -11,7 +11,7 @@ nearest copy is 72° away for the icosahedral group, so a tracking loop never ju
 
 from __future__ import annotations
 
-from dataclasses import replace
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -71,3 +71,55 @@ def marked_design(design, pole: int | None = None):
     polarity = np.array(design.polarity, copy=True)
     polarity[pole] = -polarity[pole]
     return replace(design, polarity=polarity, name=f"{design.name}-marked")
+
+
+@dataclass(frozen=True)
+class MarkerEffect:
+    """What marking costs the motor (torque map of :mod:`spherestep.magnetics`, N·m): holding torque of
+    ``states`` stepper states that hold the marked pole and of as many that do not, before and after; the
+    share of states that hold it; the marked rotor's net dipole (A·m², the unmarked one's is zero); and the
+    RMS change of the torque over random orientations and drives relative to its RMS."""
+
+    marked_pole: int
+    states_holding_marker: float
+    holding_marker_before_Nm: tuple[float, ...]
+    holding_marker_after_Nm: tuple[float, ...]
+    holding_other_before_Nm: tuple[float, ...]
+    holding_other_after_Nm: tuple[float, ...]
+    dipole_before_Am2: float
+    dipole_after_Am2: float
+    torque_change_rms: float
+
+    def to_dict(self) -> dict:
+        return dict(self.__dict__)
+
+
+def marker_effect(design, marked, states: int = 2, samples: int = 200, seed=0) -> MarkerEffect:
+    """Measure :class:`MarkerEffect` for ``marked`` (from :func:`marked_design`) against ``design``."""
+    from ..magnetics import equilibrium, state_currents, torque_map
+    from ..magnetics._model import MU0
+    from ..statics import holding_torque
+    from .. import so3
+
+    pole = int(np.nonzero(np.asarray(marked.polarity) != np.asarray(design.polarity))[0][0])
+    st = design.states()
+    holds = np.array([any(j == pole for j, _ in st.held(i)) for i in range(len(st))])
+    rng = np.random.default_rng(seed)
+    pick_m = rng.choice(np.nonzero(holds)[0], states, replace=False)
+    pick_o = rng.choice(np.nonzero(~holds)[0], states, replace=False)
+    maps = {id(design): torque_map(design), id(marked): torque_map(marked)}
+
+    def holding(d, picks):
+        c = np.array([state_currents(d, int(i)) for i in picks])
+        eq = equilibrium(maps[id(d)], st.rotations[picks], c)
+        return tuple(float(x) for x in holding_torque(maps[id(d)], eq.rotation, c).torque)
+
+    moment = design.remanence / MU0 * np.pi * (0.5 * design.magnet_diameter) ** 2 * design.magnet_length
+    dipole = [float(np.linalg.norm(moment * np.asarray(d.polarity) @ d.rotor.centers)) for d in (design, marked)]
+    R = so3.random(samples, rng)
+    c = rng.choice([-1.0, 0.0, 0.0, 0.0, 1.0], size=(samples, len(design.stator)))
+    T0 = maps[id(design)].torque(R, c)
+    T1 = maps[id(marked)].torque(R, c)
+    change = float(np.sqrt(np.mean((T1 - T0) ** 2) / np.mean(T0 ** 2)))
+    return MarkerEffect(pole, float(holds.mean()), holding(design, pick_m), holding(marked, pick_m),
+                        holding(design, pick_o), holding(marked, pick_o), dipole[0], dipole[1], change)

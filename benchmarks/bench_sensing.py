@@ -1,0 +1,186 @@
+"""The sensing chain on the prototype, measured in one run: table accuracy, time per update, accuracy against
+sensor count, global start, symmetry, the marker's cost, and a 1 kHz tracking run with the IMU alternatives.
+
+Run: ``OPENBLAS_NUM_THREADS=1 .venv/bin/python benchmarks/bench_sensing.py [--quick]``. Times are medians of
+repeated calls (``_timing.median_seconds``); ``× magpylib`` compares one estimator update with one magpylib
+evaluation of the rotor's field at the same sensors (what a per-iteration magpylib estimator would pay at
+least once per iteration). Errors are geodesic angles in degrees.
+"""
+
+from __future__ import annotations
+
+import datetime
+import math
+import platform
+import sys
+import time
+
+import magpylib
+import numpy as np
+
+from _timing import median_seconds
+from spherestep import sensing, so3
+from spherestep.magnetics import rotor_collection
+from spherestep.motor import prototype
+
+
+def table_accuracy(design, array):
+    print("\n## Field table against magpylib (200 Haar-random orientations, 24 sensors)")
+    R = so3.random(200, 1)
+    exact = np.asarray(rotor_collection(design, R).getB(array.positions))
+    print("| nodes | max |ΔB| (T) | RMS ΔB (T) | build (s) |\n|---|---|---|---|")
+    for n in (4097, 16385, 65537):
+        t0 = time.perf_counter()
+        table = sensing.FieldTable.build(design, array.positions, nodes=n)
+        build = time.perf_counter() - t0
+        d = table.field(R) - exact
+        print(f"| {n} | {np.abs(d).max():.2e} | {np.sqrt(np.mean(d ** 2)):.2e} | {build:.3f} |")
+    print(f"max |B| at the sensors: {np.abs(exact).max() * 1e3:.1f} mT")
+
+
+def timing(design, array):
+    print("\n## Time per call (median, one orientation, 24 sensors)")
+    table = sensing.FieldTable.build(design, array.positions)
+    coils = sensing.CoilField.build(design, array.positions)
+    est = sensing.Estimator(table, array.axes, array.part, (coils,))
+    rng = np.random.default_rng(2)
+    R = so3.random(1, rng)[0]
+    c = np.zeros(len(design.stator))
+    c[[1, 5, 9, 20]] = [1, -1, 1, -1]
+    m = sensing.sense(array, table.field(R) + coils.field(c), rng)
+    R_prev = so3.exp(np.radians(0.06) * np.array([0.6, 0.0, 0.8])) @ R  # 1 rad/s for 1 ms
+    rotor = rotor_collection(design)
+    rows = [("magpylib rotor field (1 call)", lambda: rotor.getB(array.positions)),
+            ("table field", lambda: table.field(R)),
+            ("table field + Jacobian", lambda: table.field_and_jacobian(R)),
+            ("track: 1 Gauss–Newton step (update)", lambda: est.track(m, R_prev, c)),
+            ("solve: LM to 1e-10 rad from 0.06°", lambda: est.solve(m, R_prev, c))]
+    t_mag = median_seconds(50, rows[0][1])
+    print("| call | median (µs) | rate (1/s) | × magpylib |\n|---|---|---|---|")
+    for name, f in rows:
+        t = t_mag if f is rows[0][1] else median_seconds(300, f)
+        print(f"| {name} | {t * 1e6:.0f} | {1 / t:.0f} | {t_mag / t:.1f} |")
+    e = est.track(m, R_prev, c)
+    print(f"one-step tracking error: {math.degrees(so3.distance(e.R, R)):.4f}°; "
+          f"after solve: {math.degrees(so3.distance(est.solve(m, R_prev, c).R, R)):.4f}°")
+
+
+def accuracy_vs_count(design, placement, samples):
+    print(f"\n## Accuracy against sensor count ({samples} Haar-random orientations each; magpylib readings; "
+          "4 random coils at ±1 with 1 % RMS current error, subtracted at the commanded currents; "
+          "TMAG5273A2 noise 0.1 mT, LSB, saturation)")
+    cand = placement.candidates
+    print("| sensors | layout | RMS (°) | worst (°) | Cramér–Rao RMS (°) | worst-case bound (°) | coil residual RMS (µT) |")
+    print("|---|---|---|---|---|---|---|")
+    for k in (3, 4, 6, 8, 12, 16, 24):
+        greedy = placement.array(k)
+        spread = sensing.SensorArray.at(cand[np.linspace(0, len(cand) - 1, k).astype(int)])
+        for name, arr in (("greedy", greedy), ("spread", spread)):
+            a = sensing.accuracy(design, arr, samples=samples, seed=k)
+            bound = placement.bound_deg()[k - 1] if name == "greedy" else float("nan")
+            print(f"| {k} | {name} | {a.rms_deg:.4f} | {a.worst_deg:.4f} | {a.predicted_rms_deg:.4f} | "
+                  f"{bound:.4f} | {a.coil_residual_T * 1e6:.1f} |")
+
+
+def global_start(design, array, trials):
+    print(f"\n## Global start from no prior ({trials} Haar-random orientations, 24 sensors, 2000-rotation grid)")
+    print("| rotor | readings averaged | success (error < 0.05°) | median time (s) | errors of failures (°) |")
+    print("|---|---|---|---|---|")
+    rng = np.random.default_rng(3)
+    marked = sensing.marked_design(design)
+    for d, name, G in ((design, "prototype (up to its 60 symmetries)", sensing.symmetry_group(design)),
+                       (marked, "marked (exact)", None)):
+        table = sensing.FieldTable.build(d, array.positions)
+        est = sensing.Estimator(table, array.axes, array.part)
+        near = sensing.symmetry_group(d, polarity=False) if G is None else None
+        for avg in (1, 32):
+            ok, times, fails = 0, [], []
+            for _ in range(trials):
+                R = so3.random(1, rng)[0]
+                m = np.mean([sensing.sense(array, table.field(R), rng) for _ in range(avg)], axis=0)
+                t0 = time.perf_counter()
+                e = est.initialise(m, near_symmetry=near)
+                times.append(time.perf_counter() - t0)
+                err = so3.distance(e.R[None], R @ G).min() if G is not None else so3.distance(e.R, R)
+                ok += err < math.radians(0.05)
+                if err >= math.radians(0.05):
+                    fails.append(round(math.degrees(err), 1))
+            print(f"| {name} | {avg} | {ok}/{trials} | {np.median(times):.2f} | {fails} |")
+
+
+def symmetry(design, array):
+    print("\n## Symmetry")
+    G = sensing.symmetry_group(design)
+    R = so3.random(5, 4)
+    spread = max(np.abs(B - B[0]).max() for B in
+                 (sensing.rotor_field(design, array.positions, Ri @ G) for Ri in R))
+    angles = np.degrees(so3.angle(G[1:]))
+    print(f"group order {len(G)}; smallest turn between copies {angles.min():.1f}°; largest reading "
+          f"difference over the 60 copies (magpylib, 5 orientations, 24 sensors): {spread:.1e} T")
+    marked = sensing.marked_design(design)
+    table = sensing.FieldTable.build(marked, array.positions)
+    Gp = sensing.symmetry_group(marked, polarity=False)
+    Rs = so3.random(300, 5)
+    d = np.array([np.sqrt(np.sum((table.field(Ri @ Gp[1:]) - table.field(Ri)) ** 2, axis=(1, 2))).min()
+                  for Ri in Rs]) / array.part.effective_noise_T
+    print(f"marked rotor: the nearest wrong copy differs by |Δm|/σ = {np.min(d):.1f} (min), "
+          f"{np.percentile(d, 5):.1f} (5 %), {np.median(d):.1f} (median) over 300 orientations")
+
+
+def marker(design):
+    print("\n## What the marker costs the motor (torque map)")
+    t0 = time.perf_counter()
+    e = sensing.marker_effect(design, sensing.marked_design(design), states=2, samples=300)
+    for key, value in e.to_dict().items():
+        print(f"- {key}: {value}")
+    print(f"({time.perf_counter() - t0:.0f} s)")
+
+
+def loop(design, array):
+    print("\n## A 2-s run at 1 kHz (1 rad/s about a random axis; 3 coils on; 1 % current error; known start)")
+    rng = np.random.default_rng(6)
+    dt, axis = 1e-3, rng.normal(size=3)
+    axis /= np.linalg.norm(axis)
+    R0 = so3.random(1, rng)[0]
+    path = [R0 @ so3.exp(axis * dt * k) for k in range(2000)]
+    c = np.zeros(len(design.stator))
+    c[[3, 7, 11]] = [1, -1, 1]
+    sensors = {"hall (array, 1 GN step)": sensing.HallSensor(design, array=array, current_error=0.01, seed=1),
+               "imu alone (BMI270+BMM150 MEKF)": sensing.ImuSensor(design, dt, seed=2),
+               "fused (gyro + array, MEKF)": sensing.FusedSensor(
+                   design, sensing.HallSensor(design, array=array, current_error=0.01, seed=3), dt, seed=4)}
+    print("| sensor | RMS (°) | worst (°) | time per sample (µs) |\n|---|---|---|---|")
+    for name, s in sensors.items():
+        R_est, err = R0, []
+        t0 = time.perf_counter()
+        for k, R in enumerate(path):
+            prev = R0 if k == 0 else (None if not name.startswith("hall") else R_est)
+            R_est = s.measure(R, c, prev)
+            err.append(so3.distance(R_est, R))
+        t = (time.perf_counter() - t0) / len(path)
+        e = np.degrees(np.array(err[100:]))
+        print(f"| {name} | {np.sqrt(np.mean(e ** 2)):.4f} | {e.max():.4f} | {t * 1e6:.0f} |")
+
+
+def main() -> None:
+    quick = "--quick" in sys.argv
+    print(f"# bench_sensing — {datetime.date.today()}, {platform.machine()}, Python {platform.python_version()}, "
+          f"NumPy {np.__version__}, magpylib {magpylib.__version__}")
+    design = prototype()
+    t0 = time.perf_counter()
+    placement = sensing.greedy_placement(design, 24)
+    print(f"greedy placement of 24 sensors from {len(placement.candidates)} candidates: "
+          f"{time.perf_counter() - t0:.1f} s")
+    array = placement.array(24)
+    table_accuracy(design, array)
+    timing(design, array)
+    symmetry(design, array)
+    global_start(design, array, 10 if quick else 50)
+    accuracy_vs_count(design, placement, 50 if quick else 300)
+    loop(design, array)
+    if not quick:
+        marker(design)
+
+
+if __name__ == "__main__":
+    main()
