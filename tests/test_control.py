@@ -246,3 +246,12 @@ def test_planned_turn_stays_within_the_guaranteed_torque_and_above_the_bound(tma
     r_min = tr.segments[0].acceleration * inertia / 0.7
     assert inertia * seg.acceleration + 0.25 * seg.peak_speed <= 0.7 * r_min * (1 + 1e-9)
     assert damped.duration > tr.duration
+
+
+def test_rotation_error_is_the_log_map():
+    from spherestep.control.controller import rotation_error
+
+    R = so3.random(500, 3)
+    np.testing.assert_allclose(np.array([rotation_error(r) for r in R]), so3.log(R), atol=1e-13)
+    tiny = so3.exp(np.array([1e-10, -2e-10, 3e-10]))
+    np.testing.assert_allclose(rotation_error(tiny), [1e-10, -2e-10, 3e-10], rtol=1e-6)

@@ -33,6 +33,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 
@@ -69,9 +70,16 @@ class Allocation:
 
 
 def _bounds(coil_count: int, failed, limits: DriveLimits) -> np.ndarray:
-    u = np.full(coil_count, limits.per_unit_bound)
-    if len(failed):
+    """Per-unit current bounds ``u (N,)``: ``I_max/I_n``, zero on failed coils (cached, read-only)."""
+    return _bounds_cached(int(coil_count), tuple(int(k) for k in failed), limits.per_unit_bound)
+
+
+@lru_cache(maxsize=64)
+def _bounds_cached(coil_count: int, failed: tuple[int, ...], bound: float) -> np.ndarray:
+    u = np.full(coil_count, bound)
+    if failed:
         u[list(failed)] = 0.0
+    u.flags.writeable = False
     return u
 
 

@@ -34,6 +34,20 @@ BANDWIDTH = 30.0  # rad/s, closed-loop natural frequency
 OBSERVER_BANDWIDTH = 120.0  # rad/s
 
 
+def rotation_error(M: np.ndarray) -> np.ndarray:
+    """``log(M)`` of one rotation ``M (3, 3)`` as a rotation vector: ``θ/sin θ · vect(M)`` with
+    ``θ = atan2(|vect M|, (tr M − 1)/2)`` in Python floats (the control loop's hot path; full precision for
+    ``θ < 2.5`` rad), :func:`spherestep.so3.log` beyond, where that quotient loses digits."""
+    (a, b, c), (d, e, f), (g, h, i) = M.tolist()
+    x, y, z = 0.5 * (h - f), 0.5 * (c - g), 0.5 * (d - b)
+    s = math.sqrt(x * x + y * y + z * z)
+    theta = math.atan2(s, 0.5 * (a + e + i - 1.0))
+    if theta >= 2.5:
+        return so3.log(M)
+    k = 1.0 + theta * theta / 6.0 if s < 1e-8 else theta / s
+    return np.array([k * x, k * y, k * z])
+
+
 def _positive(value, name: str) -> float:
     if isinstance(value, bool) or not isinstance(value, (int, float, np.floating)) or not math.isfinite(value) \
             or value <= 0:
@@ -64,7 +78,7 @@ class GeometricPD:
     def torque(self, R_est, w_est, R_d, w_d, a_d) -> np.ndarray:
         """Commanded torque (N·m, fixed frame) for the estimate ``(R̂ (3, 3), ω̂ (3,))`` and the desired
         ``(R_d, ω_d, α_d)``."""
-        e = so3.log(R_d @ R_est.T)
+        e = rotation_error(R_d @ R_est.T)
         kp, kd = self.bandwidth ** 2, 2.0 * self.damping_ratio * self.bandwidth
         return self.inertia * (a_d + kp * e + kd * (w_d - w_est)) + self.damping * w_est
 
@@ -98,6 +112,6 @@ class Observer:
             times = [p[0] for p in self._past]
             k = int(np.clip(np.searchsorted(times, t_meas), 0, len(times) - 1))
             ref = self._past[k][1]
-        eps = so3.log(R_meas @ ref.T)
+        eps = rotation_error(R_meas @ ref.T)
         self.R = so3.exp(self.l1 * eps) @ self.R
         self.w = self.w + self.l2 * eps

@@ -78,15 +78,16 @@ class CoilDrive:
         kp, ki = L * self.bandwidth, R * self.bandwidth
         i = np.array(i, dtype=float)
         integral = np.array(integral, dtype=float)
+        i_ref = np.asarray(i_ref, dtype=float)
+        feed = R * i_ref
         i_sum = np.zeros_like(i)
         v_sum = np.zeros_like(i)
         energy = 0.0
         for _ in range(periods):
             err = i_ref - i
-            v_raw = R * i_ref + kp * err + ki * integral
+            v_raw = feed + kp * err + ki * integral
             v = self.quantise(v_raw)
-            free = np.abs(v_raw) < V
-            integral = integral + np.where(free, err * h, 0.0)
+            integral += np.where(np.abs(v_raw) < V, err * h, 0.0)
             i, i_mean = rl_step(i, v, emf, R, L, h)
             i_sum += i_mean
             v_sum += v

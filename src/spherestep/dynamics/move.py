@@ -144,7 +144,7 @@ def move(design, axis, angle: float, *, mode: str = "servo", duration: float | N
         else:
             traj = Trajectory.turn(start, n, angle, 4.0 * abs(angle) / duration ** 2)
         run = simulate_servo(design, traj, model, limits=limits, rotor=rotor,
-                             sensor=NoisySensor(sensor_noise, rng=seed), settle=0.5)
+                             sensor=NoisySensor(sensor_noise, rng=seed), settle=0.3)
         s = run.summary()
         summary = base | {"time_s": s["arrival_time_s"], "final_error_deg": math.degrees(
             float(so3.distance(run.orientations[-1], end)))} | s | {"sensor_noise_deg": math.degrees(sensor_noise)}

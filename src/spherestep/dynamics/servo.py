@@ -195,6 +195,8 @@ def simulate_servo(design, trajectory: Trajectory, model: TorqueModel | None = N
     Rd_all, wd_all, ad_all = trajectory.sample(np.arange(steps) * h)
     rec = {k: [] for k in ("R", "Rh", "w", "i", "iref", "v", "p", "pc", "tau", "ok")}
     measured = False
+    probe = so3.random(8, 0)  # a model with no torque at zero current anywhere needs no bias per period
+    biased = bool(np.any(np.asarray(ctrl_model.torque(probe, np.zeros((8, N)))) != 0))
     for n in range(steps):
         t = n * h
         c_now = i / In
@@ -206,7 +208,7 @@ def simulate_servo(design, trajectory: Trajectory, model: TorqueModel | None = N
         rec["Rh"].append(observer.R)
         tau_cmd = controller.torque(observer.R, observer.w, Rd_all[n], wd_all[n], ad_all[n])
         K_hat = np.asarray(ctrl_model.torque_matrix(observer.R), dtype=float)
-        bias = np.asarray(ctrl_model.torque(observer.R, zeros), dtype=float)
+        bias = np.asarray(ctrl_model.torque(observer.R, zeros), dtype=float) if biased else None
         alloc, lam = allocate_matrix(K_hat, tau_cmd, limits, bias=bias, failed=ctrl_model.failed, lam0=lam)
         i_ref = alloc.currents * In
         K_true = np.asarray(model.torque_matrix(R), dtype=float)
