@@ -162,9 +162,9 @@ def test_feasible_support_matches_an_independent_maximisation():
         u[[3, 8]] = 0.0  # failed
         g = rng.normal(size=29)
         h, c = feasible_support(g, u, rho)
-        res = minimize(lambda x: -g @ x, np.zeros(29), jac=lambda x: -g, method="SLSQP",
+        res = minimize(lambda x, g=g: -g @ x, np.zeros(29), jac=lambda x, g=g: -g, method="SLSQP",
                        bounds=[(-b, b) for b in u],
-                       constraints=[{"type": "ineq", "fun": lambda x: rho * rho - x @ x, "jac": lambda x: -2 * x}],
+                       constraints=[{"type": "ineq", "fun": lambda x, r=rho: r * r - x @ x, "jac": lambda x: -2 * x}],
                        options={"ftol": 1e-14, "maxiter": 500})
         assert h == pytest.approx(-res.fun, rel=1e-7)
         assert h == pytest.approx(g @ c, rel=1e-12)

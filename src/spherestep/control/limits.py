@@ -70,7 +70,7 @@ class DriveLimits:
     @classmethod
     def from_coil(cls, resistance: float, inductance: float, nominal_current: float, *,
                   supply_voltage: float = SUPPLY_VOLTAGE, supply_power: float = SUPPLY_POWER,
-                  max_current: float | None = None) -> "DriveLimits":
+                  max_current: float | None = None) -> DriveLimits:
         """Limits for a coil of given ``resistance`` (Ω), ``inductance`` (H) and ``nominal_current`` (A) — the
         numbers a coil specification (``spherestep.motor.coil``) computes from its winding; ``max_current``
         defaults to what the supply voltage drives through the coil, ``V / R``."""
@@ -80,7 +80,7 @@ class DriveLimits:
                    max_current=v / r if max_current is None else max_current, supply_voltage=v,
                    supply_power=supply_power, resistance=r, inductance=_positive(inductance, "inductance"))
 
-    def replace(self, **changes) -> "DriveLimits":
+    def replace(self, **changes) -> DriveLimits:
         """A copy with ``changes``."""
         return replace(self, **changes)
 

@@ -135,12 +135,12 @@ class Trajectory:
         return R, w, a
 
     @classmethod
-    def turn(cls, start, axis, angle: float, acceleration: float, speed: float | None = None) -> "Trajectory":
+    def turn(cls, start, axis, angle: float, acceleration: float, speed: float | None = None) -> Trajectory:
         """One trapezoidal turn of ``angle`` (rad) about the fixed ``axis`` from ``start``."""
         return cls((segment(start, axis, angle, acceleration, speed),))
 
     @classmethod
-    def through(cls, waypoints, acceleration: float, speed: float | None = None) -> "Trajectory":
+    def through(cls, waypoints, acceleration: float, speed: float | None = None) -> Trajectory:
         """Geodesic segments through ``waypoints (W, 3, 3)`` (``W ≥ 2``), at rest at each."""
         W = so3.as_rotations(waypoints, "waypoints")
         if W.ndim != 3 or len(W) < 2:

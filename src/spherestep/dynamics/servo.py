@@ -217,7 +217,7 @@ def simulate_servo(design, trajectory: Trajectory, model: TorqueModel | None = N
         c_mean = i_mean / In
         rec["R"].append(R)
         rec["w"].append(w)
-        R, w, _ = rotor.step(R[None], w[None], lambda Rb: model.torque(Rb, c_mean[None]), h)
+        R, w, _ = rotor.step(R[None], w[None], lambda Rb, c=c_mean[None]: model.torque(Rb, c), h)
         R, w = R[0], w[0]
         observer.predict(alloc.torque - rotor.damping * observer.w, h)
         rec["i"].append(i_mean)
