@@ -11,14 +11,16 @@ import numpy as np
 import pytest
 
 from spherestep import so3
-from spherestep.hardware.drive_link import DriveLink
-from spherestep.hardware.motor_emulator import EmulatedMotor, MotorFaults, MotorPty
-from spherestep.hardware.servo import run_servo
-from spherestep.hardware.servo_parts import FieldTracker, PoseServo, hold, turn
+from spherestep.errors import InputError
+from spherestep.hardware.motor_emulator import MotorFaults
+from spherestep.hardware.servo_parts import hold
+from spherestep.hardware.session import servo_session, turn_reference
 
 pytestmark = pytest.mark.slow
 
 DEMO_AXIS = (1.0, 0.5, 2.0)
+MIN_RATE = 150.0  # Hz: below this (a loaded test machine) the 360° turn is not judged
+FAULT_AT = 0.4  # s of device time
 
 
 @pytest.fixture(scope="module")
@@ -26,78 +28,75 @@ def rig():
     from spherestep.control import DriveLimits
     from spherestep.magnetics import torque_map
     from spherestep.motor import prototype
-    from spherestep.sensing.array import SensorArray, candidate_positions
+    from spherestep.sensing import default_array
 
     design = prototype()
-    positions = candidate_positions(design, 300)
-    sensors = SensorArray.at(positions[np.linspace(0, len(positions) - 1, 8).round().astype(int)])
-    return design, torque_map(design), sensors, DriveLimits()
+    return {"design": design, "model": torque_map(design), "sensors": default_array(design, 8),
+            "drive": DriveLimits()}
 
 
-def run(rig, reference, duration, *, faults=None, control_wrap=None, rate=200.0, watchdog_ms=250, **options):
-    """Run the loop; returns (report, truth samples [(loop time, estimate, Truth)], final Truth, pty) after the
-    pty stopped. The watchdog is 250 ms rather than the firmware's 100 ms, and a cycle may start up to 200 ms
-    late, so that the load of a shared test machine does not end a run that is not under test."""
-    design, model, sensors, drive = rig
-    motor = EmulatedMotor(design, model, sensors, faults=faults)
-    estimate = FieldTracker(design, sensors, np.eye(3), drive.nominal_current)
-    control = PoseServo(model, motor.rotor.inertia, reference, drive)
-    if control_wrap is not None:
-        control = control_wrap(control)
-    samples = []
-
+def run(rig, reference, duration, **options):
+    """An emulated session. The watchdog is 250 ms rather than the firmware's 100 ms, and a cycle may start up
+    to 200 ms late, so that the load of a shared test machine does not end a run that is not under test."""
+    options.setdefault("watchdog_ms", 250)
     options.setdefault("max_late", 0.2)
-    with MotorPty(motor, watchdog_ms=watchdog_ms) as dev:
-        def status(t, R, w, c):
-            if len(samples) <= int(t / 0.05):
-                samples.append((t, R.copy(), dev.truth()))
-
-        with DriveLink(dev.port) as link:
-            report = run_servo(link, estimate, control, duration=duration, rate=rate, status=status, **options)
-        time.sleep(0.15)  # the device runs on: a watchdog trip after a lost link lands in the truth
-        final = dev.truth()
-    return report, samples, final, dev
+    return servo_session(rig["design"], reference, duration, emulate=True, sensors=rig["sensors"],
+                         model=rig["model"], drive=rig["drive"], **options)
 
 
-def test_holds_a_pose_within_a_tenth_of_a_degree(rig):
+def test_holds_a_pose_within_a_tenth_of_a_degree(rig, tmp_path):
     target = so3.exp([0.002, -0.001, 0.003])
-    report, samples, final, _ = run(rig, hold(target), 2.0)
-    assert report.outcome == "done", report.message
-    errors = [math.degrees(so3.distance(truth.R, target)) for t, _, truth in samples if t > 1.0]
+    s = run(rig, hold(target), 2.0, R0=np.eye(3), log=tmp_path / "hold.csv")
+    assert s.report.outcome == "done", s.report.message
+    errors = [math.degrees(so3.distance(truth.R, target)) for t, truth in s.truth if t > 1.0]
     assert len(errors) > 5 and max(errors) < 0.1, errors
-    assert report.rate > 20, report.to_dict()  # the 200 Hz target is measured by benchmarks/bench_hardware.py
-    assert report.off_acknowledged and not final.enabled and np.abs(final.i).max() < 1e-3
+    assert s.report.rate > 20, s.report.to_dict()  # the 200 Hz target is measured by benchmarks/bench_hardware.py
+    assert s.report.off_acknowledged and not s.final.enabled and np.abs(s.final.i).max() < 1e-3
+    lines = (tmp_path / "hold.csv").read_text().splitlines()
+    assert lines[0].startswith("t_s,late_s") and len(lines) == s.report.cycles + 1
+    assert not (tmp_path / "hold.csv.part").exists()
 
 
 def test_turns_360_degrees_about_the_demo_axis_within_3_s(rig):
-    reference = turn(np.eye(3), DEMO_AXIS, 2 * math.pi, 2.4, start=0.2)
-    report, samples, final, _ = run(rig, reference, 3.0)
-    assert report.outcome == "done", report.message
-    # half way (t = 1.4 s) the rotor is turned half a turn about the axis; at 3 s it is back where it started
-    half = min(samples, key=lambda s: abs(s[0] - 1.4))
-    assert math.degrees(so3.distance(half[2].R, np.eye(3))) > 170
+    s = run(rig, turn_reference(np.eye(3), DEMO_AXIS, 2 * math.pi, 2.4, delay=0.2), 3.0)
+    if s.report.rate < MIN_RATE:
+        pytest.skip(f"the shared machine held the loop at {s.report.rate:.0f} Hz ({s.report.missed} deadlines "
+                    f"missed, outcome {s.report.outcome}); the turn is judged at {MIN_RATE:.0f} Hz or more "
+                    "(benchmarks/bench_hardware.py measures it)")
+    assert s.report.outcome == "done", s.report.message
+    # on the way the rotor is half a turn from the start, about the demo axis; at 3 s it is back where it started
+    t_half, half = max(s.truth, key=lambda sample: so3.distance(sample[1].R, np.eye(3)))
+    assert math.degrees(so3.distance(half.R, np.eye(3))) > 170
     axis = np.asarray(DEMO_AXIS) / np.linalg.norm(DEMO_AXIS)
-    turned = so3.log(half[2].R)
-    assert abs(abs(turned @ axis) - np.linalg.norm(turned)) < 0.05  # about the demo axis
-    end = samples[-1]
-    assert end[0] > 2.9 and math.degrees(so3.distance(end[2].R, np.eye(3))) < 0.1, end[0]
+    turned = so3.log(half.R)
+    assert abs(abs(turned @ axis) - np.linalg.norm(turned)) < 0.05
+    assert s.truth[-1][0] > 2.9
+    assert math.degrees(s.final_error()) < 0.1, s.report.to_dict()
 
 
-def with_bias(current: float, coil: int = 0):
-    """The servo's currents plus a fixed current on one coil (the servo holds against its torque)."""
-    def wrap(control):
-        def biased(t, R, w):
-            c = np.array(control(t, R, w))
-            c[coil] += current
+def with_bias(reference_law_current: float = 0.3, coil: int = 0):
+    """A status-free way to keep one coil at a sizeable current: the servo plus ``current`` A on ``coil``."""
+    from spherestep.hardware import servo_parts
+
+    class Biased(servo_parts.ServoLaw):
+        def __call__(self, t, R, w):
+            c = super().__call__(t, R, w)
+            c[coil] += reference_law_current
             return c
-        return biased
-    return wrap
+
+    return Biased
 
 
-FAULT_AT = 0.4  # s of device time
+@pytest.fixture
+def biased(monkeypatch):
+    """The session's control law with 0.3 A added on coil 0 (the servo holds against its torque), so that the
+    coil faults meet a coil that carries current."""
+    from spherestep.hardware import session
+
+    monkeypatch.setattr(session, "ServoLaw", with_bias())
 
 
-@pytest.mark.parametrize("faults, code", [
+@pytest.mark.parametrize("faults, codes", [
     (MotorFaults(open_coil=(0, FAULT_AT)), {"OPEN"}),
     (MotorFaults(stuck_coil=(0, FAULT_AT)), {"STUCK", "OVER"}),
     (MotorFaults(frozen_reading=(0, FAULT_AT)), {"STUCK"}),
@@ -106,29 +105,35 @@ FAULT_AT = 0.4  # s of device time
     (MotorFaults(vanish_at=FAULT_AT), {"LINK"}),
     (MotorFaults(deaf_at=FAULT_AT), {"LINK"}),
 ], ids=["open-coil", "stuck-coil", "frozen-sense", "sensor-stops", "sensor-garbage", "link-vanishes", "link-deaf"])
-def test_every_motor_and_link_fault_ends_with_all_coils_off_within_the_watchdog(rig, faults, code):
-    report, _, final, dev = run(rig, hold(np.eye(3)), 1.5, faults=faults, control_wrap=with_bias(0.3))
-    assert report.outcome in code, report.to_dict()
-    assert report.message
-    watchdog = dev.device.watchdog_ms / 1000
-    assert FAULT_AT <= final.off_at <= FAULT_AT + watchdog, (final.off_at, final.trips)
-    assert not final.enabled
-    assert np.abs(final.i).max() < 1e-3  # the coils' current has decayed
+def test_every_fault_ends_with_all_coils_off_within_the_watchdog(rig, biased, faults, codes):
+    s = run(rig, hold(np.eye(3)), 1.5, faults=faults)
+    assert s.report.outcome in codes, s.report.to_dict()
+    assert s.report.message
+    assert FAULT_AT <= s.final.off_at <= FAULT_AT + s.watchdog, (s.final.off_at, s.final.trips)
+    assert not s.final.enabled
+    assert np.abs(s.final.i).max() < 1e-3  # the coils' current has decayed
 
 
-def test_a_slow_host_is_stopped_by_the_device_watchdog(rig):
+def test_a_slow_host_is_stopped_by_the_device_watchdog(rig, monkeypatch):
+    from spherestep.hardware import session
+
     stalled = []
 
-    def stall_once(control):
-        def slow(t, R, w):
+    class Slow(session.ServoLaw):
+        def __call__(self, t, R, w):
             if t > 0.4 and not stalled:
                 stalled.append(time.monotonic())
-                time.sleep(0.3)  # the host misses 60 deadlines
-            return control(t, R, w)
-        return slow
+                time.sleep(0.4)  # the host misses 80 deadlines
+            return super().__call__(t, R, w)
 
-    report, _, final, dev = run(rig, hold(np.eye(3)), 1.5, control_wrap=stall_once)
-    assert report.outcome in {"WDOG", "SLOW"}, report.to_dict()
-    stall = stalled[0] - dev.started
-    assert stall <= final.off_at <= stall + dev.device.watchdog_ms / 1000 + 0.01, (stall, final.off_at)
-    assert not final.enabled and np.abs(final.i).max() < 1e-3
+    monkeypatch.setattr(session, "ServoLaw", Slow)
+    s = run(rig, hold(np.eye(3)), 1.5, max_late=1.0)
+    assert s.report.outcome == "WDOG", s.report.to_dict()
+    stall = stalled[0] - s.started - s.final.slip  # in device time (any slip before the stall is subtracted)
+    assert stall <= s.final.off_at <= stall + s.watchdog + 0.02, (stall, s.final.off_at, s.final.trips)
+    assert not s.final.enabled and np.abs(s.final.i).max() < 1e-3
+
+
+def test_session_needs_a_port_or_the_emulator(rig):
+    with pytest.raises(InputError, match="port"):
+        servo_session(rig["design"], hold(np.eye(3)), 1.0, sensors=rig["sensors"], model=rig["model"])

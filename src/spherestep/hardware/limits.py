@@ -132,7 +132,7 @@ class CurrentLimits:
 
     @classmethod
     def from_drive(cls, drive, *, max_duty: float = 0.95, thermal_time: float = 60.0,
-                   trip_ratio: float = 1.25) -> "CurrentLimits":
+                   trip_ratio: float = 1.25) -> CurrentLimits:
         """The device limits for a :class:`spherestep.control.DriveLimits`: its current, power and resistance;
         the coil is rated for its nominal current continuously."""
         return cls(max_current=drive.max_current, max_duty=max_duty, max_power=drive.supply_power,

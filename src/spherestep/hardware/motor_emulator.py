@@ -33,10 +33,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from .. import so3
-from ..errors import bad_value
 from .current_device import CurrentDevice
 from .limits import CurrentLimits
 from .protocol2 import FULL_SCALE
+
+K_REUSE = 2e-3  # rad: the torque matrix is re-evaluated when the rotor has turned further than this
 
 
 @dataclass(frozen=True)
@@ -57,9 +58,6 @@ class MotorFaults:
     sensor_garbage: tuple[int, float] | None = None
     vanish_at: float | None = None
     deaf_at: float | None = None
-
-
-K_REUSE = 2e-3  # rad: the torque matrix is re-evaluated when the rotor has turned further than this
 
 
 def _active(fault: tuple[int, float] | None, t: float) -> int | None:
@@ -188,8 +186,9 @@ class EmulatedMotor:
 class Truth:
     """The emulated motor as the device process last published it: orientation ``R``, angular velocity ``w``
     (rad/s), coil currents ``i`` (A), emulated time ``t`` (s, from :attr:`MotorPty.started`), bridges
-    ``enabled``, ``off_at`` (s) the last time the device switched every coil off, and the device's ``trips``
-    ``(code, coil, time s)``."""
+    ``enabled``, ``off_at`` (s) the last time the coils went from driven to off, ``slip`` (s) how far emulated
+    time has fallen behind the wall clock (the process was starved), and the device's ``trips``
+    ``(code, coil, time s)``: emulated time ``t`` is wall time ``− started − slip``."""
 
     R: np.ndarray
     w: np.ndarray
@@ -197,20 +196,23 @@ class Truth:
     t: float
     enabled: bool
     off_at: float
+    slip: float
     trips: tuple[tuple[str, int, float], ...]
 
 
 _TRIP_ORDER = ("WDOG", "CRCS", "OVER", "OPEN", "STUCK", "HEAT")
 _MAX_TRIPS = 8
 PUBLISH_EVERY = 2e-3  # s of emulated time between two publications of the truth
+MAX_CATCH_UP = 0.01  # s: when the process falls further behind the wall clock, emulated time slips instead
 
 
 class MotorPty:
     """A :class:`CurrentDevice` driving an :class:`EmulatedMotor`, served on a pseudo-terminal by a separate
     process (forked; as a real board, it does not share the host's interpreter and its lock).
 
-    The device's control step runs every ``motor.period`` of wall time (catching up when the process was held
-    up, so emulated time follows the wall clock); frames are answered as they complete. :meth:`truth` returns
+    The device's control step runs every ``motor.period`` of wall time, catching up at most ``MAX_CATCH_UP`` when
+    the process was held up (beyond that emulated time slips, so that the host never meets a motor that ran
+    10 ms unattended in a burst); frames are answered as they complete. :meth:`truth` returns
     the :class:`Truth` the process publishes after every step and frame. ``device_options`` go to
     :class:`CurrentDevice` (``watchdog_ms``, ``limits``...). POSIX only.
     """
@@ -232,7 +234,8 @@ class MotorPty:
         self.port = os.ttyname(self._slave)
         ctx = mp.get_context("fork")
         n = len(motor.i)
-        self._shared = ctx.Array("d", 9 + 3 + n + 4 + 3 * _MAX_TRIPS, lock=True)
+        self._shared = ctx.Array("d", 9 + 3 + n + 5 + 3 * _MAX_TRIPS, lock=True)
+        self._slip = 0.0
         self.started: float | None = None  # time.monotonic() at emulated time 0
         self._stop = ctx.Event()
         self._process = ctx.Process(target=self._serve, name=f"MotorPty {self.port}", daemon=True)
@@ -243,10 +246,10 @@ class MotorPty:
         with self._shared.get_lock():
             v = np.array(self._shared[:])
         count = int(v[14 + n])
-        rows = v[16 + n:].reshape(_MAX_TRIPS, 3)[:min(count, _MAX_TRIPS)]
+        rows = v[17 + n:].reshape(_MAX_TRIPS, 3)[:min(count, _MAX_TRIPS)]
         trips = tuple((_TRIP_ORDER[int(c)], int(k), float(t)) for c, k, t in rows)
         return Truth(v[:9].reshape(3, 3), v[9:12], v[12:12 + n], float(v[12 + n]), bool(v[13 + n]),
-                     float(v[15 + n]), trips)
+                     float(v[15 + n]), float(v[16 + n]), trips)
 
     def start(self) -> MotorPty:
         self.motor.sense()  # first calls (spline set-up, caches) here, inherited by the device process
@@ -276,12 +279,12 @@ class MotorPty:
 
     # -- the device process -------------------------------------------------------------------------------------
     def _publish(self) -> None:
-        m, n = self.motor, len(self.motor.i)
+        m = self.motor
         trips = self.device.trips[:_MAX_TRIPS]
         rows = [(_TRIP_ORDER.index(c), k, us * 1e-6) for c, k, us in trips]
         rows += [(0.0, 0.0, 0.0)] * (_MAX_TRIPS - len(rows))
         values = np.concatenate([m.R.ravel(), m.w, m.i, [m.t, float(m.enabled), len(self.device.trips),
-                                                         self.device.off_us * 1e-6], np.ravel(rows)])
+                                                         self.device.off_us * 1e-6, self._slip], np.ravel(rows)])
         with self._shared.get_lock():
             self._shared[:] = values.tolist()
 
@@ -318,6 +321,10 @@ class MotorPty:
         published = m.t
         while not self._stop.is_set():
             t = time.monotonic() - t0
+            if t > m.t + MAX_CATCH_UP:  # starved by the machine: let emulated time slip rather than burst
+                self._slip += t - (m.t + MAX_CATCH_UP)
+                t0 += t - (m.t + MAX_CATCH_UP)
+                t = m.t + MAX_CATCH_UP
             if master is not None and f.vanish_at is not None and t >= f.vanish_at:
                 os.close(master)
                 master = None

@@ -34,6 +34,7 @@ from pathlib import Path
 import numpy as np
 
 from .. import so3
+from ..control.controller import rotation_error
 from ..errors import ComputationError, bad_value
 from .backend import LinkError
 from .drive_link import DriveLink
@@ -42,16 +43,6 @@ from .serialport import NakError
 
 OMEGA_FILTER = 0.01  # s, time constant of the angular-velocity filter
 LOG_HEADER = "t_s,late_s,rx,ry,rz,wx,wy,wz,power_W,max_abs_current_A,stale\n"
-
-
-def log_near_identity(R: np.ndarray) -> np.ndarray:
-    """Rotation vector ``θ n`` of one rotation within π/2 of the identity, without :func:`spherestep.so3.log`'s
-    input checks (about 1 ms, too much for a 5 ms loop): ``v = vect(R) = n sin θ``, ``cos θ = (tr R − 1)/2``,
-    ``θ n = v θ / sin θ`` (exact, and well conditioned away from θ = π)."""
-    v = so3.vect(R)
-    s = float(np.linalg.norm(v))
-    theta = math.atan2(s, 0.5 * (R[0, 0] + R[1, 1] + R[2, 2] - 1.0))
-    return v * (theta / s) if s > 1e-300 else v
 
 
 class ServoFault(ComputationError):
@@ -155,7 +146,7 @@ def run_servo(link: DriveLink, estimate, control, *, duration: float, rate: floa
             if R_prev is not None:
                 dt = period if not report.times else max(t - report.times[-1], 1e-6)
                 beta = 1.0 - math.exp(-dt / OMEGA_FILTER)
-                w = (1 - beta) * w + beta * log_near_identity(R @ R_prev.T) / dt
+                w = (1 - beta) * w + beta * rotation_error(R @ R_prev.T) / dt
             R_prev = R
             currents = np.asarray(control(t, R, w), dtype=float)
             limits.check_setpoints(currents)
