@@ -137,3 +137,36 @@ def test_a_slow_host_is_stopped_by_the_device_watchdog(rig, monkeypatch):
 def test_session_needs_a_port_or_the_emulator(rig):
     with pytest.raises(InputError, match="port"):
         servo_session(rig["design"], hold(np.eye(3)), 1.0, sensors=rig["sensors"], model=rig["model"])
+
+
+def test_relay_plans_still_play_on_the_current_device(rig):
+    """`spherestep run`'s path (Serial, protocol version 1, play) against the current-mode device: each step's
+    coils carry ± the nominal current (1 A asked; 0.95 A reached, the 24 V / 24 Ω drive at its 0.95 duty limit),
+    the others nothing, and the run ends all off."""
+    from spherestep.commutation import Plan, Step, default_channel_map
+    from spherestep.hardware import EmulatedMotor, MotorPty, Serial, play
+
+    n = len(rig["design"].stator)
+    I3 = np.eye(3)
+    plan = Plan(steps=[Step(index=i, target=I3, achieved=I3, error=0.0, coils={i: 1, i + 5: -1}) for i in range(3)],
+                coil_count=n, channel_map=default_channel_map(n))
+    motor = EmulatedMotor(rig["design"], rig["model"], rig["sensors"], drive=rig["drive"])
+    seen = []
+    with MotorPty(motor, watchdog_ms=500) as dev:
+        link = Serial(dev.port)
+        original = link.hold
+
+        def hold_and_look(seconds):
+            original(seconds)
+            seen.append(dev.truth().i.copy())
+
+        link.hold = hold_and_look
+        report = play(plan, link, rate=5.0)
+        time.sleep(0.05)
+        final = dev.truth()
+    assert report.steps == 3 and report.device.protocol == 1 and report.device.channels == 2 * n
+    for i, currents in enumerate(seen[:3]):
+        assert currents[i] == pytest.approx(0.95, abs=0.02) and currents[i + 5] == pytest.approx(-0.95, abs=0.02)
+        others = np.delete(currents, [i, i + 5])
+        assert np.abs(others).max() < 0.05
+    assert not final.enabled and np.abs(final.i).max() < 1e-3

@@ -5,23 +5,36 @@
 :class:`ThermalLimits`, and always leaves them off; :func:`play` streams a commutation plan at a step rate.
 :mod:`~spherestep.hardware.protocol` is the wire format, :class:`Emulator`/:class:`PtyDevice` a device that
 speaks it on a pseudo-terminal. See ``docs/protocol.md``.
+
+Current mode (protocol version 2): :class:`CurrentDevice` is the device (PI current loops, limits, trips) the
+firmware's ``drive.cpp`` mirrors; :class:`DriveLink` the host side; :class:`EmulatedMotor`/:class:`MotorPty` the
+motor on a pseudo-terminal; :func:`run_servo` the fixed-rate loop, :func:`servo_session` a whole session on a
+port or the emulator. See ``docs/protocol.md`` and ``docs/hardware.md``.
 """
 
 from __future__ import annotations
 
-from . import protocol
+from . import protocol, protocol2
 from .backend import Backend, DeviceInfo, LinkError
 from .driver import CoilDriver, coil_masks
 from .dryrun import DryRun, Sent
 from .emulator import Emulator, Faults, PtyDevice
-from .limits import ThermalGuard, ThermalLimitError, ThermalLimits
+from .current_device import CurrentDevice
+from .drive_link import DeviceTrip, DriveInfo, DriveLink
+from .limits import CurrentLimits, ThermalGuard, ThermalLimitError, ThermalLimits, heating_step
+from .motor_emulator import EmulatedMotor, MotorFaults, MotorPty, Truth
 from .serialport import NakError, Serial
+from .servo import ServoFault, ServoReport, run_servo
+from .servo_parts import FieldTracker, ServoLaw, hold
+from .session import Session, servo_session, turn_reference
 from .simulated import Simulated
 from .stream import PlayReport, play
 from .transcript import Transcript
 
 __all__ = [
-    "Backend", "CoilDriver", "DeviceInfo", "DryRun", "Emulator", "Faults", "LinkError", "NakError", "PlayReport",
-    "PtyDevice", "Sent", "Serial", "Simulated", "ThermalGuard", "ThermalLimitError", "ThermalLimits", "Transcript",
-    "coil_masks", "play", "protocol",
+    "Backend", "CoilDriver", "CurrentDevice", "CurrentLimits", "DeviceInfo", "DeviceTrip", "DriveInfo", "DriveLink",
+    "DryRun", "EmulatedMotor", "Emulator", "Faults", "FieldTracker", "LinkError", "MotorFaults", "MotorPty",
+    "NakError", "PlayReport", "PtyDevice", "Sent", "Serial", "ServoFault", "ServoLaw", "ServoReport", "Session",
+    "Simulated", "ThermalGuard", "ThermalLimitError", "ThermalLimits", "Transcript", "Truth", "coil_masks",
+    "heating_step", "hold", "play", "protocol", "protocol2", "run_servo", "servo_session", "turn_reference",
 ]
