@@ -398,10 +398,10 @@ def test_design_commands_refuse_bad_input_in_one_line(tmp_path, capsys):
     bad = write(tmp_path, mutate(stator__cap_half_angle="95 deg"))
     for args, words in ((["design", "validate", str(bad)], "stator.cap_half_angle"),
                         (["design", "show", str(bad)], "stator.cap_half_angle"),
-                        (["design", "validate", str(tmp_path / "none.yaml")], "does not exist"),
+                        (["design", "validate", str(tmp_path / "none.yaml")], "must be an existing file"),
                         (["design", "new", str(tmp_path / "x.toml")], "written as YAML"),
                         (["design", "new", str(tmp_path / "y.yaml"), "--from", str(bad)], "stator.cap_half_angle"),
-                        (["design", "new", str(tmp_path)], "is a folder")):
+                        (["design", "new", str(tmp_path)], "must end in .yaml")):
         assert main(args) == 2, args
         assert words in one_line_error(capsys)
     assert not (tmp_path / "x.toml").exists() and not (tmp_path / "y.yaml").exists()

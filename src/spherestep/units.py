@@ -23,7 +23,14 @@ METRES_PER_UNIT: dict[str, float] = {
 }
 
 _UNIT_NAMES = ", ".join(u for u in METRES_PER_UNIT if u != '"')
-_LENGTH = re.compile(r"^\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*([a-zA-Z\"]*)\s*$")
+_QUANTITY = re.compile(r"^\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*(\S*)\s*$")
+
+
+def split_quantity(text: str) -> tuple[float, str] | None:
+    """``(number, unit)`` of a string ``"<number> <unit>"`` (``"12 in"``, ``"12in"``, ``"80°"``; the unit as
+    written, ``""`` when there is none), or None when ``text`` is not a number followed by one word."""
+    match = _QUANTITY.match(text) if isinstance(text, str) else None
+    return None if match is None else (float(match.group(1)), match.group(2))
 
 
 def length(value: float | str, name: str = "length", *, allow_zero: bool = False) -> float:
@@ -38,12 +45,12 @@ def length_and_unit(value: float | str, name: str = "length", *, allow_zero: boo
     if isinstance(value, (int, float)):
         metres, unit = float(value), "m"
     elif isinstance(value, str):
-        match = _LENGTH.match(value)
-        unit = match.group(2).lower() if match else ""
-        if not match or (unit and unit not in METRES_PER_UNIT):
+        quantity = split_quantity(value)
+        unit = quantity[1].lower() if quantity else ""
+        if quantity is None or (unit and unit not in METRES_PER_UNIT):
             raise bad_value(name, f"a length like '12 in' with unit one of {_UNIT_NAMES}", value)
         unit = {'"': "in", "inch": "in"}.get(unit, unit or "m")
-        metres = float(match.group(1)) * METRES_PER_UNIT[unit]
+        metres = quantity[0] * METRES_PER_UNIT[unit]
     else:
         raise bad_value(name, "a length such as 0.3 (metres) or \"12 in\"", value)
     if not math.isfinite(metres) or metres < 0 or (metres == 0 and not allow_zero):

@@ -9,18 +9,18 @@ message saying what was expected (the schema turns it into a :class:`DesignFileE
 from __future__ import annotations
 
 import math
-import re
 from typing import Any
 
+from .. import units
 from ..units import METRES_PER_UNIT
 
 LENGTH_UNITS = METRES_PER_UNIT
 ANGLE_UNITS = ("deg", "°", "rad")
 TESLA_UNITS = {"T": 1.0, "mT": 1e-3}
-_QUANTITY = re.compile(r"^\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*(\S*)\s*$")
 
 
 def show(value: Any) -> str:
+    """``repr(value)``, cut to 60 characters for a one-line message."""
     text = repr(value)
     return text if len(text) <= 60 else text[:57] + "..."
 
@@ -28,14 +28,16 @@ def show(value: Any) -> str:
 # --- quantities with units ---------------------------------------------------------------------------------
 
 def split_quantity(value: Any, what: str, example: str) -> tuple[float, str]:
-    """``(number, unit)`` of a string like ``"12 in"``; ValueError saying what was expected otherwise."""
-    match = _QUANTITY.match(value) if isinstance(value, str) else None
-    if match is None or not match.group(2):
+    """``(number, unit)`` of a string like ``"12 in"`` (:func:`spherestep.units.split_quantity`), the unit
+    required; ValueError saying what was expected otherwise."""
+    quantity = units.split_quantity(value)
+    if quantity is None or not quantity[1]:
         raise ValueError(f"must be {what} with its unit, like {example!r}; instead received {show(value)}")
-    return float(match.group(1)), match.group(2)
+    return quantity
 
 
 def parse_length(value: Any, *, allow_zero: bool = False) -> float:
+    """Metres of ``"<number> <length unit>"``; positive (or zero when ``allow_zero``)."""
     number, unit = split_quantity(value, "a length", "12 in")
     unit = unit.lower()
     if unit not in LENGTH_UNITS:
@@ -49,6 +51,7 @@ def parse_length(value: Any, *, allow_zero: bool = False) -> float:
 
 
 def parse_angle(value: Any) -> float:
+    """Radians of ``"<number> deg"`` (or ``°``) or ``"<number> rad"``."""
     number, unit = split_quantity(value, "an angle", "80 deg")
     unit = unit.lower()
     if unit not in ANGLE_UNITS:
@@ -60,6 +63,7 @@ def parse_angle(value: Any) -> float:
 
 
 def parse_tesla(value: Any) -> float:
+    """Tesla of a number or of ``"<number> T"`` / ``"<number> mT"``; positive."""
     if isinstance(value, (int, float)) and not isinstance(value, bool):
         tesla = float(value)
     else:
