@@ -45,7 +45,7 @@ def move(
 
     Example: [bold]spherestep move --axis 1,0.5,2 --angle 360 --fastest --mode servo --sensor-noise 0.02[/bold]
     """
-    from ..dynamics.move import move as drive
+    from ..dynamics import drive_turn as drive
 
     if time is not None and fastest:
         raise bad_value("--time", "left out with --fastest (one or the other)", time)

@@ -32,7 +32,7 @@ from ..control import DriveLimits, bang_bang_time, plan_turn
 from ..errors import bad_value
 from .ramped import RATES, pull_out_rate
 from .rotor import Rotor
-from .servo import NoisySensor, simulate_servo
+from .servo import NoisySensor, ServoRun, simulate_servo
 from .simulate import simulate
 from .tuning import tune
 
@@ -63,14 +63,16 @@ class DriveResult:
 @dataclass(frozen=True)
 class DriveComparison:
     """The three modes (``results``, in the order settled, ramped, servo[, servo on the damped rotor]), the
-    turn (``axis``, ``angle`` rad), the bang-bang lower bound ``bound`` (s) for the servo's rotor, and
-    ``pull_out_rate`` (steps/s)."""
+    turn (``axis``, ``angle`` rad), the bang-bang lower bound ``bound`` (s) for the servo's rotor,
+    ``pull_out_rate`` (steps/s) and the servo's run ``servo_run`` (for the report's figure:
+    ``dynamics.move.figure_drive(run.times, run.tracking_error, run.currents, run.power)``)."""
 
     results: tuple[DriveResult, ...]
     axis: np.ndarray
     angle: float
     bound: float
     pull_out_rate: float
+    servo_run: ServoRun | None = None
 
     def result(self, mode: str) -> DriveResult:
         for r in self.results:
@@ -139,6 +141,7 @@ def compare_drives(design, axis=DEMO_AXIS, angle: float = 2 * math.pi, model=Non
                                     "tried": [[r, bool(lost)] for r, lost in pull.tried]}))
 
     rotors = [("servo", Rotor.from_design(design))]
+    servo_run = None
     if damped_servo:
         rotors.append(("servo (tuned damping)", tuning.rotor))
     for k, (mode, rotor) in enumerate(rotors):
@@ -146,6 +149,7 @@ def compare_drives(design, axis=DEMO_AXIS, angle: float = 2 * math.pi, model=Non
         run = simulate_servo(design, traj, model, limits=limits, rotor=rotor,
                              sensor=NoisySensor(sensor_noise, rng=seed + k), settle=0.5)
         s = run.summary()
+        servo_run = run if k == 0 else servo_run
         results.append(DriveResult(mode, s["arrival_time_s"], float(so3.distance(run.orientations[-1], end)),
                                    float(run.tracking_error.max()), s["peak_power_W"], s["mean_power_W"],
                                    {"motion_time_s": traj.duration, "sensor_noise_deg": math.degrees(sensor_noise),
@@ -154,4 +158,4 @@ def compare_drives(design, axis=DEMO_AXIS, angle: float = 2 * math.pi, model=Non
                                     "peak_current_A": s["peak_current_A"],
                                     "reachable_fraction": s["reachable_fraction"]}))
     bound = bang_bang_time(model, start, n, angle, Rotor.from_design(design).inertia, limits)
-    return DriveComparison(tuple(results), n, float(angle), bound, pull.rate)
+    return DriveComparison(tuple(results), n, float(angle), bound, pull.rate, servo_run)

@@ -1,6 +1,6 @@
 """One turn driven one way, with its files: what ``spherestep move`` runs.
 
-:func:`move` turns the rotor by ``angle`` about ``axis`` from the stepper state nearest the identity with
+:func:`drive_turn` turns the rotor by ``angle`` about ``axis`` from the stepper state nearest the identity with
 ``mode`` ``"servo"`` (:func:`~spherestep.control.plan_turn` and :func:`~.servo.simulate_servo`; ``duration``
 sets the turn's time as a triangle profile of acceleration ``4θ/T²``, else the fastest turn within the
 guaranteed torque), ``"ramped"`` (relay steps at the pull-out rate, :mod:`.ramped`) or ``"settled"`` (today's
@@ -74,24 +74,10 @@ class Move:
         return "t_s,power_W\n" + "".join(f"{t:.6f},{p:.6f}\n" for t, p in zip(self.times, self.power))
 
     def figure(self):
-        """Error to the target (degrees, log scale), coil currents (A) and electrical power (W) against time."""
-        from matplotlib.figure import Figure
-
-        fig = Figure(figsize=(9, 7.5), layout="constrained")
-        ax1, ax2, ax3 = fig.subplots(3, 1, sharex=True)
-        ax1.semilogy(self.times, np.maximum(np.degrees(self.errors), 1e-5), color="C0")
-        ax1.set_ylabel("error to target (°)")
-        ax1.set_title(f"{self.mode}: {self.summary['angle_deg']:g}° turn, time {self.summary['time_s']:.3g} s, "
-                      f"final error {self.summary['final_error_deg']:.3g}°")
-        ax1.grid(alpha=0.3, which="both")
-        ax2.plot(self.times, self.currents, lw=0.7)
-        ax2.set_ylabel("coil currents (A)")
-        ax2.grid(alpha=0.3)
-        ax3.plot(self.times, self.power, color="C3", lw=0.8)
-        ax3.set_ylabel("electrical power (W)")
-        ax3.set_xlabel("time (s)")
-        ax3.grid(alpha=0.3)
-        return fig
+        """:func:`figure_drive` of this move."""
+        return figure_drive(self.times, self.errors, self.currents, self.power,
+                            f"{self.mode}: {self.summary['angle_deg']:g}° turn, time {self.summary['time_s']:.3g} s, "
+                            f"final error {self.summary['final_error_deg']:.3g}°")
 
     def write(self, out: str | Path) -> list[Path]:
         """``trajectory.csv``, ``currents.csv``, ``power.csv``, ``move.png`` and ``move.json`` into ``out``
@@ -110,7 +96,28 @@ class Move:
         return paths
 
 
-def move(design, axis, angle: float, *, mode: str = "servo", duration: float | None = None,
+def figure_drive(times, errors, currents, power, title: str = ""):
+    """Error to the target (degrees, log scale; ``errors`` in rad), coil currents (A) and electrical power (W)
+    against time (s): the figure of a driven run (``spherestep move``, the report's servo run)."""
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(9, 7.5), layout="constrained")
+    ax1, ax2, ax3 = fig.subplots(3, 1, sharex=True)
+    ax1.semilogy(times, np.maximum(np.degrees(errors), 1e-5), color="C0")
+    ax1.set_ylabel("error to target (°)")
+    ax1.set_title(title)
+    ax1.grid(alpha=0.3, which="both")
+    ax2.plot(times, currents, lw=0.7)
+    ax2.set_ylabel("coil currents (A)")
+    ax2.grid(alpha=0.3)
+    ax3.plot(times, power, color="C3", lw=0.8)
+    ax3.set_ylabel("electrical power (W)")
+    ax3.set_xlabel("time (s)")
+    ax3.grid(alpha=0.3)
+    return fig
+
+
+def drive_turn(design, axis, angle: float, *, mode: str = "servo", duration: float | None = None,
          sensor_noise: float = 0.0, model=None, limits: DriveLimits | None = None, seed: int = 0) -> Move:
     """Drive a turn of ``angle`` rad about ``axis`` (fixed frame) with ``mode`` (see the module); ``duration``
     (s) only for the servo (default: the fastest turn within the guaranteed torque); ``sensor_noise`` σ (rad)
