@@ -1,0 +1,127 @@
+"""Build the prototype's iron-core tables by the method of moments (magpylib-material-response) and store them.
+
+    OPENBLAS_NUM_THREADS=1 nice -n 5 python scripts/iron_tables.py table        # data/iron_pair_table.csv (~10 min)
+    OPENBLAS_NUM_THREADS=1 nice -n 5 python scripts/iron_tables.py convergence  # data/iron_convergence.csv
+    OPENBLAS_NUM_THREADS=1 nice -n 5 python scripts/iron_tables.py multibody    # data/iron_multibody.csv
+    OPENBLAS_NUM_THREADS=1 nice -n 5 python scripts/iron_tables.py fig6         # data/iron_fig6.csv
+
+Each file starts with ``#`` lines saying what produced it; times are wall-clock on the machine that ran it.
+"""
+
+from __future__ import annotations
+
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+from spherestep.magnetics import _iron as iron
+from spherestep.magnetics._ironmap import TABLE_NODES_DEG, pair_table
+from spherestep.motor import prototype
+from spherestep.motor.coil import iron_coil
+
+DATA = Path(__file__).resolve().parents[1] / "data"
+
+
+def _write(path: Path, header: str, names: list[str], rows: np.ndarray) -> None:
+    text = "".join(f"# {line}\n" for line in header.splitlines()) + ",".join(names) + "\n"
+    text += "".join(",".join(f"{v:.9g}" for v in r) + "\n" for r in rows)
+    tmp = path.with_suffix(".tmp")
+    tmp.write_text(text)
+    tmp.replace(path)
+    print("wrote", path, flush=True)
+
+
+def table(level: int = iron.IRON_LEVEL) -> None:
+    design, coil = prototype(), iron_coil()
+    t0 = time.perf_counter()
+    iron.core_solver(iron.CoreGeometry.of(design, coil), level)
+    t1 = time.perf_counter()
+    det, lin = pair_table(design, coil, level)
+    t2 = time.perf_counter()
+    _write(Path(__file__).resolve().parents[1] / "src" / "spherestep" / "data" / "iron_pair_table.csv",
+           f"Iron-core pair torques of the prototype (spherestep.magnetics._iron.pair_tables), MoM level {level}: "
+           f"{len(iron.core_solver(iron.CoreGeometry.of(design, coil), level).cells)} cells.\n"
+           f"One +1 rotor magnet at angle alpha from one iron coil's axis; torque about the sphere's centre (N m), "
+           f"positive away from the axis; linear per nominal current ({iron.CoreGeometry.of(design, coil).NI:.1f} "
+           f"ampere-turns).\nfactorisation {t1 - t0:.1f} s, {len(TABLE_NODES_DEG)} angles {t2 - t1:.1f} s. "
+           f"Produced by: python scripts/iron_tables.py table",
+           ["alpha_deg", "detent_Nm", "linear_Nm"], np.c_[TABLE_NODES_DEG, det, lin])
+
+
+def convergence(levels=(0, 1, 2)) -> None:
+    design, coil = prototype(), iron_coil()
+    a = np.array([2.0, 4.0, 6.0, 8.0, 10.0, 12.0, 14.0, 17.0, 20.0, 25.0])
+    rows = []
+    for level in levels:
+        t0 = time.perf_counter()
+        s = iron.core_solver(iron.CoreGeometry.of(design, coil), level)
+        t1 = time.perf_counter()
+        det, lin = iron.pair_tables(design, coil, np.radians(a), level)
+        t2 = time.perf_counter()
+        print(level, len(s.cells), t1 - t0, t2 - t1, flush=True)
+        rows += [[level, len(s.cells), t1 - t0, (t2 - t1) / len(a), ai, d, li] for ai, d, li in zip(a, det, lin)]
+        iron.core_solver.cache_clear()
+    _write(DATA / "iron_convergence.csv",
+           "Mesh convergence of the iron pair torques (MoM), prototype. Produced by: "
+           "python scripts/iron_tables.py convergence",
+           ["level", "cells", "factorise_s", "per_angle_s", "alpha_deg", "detent_Nm", "linear_Nm"], np.array(rows))
+
+
+def multibody(level: int = 0) -> None:
+    """Two neighbouring cores under the whole rotor: full solve against the sum of pair tables (same level)."""
+    from spherestep.magnetics._ironmap import IronTorqueMap
+    design, coil = prototype(), iron_coil()
+    v = design.stator.centers
+    k0 = int(np.argmin(v[:, 2]))
+    k1 = int(np.argsort(v @ v[k0])[-2])
+    coils = [k0, k1]
+    rng = np.random.default_rng(1)
+    from scipy.spatial.transform import Rotation
+    # orientations that put a pole 3-10 degrees from each core's axis (where the torques are large)
+    R = []
+    for i in range(4):
+        j = rng.integers(len(design.rotor))
+        target = Rotation.from_rotvec(rng.normal(size=3) * np.radians(6.0) / np.sqrt(3)).apply(v[coils[i % 2]])
+        base = Rotation.align_vectors(target[None], design.rotor.centers[j][None])[0]
+        R.append((Rotation.from_rotvec(target * rng.uniform(0, 2 * np.pi)) * base).as_matrix())
+    R = np.array(R)
+    det, lin = pair_table(design, coil, level, nodes_deg=TABLE_NODES_DEG)
+    model = IronTorqueMap.from_tables(design, coil, np.radians(TABLE_NODES_DEG), det, lin, level=level)
+    rows = []
+    for currents in ([0.0, 0.0], [1.0, 0.0], [1.0, -1.0]):
+        t0 = time.perf_counter()
+        full = iron.rotor_iron_torque(design, coil, coils, R, currents, level)
+        t1 = time.perf_counter()
+        c = np.zeros(len(design.stator))
+        c[coils] = currents
+        pair = model.torque_on(R, c, coils)
+        for k in range(len(R)):
+            rows.append([currents[0], currents[1], k, *full[k], *pair[k], t1 - t0])
+        print(currents, np.linalg.norm(full - pair, axis=1) / np.linalg.norm(full, axis=1), flush=True)
+    _write(DATA / "iron_multibody.csv",
+           f"Full MoM solve of cores {coils} together under all 92 rotor magnets (level {level}) against the sum "
+           f"of pair tables of the same level over those cores.\nProduced by: python scripts/iron_tables.py "
+           f"multibody. Torques N m, fixed frame, about the centre.",
+           ["c0", "c1", "orientation", "full_x", "full_y", "full_z", "pair_x", "pair_y", "pair_z", "solve_s"],
+           np.array(rows))
+    np.save(DATA / "iron_multibody_R.npy", R)
+
+
+def fig6(level: int = iron.IRON_LEVEL) -> None:
+    design, coil = prototype(), iron_coil()
+    x = np.arange(0.0, 0.0605, 0.0025)
+    Fd, Fl = iron.fig6_forces(design, coil, x, level=level)
+    g = design.radius + design.air_gap - iron.magnet_face_radius(design)
+    _write(DATA / "iron_fig6.csv",
+           f"Fig. 6 with the iron core (MoM level {level}): one +1 magnet translated by x at a {1e3 * g:.3f} mm face "
+           f"gap; force on the magnet (N), detent (coil off) and linear (per nominal current).\nProduced by: "
+           f"python scripts/iron_tables.py fig6",
+           ["x_m", "detent_Fx_N", "detent_Fz_N", "linear_Fx_N", "linear_Fz_N"],
+           np.c_[x, Fd[:, 0], Fd[:, 2], Fl[:, 0], Fl[:, 2]])
+
+
+if __name__ == "__main__":
+    what = sys.argv[1] if len(sys.argv) > 1 else "table"
+    {"table": table, "convergence": convergence, "multibody": multibody, "fig6": fig6}[what]()

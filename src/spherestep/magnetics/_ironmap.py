@@ -1,0 +1,161 @@
+"""The motor's torque model with iron-cored coils: two pair tables on the machinery of :class:`TorqueMap`.
+
+Each pole–coil pair with a linear core contributes (see :mod:`._iron`)
+
+    τ_jk(α, c) = τ_d(α) + p_j c_k τ_1(α)
+
+about the normal of the plane of ``v_k`` and ``w_j``: ``τ_d`` the detent (the magnet pulling on the iron it
+magnetises, the same for both polarities, present with the coil off and in failed coils), ``τ_1`` the winding
+plus the iron it magnetises, per nominal current. Both parts have the symmetry that makes :class:`TorqueMap`
+exact, so the model is two maps over the same poles and coils,
+
+    T(R, c) = D(R) + L(R) c,    D = TorqueMap(τ_d, all polarities +1).torque(R, 1),    L = TorqueMap(τ_1).K(R),
+
+with energies ``E = Σ_jk e_d(α_jk) + Σ_jk p_j c_k e_1(α_jk)`` from the splines' antiderivatives, so
+``T = −∂E/∂θ`` to rounding. A quadratic ``c²`` term would act between the winding and its own core only (no
+torque on the rotor) as long as the iron stays linear; :func:`iron_saturation` checks that it does.
+Pairwise superposition leaves out a magnet acting on another through a core and the cores on each other;
+``data/iron_multibody.csv`` measures that against a full solve (docs/magnetics.md).
+
+The prototype's tables (``spherestep/data/iron_pair_table.csv``, by ``python scripts/iron_tables.py table``) are
+read when the design and coil match it; any other geometry is solved on first use (minutes) and cached.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from functools import lru_cache
+from importlib import resources
+
+import numpy as np
+
+from ..errors import bad_value
+from ..motor.coil import CoilSpec, iron_coil
+from ..statics import TorqueModelBase
+from . import _iron
+from ._table import TorqueMap
+
+TABLE_NODES_DEG = np.concatenate([np.arange(0.0, 30.0, 1.0), np.arange(30.0, 60.0, 2.0), np.arange(60.0, 180.1, 5.0)])
+TABLE_FILE = "iron_pair_table.csv"
+
+
+def pair_table(design, coil: CoilSpec, level: int = _iron.IRON_LEVEL, nodes_deg=TABLE_NODES_DEG):
+    """``(τ_d, τ_1)`` (N·m) at ``nodes_deg`` by the method of moments, with the values at 0° and 180° set to
+    their symmetric value 0 (the solve gives below 3e-3 N·m there)."""
+    det, lin = _iron.pair_tables(design, coil, np.radians(nodes_deg), level)
+    ends = np.isclose(nodes_deg, 0.0) | np.isclose(nodes_deg, 180.0)
+    det[ends] = 0.0
+    lin[ends] = 0.0
+    return det, lin
+
+
+def _key(design, coil: CoilSpec, level: int) -> tuple:
+    return (round(design.radius, 9), round(design.magnet_diameter, 9), round(design.magnet_length, 9),
+            round(design.coil_diameter, 9), round(design.coil_length, 9), round(design.air_gap, 9),
+            round(design.remanence, 6), repr(_iron.CoreGeometry.of(design, coil)), level)
+
+
+@lru_cache(maxsize=8)
+def _tables(key: tuple, design, coil: CoilSpec, level: int):
+    from ..motor import prototype
+    if key == _key(prototype(), iron_coil(), _iron.IRON_LEVEL):
+        path = resources.files("spherestep.data") / TABLE_FILE
+        if path.is_file():
+            arr = np.loadtxt(path.open(), delimiter=",", comments="#", skiprows=1, ndmin=2)
+            return np.radians(arr[:, 0]), arr[:, 1], arr[:, 2]
+    det, lin = pair_table(design, coil, level)
+    return np.radians(TABLE_NODES_DEG), det, lin
+
+
+@dataclass(frozen=True, eq=False)
+class IronTorqueMap(TorqueModelBase):
+    """Torque model of a stator with iron-cored coils (see the module docstring): a
+    :class:`~spherestep.statics.TorqueModel` with a detent, ``torque(R, 0) ≠ 0``.
+
+    ``detent`` and ``linear`` are :class:`TorqueMap` objects on the same poles and coils; ``coil`` the coil spec.
+    """
+
+    detent: TorqueMap
+    linear: TorqueMap
+    coil: CoilSpec
+
+    @classmethod
+    def from_tables(cls, design, coil: CoilSpec, nodes, tau_detent, tau_linear, level: int = _iron.IRON_LEVEL):
+        """The model of ``design`` from pair tables ``τ_d``, ``τ_1`` (N·m) at ``nodes`` (rad, 0…π)."""
+        poles = design.rotor.centers.copy()
+        coils = design.stator.centers.copy()
+        detent = TorqueMap(poles, np.ones(len(poles)), coils, (), np.asarray(nodes), np.asarray(tau_detent), level)
+        linear = TorqueMap(poles, design.polarity.astype(float), coils, tuple(design.failed_coils),
+                           np.asarray(nodes), np.asarray(tau_linear), level)
+        return cls(detent, linear, coil)
+
+    @property
+    def coil_count(self) -> int:
+        return self.linear.coil_count
+
+    @property
+    def failed(self) -> tuple[int, ...]:
+        return self.linear.failed
+
+    def subset(self, coils) -> "IronTorqueMap":
+        """The same model with only the cores ``coils`` present (indices into the stator)."""
+        idx = np.asarray(coils, dtype=int)
+        failed = tuple(int(np.nonzero(idx == k)[0][0]) for k in self.failed if k in idx)
+
+        def cut(m: TorqueMap, failed_):
+            return TorqueMap(m.poles, m.polarity, m.coils[idx], failed_, m.nodes, m.tau, m.meshing)
+
+        return IronTorqueMap(cut(self.detent, ()), cut(self.linear, failed), self.coil)
+
+    def torque_on(self, R, currents, coils) -> np.ndarray:
+        """Torque (N·m) with only the cores ``coils`` present, their currents taken from ``currents (N,)``."""
+        idx = np.asarray(coils, dtype=int)
+        return self.subset(idx).torque(R, np.asarray(currents, dtype=float)[..., idx])
+
+    def _ones(self, R) -> np.ndarray:
+        lead = np.shape(R)[:-2]
+        return np.ones(lead + (self.coil_count,))
+
+    def detent_torque(self, R) -> np.ndarray:
+        """``D(R)`` (N·m, fixed frame): the torque with every coil off."""
+        return self.detent.torque(R, self._ones(R))
+
+    def torque(self, R, currents) -> np.ndarray:
+        """``D(R) + L(R) c`` (N·m, fixed frame, about the centre), ``(K, 3)`` or ``(3,)``."""
+        c = self.as_currents(currents)
+        return self.detent.torque(R, self._ones(R)) + self.linear.torque(R, c)
+
+    def energy(self, R, currents) -> np.ndarray:
+        """``Σ e_d(α_jk) + Σ p_j c_k e_1(α_jk)`` (J), zero with every pole opposite every coil."""
+        c = self.as_currents(currents)
+        return self.detent.energy(R, self._ones(R)) + self.linear.energy(R, c)
+
+    def torque_matrix(self, R, currents=None) -> np.ndarray:
+        """``∂T/∂c = L(R)`` (N·m per nominal current), ``(3, N)`` or ``(K, 3, N)``; independent of ``currents``."""
+        return self.linear.torque_matrix(R)
+
+    def torque_reference(self, currents) -> np.ndarray:
+        """``max|τ_d| + max|τ_1| Σ|c_k|`` (N·m): positive with every coil off, because of the detent."""
+        c = np.asarray(currents, dtype=float)
+        return float(np.max(np.abs(self.detent.tau))) + self.linear.torque_reference(c)
+
+
+def iron_model(design, coil: CoilSpec | None = None, level: int = _iron.IRON_LEVEL):
+    """The torque model of ``design`` with coils built as ``coil`` (default the design's ``coil`` if it has
+    one, else :func:`~spherestep.motor.coil.iron_coil`): an :class:`IronTorqueMap` for an iron core, today's
+    air-core :class:`TorqueMap` for ``core="air"`` (at the coil's ampere-turns; ``air_coil()`` reproduces it
+    exactly)."""
+    coil = getattr(design, "coil", None) if coil is None else coil
+    coil = iron_coil() if coil is None else coil
+    if not isinstance(coil, CoilSpec):
+        raise bad_value("coil", "a spherestep.motor.coil.CoilSpec", type(coil).__name__)
+    if coil.core == "air":
+        tmap = TorqueMap.build(design)
+        ni = coil.nominal_ampere_turns(design.coil_diameter, design.coil_length)
+        if math.isclose(ni, design.coil_ampere_turns, rel_tol=1e-12):
+            return tmap
+        return TorqueMap(tmap.poles, tmap.polarity, tmap.coils, tmap.failed, tmap.nodes,
+                         tmap.tau * (ni / design.coil_ampere_turns), tmap.meshing)
+    nodes, det, lin = _tables(_key(design, coil, level), design, coil, level)
+    return IronTorqueMap.from_tables(design, coil, nodes, det, lin, level)
