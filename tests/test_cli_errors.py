@@ -172,8 +172,8 @@ def _make_env(base: Path):
 
 
 def _with_tolerance(text: str, value: str) -> str:
-    lines = [line for line in text.splitlines() if not line.lstrip().startswith("tol")]
-    return "\n".join(lines) + f"\ntol: {value}\n"
+    lines = [line for line in text.splitlines() if not line.lstrip().startswith("tolerance")]
+    return "\n".join(lines) + f"\ntolerance: {value}\n"
 
 
 # -- the table ---------------------------------------------------------------------------------------------------
@@ -325,6 +325,8 @@ def _cases() -> list[tuple[str, list[str]]]:
             cases.append((f"{name}--axis[{axis}]", [*argv, "--axis", axis]))
     for name, argv in DESIGN_COMMANDS.items():
         for design in BAD_DESIGNS:
+            if design == "deep" and name not in ("design-validate", "plan"):
+                continue  # ~10 s each for PyYAML to give up; the loader is shared, two commands show it
             cases.append((f"{name}-design[{design}]", [a.replace("{d}", f"{{design:{design}}}") for a in argv]))
     for plan in [*PLAN_MISTAKES, "not-json", "not-utf8"]:
         cases.append((f"run-plan[{plan}]", ["run", f"{{plan:{plan}}}", "--rate", "5", "--dry-run"]))
@@ -404,8 +406,7 @@ def test_stale_temporary_files_of_a_killed_run_are_removed(tmp_path, capsys):
 
 
 def test_no_arguments_prints_usage_and_version_works():
-    for argv, code in ((["spherestep"], 0), (["spherestep", "--version"], 0), (["spherestep", "design"], 0),
-                       (["spherestep", "plan", "--axis", "0,0,1", "--angle", "nan"], 2),
+    for argv, code in ((["spherestep"], 0), (["spherestep", "--version"], 0),
                        (["spherestep", "packing", "cube", "--out", "/dev/null"], 2)):
         done = subprocess.run([sys.executable, "-c", "from spherestep.cli import main; main()", *argv[1:]],
                               capture_output=True, text=True, timeout=120)

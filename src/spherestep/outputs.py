@@ -88,8 +88,6 @@ def output_file(path: str | os.PathLike, name: str = "--out", *, suffixes: tuple
     file = Path(path)
     if str(path) == "" or file.name in ("", ".", ".."):
         raise InputError(f"{name} {str(path)!r} is not a file name; give one such as out{suffixes[0] if suffixes else ''}")
-    if suffixes and file.suffix.lower() not in suffixes:
-        raise InputError(f"{name} {str(file)!r} must end in {' or '.join(suffixes)}")
     if file.is_dir():
         raise InputError(f"{name} {str(file)!r} is a folder; give a file name such as "
                          f"{str(file / ('out' + (suffixes[0] if suffixes else '')))!r}")
@@ -103,6 +101,8 @@ def output_file(path: str | os.PathLike, name: str = "--out", *, suffixes: tuple
                              "name")
         if force is False:
             raise InputError(f"{name} {str(file)!r} exists; give --force to overwrite it, or choose another name")
+    if suffixes and file.suffix.lower() not in suffixes:
+        raise InputError(f"{name} {str(file)!r} must end in {' or '.join(suffixes)}")
     above = _file_above(file)
     if above is not None:
         raise InputError(f"{name} {str(file)!r} lies under {str(above)!r}, which is a file; give a file in a folder")

@@ -10,7 +10,7 @@ from pathlib import Path
 import typer
 from rich.console import Console
 
-from ..errors import bad_value
+from ..errors import InputError, bad_value
 
 console = Console(width=None if sys.stdout.isatty() else 120, stderr=False)
 
@@ -81,14 +81,23 @@ def design_from(path: Path | None, name: str = "--design"):
     return prototype() if path is None else MotorDesign.load(input_file(path, name))
 
 
-def usable(design, option: str = "--design"):
-    """``design`` if it can step; otherwise an InputError naming ``option`` with the reasons and the fields to
-    change (:func:`spherestep.motor.diagnosis.unusable_reasons`)."""
+def usable(design, option: str = "--design", path: Path | None = None):
+    """``design`` if it can step; otherwise an InputError naming ``option`` (and the file ``path`` it came from,
+    with the file's field names) that says why and what to change
+    (:func:`spherestep.motor.diagnosis.unusable_reasons`)."""
     from ..motor.diagnosis import unusable_reasons
 
-    reasons = unusable_reasons(design)
+    if path is None:
+        reasons = unusable_reasons(design)
+    else:
+        from ..design_file import file_field
+
+        reasons = unusable_reasons(design, lambda name: file_field(name) or name)
     if reasons:
-        raise bad_value(option, f"a design that can step, but {'; '.join(reasons)}", design.name)
+        where = f"{option} {str(path)!r}" if path is not None else f"{option} (design {design.name!r})"
+        error = InputError(f"{where}: the design cannot step: {'; '.join(reasons)}")
+        error.field = option
+        raise error
     return design
 
 

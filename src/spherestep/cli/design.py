@@ -59,7 +59,7 @@ def validate(file: Path = typer.Argument(..., help="Design file (.yaml, .yml or 
     """
     from ..motor import MotorDesign
 
-    design = usable(MotorDesign.load(input_file(file, "FILE")), "FILE")
+    design = usable(MotorDesign.load(input_file(file, "FILE")), "FILE", file)
     print(f"valid: {len(design.rotor)} poles, {len(design.stator)} coils")
 
 

@@ -157,9 +157,6 @@ def explore(
                                TimeElapsedColumn, TimeRemainingColumn)
 
     from ..explore.build import Limits
-    from ..explore.outputs import propose  # pandas, pyarrow and Dask load only for this command
-    from ..explore.run import dask_client, run_sweep
-    from ..explore.store import ResultStore
     from ..outputs import output_folder
 
     grid = build_grid(quick, rotors, stators, rotor_levels, stator_levels, caps, tols, primary_ratio, same_family,
@@ -178,6 +175,10 @@ def explore(
         if (out / sub).exists() and not (out / sub).is_dir():
             raise InputError(f"--out {str(out)!r} holds a file named {sub!r} where the sweep keeps a folder; move it "
                              "or give another --out")
+    from ..explore.outputs import propose  # pandas, pyarrow and Dask load once the command line is known good
+    from ..explore.run import dask_client, run_sweep
+    from ..explore.store import ResultStore
+
     store = ResultStore(out / "results")
     show = not (quiet or as_json)
     columns = (SpinnerColumn(), TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(),

@@ -40,7 +40,7 @@ def forces(
     if seed < 0:
         raise bad_value("--seed", "a whole number ≥ 0", seed)
     out = output_folder(out, "--out")
-    design = usable(design_from(design_path))
+    design = usable(design_from(design_path), "--design", design_path)
     st = design.states()
     with console.status("simulating the Fig. 6 curve and calibrating", spinner="dots") if not as_json \
             else nullcontext():

@@ -107,10 +107,10 @@ def demo(
     from ..commutation import turn
     from ..motor import prototype
     from ..outputs import Outputs, output_folder
-    from ..report import write_report  # plotly loads only when a report is written
 
     out = output_folder(out, "--out")
     axis_vec = parse_vector(axis, "--axis")
+    from ..report import write_report  # plotly loads once the command line is known to be good
     files = Outputs(out, PLAN_FILES + SIMULATION_FILES + ("report.html", "summary.json"))
     with files, Progress(SpinnerColumn(), TextColumn("{task.description}"), TimeElapsedColumn(), console=console,
                          disable=quiet or as_json, transient=True) as progress:
@@ -180,7 +180,7 @@ def plan(
 
     out = output_folder(out, "--out")
     axis_vec = parse_vector(axis, "--axis")
-    design = usable(design_from(design_path))
+    design = usable(design_from(design_path), "--design", design_path)
     result = turn(design, axis_vec, angle, steps)
     files = Outputs(out, PLAN_FILES)
     with files:

@@ -29,11 +29,11 @@ def report(
 
     from ..commutation import turn
     from ..outputs import Outputs, output_file
-    from ..report import write_report  # plotly loads only for this command
 
     out = output_file(out, "--out", suffixes=(".html", ".htm"))
     axis_vec = parse_vector(axis, "--axis")
-    design = usable(design_from(file, "FILE"), "FILE")
+    design = usable(design_from(file, "FILE"), "FILE", file)
+    from ..report import write_report  # plotly loads once the command line is known to be good
     with Progress(SpinnerColumn(), TextColumn("{task.description}"), TimeElapsedColumn(), console=console,
                   disable=quiet or as_json, transient=True) as progress:
         task = progress.add_task("enumerating stepper states", total=None)

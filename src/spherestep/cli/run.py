@@ -72,7 +72,7 @@ def _simulated(design_path, plan):
     if len(design.stator) != plan.coil_count:
         raise bad_value("--design", f"the design the plan was made for ({plan.coil_count} coils)",
                         f"a design with {len(design.stator)} coils")
-    design = usable(design)
+    design = usable(design, "--design", design_path)
     model = torque_map(design)
     tuning = tune(design, model)
     return Simulated(design, model, plan.steps[0].achieved, rotor=tuning.rotor, dt=tuning.dt)

@@ -76,10 +76,7 @@ def simulate(
     if closed and planner != "geometric":
         raise bad_value("--planner", "geometric with --noise or --missed (the closed loop re-plans with the "
                         "geometric rule); drop --planner, or --noise and --missed for an open-loop run", planner)
-    from .. import plots
     from ..commutation import turn, turn_targets
-    from ..dynamics import run_closed_loop, tune
-    from ..magnetics import torque_map
     from ..outputs import Outputs, output_folder
 
     out = output_folder(out, "--out")
@@ -91,8 +88,11 @@ def simulate(
         raise bad_value("--failed-coils", f"coil numbers 0..{len(design.stator) - 1}", bad)
     if failed:
         design = design.without_coils(failed)
-    design = usable(design, "--design" if not failed else "--design/--failed-coils")
+    design = usable(design, "--design" if not failed else "--design/--failed-coils", design_path)
     targets = turn_targets(design, axis_vec, angle, steps)  # checked before the torque map is built
+    from .. import plots  # matplotlib and magpylib load once the command line is known to be good
+    from ..dynamics import run_closed_loop, tune
+    from ..magnetics import torque_map
     with console.status("building the torque map and tuning the rotor"):
         physics = torque_map(design)
         tuning = tune(design, physics)
