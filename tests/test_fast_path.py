@@ -102,7 +102,8 @@ def test_hessian_matches_finite_differences(model, count):
 
 
 def test_threads_give_identical_results(proto, model):
-    """ducc0 with 1 and 2 threads: the same numbers (each point is synthesised independently)."""
+    """ducc0 with 1 and 2 threads, and BLAS with 1 and 2 threads: the same numbers (each point is synthesised
+    independently; BLAS only reorders sums)."""
     two = MotorPotential(proto, nthreads=2)
     rng = np.random.default_rng(5)
     R = so3.random(BIG, rng)
@@ -111,6 +112,12 @@ def test_threads_give_identical_results(proto, model):
         np.testing.assert_allclose(a, b, rtol=1e-15, atol=1e-15 * np.max(np.abs(b)))
     np.testing.assert_allclose(model.torque_matrix(R), two.torque_matrix(R), rtol=1e-15,
                                atol=1e-15 * np.max(np.abs(two.torque_matrix(R))))
+    from threadpoolctl import threadpool_limits
+
+    with threadpool_limits(limits=2, user_api="blas"):
+        blas_two = model.evaluate(R, c, 2)
+    for a, b in zip(model.evaluate(R, c, 2), blas_two):
+        np.testing.assert_allclose(a, b, rtol=1e-14, atol=1e-14 * np.max(np.abs(b)))
 
 
 def test_fast_false_is_the_exact_form(proto, model):

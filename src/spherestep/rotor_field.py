@@ -141,33 +141,38 @@ class RotorField:
     def _harmonic(self, x: np.ndarray, order: int, value: bool):
         from ducc0.sht import synthesis_general
 
-        rho = np.hypot(x[:, 0], x[:, 1])  # sin θ, accurate near the poles (unlike √(1 − z²))
+        rho = np.sqrt(x[:, 0] * x[:, 0] + x[:, 1] * x[:, 1])  # sin θ, accurate near the poles (unlike √(1 − z²))
         z = x[:, 2]
+        loc = np.empty((len(x), 2))
+        np.arctan2(rho, z, out=loc[:, 0])
         phi = np.arctan2(x[:, 1], x[:, 0])
-        loc = np.stack([np.arctan2(rho, z), np.where(phi < 0, phi + 2 * np.pi, phi)], axis=-1)
+        loc[:, 1] = np.where(phi < 0, phi + 2 * np.pi, phi)
         common = dict(lmax=self.lmax, loc=loc, epsilon=self.epsilon, nthreads=self.nthreads)
         F = synthesis_general(alm=self.alm, spin=0, **common)[0] if value else None
         if order == 0:
             return F, None, None
-        sin_t, cos_t = rho, z
-        on_axis = rho == 0.0
+        on_axis = rho == 0.0  # there φ = 0 (arctan2(0, 0)), as in loc
         safe = np.where(on_axis, 1.0, rho)
-        cos_p, sin_p = np.where(on_axis, 1.0, x[:, 0] / safe), x[:, 1] / safe  # φ = 0 on the axis, as in loc
-        e_theta = np.stack([cos_t * cos_p, cos_t * sin_p, -sin_t], axis=-1)
-        e_phi = np.stack([-sin_p, cos_p, np.zeros_like(phi)], axis=-1)
-        d = synthesis_general(alm=self.alm, spin=1, mode="DERIV1", **common)
-        g = d[0][:, None] * e_theta + d[1][:, None] * e_phi
+        cos_p, sin_p = np.where(on_axis, 1.0, x[:, 0] / safe), x[:, 1] / safe
+        d_theta, d_phi = synthesis_general(alm=self.alm, spin=1, mode="DERIV1", **common)
+        # g = ∂_θF θ̂ + (∂_φF / sin θ) φ̂, θ̂ = (cos θ cos φ, cos θ sin φ, −sin θ), φ̂ = (−sin φ, cos φ, 0)
+        a = d_theta * z
+        g = np.empty_like(x)
+        g[:, 0] = a * cos_p - d_phi * sin_p
+        g[:, 1] = a * sin_p + d_phi * cos_p
+        np.multiply(d_theta, -rho, out=g[:, 2])
         if order == 1:
             return F, g, None
         lap = synthesis_general(alm=self._laplacian_alm, spin=0, **common)[0]
         q, u = synthesis_general(alm=self._spin2_alm, spin=2, mode="GRAD_ONLY", **common)
+        e_theta = np.stack([z * cos_p, z * sin_p, -rho], axis=-1)
+        e_phi = np.stack([-sin_p, cos_p, np.zeros_like(rho)], axis=-1)
         tt = e_theta[:, :, None] * e_theta[:, None, :]
         pp = e_phi[:, :, None] * e_phi[:, None, :]
         tp = e_theta[:, :, None] * e_phi[:, None, :]
         hess = (0.5 * lap[:, None, None] * (tt + pp) + SPIN2_SIGN * 0.5 * q[:, None, None] * (tt - pp)
                 + SPIN2_SIGN * 0.5 * u[:, None, None] * (tp + np.swapaxes(tp, 1, 2)))
         return F, g, (lap, hess)
-
 
 
 def threads(n) -> int:
