@@ -1,15 +1,23 @@
-"""Frames per second through a pseudo-terminal: host Serial back end ↔ Python emulator, side by side.
+"""Frames per second through a pseudo-terminal: host Serial back end ↔ Python emulator, side by side; then the
+current mode (protocol version 2) against the emulated motor.
 
-Each row: median over REPEATS rounds of FRAMES acknowledged commands (stop-and-wait, so one frame in flight),
-and its ratio to the SET round trip; then how late ``play`` starts its steps when it keeps a RATE Hz
-schedule. Run: ``.venv/bin/python benchmarks/bench_hardware.py``.
+Relay mode, each row: median over REPEATS rounds of FRAMES acknowledged commands (stop-and-wait, so one frame
+in flight), and its ratio to the SET round trip; then how late ``play`` starts its steps when it keeps a RATE Hz
+schedule. Current mode (:func:`servo`): the per-frame costs side by side (CRC table vs bit by bit, encode and
+parse, one device control step), ``DRIVE`` round trips per second against the emulated motor (29 coils, 8
+magnetometers, the device in its own process), and whole sessions at 200 Hz: holding a pose, the 360° turn
+about (1, 0.5, 2) in 2.4 s, and the fault drill (time from each injected fault to all coils off). The machine's
+load average is printed with them: on a shared 2-core machine the loop rate is the machine's, not the code's.
+Run: ``.venv/bin/python benchmarks/bench_hardware.py`` (``--servo`` for the current mode only).
 """
 
 from __future__ import annotations
 
+import math
 import os
 import platform
 import statistics
+import sys
 import time
 
 import numpy as np
@@ -76,5 +84,102 @@ def main() -> None:
           f"{statistics.median(lags) * 1000:.2f} ms (median of {REPEATS} runs; max {max(lags) * 1000:.2f} ms)")
 
 
+def servo() -> None:
+    from _timing import median_seconds
+
+    from spherestep import so3
+    from spherestep.control import DriveLimits
+    from spherestep.hardware import CurrentDevice, DriveLink, EmulatedMotor, MotorFaults, MotorPty, hold, \
+        servo_session, turn_reference
+    from spherestep.hardware.protocol import _shift8
+    from spherestep.hardware.protocol2 import MAX_FRAME2, encode_block, frame_bytes, parse_state
+    from spherestep.magnetics import torque_map
+    from spherestep.motor import prototype
+    from spherestep.sensing import default_array
+
+    def crc_bitwise(data: bytes) -> int:
+        crc = 0xFFFF
+        for byte in data:
+            crc = _shift8(crc ^ (byte << 8))
+        return crc
+
+    design = prototype()
+    model, sensors, drive = torque_map(design), default_array(design, 8), DriveLimits()
+    n, S = len(design.stator), len(sensors)
+    answer = encode(0, "ACK", "DRIVE", "00000000", "0", encode_block(np.arange(n)), encode_block(np.arange(3 * S)),
+                    max_frame=MAX_FRAME2)
+    body = answer[1:-1]
+    motor = EmulatedMotor(design, model, sensors, drive=drive)
+    device = CurrentDevice(motor, n, S)
+    device.receive(encode(0, "HELLO", 2), 0)
+    device.receive(encode(1, "DRIVE", encode_block(np.full(n, 100)), max_frame=MAX_FRAME2), 0)
+    costs = {
+        "crc16, table (244-byte answer)": median_seconds(200, crc16, answer[1:-7]),
+        "crc16, bit by bit (same)": median_seconds(50, crc_bitwise, answer[1:-7]),
+        "encode DRIVE (29 coils)": median_seconds(200, lambda: encode(1, "DRIVE", encode_block(np.zeros(n)),
+                                                                      max_frame=MAX_FRAME2)),
+        "decode + parse the answer": median_seconds(200, lambda: parse_state(decode(body, MAX_FRAME2).args[1:], n, S,
+                                                                               8e-6)),
+        "device control step (Python)": median_seconds(200, device.step, 1000),
+        "motor: coils over one period": median_seconds(200, motor._advance_coils, motor.period),
+        "motor: magnetometers (sense)": median_seconds(200, motor.sense),
+    }
+    load = os.getloadavg()
+    print(f"\n# bench_hardware --servo  {time.strftime('%Y-%m-%d')}  {platform.machine()}  {os.cpu_count()} cores  "
+          f"Python {platform.python_version()}  load average {load[0]:.1f} {load[1]:.1f} {load[2]:.1f}")
+    sizes = frame_bytes(n, S)
+    print(f"frame bytes ({n} coils, {S} sensors): DRIVE {sizes['drive']}, answer {sizes['answer']}, round trip "
+          f"{sizes['round_trip']}; at 115200 baud (10 bits a byte) at most "
+          f"{115200 / 10 / sizes['round_trip']:.1f} round trips/s")
+    base = costs["crc16, table (244-byte answer)"]
+    print(f"{'per frame':<34} {'median µs':>10} {'ratio to CRC':>13}")
+    for name, sec in costs.items():
+        print(f"{name:<34} {sec * 1e6:>10.1f} {sec / base:>13.2f}")
+
+    with MotorPty(EmulatedMotor(design, model, sensors, drive=drive), watchdog_ms=1000) as dev, \
+            DriveLink(dev.port, timeout=0.5) as link:
+        block = np.zeros(n)
+        rounds = []
+        for _ in range(REPEATS + 1):
+            t = time.perf_counter()
+            for _ in range(200):
+                link.drive(block)
+            rounds.append(200 / (time.perf_counter() - t))
+        print(f"DRIVE round trips over pty against the emulated motor: {statistics.median(rounds[1:]):,.0f}/s "
+              f"(median of {REPEATS} rounds of 200; min {min(rounds[1:]):,.0f}, max {max(rounds[1:]):,.0f})")
+
+    def session(reference, duration, **options):
+        return servo_session(design, reference, duration, emulate=True, sensors=sensors, model=model, drive=drive,
+                             **options)
+
+    target = so3.exp([0.002, -0.001, 0.003])
+    turning = turn_reference(np.eye(3), (1.0, 0.5, 2.0), 2 * math.pi, 2.4, delay=0.2)
+    print(f"{'session (200 Hz asked)':<44} {'rate Hz':>8} {'missed':>7} {'outcome':>8} {'error °':>9}")
+    for how, extra in (("pty", dict(max_late=0.2, watchdog_ms=250)), ("lockstep", dict(lockstep=True))):
+        s = session(hold(target), 3.0, R0=np.eye(3), **extra)
+        held = max(math.degrees(so3.distance(tr.R, target)) for t, tr in s.truth if t > 1.0)
+        print(f"{'hold 3 s, max error after 1 s, ' + how:<44} {s.report.rate:>8.0f} {s.report.missed:>7} "
+              f"{s.report.outcome:>8} {held:>9.4f}")
+        s = session(turning, 3.0, **extra)
+        print(f"{'360° about (1,0.5,2) in 2.4 s, error at 3 s, ' + how:<44} {s.report.rate:>8.0f} "
+              f"{s.report.missed:>7} {s.report.outcome:>8} {math.degrees(s.final_error()):>9.4f}")
+    at = 1.0  # mid-turn, on the coil carrying the most current (index −1)
+    drill = {"open coil": MotorFaults(open_coil=(-1, at)), "coil stuck at full current": MotorFaults(stuck_coil=(-1, at)),
+             "frozen current sense": MotorFaults(frozen_reading=(-1, at)),
+             "magnetometer stops": MotorFaults(sensor_stops=(3, at)),
+             "magnetometer garbage": MotorFaults(sensor_garbage=(5, at)),
+             "link vanishes": MotorFaults(vanish_at=at), "link deaf": MotorFaults(deaf_at=at)}
+    print(f"{'fault at 1.0 s of the turn, over pty':<34} {'outcome':>8} {'to all off, ms':>15} (watchdog 100 ms)")
+    off = 0
+    for name, faults in drill.items():
+        s = session(turning, 1.5, faults=faults, max_late=0.09)
+        latency = (s.final.off_at - at) * 1000
+        off += (0 <= latency <= 100) and not s.final.enabled
+        print(f"{name:<34} {s.report.outcome:>8} {latency:>15.1f}")
+    print(f"all coils off within the watchdog period: {off} of {len(drill)}")
+
+
 if __name__ == "__main__":
-    main()
+    if "--servo" not in sys.argv:
+        main()
+    servo()

@@ -48,6 +48,17 @@ class DriveInfo:
     field_lsb: float
 
 
+def device_info(ack: Frame, port: str) -> DriveInfo:
+    """The :class:`DriveInfo` in an ``ACK,HELLO,2,...`` frame; :class:`LinkError` if it is not one."""
+    d = ack.args[1:]
+    nums = [parse_decimal(x, 9) for x in d[:8]] if len(d) == 9 else [None]
+    if None in nums or nums[0] != VERSION2 or not nums[1] or not nums[3] or not nums[4]:
+        raise LinkError(f"device on {port} answered HELLO,2 with {','.join(d)!r}; expected version 2, coils, "
+                        "sensors, watchdog_ms, period_us, max_mA, max_W, field_nT, name")
+    _, coils, sensors, wd, period, ma, watts, lsb = nums
+    return DriveInfo(d[8], coils, sensors, wd / 1000, period * 1e-6, ma / 1000, float(watts), lsb * 1e-9)
+
+
 class DriveLink:
     """The current-mode controller on serial port ``port`` (a USB CDC device, a pty's slave name).
 
@@ -102,20 +113,11 @@ class DriveLink:
             self._link.reset_input_buffer()
             ack = self._transact("HELLO", VERSION2, attempts=max(1, math.ceil(self.open_timeout / 0.25)),
                                  timeout=0.25)
-            self.info = self._device_info(ack)
+            self.info = device_info(ack, self.port)
         except BaseException:
             self.close()
             raise
         return self.info
-
-    def _device_info(self, ack: Frame) -> DriveInfo:
-        d = ack.args[1:]
-        nums = [parse_decimal(x, 9) for x in d[:8]] if len(d) == 9 else [None]
-        if None in nums or nums[0] != VERSION2 or not nums[1] or not nums[3] or not nums[4]:
-            raise LinkError(f"device on {self.port} answered HELLO,2 with {','.join(d)!r}; expected version 2, "
-                            "coils, sensors, watchdog_ms, period_us, max_mA, max_W, field_nT, name")
-        _, coils, sensors, wd, period, ma, watts, lsb = nums
-        return DriveInfo(d[8], coils, sensors, wd / 1000, period * 1e-6, ma / 1000, float(watts), lsb * 1e-9)
 
     def close(self) -> None:
         link, self._link = self._link, None

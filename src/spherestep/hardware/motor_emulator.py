@@ -33,16 +33,21 @@ from dataclasses import dataclass
 import numpy as np
 
 from .. import so3
+from .backend import LinkError
 from .current_device import CurrentDevice
+from .drive_link import DeviceTrip, device_info
 from .limits import CurrentLimits
-from .protocol2 import FULL_SCALE
+from .protocol import decode, encode
+from .protocol2 import FULL_SCALE, MAX_FRAME2, TRIP_CODES, VERSION2, encode_block, parse_state
+from .serialport import NakError
 
 K_REUSE = 2e-3  # rad: the torque matrix is re-evaluated when the rotor has turned further than this
 
 
 @dataclass(frozen=True)
 class MotorFaults:
-    """Faults by emulated time (s since the device started): each a ``(index, time)`` pair or None.
+    """Faults by emulated time (s since the device started): each a ``(index, time)`` pair or None; a coil index
+    of −1 is the coil carrying the most current when the fault strikes.
 
     ``open_coil``: the coil's circuit opens (no current). ``stuck_coil``: its bridge shorts to the supply (full
     current whatever the duty, until the supply is cut). ``frozen_reading``: its current sense repeats the last
@@ -58,10 +63,6 @@ class MotorFaults:
     sensor_garbage: tuple[int, float] | None = None
     vanish_at: float | None = None
     deaf_at: float | None = None
-
-
-def _active(fault: tuple[int, float] | None, t: float) -> int | None:
-    return fault[0] if fault is not None and t >= fault[1] else None
 
 
 class EmulatedMotor:
@@ -96,14 +97,26 @@ class EmulatedMotor:
         self._charge = np.zeros(n)
         self.alpha = np.zeros(3)
         self._K = self._K_at = None
+        self._struck: dict[str, int] = {}
         self._last_ma = np.zeros(n, dtype=np.int64)
         self._last_counts = np.zeros((len(sensors), 3), dtype=np.int64)
+
+    def _fault(self, name: str) -> int | None:
+        """The index a fault strikes now, or None (not injected, or not yet)."""
+        fault = getattr(self.faults, name)
+        if fault is None or self.t < fault[1]:
+            return None
+        if fault[0] >= 0:
+            return fault[0]
+        if name not in self._struck:
+            self._struck[name] = int(np.argmax(np.abs(self.i)))
+        return self._struck[name]
 
     # -- the device's view (Bridges) --------------------------------------------------------------------------------
     def measure(self) -> np.ndarray:
         noise = self.current_noise * self.rng.standard_normal(len(self.i))
         ma = np.rint(1000.0 * (self.i + noise)).astype(np.int64)
-        frozen = _active(self.faults.frozen_reading, self.t)
+        frozen = self._fault("frozen_reading")
         if frozen is not None:
             ma[frozen] = self._last_ma[frozen]
         self._last_ma = ma
@@ -120,11 +133,11 @@ class EmulatedMotor:
         local = local + part.noise_T * self.rng.standard_normal(local.shape)
         counts = np.clip(np.rint(local / part.lsb_T), -FULL_SCALE, FULL_SCALE).astype(np.int64)
         stale = 0
-        stopped = _active(self.faults.sensor_stops, self.t)
+        stopped = self._fault("sensor_stops")
         if stopped is not None:
             counts[stopped] = self._last_counts[stopped]
             stale |= 1 << stopped
-        garbage = _active(self.faults.sensor_garbage, self.t)
+        garbage = self._fault("sensor_garbage")
         if garbage is not None:
             counts[garbage] = self.rng.integers(-FULL_SCALE, FULL_SCALE + 1, 3)
         self._last_counts = counts
@@ -140,10 +153,10 @@ class EmulatedMotor:
                 self.sync()
 
     def _advance_coils(self, h: float) -> None:
-        e, f = self.drive_limits, self.faults
+        e = self.drive_limits
         a = math.exp(-h / e.time_constant)
         i0 = self.i
-        stuck = _active(f.stuck_coil, self.t)
+        stuck = self._fault("stuck_coil")
         if self.enabled:
             v = self.duty * e.supply_voltage
             if stuck is not None:
@@ -152,7 +165,7 @@ class EmulatedMotor:
         else:
             i1 = a * i0 - (1.0 - a) * np.sign(i0) * e.supply_voltage / e.resistance
             i1 = np.where(np.sign(i1) != np.sign(i0), 0.0, i1)  # the diodes stop at zero
-        opened = _active(f.open_coil, self.t)
+        opened = self._fault("open_coil")
         if opened is not None:
             i1[opened] = 0.0
         self._charge += 0.5 * h * (i0 + i1)  # ∫ i dt, trapezoidal
@@ -182,6 +195,69 @@ class EmulatedMotor:
         return so3.exp(dt * self.w + 0.5 * dt * dt * self.alpha) @ self.R
 
 
+def matching_device_options(motor: EmulatedMotor) -> dict:
+    """The :class:`CurrentDevice` settings that match ``motor``: its drive's limits, supply, inductance, control
+    period (bandwidth a quarter of the period's rate), relay current and magnetometer LSB."""
+    e = motor.drive_limits
+    return dict(limits=CurrentLimits.from_drive(e), supply=e.supply_voltage, inductance=e.inductance,
+                period_us=round(motor.period * 1e6), bandwidth=0.25 / motor.period,
+                nominal_ma=round(1000 * motor.nominal), field_lsb_nt=round(motor.sensors.part.lsb_T * 1e9))
+
+
+class LockstepLink:
+    """A :class:`~spherestep.hardware.DriveLink` stand-in without a line or a wall clock: frames go as bytes
+    to a :class:`CurrentDevice` on an :class:`EmulatedMotor` in this process, and :meth:`sleep` advances the
+    motor and runs the device's control steps. Pass ``clock=link.clock, sleep=link.sleep`` to
+    :func:`~spherestep.hardware.run_servo`: the loop then keeps its rate exactly, whatever the machine's load,
+    so the control design is judged apart from the host's speed. ``device_options`` as for :class:`MotorPty`."""
+
+    def __init__(self, motor: EmulatedMotor, **device_options):
+        self.motor = motor
+        self.device = CurrentDevice(motor, len(motor.design.stator), len(motor.sensors),
+                                    **{**matching_device_options(motor), **device_options})
+        self._seq = 0
+        self.info = device_info(self._transact("HELLO", VERSION2), "lockstep")
+
+    def clock(self) -> float:
+        return self.motor.t
+
+    def truth(self) -> Truth:
+        return truth_of(self.motor, self.device)
+
+    def sleep(self, seconds: float) -> None:
+        """Advance emulated time by ``seconds``: coils every period with the device's control step, rotor."""
+        m, dev = self.motor, self.device
+        end = m.t + seconds
+        while m.t + m.period <= end + 1e-12:
+            m.advance_to(m.t + m.period)
+            dev.step(round(m.t * 1e6))
+        m.advance_to(end)
+
+    def _transact(self, verb: str, *args):
+        self._seq = (self._seq + 1) & 0xFF
+        reply = self.device.receive(encode(self._seq, verb, *args, max_frame=MAX_FRAME2), round(self.motor.t * 1e6))
+        frame = decode(reply[1:-1], MAX_FRAME2)
+        if frame.verb == "NAK":
+            code = frame.args[0]
+            raise (DeviceTrip if code in TRIP_CODES else NakError)(f"device refused {verb}: NAK {code}", code)
+        return frame
+
+    def drive(self, currents):
+        return self._state(self._transact("DRIVE", encode_block(1000.0 * np.asarray(currents, dtype=float))))
+
+    def read(self):
+        return self._state(self._transact("READ"))
+
+    def off(self) -> None:
+        self._transact("OFF")
+
+    def _state(self, ack):
+        try:
+            return parse_state(ack.args[1:], self.info.coils, self.info.sensors, self.info.field_lsb)
+        except ValueError as exc:
+            raise LinkError(f"malformed state ({exc})") from None
+
+
 @dataclass(frozen=True)
 class Truth:
     """The emulated motor as the device process last published it: orientation ``R``, angular velocity ``w``
@@ -198,6 +274,14 @@ class Truth:
     off_at: float
     slip: float
     trips: tuple[tuple[str, int, float], ...]
+
+
+def truth_of(motor: EmulatedMotor, device: CurrentDevice, slip: float = 0.0) -> Truth:
+    """The :class:`Truth` of a motor and its device in this process (the rotor brought up to date)."""
+    motor.sync()
+    trips = tuple((code, coil, us * 1e-6) for code, coil, us in device.trips)
+    return Truth(motor.R.copy(), motor.w.copy(), motor.i.copy(), motor.t, motor.enabled, device.off_us * 1e-6, slip,
+                 trips)
 
 
 _TRIP_ORDER = ("WDOG", "CRCS", "OVER", "OPEN", "STUCK", "HEAT")
@@ -221,14 +305,9 @@ class MotorPty:
         import multiprocessing as mp
         import tty
 
-        e = motor.drive_limits
-        options = dict(limits=CurrentLimits.from_drive(e), supply=e.supply_voltage, inductance=e.inductance,
-                       period_us=round(motor.period * 1e6), bandwidth=0.25 / motor.period,
-                       nominal_ma=round(1000 * motor.nominal),
-                       field_lsb_nt=round(motor.sensors.part.lsb_T * 1e9))
-        options.update(device_options)
         self.motor = motor
-        self.device = CurrentDevice(motor, len(motor.design.stator), len(motor.sensors), **options)
+        self.device = CurrentDevice(motor, len(motor.design.stator), len(motor.sensors),
+                                    **{**matching_device_options(motor), **device_options})
         self._master, self._slave = os.openpty()
         tty.setraw(self._slave)
         self.port = os.ttyname(self._slave)

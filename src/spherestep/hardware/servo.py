@@ -94,10 +94,11 @@ def _check_state(state) -> None:
 
 def run_servo(link: DriveLink, estimate, control, *, duration: float, rate: float = 200.0,
               limits: CurrentLimits | None = None, log: str | Path | None = None, status=None,
-              max_late: float | None = None) -> ServoReport:
+              max_late: float | None = None, clock=time.monotonic, sleep=time.sleep) -> ServoReport:
     """Run the loop for ``duration`` s at ``rate`` Hz on an open ``link`` (see the module); returns the
     :class:`ServoReport`. ``status(t, R, ω, currents)`` is called every cycle (live display); ``log`` a path
-    for the per-cycle log. Never raises for a fault of the motor, the sensors, the host or the link: the
+    for the per-cycle log. ``clock``/``sleep`` are the loop's time (wall time by default; a simulated clock for
+    :class:`~spherestep.hardware.motor_emulator.LockstepLink`). Never raises for a fault of the motor, the sensors, the host or the link: the
     report says what ended the run."""
     if link.info is None:
         raise bad_value("link", "an open DriveLink (call open() or use it in a with block)", link)
@@ -118,20 +119,20 @@ def run_servo(link: DriveLink, estimate, control, *, duration: float, rate: floa
         out = open(part, "w", encoding="utf-8")
         out.write(LOG_HEADER)
     k = 0
-    t0 = time.monotonic()
+    t0 = clock()
     try:
         state = link.read()  # prime: the first estimate and currents come from a reading, before the clock starts
         _check_state(state)
         R_prev = estimate(state)
         currents = np.asarray(control(0.0, R_prev, w), dtype=float)
         limits.check_setpoints(currents)
-        t0 = time.monotonic()
+        t0 = clock()
         while k * period < duration:
             start = t0 + k * period
-            now = time.monotonic()
+            now = clock()
             if now < start:
-                time.sleep(start - now)
-            late = time.monotonic() - start
+                sleep(start - now)
+            late = clock() - start
             if late > max_late:
                 raise ServoFault(f"cycle {k} started {late * 1e3:.1f} ms late, over max_late = {max_late * 1e3:.0f} "
                                  "ms: the host is too slow for this rate", "SLOW")
@@ -141,7 +142,7 @@ def run_servo(link: DriveLink, estimate, control, *, duration: float, rate: floa
                 k += skipped
             state = link.drive(currents)
             _check_state(state)
-            t = time.monotonic() - t0
+            t = clock() - t0
             R = estimate(state)
             if R_prev is not None:
                 dt = period if not report.times else max(t - report.times[-1], 1e-6)
@@ -173,7 +174,7 @@ def run_servo(link: DriveLink, estimate, control, *, duration: float, rate: floa
     except KeyboardInterrupt:
         report.outcome, report.message = "INTERRUPT", "interrupted"
     finally:
-        report.ended_at = time.monotonic() - t0
+        report.ended_at = clock() - t0
         report.duration = report.times[-1] - report.times[0] if report.times else 0.0
         try:
             link.off()

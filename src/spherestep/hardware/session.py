@@ -61,7 +61,7 @@ def turn_reference(start, axis, angle: float, duration: float, delay: float = 0.
 
 
 def servo_session(design, reference, duration: float, *, port: str | None = None, emulate: bool = False,
-                  rate: float = 200.0, log=None, status=None, faults=None, sensors=None, model=None, drive=None,
+                  lockstep: bool = False, rate: float = 200.0, log=None, status=None, faults=None, sensors=None, model=None, drive=None,
                   R0=None, watchdog_ms: int | None = None, max_late: float | None = None,
                   truth_every: float = 0.05) -> Session:
     """Run the servo for ``duration`` s following ``reference`` (``t -> (R, ω, α)``) on the controller at
@@ -70,7 +70,9 @@ def servo_session(design, reference, duration: float, *, port: str | None = None
     defaults to the sensing room's :func:`~spherestep.sensing.default_array` of 8, ``model`` to the design's
     torque map, ``drive`` to :class:`~spherestep.control.DriveLimits`, ``R0`` (the start, for the estimate and
     the emulated rotor) to the reference's start. ``log``, ``status``, ``rate``, ``max_late``: see
-    :func:`~spherestep.hardware.servo.run_servo`."""
+    :func:`~spherestep.hardware.servo.run_servo`. With ``lockstep`` (and ``emulate``) the frames go straight to
+    the device in this process on a simulated clock (:class:`~spherestep.hardware.motor_emulator.LockstepLink`):
+    the same loop, protocol and motor with the rate kept exactly, whatever the machine's load."""
     from ..control import DriveLimits, GeometricPD
     from ..dynamics import Rotor
     from ..magnetics import torque_map
@@ -78,6 +80,8 @@ def servo_session(design, reference, duration: float, *, port: str | None = None
 
     if (port is None) == (not emulate):
         raise bad_value("port", "a serial device, or emulate=True (one of the two)", port)
+    if lockstep and not emulate:
+        raise bad_value("lockstep", "used only with emulate=True", lockstep)
     sensors = default_array(design, 8) if sensors is None else sensors
     model = torque_map(design) if model is None else model
     drive = DriveLimits() if drive is None else drive
@@ -95,11 +99,24 @@ def servo_session(design, reference, duration: float, *, port: str | None = None
                                **options)
         return Session(report, reference, [], None)
 
-    from .motor_emulator import EmulatedMotor, MotorPty
+    from .motor_emulator import EmulatedMotor, LockstepLink, MotorPty
 
     motor = EmulatedMotor(design, model, sensors, rotor=rotor, drive=drive, R0=R0, faults=faults)
     truth: list = []
     device = {} if watchdog_ms is None else {"watchdog_ms": watchdog_ms}
+    if lockstep:
+        link = LockstepLink(motor, **device)
+
+        def observe_here(t, R, w, currents):
+            if len(truth) <= int(t / truth_every):
+                truth.append((t, link.truth()))
+            if status is not None:
+                status(t, R, w, currents)
+
+        report = run_servo(link, estimate, control, duration=duration, rate=rate, log=log, status=observe_here,
+                           clock=link.clock, sleep=link.sleep, **options)
+        link.sleep(0.15)
+        return Session(report, reference, truth, link.truth(), link.device.watchdog_ms / 1000, 0.0)
     with MotorPty(motor, **device) as dev:
         def observe(t, R, w, currents):
             if len(truth) <= int(t / truth_every):
