@@ -138,3 +138,47 @@ def test_step_intervals_follow_the_ramp():
     assert rate[n // 2] == pytest.approx(fmax)
     np.testing.assert_allclose(rate, rate[::-1])  # symmetric decelerations
     assert rate.max() == pytest.approx(fmax)
+
+
+class SpringDetent:
+    """A toy torque model with a bias: a torsion spring to the identity, ``τ(R, 0) = −k log R``, plus coils with a
+    fixed torque per unit current ``K`` (linear), for the servo's bias path."""
+
+    def __init__(self, K, k=2.0, failed=()):
+        self.K, self.k, self.failed, self.coil_count = np.asarray(K), k, tuple(failed), K.shape[1]
+
+    def torque(self, R, currents):
+        return -self.k * so3.log(R) + np.asarray(currents) @ self.K.T
+
+    def energy(self, R, currents):
+        v = so3.log(R)
+        return 0.5 * self.k * np.sum(v * v, -1) - np.sum((np.asarray(currents) @ self.K.T) * v, -1)
+
+    def torque_matrix(self, R, currents=None):
+        R = np.asarray(R)
+        return np.broadcast_to(self.K, R.shape[:-2] + self.K.shape).copy()
+
+    def hessian(self, R, currents):
+        return np.broadcast_to(self.k * np.eye(3), np.asarray(R).shape[:-2] + (3, 3))
+
+    def torque_reference(self, currents):
+        return np.full(np.asarray(currents).shape[:-1], self.k)
+
+    def evaluate(self, R, currents, order):
+        out = (self.energy(R, currents), self.torque(R, currents), self.hessian(R, currents))
+        return out[:order + 1]
+
+
+def test_servo_holds_against_a_bias_torque(design):
+    rng = np.random.default_rng(4)
+    model = SpringDetent(rng.normal(size=(3, 29)) * 0.3)
+    target = so3.exp(np.radians([12.0, -15.0, 8.0]))  # the spring pulls back with 0.76 N·m
+    rotor = Rotor(0.0724)
+    run = hold(design, target, model, duration=0.3, rotor=rotor, sensor=NoisySensor(math.radians(0.02), rng=2))
+    bias = -model.k * so3.log(target)
+    assert np.linalg.norm(bias) > 0.7
+    tail = run.times >= 0.15
+    assert run.tracking_error[tail].max() <= HOLD
+    # the coils cancel the spring: mean coil torque over the tail equals minus the bias
+    coil_torque = (run.currents[tail] / LIMITS.nominal_current) @ model.K.T
+    np.testing.assert_allclose(coil_torque.mean(axis=0), -bias, atol=0.01)
