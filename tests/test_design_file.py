@@ -213,7 +213,7 @@ BAD = [
     (mutate(dimensions__sphere_diameter=0.3), "dimensions.sphere_diameter", "with its unit, like '12 in'"),
     (mutate(dimensions__coil_length="2 furlongs"), "dimensions.coil_length", "unit one of m, cm, mm"),
     (mutate(stator__cap_half_angle="95 deg"), "stator.cap_half_angle", "overrides.allow_hemisphere"),
-    (mutate(stator__cap_half_angle="180 deg"), "stator.cap_half_angle", "between 0 and 180 deg"),
+    (mutate(stator__cap_half_angle="180 deg"), "stator.cap_half_angle", "between 0 and π radians (0° and 180°)"),
     (mutate(dimensions__magnet_diameter="3 in"), "rotor", "overlap"),
     (mutate(dimensions__magnet_diameter="13 in"), "dimensions.magnet_diameter", "smaller than the sphere_diameter"),
     (mutate(rotor={"poles": [[0, 0, 1], [0, 1.1, 0]], "polarity": [1, -1]}), "rotor.poles[1]", "divide it by its norm"),
@@ -241,7 +241,7 @@ BAD = [
      "overrides.max_coils"),
     (mutate(schema_version=2), "schema_version", "must be 1"),
     (mutate(schema_version=None), "schema_version", "schema_version: 1"),
-    (mutate(tolerance="45 deg"), "tolerance", "between 0 and 28.65 deg"),
+    (mutate(tolerance="45 deg"), "tolerance", "between 0 and 0.5 radians (0° and 28.65°)"),
     (mutate(channel_map=[[0, 1]]), "channel_map", "29 pairs"),
     (mutate(failed_coils=[40]), "failed_coils", "coil indices 0..28"),
     (mutate(name=5), "name", "valid string"),
@@ -401,7 +401,7 @@ def test_design_commands_refuse_bad_input_in_one_line(tmp_path, capsys):
                         (["design", "validate", str(tmp_path / "none.yaml")], "must be an existing file"),
                         (["design", "new", str(tmp_path / "x.toml")], "written as YAML"),
                         (["design", "new", str(tmp_path / "y.yaml"), "--from", str(bad)], "stator.cap_half_angle"),
-                        (["design", "new", str(tmp_path)], "must end in .yaml")):
+                        (["design", "new", str(tmp_path)], "is a folder")):
         assert main(args) == 2, args
         assert words in one_line_error(capsys)
     assert not (tmp_path / "x.toml").exists() and not (tmp_path / "y.yaml").exists()

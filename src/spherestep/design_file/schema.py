@@ -211,13 +211,6 @@ class StatorSpec(_Model):
             raise ValueError("takes no radius: give [x, y, z] or {phi, theta}")
         return value
 
-    @field_validator("cap_half_angle")
-    @classmethod
-    def _cap(cls, value: float) -> float:
-        if not 0 < value < math.pi:
-            raise ValueError(f"must be between 0 and 180 deg; instead received {math.degrees(value):.6g} deg")
-        return value
-
     @model_validator(mode="after")
     def _consistent(self):
         by_packing = self.coils == "fit" or (isinstance(self.coils, list) and isinstance(self.coils[0], int))
@@ -267,14 +260,6 @@ class DesignSpec(_Model):
                            Field(max_length=MAX_POLES)] | None = None
     overrides: Overrides = Overrides()
     failed_coils: Annotated[list[Index], Field(max_length=MAX_POLES)] = []
-
-    @field_validator("tolerance")
-    @classmethod
-    def _tolerance(cls, value):
-        if value is not None and not 0 < value < 0.5:
-            raise ValueError(f"must be an angle between 0 and {math.degrees(0.5):.4g} deg, like '1 deg'; instead "
-                             f"received {math.degrees(value):.6g} deg")
-        return value
 
 
 _SECTIONS: dict[str, type[BaseModel]] = {

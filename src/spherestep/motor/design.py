@@ -66,11 +66,19 @@ def _check_cap(cap_half_angle, allow_hemisphere: bool) -> None:
     """The stator cap: an angle in (0, π) radians, under π/2 unless ``allow_hemisphere``."""
     if isinstance(cap_half_angle, bool) or not isinstance(cap_half_angle, (int, float)) or \
             not (math.isfinite(cap_half_angle) and 0 < cap_half_angle < math.pi):
-        raise bad_value("cap_half_angle", "an angle in (0, π) radians", cap_half_angle)
+        shown = f"{math.degrees(cap_half_angle):.6g}°" if isinstance(cap_half_angle, (int, float)) else cap_half_angle
+        raise bad_value("cap_half_angle", "an angle between 0 and π radians (0° and 180°)", shown)
     if cap_half_angle >= math.pi / 2 and not allow_hemisphere:
         raise bad_value("cap_half_angle", "under 90° (a stator covering less than a hemisphere gives the wide "
                         "range of motion, Sec. IV); set allow_hemisphere (overrides.allow_hemisphere in a design "
                         "file) to override", f"{math.degrees(cap_half_angle):.4g}°")
+
+
+def _check_tol(tol) -> None:
+    """How close a pole must sit to a coil: None (the default, 1°) or an angle in (0, 0.5) radians."""
+    if tol is not None and (isinstance(tol, bool) or not isinstance(tol, (int, float)) or not 0 < tol < 0.5):
+        shown = f"{math.degrees(tol):.6g}°" if isinstance(tol, (int, float)) and not isinstance(tol, bool) else tol
+        raise bad_value("tol", "an angle between 0 and 0.5 radians (0° and 28.65°), like 1°", shown)
 
 
 def _stator_axis(axis) -> np.ndarray:
@@ -152,8 +160,7 @@ class MotorDesign:
             k = int(np.argmax(off))
             raise bad_value(f"stator[{k}]", f"a coil within the stator cap ({math.degrees(self.cap_half_angle):.4g}° "
                             "about stator_axis): remove it or widen cap_half_angle", f"{off[k]:.4g}° outside it")
-        if self.tol is not None and not (isinstance(self.tol, (int, float)) and 0 < self.tol < 0.5):
-            raise bad_value("tol", "an angle in (0, 0.5) radians", self.tol)
+        _check_tol(self.tol)
         cmap = default_channel_map(len(self.stator)) if self.channel_map is None else self.channel_map
         cmap = as_channel_map(cmap, len(self.stator))
         bad = [k for k in self.failed_coils if not 0 <= k < len(self.stator)]
@@ -326,8 +333,7 @@ class MotorDesign:
             return self._states
         from .states import find_states
 
-        if not (isinstance(tol, (int, float)) and 0 < tol < 0.5):
-            raise bad_value("tol", "an angle in (0, 0.5) radians", tol)
+        _check_tol(tol)
         return find_states(self, float(tol))
 
     def metrics(self, samples: int = 20_000, seed: int = 0, escape: bool = True):
