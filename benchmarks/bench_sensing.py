@@ -192,8 +192,37 @@ def model_error(design, array, samples=100):
         print(f"| {name} | {np.sqrt(np.mean(e ** 2)):.4f} | {e.max():.4f} |")
 
 
+def servo(design, array):
+    print("\n## In the loop: simulate_servo along a 20° turn (magnets' torque map, 1 kHz, known start, 0.15 s settle)")
+    from spherestep.control import Trajectory
+    from spherestep.dynamics import simulate_servo
+    from spherestep.magnetics import torque_map
+
+    tmap = torque_map(design)
+    R0 = so3.random(1, 4)[0]
+    traj = Trajectory.turn(R0, [1.0, 0.5, 2.0], math.radians(20), acceleration=10.0)
+    sensors = {"ideal": sensing.IdealSensor(),
+               "hall (24 × TMAG5273A2, 1 % current error)": sensing.HallSensor(design, array=array,
+                                                                                current_error=0.01, seed=1),
+               "fused (gyro + array)": sensing.FusedSensor(design, sensing.HallSensor(
+                   design, array=array, current_error=0.01, seed=2), 1e-3, seed=3),
+               "imu alone": sensing.ImuSensor(design, 1e-3, seed=4)}
+    print("| sensor | max tracking error (°) | final error (°) | estimate error RMS (°) | wall time (s) |")
+    print("|---|---|---|---|---|")
+    for name, inner in sensors.items():
+        t0 = time.perf_counter()
+        run = simulate_servo(design, traj, tmap, sensor=sensing.LoopSensor(inner, start=R0), settle=0.15)
+        est = so3.distance(run.estimates, run.orientations)
+        print(f"| {name} | {math.degrees(run.tracking_error.max()):.4f} | {math.degrees(run.final_error):.4f} | "
+              f"{math.degrees(np.sqrt(np.mean(est ** 2))):.4f} | {time.perf_counter() - t0:.1f} |")
+
+
 def main() -> None:
     quick = "--quick" in sys.argv
+    if "--servo" in sys.argv:
+        design = prototype()
+        servo(design, sensing.default_array(design))
+        return
     if "--model-error" in sys.argv:
         design = prototype()
         model_error(design, sensing.default_array(design))
@@ -213,6 +242,7 @@ def main() -> None:
     accuracy_vs_count(design, placement, 50 if quick else 300)
     loop(design, array)
     model_error(design, array, 30 if quick else 100)
+    servo(design, array)
     if not quick:
         marker(design)
 

@@ -9,7 +9,8 @@
 * :mod:`.symmetry`: :func:`symmetry_group`, :func:`marked_design`.
 * :mod:`.placement`: :func:`greedy_placement` (worst-case Fisher information), :func:`accuracy`.
 * :mod:`.imu`: :class:`Imu`, :class:`Mekf`, :class:`ImuSensor`, :class:`FusedSensor`.
-* :mod:`.sensor`: :class:`HallSensor`, :class:`IdealSensor` — ``measure(R_true, currents, R_prev) -> R``.
+* :mod:`.sensor`: :class:`HallSensor`, :class:`IdealSensor` — ``measure(R_true, currents, R_prev) -> R``;
+  :class:`LoopSensor`, the servo's ``measure(t, R_true, currents)`` form.
 """
 
 from .array import SensorArray, candidate_positions, coil_collisions, fibonacci_directions, radial_frames
@@ -19,12 +20,12 @@ from .imu import FusedSensor, Imu, ImuSensor, Mekf, triad
 from .parts import BMI270_BMM150, TMAG5273A2, ImuPart, MagnetometerPart
 from .placement import Accuracy, Placement, accuracy, default_array, greedy_placement, smallest_eigenvalue
 from .readings import actual_currents, sense, true_field
-from .sensor import HallSensor, IdealSensor
+from .sensor import HallSensor, IdealSensor, LoopSensor
 from .symmetry import MarkerEffect, marked_design, marker_effect, symmetry_group
 
 __all__ = [
     "Accuracy", "BMI270_BMM150", "CoilField", "Estimate", "Estimator", "FieldTable", "FusedSensor", "HallSensor",
-    "IdealSensor", "Imu", "ImuPart", "ImuSensor", "KnownField", "MagnetometerPart", "MarkerEffect", "Mekf", "Placement",
+    "IdealSensor", "Imu", "LoopSensor", "ImuPart", "ImuSensor", "KnownField", "MagnetometerPart", "MarkerEffect", "Mekf", "Placement",
     "SensorArray", "TMAG5273A2", "accuracy", "actual_currents", "axial_field_table", "candidate_positions",
     "coil_collisions", "default_array", "fibonacci_directions", "greedy_placement", "marked_design", "marker_effect",
     "radial_frames", "rotor_field", "sense", "smallest_eigenvalue", "super_fibonacci", "symmetry_group",

@@ -99,12 +99,12 @@ class SensorArray:
         return len(self.positions)
 
     @classmethod
-    def at(cls, positions, part: MagnetometerPart = TMAG5273A2) -> "SensorArray":
+    def at(cls, positions, part: MagnetometerPart = TMAG5273A2) -> SensorArray:
         """Sensors at ``positions`` with radial frames (:func:`radial_frames`)."""
         p = np.asarray(positions, dtype=float).reshape(-1, 3)
         return cls(p, radial_frames(p), part)
 
-    def subset(self, indices) -> "SensorArray":
+    def subset(self, indices) -> SensorArray:
         idx = np.asarray(indices, dtype=int)
         return SensorArray(self.positions[idx], self.axes[idx], self.part)
 

@@ -25,6 +25,7 @@ from dataclasses import dataclass
 from functools import lru_cache
 
 import numpy as np
+from scipy.spatial.transform import Rotation
 
 from .. import so3
 from ..errors import bad_value
@@ -44,8 +45,9 @@ def super_fibonacci(n: int) -> np.ndarray:
     r, R = np.sqrt(s / n), np.sqrt(1.0 - s / n)
     a, b = 2.0 * math.pi * s / math.sqrt(2.0), 2.0 * math.pi * s / PSI
     q = np.stack([r * np.sin(a), r * np.cos(a), R * np.sin(b), R * np.cos(b)], axis=1)
-    from scipy.spatial.transform import Rotation
-    return Rotation.from_quat(q).as_matrix()
+    grid = Rotation.from_quat(q).as_matrix()
+    grid.flags.writeable = False  # cached: shared by every caller
+    return grid
 
 
 @dataclass(frozen=True)
@@ -138,7 +140,8 @@ class Estimator:
     def _solve(self, b, weight, R, iterations, tol):
         H, g, cost = self._normal_equations(R, b, weight)
         lam, converged, it = 0.0, False, 0
-        for it in range(1, iterations + 1):
+        while it < iterations:
+            it += 1
             delta = np.linalg.solve(H + lam * np.diag(np.diag(H)), g)
             small = float(delta @ delta) < tol * tol
             R_new = so3.exp(delta) @ R

@@ -37,8 +37,7 @@ from scipy.interpolate import CubicSpline
 
 from .. import so3
 from ..errors import bad_value
-from ..magnetics import rotor_collection, stator_coils
-from ..magnetics._model import magnet_centre_radius
+from ..magnetics import model_summary, rotor_collection, stator_coils
 
 TABLE_NODES = 16385  # values of c in [−1, 1]; interpolation error measured in docs/sensing.md
 POLE_ALPHA = 1e-4  # rad, where β = B_x / sin α is taken at c = ±1
@@ -54,7 +53,7 @@ def axial_field_table(design, radius: float, nodes: int = TABLE_NODES) -> tuple[
     alpha[0], alpha[-1] = np.pi - POLE_ALPHA, POLE_ALPHA
     magnet = magpy.magnet.Cylinder(dimension=(design.magnet_diameter, design.magnet_length),
                                    polarization=(0.0, 0.0, design.remanence),
-                                   position=(0.0, 0.0, magnet_centre_radius(design)))
+                                   position=(0.0, 0.0, model_summary(design)["magnet_centre_m"]))
     pts = radius * np.stack([np.sin(alpha), np.zeros_like(alpha), np.cos(alpha)], axis=1)
     B = magnet.getB(pts)
     beta = B[:, 0] / np.sin(alpha)
@@ -77,7 +76,7 @@ class FieldTable:
     skew_directions: np.ndarray  # (S, 3, 3): [x̂_s]×
 
     @classmethod
-    def build(cls, design, positions, nodes: int = TABLE_NODES) -> "FieldTable":
+    def build(cls, design, positions, nodes: int = TABLE_NODES) -> FieldTable:
         """Tables for every distinct sensor radius of ``positions (S, 3)`` (radii equal to 1e-9 m share one)."""
         p = np.asarray(positions, dtype=float).reshape(-1, 3)
         r = np.linalg.norm(p, axis=1)
@@ -156,7 +155,7 @@ class CoilField:
     per_coil: np.ndarray
 
     @classmethod
-    def build(cls, design, positions) -> "CoilField":
+    def build(cls, design, positions) -> CoilField:
         p = np.asarray(positions, dtype=float).reshape(-1, 3)
         G = magpy.getB(stator_coils(design), p, sumup=False)
         return cls(np.asarray(G).reshape(len(design.stator), len(p), 3))

@@ -6,10 +6,13 @@
 * :class:`IdealSensor`: returns the true orientation (the reference).
 
 The IMU alternatives (:class:`~spherestep.sensing.imu.ImuSensor`, :class:`~spherestep.sensing.imu.FusedSensor`)
-have the same ``measure`` plus the time step they need for their gyro.
+have the same ``measure`` plus the time step they need for their gyro. :class:`LoopSensor` wraps any of them in
+the servo's ``measure(t, R_true, currents)`` form (:func:`spherestep.dynamics.simulate_servo`).
 """
 
 from __future__ import annotations
+
+import math
 
 import numpy as np
 
@@ -83,3 +86,27 @@ class HallSensor:
             m = self.readings(R_true, currents)
             self.last = self.estimator.track(m, R_prev, currents, self.iterations)
         return self.last.R
+
+
+class LoopSensor:
+    """A sensing sensor in the servo's :class:`~spherestep.dynamics.servo.OrientationSensor` form:
+    ``measure(t, R_true, currents)`` returns an estimate every ``1/rate`` s (else ``None``), ``latency`` s old.
+    The inner ``sensor`` (:class:`HallSensor`, :class:`IdealSensor`, an IMU sensor with ``dt = 1/rate``) tracks
+    from its own previous estimate, starting from ``start`` (``None``: the global start, up to the rotor's
+    symmetry)."""
+
+    def __init__(self, sensor, rate: float = 1000.0, latency: float = 0.0, start=None):
+        if not (isinstance(rate, (int, float)) and math.isfinite(rate) and rate > 0):
+            raise bad_value("rate", "a positive sampling rate in Hz", rate)
+        if not (isinstance(latency, (int, float)) and math.isfinite(latency) and latency >= 0):
+            raise bad_value("latency", "a non-negative delay in seconds", latency)
+        self.sensor, self.rate, self.latency = sensor, float(rate), float(latency)
+        self._last = None if start is None else so3.as_rotations(start, "start").reshape(3, 3).copy()
+        self._next = 0.0
+
+    def measure(self, t: float, R_true, currents=None):
+        if t < self._next - 1e-12:
+            return None
+        self._next += 1.0 / self.rate
+        self._last = self.sensor.measure(R_true, currents, self._last)
+        return self._last

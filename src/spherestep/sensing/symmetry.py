@@ -13,9 +13,13 @@ from __future__ import annotations
 
 from dataclasses import dataclass, replace
 
+import magpylib as magpy
 import numpy as np
 
+from .. import so3
 from ..errors import bad_value
+from ..magnetics import equilibrium, state_currents, torque_map
+from ..statics import holding_torque
 
 
 def _frame(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -96,11 +100,6 @@ class MarkerEffect:
 
 def marker_effect(design, marked, states: int = 2, samples: int = 200, seed=0) -> MarkerEffect:
     """Measure :class:`MarkerEffect` for ``marked`` (from :func:`marked_design`) against ``design``."""
-    from ..magnetics import equilibrium, state_currents, torque_map
-    from ..magnetics._model import MU0
-    from ..statics import holding_torque
-    from .. import so3
-
     pole = int(np.nonzero(np.asarray(marked.polarity) != np.asarray(design.polarity))[0][0])
     st = design.states()
     holds = np.array([any(j == pole for j, _ in st.held(i)) for i in range(len(st))])
@@ -114,7 +113,7 @@ def marker_effect(design, marked, states: int = 2, samples: int = 200, seed=0) -
         eq = equilibrium(maps[id(d)], st.rotations[picks], c)
         return tuple(float(x) for x in holding_torque(maps[id(d)], eq.rotation, c).torque)
 
-    moment = design.remanence / MU0 * np.pi * (0.5 * design.magnet_diameter) ** 2 * design.magnet_length
+    moment = design.remanence / magpy.mu_0 * np.pi * (0.5 * design.magnet_diameter) ** 2 * design.magnet_length
     dipole = [float(np.linalg.norm(moment * np.asarray(d.polarity) @ d.rotor.centers)) for d in (design, marked)]
     R = so3.random(samples, rng)
     c = rng.choice([-1.0, 0.0, 0.0, 0.0, 1.0], size=(samples, len(design.stator)))
