@@ -182,3 +182,25 @@ def test_servo_holds_against_a_bias_torque(design):
     # the coils cancel the spring: mean coil torque over the tail equals minus the bias
     coil_torque = (run.currents[tail] / LIMITS.nominal_current) @ model.K.T
     np.testing.assert_allclose(coil_torque.mean(axis=0), -bias, atol=0.01)
+
+
+@pytest.mark.slow
+def test_ramped_relay_stepping_keeps_or_loses_steps_and_finds_a_pull_out_rate(design, tmap):
+    from spherestep.commutation import turn
+    from spherestep.dynamics import pull_out_rate, run_ramped, tune
+
+    plan = turn(design, (1.0, 0.5, 2.0), 40.0)
+    tuning = tune(design, tmap)
+    slow = run_ramped(design, plan, tmap, 3.0, rotor=tuning.rotor, dt=tuning.dt, settle=2.0)
+    assert not slow.lost and math.isfinite(slow.arrival_time())
+    # it ends in the plan's last state (the plan's own error to the 40° target is the stepper resolution)
+    assert so3.distance(slow.orientations[-1], plan.achieved[-1]) <= math.radians(0.5)
+    np.testing.assert_allclose(np.diff(slow.step_times), step_intervals(len(plan.steps) - 1, 3.0)[:-1])
+    fast = run_ramped(design, plan, tmap, 300.0, rotor=tuning.rotor, dt=tuning.dt, settle=2.0)
+    assert fast.lost  # 300 steps/s: the rotor cannot follow and is left behind
+    assert so3.distance(fast.orientations[-1], plan.achieved[-1]) > math.radians(10)
+    pull = pull_out_rate(design, plan, tmap, rotor=tuning.rotor, rates=(3.0, 300.0), iterations=2, dt=tuning.dt,
+                         settle=2.0)
+    assert 3.0 <= pull.rate < 300.0 and not pull.run.lost
+    assert [r for r, _ in pull.tried][:2] == [3.0, 300.0] and len(pull.tried) == 4
+    assert slow.summary()["peak_power_W"] == 24.0 * max(len(s.coils) for s in plan.steps)  # 24 W a coil
