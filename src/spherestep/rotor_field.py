@@ -64,7 +64,7 @@ class RotorField:
     ``poles (M, 3)`` unit vectors ``u_j`` and ``polarity (M,)`` ``p_j`` (body frame); ``kernel(t, orders)`` returns
     the derivatives of ``h`` of the given ``orders`` (a tuple from 0, 1, 2) at ``t`` (any shape), used by the
     direct evaluator.
-    With ``lmax``: the ducc0 evaluator; ``exact(t)`` (default ``kernel(t, 0)[0]``) the most accurate ``h``,
+    With ``lmax``: the ducc0 evaluator; ``exact(t)`` (default ``kernel(t, (0,))[0]``) the most accurate ``h``,
     used once to sample ``F`` for its spherical-harmonic coefficients up to degree ``lmax`` on a
     Gauss–Legendre grid of ``rings ≥ lmax + 1`` rings; ``epsilon``: ducc0's synthesis accuracy; ``nthreads``:
     ducc0's threads. Without ``lmax``, only the direct sum. ``direct_below``: batches of fewer points use the
