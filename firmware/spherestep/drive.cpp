@@ -91,6 +91,7 @@ void CurrentDevice::allOff() {
     duty_[k] = 0.0;
     follow_[k] = 0;
     frozen_[k] = 0;
+    dead_[k] = 0;
   }
   enable_ = 0;
   polarity_ = 0;
@@ -139,12 +140,15 @@ void CurrentDevice::step(uint32_t nowUs) {
     duty_[k] = clampAbs(kp_ * e + integral_[k], dmax);
     const bool lagging = fabs(duty_[k]) >= dmax && fabs(e) > 0.05 + 0.1 * fabs(setpoint_[k]);
     follow_[k] = lagging ? follow_[k] + 1 : 0;
+    const bool dead = fabs(duty_[k]) * loop_.supply / limits_.resistance > OPEN_EXPECTED &&
+                      (ma[k] < 0 ? -ma[k] : ma[k]) < 50;
+    dead_[k] = dead ? dead_[k] + 1 : 0;
     const bool frozen = ma[k] == measured_[k] && (ma[k] < 0 ? -ma[k] : ma[k]) >= 50 && fabs(duty_[k]) > FROZEN_DUTY;
     frozen_[k] = frozen ? frozen_[k] + 1 : 0;
     measured_[k] = ma[k];
   }
   for (uint8_t k = 0; k < coils_; ++k) {
-    if (follow_[k] >= followSteps_) return trip((ma[k] < 0 ? -ma[k] : ma[k]) < 50 ? "OPEN" : "STUCK", k);
+    if (follow_[k] >= followSteps_ || dead_[k] >= followSteps_) return trip((ma[k] < 0 ? -ma[k] : ma[k]) < 50 ? "OPEN" : "STUCK", k);
   }
   for (uint8_t k = 0; k < coils_; ++k) {
     if (frozen_[k] >= followSteps_) return trip("STUCK", k);

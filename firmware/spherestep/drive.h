@@ -23,6 +23,7 @@ const uint8_t MAX_SENSORS = 16;
 const uint8_t CRC_STORM = 8;     // damaged frames in a row that trip a session
 const uint32_t FOLLOW_MS = 20;   // duty saturated without the current following, or a frozen reading, this long
 const double FROZEN_DUTY = 0.05;  // a reading is only judged frozen while |duty| exceeds this
+const double OPEN_EXPECTED = 0.2;  // A: a duty that would drive this much (d V / R) with under 50 mA flowing: open
 
 // Limits in SI (A, W, Ω, s), enforced on the device (hardware/limits.py CurrentLimits).
 struct Limits {
@@ -107,6 +108,7 @@ class CurrentDevice {
   int32_t measured_[MAX_COILS];
   uint32_t follow_[MAX_COILS];
   uint32_t frozen_[MAX_COILS];
+  uint32_t dead_[MAX_COILS];
   uint64_t enable_;
   uint64_t polarity_;
   bool enabled_;

@@ -10,6 +10,7 @@ loop per coil and writes the PWM duties to a :class:`Bridges` plant, and checks 
 * heating: the I²t model (:func:`~spherestep.hardware.limits.heating_step`) of any coil above 1 → ``HEAT``;
 * following: duty at ``±max_duty`` while ``|i_set − i| > 50 mA + 0.1 |i_set|`` for 20 ms → ``OPEN`` when
   ``|i| < 50 mA`` (no current sensed: an open coil, or a sense stuck at zero), else ``STUCK``;
+* no current: a duty that would drive over 0.2 A (``|d| V / R``) while under 50 mA flows, for 20 ms → ``OPEN``;
 * frozen reading: the same non-zero reading (``|i| ≥ 50 mA``) for 20 ms while ``|duty| > 0.05`` → ``STUCK``;
 * 8 damaged frames in a row during a session → ``CRCS``; no accepted command for the watchdog period → ``WDOG``.
 
@@ -37,6 +38,7 @@ _NAME_CHARS = frozenset("ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz012
 CRC_STORM = 8  # damaged frames in a row that trip a session
 FOLLOW_MS = 20  # duty saturated without the current following, or a frozen reading, this long → trip
 FROZEN_DUTY = 0.05  # a reading is only judged frozen while |duty| exceeds this
+OPEN_EXPECTED = 0.2  # A: a duty that would drive this much (d V / R) while under 50 mA flows is an open coil
 
 
 class Bridges(Protocol):
@@ -95,6 +97,8 @@ class CurrentDevice:
         self.heat = np.zeros(coils)
         self._follow = np.zeros(coils, dtype=np.int64)
         self._frozen = np.zeros(coils, dtype=np.int64)
+        self._dead = np.zeros(coils, dtype=np.int64)
+        self.supply = float(supply)
         self.version = 0  # 0: no session, 1: relay session, 2: current session
         self.enable = self.polarity = 0  # relay-mode masks
         self.tripped: str | None = None
@@ -118,6 +122,7 @@ class CurrentDevice:
         self.duty[:] = 0.0
         self._follow[:] = 0
         self._frozen[:] = 0
+        self._dead[:] = 0
         self.enable = self.polarity = 0
         self.bridges.drive(self.duty.copy(), False)
 
@@ -154,10 +159,12 @@ class CurrentDevice:
         self.duty = np.clip(self.kp * e + self.integral, -dmax, dmax)
         lagging = (np.abs(self.duty) >= dmax) & (np.abs(e) > 0.05 + 0.1 * np.abs(self.setpoint))
         self._follow = np.where(lagging, self._follow + 1, 0)
+        dead = (np.abs(self.duty) * self.supply / lim.resistance > OPEN_EXPECTED) & (np.abs(ma) < 50)
+        self._dead = np.where(dead, self._dead + 1, 0)
         frozen = (ma == self.measured) & (np.abs(ma) >= 50) & (np.abs(self.duty) > FROZEN_DUTY)
         self._frozen = np.where(frozen, self._frozen + 1, 0)
         self.measured = ma
-        lost = np.flatnonzero(self._follow >= self.follow_steps)
+        lost = np.flatnonzero((self._follow >= self.follow_steps) | (self._dead >= self.follow_steps))
         if len(lost):
             k = int(lost[0])
             return self._trip("OPEN" if abs(ma[k]) < 50 else "STUCK", k, now_us)
