@@ -118,6 +118,13 @@ def test_servo_tracks_a_turn_with_a_failed_coil(design, tmap):
     assert run.final_error <= HOLD
     # the rotor really turned: 20° about the axis
     assert so3.distance(run.orientations[-1], R0) == pytest.approx(math.radians(20), abs=math.radians(0.05))
+    # energy balance (an independent check of the back-EMF): the energy drawn from the supply less the copper
+    # loss and the coils' magnetic energy ½LΣi² is the rotor's kinetic energy, at every instant of the turn
+    supplied = np.cumsum((run.power - run.copper_power) * 1e-3)
+    kinetic = 0.5 * rotor.inertia * np.sum(run.angular_velocity ** 2, axis=1)
+    magnetic = 0.5 * LIMITS.inductance * np.sum(run.currents ** 2, axis=1)
+    residual = supplied[:-1] - kinetic[1:] - magnetic[:-1]
+    assert np.abs(residual).max() < 0.05 * kinetic.max()
 
 
 def test_servo_rejects_bad_input(design, tmap):
