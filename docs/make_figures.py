@@ -219,6 +219,18 @@ def commutation_steps(outdir: Path) -> Path:
     return plots.save_figure(plots.figure_steps(design, plan, axis), outdir / "commutation_steps.png")
 
 
+@figure("sensing_layout")
+def sensing_layout(outdir: Path) -> Path:
+    """The prototype's 24 magnetometers (greedy placement) between its coils, and the worst-case bound against
+    sensor count. docs/sensing.md."""
+    from spherestep import plots, sensing
+    from spherestep.motor import prototype
+
+    design = prototype()
+    placement = sensing.greedy_placement(design, 24)
+    return plots.save_figure(sensing.figure_layout(design, placement), outdir / "sensing_layout.png")
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("names", nargs="*", help=f"figures to make (default all): {', '.join(FIGURES)}")

@@ -9,12 +9,14 @@
 * :mod:`.symmetry`: :func:`symmetry_group`, :func:`marked_design`.
 * :mod:`.placement`: :func:`greedy_placement` (worst-case Fisher information), :func:`accuracy`.
 * :mod:`.imu`: :class:`Imu`, :class:`Mekf`, :class:`ImuSensor`, :class:`FusedSensor`.
+* :mod:`.figures`: :func:`figure_layout`.
 * :mod:`.sensor`: :class:`HallSensor`, :class:`IdealSensor` — ``measure(R_true, currents, R_prev) -> R``;
   :class:`LoopSensor`, the servo's ``measure(t, R_true, currents)`` form.
 """
 
 from .array import SensorArray, candidate_positions, coil_collisions, fibonacci_directions, radial_frames
 from .estimate import Estimate, Estimator, super_fibonacci
+from .figures import figure_layout
 from .field import CoilField, FieldTable, KnownField, axial_field_table, rotor_field
 from .imu import FusedSensor, Imu, ImuSensor, Mekf, triad
 from .parts import BMI270_BMM150, TMAG5273A2, ImuPart, MagnetometerPart
@@ -27,7 +29,7 @@ __all__ = [
     "Accuracy", "BMI270_BMM150", "CoilField", "Estimate", "Estimator", "FieldTable", "FusedSensor", "HallSensor",
     "IdealSensor", "Imu", "LoopSensor", "ImuPart", "ImuSensor", "KnownField", "MagnetometerPart", "MarkerEffect", "Mekf", "Placement",
     "SensorArray", "TMAG5273A2", "accuracy", "actual_currents", "axial_field_table", "candidate_positions",
-    "coil_collisions", "default_array", "fibonacci_directions", "greedy_placement", "marked_design", "marker_effect",
+    "coil_collisions", "default_array", "fibonacci_directions", "figure_layout", "greedy_placement", "marked_design", "marker_effect",
     "radial_frames", "rotor_field", "sense", "smallest_eigenvalue", "super_fibonacci", "symmetry_group",
     "triad", "true_field",
 ]
