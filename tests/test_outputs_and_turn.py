@@ -148,3 +148,19 @@ def test_the_diagnosis_of_designs_that_cannot_step(proto):
     reason = unusable_reasons(wide, lambda name: {"tol": "tolerance"}.get(name, name))[0]
     assert reason.startswith(f"tolerance 12° is over half the rotor's pole spacing ({spacing:.3g}°)")
     assert f"make tolerance smaller than {spacing / 2:.3g}°" in reason
+
+
+@pytest.mark.parametrize("call, name", [
+    (lambda c: c.about_axis((0, 0, 1), 1.0, 0), "steps"),
+    (lambda c: c.about_axis((0, 0, 1), 1.0, 2.5), "steps"),
+    (lambda c: c.about_axis((0, 0, 1), 1.0, 3, start=2 * np.eye(3)), "start"),
+    (lambda c: c.through(np.stack([np.eye(3)] * 2), 0), "steps"),
+    (lambda c: c.through(np.stack([2 * np.eye(3)] * 2), 3), "keys"),
+    (lambda c: c.steps_for(float("nan"), 0.1), "length"),
+    (lambda c: c.plan_geometric(None, "abc"), "targets"),
+])
+def test_the_trajectory_api_names_its_own_arguments(call, name):
+    import spherestep.commutation as c
+
+    with pytest.raises(InputError, match=f"^{name} must be"):
+        call(c)

@@ -12,6 +12,7 @@ so ``spherestep --help`` stays fast.
 from __future__ import annotations
 
 import errno
+import functools
 import sys
 
 import typer
@@ -26,6 +27,12 @@ from .app import app
 DISK_FULL = (errno.ENOSPC, errno.EDQUOT, errno.EFBIG)
 
 
+@functools.cache
+def _command():
+    """The Click command of the app, built once per process (every command registers at import)."""
+    return typer.main.get_command(app)
+
+
 def _error(kind: str, text: str) -> None:
     line = " ".join(str(text).split())  # one line, whatever the message held
     print(f"spherestep: {kind}: {line}", file=sys.stderr)
@@ -37,7 +44,7 @@ def main(argv: list[str] | None = None) -> int:
     debug = "--debug" in args
     if debug:
         args.remove("--debug")
-    command = typer.main.get_command(app)
+    command = _command()
     try:
         result = command.main(args=args, prog_name="spherestep", standalone_mode=False)
         # outside standalone mode Typer returns the code of an Exit (130 for Ctrl-C) instead of exiting

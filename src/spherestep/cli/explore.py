@@ -10,7 +10,7 @@ import typer
 
 from ..errors import ComputationError, InputError, bad_value
 from .app import app
-from .common import console, print_json
+from .common import console, number, print_json
 
 OPTION_OF = {  # library field -> the option that sets it, so a refusal names what the user typed
     "rotors": "--rotors", "stators": "--stators", "rotor_levels": "--rotor-levels", "stator_levels": "--stator-levels",
@@ -115,7 +115,7 @@ def explore(
     scheduler: str = typer.Option(None, "--scheduler", help="Address of a running Dask scheduler, tcp://HOST:PORT "
                                                            "(its workers must have spherestep installed)."),
     threads: bool = typer.Option(False, "--threads", help="Local workers as threads in this process, not processes."),
-    workers: int = typer.Option(None, "--workers", help="Local workers (processes, or threads with --threads); "
+    workers: int = typer.Option(None, "--workers", callback=number("a whole number of workers ≥ 1", 1), help="Local workers (processes, or threads with --threads); "
                                                        "default: the CPU count."),
     quick: bool = typer.Option(False, "--quick", help="A tiny grid (12 designs, seconds) instead of the default "
                                                      "one (648 designs, minutes)."),

@@ -163,8 +163,8 @@ def plan(
     angle: float = typer.Option(..., "--angle", callback=ANGLE, help="Rotation angle in degrees (sign gives the "
                                                                      "sense)."),
     steps: int = typer.Option(None, "--steps", callback=number("a whole number of steps, 1 to 100000", 1, 100_000),
-                              help="Number of steps (default: 0.35 of a max step each; more than the angle over "
-                                   "the max step is warned about)."),
+                              help="Number of steps (default: each 0.35 of a max step; a step longer than the "
+                                   "design's max step is warned about)."),
     out: Path = typer.Option(Path("spherestep-out"), "--out", help="Output folder."),
     as_json: bool = typer.Option(False, "--json", help="Print the plan summary as JSON."),
     design_path: Path = typer.Option(None, "--design", help="Design file (YAML/TOML); default the built-in prototype."),

@@ -17,10 +17,18 @@ from ..errors import bad_value
 KEY_SPACING = math.pi / 2  # keys of a long turn are at most 90° apart, well inside the geodesic's uniqueness
 
 
+def _check_steps(steps) -> int:
+    if isinstance(steps, bool) or not isinstance(steps, (int, np.integer)) or steps < 1:
+        raise bad_value("steps", "a positive whole number of steps", steps)
+    return int(steps)
+
+
 def steps_for(length: float, step: float) -> int:
     """Number of equal steps of at most ``step`` radians covering ``length`` radians (at least one)."""
     if not (math.isfinite(step) and step > 0):
         raise bad_value("step", "a positive angle", step)
+    if not (math.isfinite(length) and length >= 0):
+        raise bad_value("length", "a finite angle ≥ 0 in radians", length)
     return max(1, math.ceil(length / step - 1e-9))
 
 
@@ -29,7 +37,10 @@ def about_axis(axis, angle: float, steps: int, start=None) -> np.ndarray:
     fixed-frame ``axis`` from ``start`` (default identity), equally spaced."""
     if not math.isfinite(angle):
         raise bad_value("angle", "a finite angle", angle)
-    start = np.eye(3) if start is None else np.asarray(start, dtype=float)
+    steps = _check_steps(steps)
+    start = np.eye(3) if start is None else so3.as_rotations(start, "start")
+    if start.shape != (3, 3):
+        raise bad_value("start", "one rotation matrix (3, 3)", f"shape {start.shape}")
     pieces = max(1, math.ceil(abs(angle) / KEY_SPACING))
     keys = so3.rot(axis, np.linspace(0.0, angle, pieces + 1)) @ start
     if angle == 0:
@@ -39,12 +50,15 @@ def about_axis(axis, angle: float, steps: int, start=None) -> np.ndarray:
 
 def through(keys, steps: int) -> np.ndarray:
     """``steps + 1`` orientations on the piecewise geodesic through ``keys (m, 3, 3)``, equally spaced."""
-    return so3.resample(keys, steps)
+    return so3.resample(so3.as_rotations(keys, "keys"), _check_steps(steps))
 
 
 def check_targets(targets) -> np.ndarray:
     """``targets`` as a float array of at least two rotations ``(n+1, 3, 3)``; InputError otherwise."""
-    targets = np.asarray(targets, dtype=float)
+    try:
+        targets = np.asarray(targets, dtype=float)
+    except (TypeError, ValueError):
+        raise bad_value("targets", "at least two rotations, shape (n+1, 3, 3)", targets) from None
     if targets.ndim != 3 or targets.shape[1:] != (3, 3) or len(targets) < 2:
         raise bad_value("targets", "at least two rotations, shape (n+1, 3, 3)", f"shape {targets.shape}")
     return targets
