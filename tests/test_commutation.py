@@ -49,7 +49,7 @@ def _check_plan(design, plan, metrics):
             assert arc_distance(step.achieved @ design.rotor.centers[j], design.stator.centers[k]) <= design.state_tol + 1e-12
             assert step.coils[k] == design.polarity[j]
         assert math.isclose(step.error, so3.distance(step.achieved, step.target), abs_tol=1e-12)
-    assert plan.errors[-1] <= metrics["resolution_p95"]
+    assert plan.errors[-1] <= metrics.resolution_p95_rad
 
 
 def test_full_turns_about_random_axes(proto, proto_metrics):
@@ -62,13 +62,13 @@ def test_full_turns_about_random_axes(proto, proto_metrics):
         plan = plan_geometric(proto, T)
         _check_plan(proto, plan, proto_metrics)
         # the plan follows the path: typical error within the design's resolution
-        assert np.median(plan.errors) <= proto_metrics["resolution_p95"]
+        assert np.median(plan.errors) <= proto_metrics.resolution_p95_rad
 
 
 def test_plan_from_arbitrary_start_ends_near_target(proto, proto_metrics):
     T = about_axis([0.2, -1, 0.4], math.radians(200), 30, start=so3.random(1, 3)[0])
     plan = plan_geometric(proto, T)
-    assert plan.errors[-1] <= proto_metrics["resolution_max"]
+    assert plan.errors[-1] <= proto_metrics.resolution_max_rad
 
 
 def test_axis_cost_prefers_the_desired_direction(proto):
