@@ -255,3 +255,21 @@ def test_rotation_error_is_the_log_map():
     np.testing.assert_allclose(np.array([rotation_error(r) for r in R]), so3.log(R), atol=1e-13)
     tiny = so3.exp(np.array([1e-10, -2e-10, 3e-10]))
     np.testing.assert_allclose(rotation_error(tiny), [1e-10, -2e-10, 3e-10], rtol=1e-6)
+
+
+def test_limits_from_a_coil_spec():
+    from spherestep.control.limits import wheeler_inductance
+    from spherestep.motor.coil import iron_coil
+
+    design = prototype()
+    spec = iron_coil()
+    e = spec.electrics(design.coil_diameter, design.coil_length)
+    limits = DriveLimits.from_spec(spec, design)
+    assert limits.resistance == e["resistance_ohm"] and limits.nominal_current == e["nominal_current_A"]
+    assert limits.max_current == pytest.approx(24.0 / e["resistance_ohm"])
+    # ρ² R I_n² is the supply's power
+    assert limits.per_unit_power_radius ** 2 * limits.resistance * limits.nominal_current ** 2 == pytest.approx(100.0)
+    assert DriveLimits.from_spec(spec, design, inductance=0.5).time_constant == pytest.approx(0.5 / e["resistance_ohm"])
+    # Wheeler's multilayer formula: L ∝ N², and the defaults' 18.7 mH for 1000 turns on the prototype's coil
+    assert wheeler_inductance(2000, 0.0254, 0.041275, 0.0127) == pytest.approx(4 * DriveLimits().inductance)
+    assert DriveLimits().inductance == pytest.approx(0.01871, rel=1e-3)

@@ -80,6 +80,20 @@ class DriveLimits:
                    max_current=v / r if max_current is None else max_current, supply_voltage=v,
                    supply_power=supply_power, resistance=r, inductance=_positive(inductance, "inductance"))
 
+    @classmethod
+    def from_spec(cls, spec, design, inductance: float | None = None) -> DriveLimits:
+        """Limits for the coils of ``design`` wound as ``spec`` (a coil-as-built specification such as
+        ``spherestep.motor.coil.CoilSpec``: its ``resistance``, ``nominal_current`` and ``turns`` for the design's
+        coil diameter and length, its ``supply_voltage`` and ``supply_power``). ``inductance`` (H) defaults to
+        Wheeler's air-core value for the spec's turns and groove (:func:`wheeler_inductance`); give the iron
+        core's when it has one. The torque model must then be built at ``N I_n`` ampere-turns."""
+        d, length = design.coil_diameter, design.coil_length
+        if inductance is None:
+            r_p, r_w, depth = spec.groove(d, length)
+            inductance = wheeler_inductance(spec.turns(d, length), r_w, depth, r_p)
+        return cls.from_coil(spec.resistance(d, length), inductance, spec.nominal_current(d, length),
+                             supply_voltage=spec.supply_voltage, supply_power=spec.supply_power)
+
     def replace(self, **changes) -> DriveLimits:
         """A copy with ``changes``."""
         return replace(self, **changes)
