@@ -138,7 +138,9 @@ class _MotionSensor:
 
 class ImuSensor(_MotionSensor):
     """IMU alone (AHRS): gyro prediction, accelerometer (gravity) and magnetometer (Earth + known coil
-    field) updates; starts by TRIAD. ``measure`` is called once per ``dt`` with the true orientation."""
+    field) updates; starts by TRIAD from its first sample (``R_prev`` is not used). The accelerometer's and
+    magnetometer's offsets are not estimated: the filter treats them as extra white noise. ``measure`` is
+    called once per ``dt`` with the true orientation."""
 
     def __init__(self, design, dt: float = 1e-3, part: ImuPart = BMI270_BMM150, seed=None):
         super().__init__(design, dt, part, seed)
@@ -159,7 +161,9 @@ class ImuSensor(_MotionSensor):
 
 class FusedSensor(_MotionSensor):
     """Gyro prediction + the magnetometer array's estimate as an orientation update (with its Cramér–Rao
-    covariance) every ``hall_every`` samples. ``hall`` is a :class:`~spherestep.sensing.sensor.HallSensor`."""
+    covariance) every ``hall_every`` samples. ``hall`` is a :class:`~spherestep.sensing.sensor.HallSensor`.
+    The first call starts from ``hall.measure(R_true, currents, R_prev)``: give the known start as ``R_prev``
+    for a symmetric rotor (a symmetric copy ``R g`` would contradict the gyro, which sees the body rate)."""
 
     def __init__(self, design, hall, dt: float = 1e-3, part: ImuPart = BMI270_BMM150, hall_every: int = 1,
                  seed=None):

@@ -54,7 +54,8 @@ class HallSensor:
         self.array.check_fits(design)
         self.coils = CoilField.build(design, self.array.positions)
         self.table = FieldTable.build(design, self.array.positions)
-        self.estimator = Estimator(self.table, self.array.axes, self.array.part, (self.coils, *known))
+        self.known = tuple(known)
+        self.estimator = Estimator(self.table, self.array.axes, self.array.part, (self.coils, *self.known))
         self.current_error = current_error
         self.truth = truth
         self.iterations = int(iterations)
@@ -75,6 +76,8 @@ class HallSensor:
             B = rotor_field(self.design, self.array.positions, R)[0]
         if currents is not None:
             B = B + self.coils.field(actual_currents(currents, self.current_error, self.rng))
+            for source in self.known:  # the extra known fields are really there too
+                B = B + source.field(currents)
         return sense(self.array, B, self.rng)
 
     def measure(self, R_true, currents=None, R_prev=None) -> np.ndarray:
