@@ -186,3 +186,17 @@ def test_relay_plans_still_play_on_the_current_device(rig):
         others = np.delete(currents, [i, i + 5])
         assert np.abs(others).max() < 0.05
     assert not final.enabled and np.abs(final.i).max() < 1e-3
+
+
+def test_move_on_hardware_refuses_bad_input_with_exit_2(tmp_path):
+    import shutil
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    exe = shutil.which("spherestep", path=str(Path(sys.executable).parent))
+    for args in (["--emulate", "--port", "/dev/null"], ["--emulate", "--mode", "ramped"]):
+        run_ = subprocess.run([exe, "move", "--axis", "1,0,0", "--angle", "10",
+                               "--out", str(tmp_path), *args], capture_output=True, text=True, timeout=120)
+        assert run_.returncode == 2, run_.stderr
+        assert "Traceback" not in run_.stderr and run_.stderr.count("\n") == 1, run_.stderr

@@ -2,10 +2,14 @@
 
 from __future__ import annotations
 
+import json
 import math
 from pathlib import Path
 
+import numpy as np
 import typer
+
+from .. import so3
 
 from ..errors import bad_value
 from .app import app
@@ -38,12 +42,22 @@ def move(
                                        help="Servo: orientation sensor noise σ in degrees."),
     out: Path = typer.Option(Path("spherestep-move"), "--out", help="Output folder."),
     as_json: bool = typer.Option(False, "--json", help="Print the summary as JSON."),
+    port: str = typer.Option(None, "--port", help="Servo on hardware: the coil controller's serial device "
+                                                  "(protocol 2, docs/protocol.md), e.g. /dev/ttyACM0."),
+    emulate: bool = typer.Option(False, "--emulate", help="Servo on the emulated motor behind a pseudo-terminal."),
+    rate: float = typer.Option(200.0, "--rate", callback=number("Hz", 1, 2000, what="the loop rate"),
+                               help="With --port/--emulate: the loop rate in Hz."),
 ) -> None:
     """Drive a turn about an axis on the simulated motor (magnets' torque map, 24 V / 100 W supply) and write the
     trajectory (trajectory.csv), coil currents (currents.csv), power (power.csv), a plot (move.png) and a summary
     (move.json).
 
     Example: [bold]spherestep move --axis 1,0.5,2 --angle 360 --fastest --mode servo --sensor-noise 0.02[/bold]
+
+    With --port DEV (or --emulate) the servo runs on the coil controller over its serial link (or on the emulated
+    motor behind a pseudo-terminal) with live status, its log streamed to OUT/servo-log.csv and a summary in
+    OUT/servo.json; exit status 1 when a fault ended the run (every coil is off either way).
+    Example: [bold]spherestep move --axis 1,0.5,2 --angle 360 --time 2.4 --emulate[/bold]
     """
     from ..dynamics import drive_turn as drive
 
@@ -51,7 +65,14 @@ def move(
         raise bad_value("--time", "left out with --fastest (one or the other)", time)
     if time is not None and mode != "servo":
         raise bad_value("--time", "given only with --mode servo (relay modes run at their own pace)", time)
+    if port is not None or emulate:
+        if mode != "servo":
+            raise bad_value("--mode", "servo with --port/--emulate (relay plans run with spherestep run)", mode)
+        if port is not None and emulate:
+            raise bad_value("--port", "left out with --emulate (one or the other)", port)
     design = usable(design_from(design_path))
+    if port is not None or emulate:
+        return _on_hardware(design, axis, angle, time, port, emulate, rate, out, as_json)
     result = drive(design, parse_vector(axis, "--axis"), math.radians(angle), mode=mode, duration=time,
                    sensor_noise=math.radians(sensor_noise))
     written = result.write(out)
@@ -63,3 +84,35 @@ def move(
                   f"final error {s['final_error_deg']:.3g}°, max tracking error {s['max_tracking_error_deg']:.3g}°; "
                   f"power peak {s['peak_power_W']:.3g} W, mean {s['mean_power_W']:.3g} W; "
                   f"wrote {len(written)} files to {out}/")
+
+
+def _on_hardware(design, axis, angle, time, port, emulate, rate, out, as_json) -> None:
+    """The servo on a controller or the emulated motor: live status, streamed log, summary (docs/protocol.md)."""
+    from ..atomic import write_text
+    from ..hardware.session import move_on_hardware
+
+    out.mkdir(parents=True, exist_ok=True)
+    shown = [-1.0]
+
+    def status(t, R, w, currents):
+        if t - shown[0] >= 0.25 and not as_json:
+            shown[0] = t
+            console.print(f"  t {t:6.2f} s   turned {math.degrees(float(np.linalg.norm(so3.log(R)))):7.2f}°   "
+                          f"|ω| {float(np.linalg.norm(w)):5.2f} rad/s   max |i| {float(np.abs(currents).max()):.3f} A")
+
+    session = move_on_hardware(design, parse_vector(axis, "--axis"), math.radians(angle), duration=time, port=port,
+                               emulate=emulate, rate=rate, log=out / "servo-log.csv", status=status)
+    summary = session.report.to_dict()
+    if session.final is not None:
+        summary["emulated_final_error_deg"] = math.degrees(session.final_error())
+    write_text(out / "servo.json", json.dumps(summary, indent=2) + "\n")
+    if as_json:
+        print_json(summary)
+    else:
+        console.print(f"servo on {'the emulated motor' if emulate else port}: {summary['outcome']} after "
+                      f"{summary['cycles']} cycles at {summary['rate_Hz']:.0f} Hz ({summary['missed']} deadlines "
+                      f"missed); all off {'acknowledged' if summary['off_acknowledged'] else 'NOT acknowledged'}"
+                      + (f"; final error {summary['emulated_final_error_deg']:.3g}°" if session.final is not None
+                         else "") + (f"; {summary['message']}" if summary["message"] else ""))
+    if session.report.outcome != "done":
+        raise typer.Exit(1)

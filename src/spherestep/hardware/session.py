@@ -130,3 +130,30 @@ def servo_session(design, reference, duration: float, *, port: str | None = None
         time.sleep(0.15)  # the device runs on: a watchdog trip after a lost link lands in the truth
         final = dev.truth()
     return Session(report, reference, truth, final, dev.device.watchdog_ms / 1000, dev.started)
+
+
+def move_on_hardware(design, axis, angle: float, *, duration: float | None = None, port: str | None = None,
+                     emulate: bool = False, rate: float = 200.0, log=None, status=None, settle: float = 0.5,
+                     **options) -> Session:
+    """Turn the rotor by ``angle`` rad about ``axis`` from where it is taken to be (the identity) on a controller
+    (``port``) or the emulated motor (``emulate``): in ``duration`` s (:func:`turn_reference`), or by default
+    the fastest trapezoidal turn the drive guarantees along the path
+    (:func:`spherestep.control.trajectory.plan_turn`); the loop runs ``settle`` s longer. What
+    ``spherestep move ... --port DEV`` / ``--emulate`` calls; ``options`` go to :func:`servo_session`."""
+    from ..control import DriveLimits
+    from ..control.trajectory import plan_turn
+    from ..dynamics import Rotor
+    from ..magnetics import torque_map
+
+    a = np.asarray(axis, dtype=float)
+    if a.shape != (3,) or not np.all(np.isfinite(a)) or not np.linalg.norm(a) > 0:
+        raise bad_value("axis", "a non-zero 3-vector", axis)
+    model = options.pop("model", None) or torque_map(design)
+    drive = options.pop("drive", None) or DriveLimits()
+    if duration is None:
+        plan = plan_turn(model, np.eye(3), a, angle, Rotor.from_design(design).inertia, drive)
+        reference, turn_time = plan.sample, plan.duration
+    else:
+        reference, turn_time = turn_reference(np.eye(3), a, angle, duration), duration
+    return servo_session(design, reference, turn_time + settle, port=port, emulate=emulate, rate=rate, log=log,
+                         status=status, model=model, drive=drive, **options)
