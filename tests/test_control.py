@@ -10,7 +10,8 @@ from scipy.optimize import minimize
 
 from spherestep import so3
 from spherestep.control import (DriveLimits, Trajectory, allocate, allocate_matrix, allocate_relay,
-                                available_torque, bang_bang_time, feasible_support, plan_turn, torque_capability)
+                                available_torque, bang_bang_time, feasible_support, plan_through, plan_turn,
+                                torque_capability)
 from spherestep.errors import InputError
 from spherestep.magnetics import torque_map
 from spherestep.motor import prototype
@@ -273,3 +274,16 @@ def test_limits_from_a_coil_spec():
     # Wheeler's multilayer formula: L ∝ N², and the defaults' 18.7 mH for 1000 turns on the prototype's coil
     assert wheeler_inductance(2000, 0.0254, 0.041275, 0.0127) == pytest.approx(4 * DriveLimits().inductance)
     assert DriveLimits().inductance == pytest.approx(0.01871, rel=1e-3)
+
+
+def test_plan_through_waypoints_uses_the_least_guaranteed_torque(tmap):
+    W = so3.random(3, 12)
+    inertia = 0.0724
+    tr = plan_through(tmap, W, inertia, samples=8)
+    a = tr.segments[0].acceleration
+    assert all(seg.acceleration == a for seg in tr.segments)
+    each = [plan_turn(tmap, Ra, so3.log(Rb @ Ra.T), float(np.linalg.norm(so3.log(Rb @ Ra.T))), inertia, samples=8)
+            for Ra, Rb in zip(W[:-1], W[1:])]
+    assert a == pytest.approx(min(p.segments[0].acceleration for p in each), rel=1e-12)
+    R, _, _ = tr.sample(np.array([tr.duration]))
+    np.testing.assert_allclose(R[0], W[-1], atol=1e-10)

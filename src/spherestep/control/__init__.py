@@ -14,9 +14,9 @@ from .allocation import Allocation, allocate, allocate_matrix, allocate_relay, c
 from .capability import Capability, available_torque, feasible_support, figure_capability, torque_capability
 from .controller import GeometricPD, Observer
 from .limits import DriveLimits
-from .trajectory import Segment, Trajectory, bang_bang_time, path_capability, plan_turn
+from .trajectory import Segment, Trajectory, bang_bang_time, path_capability, plan_through, plan_turn
 
 __all__ = ["Allocation", "Capability", "DriveLimits", "GeometricPD", "Observer", "Segment", "Trajectory",
-           "bang_bang_time", "path_capability", "plan_turn", "available_torque", "feasible_support", "figure_capability",
+           "bang_bang_time", "path_capability", "plan_through", "plan_turn", "available_torque", "feasible_support", "figure_capability",
            "torque_capability", "allocate", "allocate_matrix", "allocate_relay", "closest_reachable",
            "least_power_box"]

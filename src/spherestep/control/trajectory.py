@@ -208,6 +208,27 @@ def plan_turn(model, start, axis, angle: float, inertia: float, limits: DriveLim
     return Trajectory.turn(start, axis, angle, (guaranteed - damping * v) / I, v)
 
 
+def plan_through(model, waypoints, inertia: float, limits: DriveLimits | None = None, *, margin: float = MARGIN,
+                 samples: int = 24) -> Trajectory:
+    """Geodesic segments through ``waypoints (W, 3, 3)``, at rest at each, with one acceleration
+    ``a = margin · min r / I`` from the torque guaranteed along every segment (``samples`` orientations each)."""
+    if not 0 < margin <= 1:
+        raise bad_value("margin", "a fraction in (0, 1]", margin)
+    W = so3.as_rotations(waypoints, "waypoints")
+    if W.ndim != 3 or len(W) < 2:
+        raise bad_value("waypoints", "at least two rotations, shape (W, 3, 3)", f"shape {W.shape}")
+    least = math.inf
+    for Ra, Rb in zip(W[:-1], W[1:]):
+        rv = so3.log(Rb @ Ra.T)
+        angle = float(np.linalg.norm(rv))
+        if angle > 0:
+            least = min(least, float(path_capability(model, Ra, rv, angle, limits, samples)[0].min()))
+    if not least > 0:
+        raise bad_value("waypoints", "a path along which the drive can give torque in every direction",
+                        f"{least:.3g} N·m available")
+    return Trajectory.through(W, margin * least / _positive(inertia, "inertia"))
+
+
 def bang_bang_time(model, start, axis, angle: float, inertia: float, limits: DriveLimits | None = None,
                    samples: int = 48) -> float:
     """A lower bound (s) on the rest-to-rest time of the turn: accelerate with the largest torque about ``n``

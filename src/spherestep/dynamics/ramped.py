@@ -96,7 +96,17 @@ class RampedRun:
         """Electrical power (W) per sample: ``coil_power`` × the number of energised coils."""
         return self.coil_power * np.count_nonzero(self.currents, axis=1)
 
+    def to_dict(self, degrees: bool = True) -> dict:
+        """The :meth:`summary` (angles in degrees; ``degrees=False`` gives radians)."""
+        out = self.summary()
+        if not degrees:
+            for key in ("final_error_deg", "max_tracking_error_deg"):
+                out[key.replace("_deg", "_rad")] = math.radians(out.pop(key))
+        return out
+
     def summary(self) -> dict:
+        """Arrival time and last step (s), lost steps, final error to the turn's target and largest distance to
+        the energised step's state (degrees), peak and mean power (W)."""
         track = so3.distance(self.orientations, self.planned[np.clip(
             np.searchsorted(self.step_times, self.times, side="right"), 0, len(self.planned) - 1)])
         return {"arrival_time_s": self.arrival_time(), "last_step_s": float(self.step_times[-1]),
