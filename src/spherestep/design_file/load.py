@@ -51,6 +51,10 @@ class _Loader(yaml.SafeLoader):
 
 
 
+TOO_DEEP = ("is too deeply nested (lists or tables inside each other hundreds of levels deep); a design file is a "
+            "few levels deep, start from `spherestep design new FILE`")
+
+
 def parse_data(text: str, fmt: str = "yaml", source: str = "<design>") -> Any:
     """Parse the text of a design file (``fmt`` 'yaml' or 'toml') into Python data; DesignFileError on syntax."""
     if "\x00" in text:
@@ -62,6 +66,8 @@ def parse_data(text: str, fmt: str = "yaml", source: str = "<design>") -> Any:
             return tomllib.loads(text)
         except tomllib.TOMLDecodeError as exc:
             raise DesignFileError(source, None, f"TOML syntax error: {exc}; fix the syntax") from None
+        except RecursionError:
+            raise DesignFileError(source, None, TOO_DEEP) from None
     try:
         data = yaml.load(text, Loader=_Loader)  # noqa: S506 (a SafeLoader subclass)
     except yaml.MarkedYAMLError as exc:
@@ -69,7 +75,9 @@ def parse_data(text: str, fmt: str = "yaml", source: str = "<design>") -> Any:
         where = f" at line {mark.line + 1}, column {mark.column + 1}" if mark else ""
         raise DesignFileError(source, None, f"YAML syntax error{where}: {exc.problem or exc.context}; fix the "
                               "syntax") from None
-    except (yaml.YAMLError, ValueError, TypeError, OverflowError, RecursionError) as exc:
+    except RecursionError:
+        raise DesignFileError(source, None, TOO_DEEP) from None
+    except (yaml.YAMLError, ValueError, TypeError, OverflowError) as exc:
         raise DesignFileError(source, None, f"is not valid YAML ({type(exc).__name__}: {exc}); fix the syntax") \
             from None
     if data is None:
