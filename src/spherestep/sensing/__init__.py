@@ -6,6 +6,7 @@
   its Jacobian on SO(3); :class:`CoilField` and the :class:`KnownField` protocol for subtracted fields.
 * :mod:`.readings`: simulated readings (magpylib, noise, saturation, LSB, current-sense error).
 * :mod:`.estimate`: :class:`Estimator` (Gauss–Newton / Levenberg–Marquardt on SO(3), global start).
+* :mod:`.calibration`: :func:`calibrate` (positions, gains, offsets from readings at unknown poses).
 * :mod:`.symmetry`: :func:`symmetry_group`, :func:`marked_design`.
 * :mod:`.placement`: :func:`greedy_placement` (worst-case Fisher information), :func:`accuracy`.
 * :mod:`.imu`: :class:`Imu`, :class:`Mekf`, :class:`ImuSensor`, :class:`FusedSensor`.
@@ -15,6 +16,7 @@
 """
 
 from .array import SensorArray, candidate_positions, coil_collisions, fibonacci_directions, radial_frames
+from .calibration import Calibration, calibrate, field_gradient
 from .estimate import Estimate, Estimator, super_fibonacci
 from .figures import figure_layout
 from .field import CoilField, FieldTable, KnownField, axial_field_table, rotor_field
@@ -26,9 +28,9 @@ from .sensor import HallSensor, IdealSensor, LoopSensor
 from .symmetry import MarkerEffect, marked_design, marker_effect, symmetry_group
 
 __all__ = [
-    "Accuracy", "BMI270_BMM150", "CoilField", "Estimate", "Estimator", "FieldTable", "FusedSensor", "HallSensor",
+    "Accuracy", "BMI270_BMM150", "Calibration", "CoilField", "Estimate", "Estimator", "FieldTable", "FusedSensor", "HallSensor",
     "IdealSensor", "Imu", "LoopSensor", "ImuPart", "ImuSensor", "KnownField", "MagnetometerPart", "MarkerEffect", "Mekf", "Placement",
-    "SensorArray", "TMAG5273A2", "accuracy", "actual_currents", "axial_field_table", "candidate_positions",
+    "SensorArray", "TMAG5273A2", "accuracy", "actual_currents", "axial_field_table", "calibrate", "field_gradient", "candidate_positions",
     "coil_collisions", "default_array", "fibonacci_directions", "figure_layout", "greedy_placement", "marked_design", "marker_effect",
     "radial_frames", "rotor_field", "sense", "smallest_eigenvalue", "super_fibonacci", "symmetry_group",
     "triad", "true_field",
