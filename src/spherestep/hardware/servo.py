@@ -94,10 +94,13 @@ def _check_state(state) -> None:
 
 def run_servo(link: DriveLink, estimate, control, *, duration: float, rate: float = 200.0,
               limits: CurrentLimits | None = None, log: str | Path | None = None, status=None,
-              max_late: float | None = None, clock=time.monotonic, sleep=time.sleep) -> ServoReport:
+              max_late: float | None = None, clock=time.monotonic, sleep=time.sleep,
+              device_time: bool = True) -> ServoReport:
     """Run the loop for ``duration`` s at ``rate`` Hz on an open ``link`` (see the module); returns the
-    :class:`ServoReport`. ``status(t, R, ω, currents)`` is called every cycle (live display); ``log`` a path
-    for the per-cycle log. ``clock``/``sleep`` are the loop's time (wall time by default; a simulated clock for
+    :class:`ServoReport` (its ``rate`` on the host's clock). ``status(t, R, ω, currents)`` is called every cycle (live display); ``log`` a path
+    for the per-cycle log. With ``device_time`` the control law's time ``t`` (and the log's) is the device's
+    clock at the reading (``<time>`` of the state), the time the motor lives in; otherwise the host's.
+    ``clock``/``sleep`` are the loop's schedule (wall time by default; a simulated clock for
     :class:`~spherestep.hardware.motor_emulator.LockstepLink`). Never raises for a fault of the motor, the sensors, the host or the link: the
     report says what ended the run."""
     if link.info is None:
@@ -119,11 +122,13 @@ def run_servo(link: DriveLink, estimate, control, *, duration: float, rate: floa
         out = open(part, "w", encoding="utf-8")
         out.write(LOG_HEADER)
     k = 0
+    host: list[float] = []  # the host's clock at each cycle, for the achieved rate
     t0 = clock()
     try:
         state = link.read()  # prime: the first estimate and currents come from a reading, before the clock starts
         _check_state(state)
         R_prev = estimate(state)
+        start_us = state.time_us
         currents = np.asarray(control(0.0, R_prev, w), dtype=float)
         limits.check_setpoints(currents)
         t0 = clock()
@@ -142,16 +147,17 @@ def run_servo(link: DriveLink, estimate, control, *, duration: float, rate: floa
                 k += skipped
             state = link.drive(currents)
             _check_state(state)
-            t = clock() - t0
+            t = (((state.time_us - start_us) & 0xFFFFFFFF) * 1e-6 if device_time else clock() - t0)
             R = estimate(state)
             if R_prev is not None:
-                dt = period if not report.times else max(t - report.times[-1], 1e-6)
+                dt = max(t - (report.times[-1] if report.times else 0.0), 1e-6)
                 beta = 1.0 - math.exp(-dt / OMEGA_FILTER)
                 w = (1 - beta) * w + beta * rotation_error(R @ R_prev.T) / dt
             R_prev = R
             currents = np.asarray(control(t, R, w), dtype=float)
             limits.check_setpoints(currents)
             report.times.append(t)
+            host.append(clock() - t0)
             report.orientations.append(R)
             report.currents.append(currents)
             report.cycles += 1
@@ -175,7 +181,7 @@ def run_servo(link: DriveLink, estimate, control, *, duration: float, rate: floa
         report.outcome, report.message = "INTERRUPT", "interrupted"
     finally:
         report.ended_at = clock() - t0
-        report.duration = report.times[-1] - report.times[0] if report.times else 0.0
+        report.duration = host[-1] - host[0] if host else 0.0
         try:
             link.off()
             report.off_acknowledged = True
