@@ -69,6 +69,10 @@ def test_single_orientation_shapes(model, proto):
     R, c = so3.random(1, rng)[0], rng.uniform(-1.0, 1.0, model.coil_count)
     assert model.energy(R, c).shape == () and model.torque(R, c).shape == (3,)
     assert model.hessian(R, c).shape == (3, 3) and model.torque_matrix(R).shape == (3, model.coil_count)
+    E, tau = model.energy_and_torque(R, c)
+    E0, tau0 = model.evaluate_pairwise(R, c, 1)
+    assert E == pytest.approx(E0, rel=1e-12) and np.max(np.abs(tau - tau0)) <= 1e-12 * model.torque_reference(c)
+    np.testing.assert_array_equal(model.torque(R, c), tau)
     # nothing energised: the constant energy, no torque
     E, tau, H = model.evaluate(R, np.zeros(model.coil_count), 2)
     assert E == pytest.approx(model.evaluate_pairwise(R, np.zeros(model.coil_count), 0)[0], rel=1e-12)

@@ -193,6 +193,8 @@ def fast_evaluate(field: RotorField, sign: float, coils: np.ndarray, R: np.ndarr
     Rf = (R if R.shape[:-2] == lead else np.broadcast_to(R, lead + (3, 3))).reshape(-1, 3, 3)
     cf = (c if c.shape[:-1] == lead else np.broadcast_to(c, lead + c.shape[-1:])).reshape(-1, c.shape[-1])
     energy = np.array(np.broadcast_to(constant, lead), dtype=float).reshape(-1) if value else None
+    if len(Rf) == 1 and order < 2:  # one orientation: plain sums over its energised coils (fewer NumPy calls)
+        return _single(field, sign, coils, Rf[0], cf[0], order, energy, value, lead)
     rows, cols = np.nonzero(cf)  # row-major: rows ascending
     out = [energy] + [np.zeros((len(Rf),) + shape) for shape in ((3,), (3, 3))[:order]]
     if len(rows) == 0:
@@ -217,6 +219,22 @@ def fast_evaluate(field: RotorField, sign: float, coils: np.ndarray, R: np.ndarr
         Rq = Rf[present]
         out[2][present] = sign * (Rq @ Hb @ np.swapaxes(Rq, -1, -2))
     return tuple(None if a is None else a.reshape(lead + a.shape[1:]) for a in out)
+
+
+def _single(field, sign, coils, R, c, order, energy, value, lead):
+    """:func:`fast_evaluate` for one orientation ``R (3, 3)`` and ``order ≤ 1``."""
+    live = np.flatnonzero(c)
+    if len(live) == 0:
+        return (energy.reshape(lead),) + ((np.zeros(lead + (3,)),) if order else ())
+    w = c[live]
+    x = coils[live] @ R  # rows x_k = Rᵀ v_k
+    F, g, _ = field.fields(x, order, value)
+    if value:
+        energy = energy + sign * (w @ F)
+    out = (None if energy is None else energy.reshape(lead),)
+    if order:
+        out += ((sign * (R @ (w @ cross(x, g)))).reshape(lead + (3,)),)
+    return out
 
 
 def fast_torque_matrix(field: RotorField, sign: float, coils: np.ndarray, failed, R: np.ndarray) -> np.ndarray:
