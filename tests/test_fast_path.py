@@ -169,4 +169,6 @@ def test_torque_map_through_the_rotor_function(torque_map):
     Es = Es.reshape(-1, 6)
     assert np.max(np.abs(-(Es[:, :3] - Es[:, 3:]) / (2 * h) - tau)) <= 1e-6 * np.min(ref)
     single = torque_map.evaluate(R[0], c[0], 2)
+    assert np.max(np.abs(torque_map.torque(R[0], c[0]) - torque_map.torque_pairwise(R[0], c[0]))) <= 1e-12 * ref[0]
+    assert torque_map.energy(R[0], c[0]) == pytest.approx(float(torque_map.energy_pairwise(R[0], c[0])), rel=1e-12)
     assert [a.shape for a in single] == [(), (3,), (3, 3)] and torque_map.torque_matrix(R[0]).shape == (3, 29)
