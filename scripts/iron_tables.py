@@ -1,6 +1,7 @@
 """Build the prototype's iron-core tables by the method of moments (magpylib-material-response) and store them.
 
-    OPENBLAS_NUM_THREADS=1 nice -n 5 python scripts/iron_tables.py table        # data/iron_pair_table.csv (~10 min)
+    OPENBLAS_NUM_THREADS=1 nice -n 5 python scripts/iron_tables.py              # all of the below at the default level
+    OPENBLAS_NUM_THREADS=1 nice -n 5 python scripts/iron_tables.py table        # src/spherestep/data/iron_*.csv
     OPENBLAS_NUM_THREADS=1 nice -n 5 python scripts/iron_tables.py convergence  # data/iron_convergence.csv
     OPENBLAS_NUM_THREADS=1 nice -n 5 python scripts/iron_tables.py multibody    # data/iron_multibody.csv
     OPENBLAS_NUM_THREADS=1 nice -n 5 python scripts/iron_tables.py fig6         # data/iron_fig6.csv
@@ -40,6 +41,13 @@ def table(level: int = iron.IRON_LEVEL) -> None:
     t1 = time.perf_counter()
     det, lin = pair_table(design, coil, level)
     t2 = time.perf_counter()
+    from spherestep.magnetics._ironsummary import FLUX_ALPHA_DEG, core_flux_density
+    aa, pp = np.meshgrid(FLUX_ALPHA_DEG, [-1.0, 0.0, 1.0], indexing="ij")
+    B = core_flux_density(design, coil, np.radians(aa.ravel()), pp.ravel(), level)
+    _write(Path(__file__).resolve().parents[1] / "src" / "spherestep" / "data" / "iron_core_flux.csv",
+           f"Largest |B| (T) in the prototype's core (MoM level {level}, linear iron) with one pole at alpha from "
+           f"the axis and the coil at pc = polarity x current. Produced by: python scripts/iron_tables.py table",
+           ["alpha_deg", "pc", "max_B_T"], np.c_[aa.ravel(), pp.ravel(), B])
     _write(Path(__file__).resolve().parents[1] / "src" / "spherestep" / "data" / "iron_pair_table.csv",
            f"Iron-core pair torques of the prototype (spherestep.magnetics._iron.pair_tables), MoM level {level}: "
            f"{len(iron.core_solver(iron.CoreGeometry.of(design, coil), level).cells)} cells.\n"
@@ -50,7 +58,7 @@ def table(level: int = iron.IRON_LEVEL) -> None:
            ["alpha_deg", "detent_Nm", "linear_Nm"], np.c_[TABLE_NODES_DEG, det, lin])
 
 
-def convergence(levels=(0, 1, 2)) -> None:
+def convergence(levels=(0, 1)) -> None:
     design, coil = prototype(), iron_coil()
     a = np.array([2.0, 4.0, 6.0, 8.0, 10.0, 12.0, 14.0, 17.0, 20.0, 25.0])
     rows = []
@@ -122,6 +130,13 @@ def fig6(level: int = iron.IRON_LEVEL) -> None:
            np.c_[x, Fd[:, 0], Fd[:, 2], Fl[:, 0], Fl[:, 2]])
 
 
+def everything() -> None:
+    """table, fig6 and multibody in one process (the core is factorised once per level)."""
+    table()
+    fig6()
+    multibody(iron.IRON_LEVEL)
+
+
 if __name__ == "__main__":
-    what = sys.argv[1] if len(sys.argv) > 1 else "table"
-    {"table": table, "convergence": convergence, "multibody": multibody, "fig6": fig6}[what]()
+    what = sys.argv[1] if len(sys.argv) > 1 else "all"
+    {"all": everything, "table": table, "convergence": convergence, "multibody": multibody, "fig6": fig6}[what]()

@@ -20,12 +20,18 @@ def forces(
     states: int = typer.Option(8, "--states", help="Number of stepper states to sample for the torque table."),
     seed: int = typer.Option(0, "--seed", help="Seed of the state sample."),
     as_json: bool = typer.Option(False, "--json", help="Print the results as JSON."),
+    core: str = typer.Option("both", "--core", help="Coil cores to report: air (today's model), iron (pot-core "
+                             "coils, spherestep.motor.coil.iron_coil: detent, states, polarity, saturation, power) "
+                             "or both."),
 ) -> None:
     """Physical forces by magpylib: the Fig. 6 force curve (one magnet slid under one coil, simulated) with its
     4th-order fit (force_curve.csv, force_curve.png), and holding and stepping torques (N·m) of a sample of
     stepper states (forces.json; a table, or --json).
 
-    Example: [bold]spherestep forces --out forces --states 10[/bold]
+    With --core iron or both (the default) also the iron-cored coils against the air cores: detent, stepper
+    states, polarity, saturation and power (iron.json, iron.png).
+
+    Example: [bold]spherestep forces --out forces --states 10 --core both[/bold]
     """
     import numpy as np
     from rich.table import Table
@@ -39,6 +45,8 @@ def forces(
         raise bad_value("--states", "a number of states from 1 to 10000", states)
     if seed < 0:
         raise bad_value("--seed", "a whole number ≥ 0", seed)
+    if core not in ("air", "iron", "both"):
+        raise bad_value("--core", "air, iron or both", core)
     out = output_folder(out, "--out")
     design = usable(design_from(design_path), "--design", design_path)
     st = design.states()
@@ -71,6 +79,14 @@ def forces(
     with files:
         json_path = write_text(out / "forces.json", json.dumps(info, indent=1))
     info["files"] = [str(csv_path), str(png_path), str(json_path)]
+    if core != "air":
+        with console.status("iron cores: detent, states, saturation", spinner="dots") if not as_json \
+                else nullcontext():
+            iron = mg.iron_summary(design, states=min(states, 12), seed=seed)
+        info["iron"] = iron.to_dict(degrees=True)
+        with Outputs(out, ("iron.json", "iron.png")):
+            info["files"].append(str(write_text(out / "iron.json", json.dumps(info["iron"], indent=1))))
+            info["files"].append(str(save_figure(iron.figure(design), out / "iron.png")))
     if as_json:
         print_json(info)
         return
@@ -88,5 +104,24 @@ def forces(
                       f"{r.get('downhill_steps', 0)}/{r['steps']}",
                       f"{r['step_peak_torque_Nm']:.3f}" if "step_peak_torque_Nm" in r else "—")
     console.print(table)
+    if "iron" in info:
+        d = info["iron"]
+        t = Table(title=f"{design.name}: air against iron cores (pole–coil pair, N·m; states: {d['states_sampled']})")
+        for col in ("", "air", "iron"):
+            t.add_column(col, justify="right")
+        t.add_row("peak pull-in torque, +1 coil", f"{d['air_peak_Nm']:.3f}",
+                  f"{d['detent_peak_Nm'] + d['linear_peak_Nm']:.3f} (detent {d['detent_peak_Nm']:.3f})")
+        t.add_row("rest poses with all coils off", "none (no torque)",
+                  f"{d['unpowered_minima']}/{d['unpowered_starts']} starts, holding median "
+                  f"{d['unpowered_holding_median_Nm']:.3f}")
+        t.add_row("stepper states that are minima", f"{d['air_states_minima']}", f"{d['iron_states_minima']}")
+        t.add_row("offset from geometric state, median °", f"{d['air_offset_median_deg']:.2f}",
+                  f"{d['iron_offset_median_deg']:.2f} (max {d['iron_offset_max_deg']:.2f})")
+        t.add_row("holding torque, median", f"{d['air_holding_median_Nm']:.3f}", f"{d['iron_holding_median_Nm']:.3f}")
+        t.add_row("coil against the pole still pulls in", "no", "yes" if d["wrong_polarity_attracts"] else "no")
+        t.add_row("largest |B| in a core (knee)", "—", f"{d['max_core_B_T']:.2f} T ({d['knee_T']:.2f} T)")
+        t.add_row("power per coil at nominal current", "—",
+                  f"{d['electrics']['power_W']:.1f} W ({d['electrics']['supply_W']:.0f} W supply)")
+        console.print(t)
     console.print(f"wrote {len(info['files'])} files to {out}/")
 

@@ -46,7 +46,7 @@ from ..errors import bad_value
 from ._direct import EPS
 from ._model import MU0, z_to
 
-IRON_LEVEL = 1  # default mesh level of the tables (see the convergence study in docs/magnetics.md)
+IRON_LEVEL = 0  # default mesh level of the tables (see the convergence study in docs/magnetics.md)
 FACE_RADIAL = 16  # Gauss–Legendre nodes over a magnet face's radius
 FACE_ANGULAR = 48  # trapezoidal nodes over its angle
 ROTOR_SHELL = 1.0 / 16.0 * 0.0254  # m: wall of the plastic ball in front of the magnets (the paper gives none)
@@ -190,6 +190,37 @@ class CoreSolver:
 def core_solver(geom: CoreGeometry, level: int = IRON_LEVEL) -> CoreSolver:
     """The factorised :class:`CoreSolver` of a geometry (cached)."""
     return CoreSolver(geom, level)
+
+
+def face_quadrature(radius: float, n_r: int = FACE_RADIAL, n_phi: int = FACE_ANGULAR):
+    """Nodes ``(P, 2)`` (x, y) and weights ``(P,)`` (m²) integrating over a disc of ``radius``: Gauss–Legendre in
+    the radius × the trapezoidal rule in the angle."""
+    x, w = np.polynomial.legendre.leggauss(n_r)
+    r = 0.5 * radius * (x + 1.0)
+    wr = 0.5 * radius * w * r
+    phi = 2 * math.pi * np.arange(n_phi) / n_phi
+    pts = np.stack([np.outer(r, np.cos(phi)).ravel(), np.outer(r, np.sin(phi)).ravel()], axis=1)
+    return pts, np.repeat(wr, n_phi) * (2 * math.pi / n_phi)
+
+
+def magnet_faces(centre, axis, diameter: float, length: float, polarization: float, n_r: int = FACE_RADIAL,
+                 n_phi: int = FACE_ANGULAR):
+    """Charge points of an axially polarised cylinder: positions ``(2P, 3)`` and ``σ dA`` (A·m) for ``σ = ±J/μ0``
+    on its ``+axis`` and ``−axis`` faces."""
+    pts, w = face_quadrature(0.5 * diameter, n_r, n_phi)
+    rot = z_to(np.asarray(axis, dtype=float)[None])[0]
+    local = np.concatenate([np.c_[pts, np.full(len(pts), 0.5 * length)],
+                            np.c_[pts, np.full(len(pts), -0.5 * length)]])
+    q = polarization / MU0 * np.concatenate([w, -w])
+    return rot.apply(local) + np.asarray(centre, dtype=float), q
+
+
+def charge_wrench(points: np.ndarray, charges: np.ndarray, B: np.ndarray, pivot=(0.0, 0.0, 0.0)):
+    """Force (N) and torque (N·m about ``pivot``) on magnetic charges ``charges`` (A·m) at ``points`` in ``B``
+    (the field of everything but the magnet itself): ``F = Σ q B``, ``T = Σ q (x − x0) × B``."""
+    F = np.einsum("p,pi->i", charges, B)
+    T = np.einsum("p,pi->i", charges, np.cross(points - np.asarray(pivot, dtype=float), B))
+    return F, T
 
 
 def cell_quadrature(cells, order: int = 3, near_order: int = NEAR_ORDER, near=None) -> tuple[np.ndarray, np.ndarray]:
@@ -340,3 +371,30 @@ def rotor_iron_torque(design, coil, coils, R, currents, level: int = 0, order: i
         _, Tw = magpy.getFT(rotor, loops, pivot=(0.0, 0.0, 0.0), meshing=64, squeeze=False)[:2]
         T = T + Tw[0].sum(axis=1)
     return -T
+
+
+def coil_inductance(design, coil, level: int = IRON_LEVEL, samples: int = 24) -> float:
+    """Self-inductance (H) of one coil, rotor absent: ``L = λ / I`` with the flux linkage
+    ``λ = Σ_loops (N / n_loops) Φ(r_loop, z_loop)`` of the winding's loops, ``Φ(r, z) = ∫_0^r B_z(ρ, z) 2πρ dρ``
+    (Gauss–Legendre, ``samples`` nodes along a radius; the solved core is axisymmetric to its mesh), ``B`` from
+    the winding and, for an iron core, the core it magnetises (linear iron, MoM)."""
+    geom = CoreGeometry.of(design, coil)
+    turns = coil.turns(design.coil_diameter, design.coil_length)
+    current = geom.NI / turns
+    nr, nz = WINDING_GRID
+    loops = winding_loops(geom, geom.NI)
+    radii = geom.r_p + (np.arange(nr) + 0.5) / nr * (geom.r_w - geom.r_p)
+    heights = (np.arange(nz) + 0.5) / nz * geom.depth
+    x, w = np.polynomial.legendre.leggauss(samples)
+    lam = 0.0
+    for r in radii:
+        rho = 0.5 * r * (x + 1.0)
+        pts = np.array([[p, 0.0, h] for h in heights for p in rho])
+        B = magpy.getB(loops, pts, sumup=True)
+        if coil.core == "iron":
+            solver = core_solver(geom, level)
+            B = B + solver.field(solver.polarization(magpy.getB(loops, solver.centroids, sumup=True)), pts)
+        Bz = B[:, 2].reshape(nz, samples)
+        phi = (Bz * (0.5 * r * w * 2 * math.pi * rho)[None]).sum(axis=1)
+        lam += (turns / (nr * nz)) * phi.sum()
+    return float(lam / current)

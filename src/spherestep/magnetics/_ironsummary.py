@@ -88,10 +88,27 @@ class IronSummary:
         return fig
 
 
+FLUX_ALPHA_DEG = np.arange(0.0, 31.0, 2.0)
+FLUX_FILE = "iron_core_flux.csv"
+
+
 def core_flux_density(design, coil: CoilSpec, alpha, pc, level: int = _iron.IRON_LEVEL) -> np.ndarray:
     """Largest ``|B|`` (T) over the core's cells with one pole at ``alpha`` (rad, ``(K,)``) from the axis and the
-    coil at ``pc`` (pole polarity × current, ``(K,)``), linear iron (MoM)."""
+    coil at ``pc`` (pole polarity × current, ``(K,)``), linear iron (MoM). For the prototype's coil the stored
+    grid (``spherestep/data/iron_core_flux.csv``, 2° × pc ∈ {−1, 0, 1}) is interpolated (linear in both)."""
     import magpylib as magpy
+    from importlib import resources
+
+    from ..motor import prototype
+    from ._ironmap import _key
+    path = resources.files("spherestep.data") / FLUX_FILE
+    if _key(design, coil, level) == _key(prototype(), iron_coil(), _iron.IRON_LEVEL) and path.is_file():
+        from scipy.interpolate import RegularGridInterpolator
+        arr = np.loadtxt(path.open(), delimiter=",", comments="#", skiprows=1, ndmin=2)
+        grid = arr[:, 2].reshape(len(FLUX_ALPHA_DEG), 3)
+        f = RegularGridInterpolator((FLUX_ALPHA_DEG, [-1.0, 0.0, 1.0]), grid)
+        a = np.clip(np.degrees(np.atleast_1d(alpha)), 0.0, FLUX_ALPHA_DEG[-1])
+        return f(np.c_[a, np.clip(np.atleast_1d(pc), -1.0, 1.0)])
     solver = _iron.core_solver(_iron.CoreGeometry.of(design, coil), level)
     a = np.atleast_1d(np.asarray(alpha, dtype=float))
     face = design.radius + design.air_gap

@@ -1,0 +1,197 @@
+"""Iron-cored coils (issue 14): the coil spec, the method-of-moments core solve, the iron torque model, and the
+fast model against the stored full solves and finite elements."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import magpylib as magpy
+import numpy as np
+import pytest
+from magpylib_material_response.demag import apply_demag
+
+from spherestep import so3
+from spherestep.errors import InputError
+from spherestep.magnetics import _iron as iron
+from spherestep.magnetics import TorqueMap, iron_model
+from spherestep.magnetics._ironmap import IronTorqueMap
+from spherestep.motor import prototype
+from spherestep.motor.coil import INCH, RHO_COPPER, CoilSpec, IronMaterial, air_coil, iron_coil
+
+DATA = Path(__file__).resolve().parents[1] / "data"
+
+
+@pytest.fixture(scope="module")
+def design():
+    return prototype()
+
+
+@pytest.fixture(scope="module")
+def model(design):
+    return iron_model(design)
+
+
+# --- the coil as built -------------------------------------------------------------------------------------------
+
+def test_winding_formulas_by_hand():
+    c = iron_coil()
+    D, L = 2 * INCH, 1.625 * INCH
+    r_p, r_w, depth = 0.5 * INCH, 1.0 * INCH - 0.125 * INCH, 1.625 * INCH - 0.375 * INCH
+    area = math.pi * 0.286e-3 ** 2 / 4
+    n = int(0.6 * (r_w - r_p) * depth / area)
+    R = RHO_COPPER * n * math.pi * (r_p + r_w) / area
+    assert c.turns(D, L) == n
+    assert c.resistance(D, L) == pytest.approx(R, rel=1e-12)
+    assert c.nominal_current(D, L) == pytest.approx(min(24.0 / R, 100.0 / (24.0 * 4)), rel=1e-12)
+    assert c.power(D, L) == pytest.approx(c.nominal_current(D, L) ** 2 * R, rel=1e-12)
+    # a thicker wire: fewer turns, less resistance, the supply's share becomes the limit
+    thick = iron_coil(wire_diameter=1.0e-3)
+    assert thick.nominal_current(D, L) == pytest.approx(100.0 / 96.0)
+    assert air_coil(1000).nominal_ampere_turns(D, L) == 1000.0
+
+
+def test_bh_curve_is_invertible_and_odd():
+    m = IronMaterial()
+    H = np.array([-5e4, -100.0, 0.0, 300.0, 2000.0, 4e5])
+    assert np.allclose(m.field_strength(m.flux_density(H)), H, rtol=1e-9, atol=1e-9)
+    assert m.flux_density(-300.0) == -m.flux_density(300.0)
+
+
+@pytest.mark.parametrize("kw, name", [({"core": "steel"}, "core"), ({"fill_factor": 1.2}, "fill_factor"),
+                                      ({"wire_diameter": -1.0}, "wire_diameter"), ({"coils_on": 0}, "coils_on")])
+def test_bad_coil_names_the_field(kw, name):
+    with pytest.raises(InputError, match=name):
+        CoilSpec(**kw)
+
+
+def test_groove_must_fit(design):
+    with pytest.raises(InputError, match="coil"):
+        iron_coil(pole_diameter=2.5 * INCH).turns(design.coil_diameter, design.coil_length)
+
+
+# --- the method of moments ---------------------------------------------------------------------------------------
+
+@pytest.fixture(scope="module")
+def rod():
+    """A small iron rod (r = 6 mm, 12 mm long) at level 0: a few dozen cells, fast to factorise."""
+    geom = iron.CoreGeometry(R=6e-3, L=12e-3, r_p=6e-3 - 1e-12, r_w=6e-3, depth=12e-3, NI=200.0, mu_r=1000.0)
+    return iron.CoreSolver(geom, level=0)
+
+
+def test_factorised_solve_equals_apply_demag(rod):
+    """One back-substitution of the factorised system reproduces magpylib-material-response's own apply_demag."""
+    magnet = magpy.magnet.Cylinder(dimension=(0.01, 0.005), polarization=(0, 0, 1.3), position=(0.003, 0, -0.004))
+    cells = [c.copy() for c in rod.cells]
+    coll = magpy.Collection(*cells, magnet)
+    for c in cells:
+        c.susceptibility = rod.chi
+    magnet.susceptibility = 0.0
+    solved = apply_demag(coll, solver="direct")
+    ref = np.array([s.orientation.apply(s.polarization) for s in solved.sources_all[:len(cells)]])
+    mine = rod.polarization(magnet.getB(rod.centroids))
+    assert np.abs(mine - ref).max() < 1e-9 * np.abs(ref).max()
+
+
+def test_reaction_equals_direct_force_on_the_magnet(rod):
+    """Newton's third law across two computations: the force on the magnet from the solved rod's field (charges on
+    the magnet's faces) against minus the magnet's force on the rod's cells (what magnet_wrenches uses)."""
+    centre = np.array([[0.004, 0.0, -0.0045]])
+    axis = np.array([[0.0, 0.0, 1.0]])
+    magnet = iron._magnet(type("D", (), {"magnet_diameter": 0.01, "magnet_length": 0.005, "remanence": 1.3})(),
+                          centre, axis)
+    J = rod.polarization(magnet.getB(rod.centroids))
+    pts, q = iron.magnet_faces(centre[0], axis[0], 0.01, 0.005, 1.3, n_r=8, n_phi=16)
+    F_direct, T_direct = iron.charge_wrench(pts, q, rod.field(J, pts), pivot=(0, 0, -0.1))
+    F_react, T_react = iron._reaction(rod, J, magnet, (0, 0, -0.1), order=4)
+    assert F_direct[2] > 1.0  # pulled towards the iron
+    assert np.linalg.norm(F_direct + F_react[0]) < 0.02 * np.linalg.norm(F_direct)
+    assert np.linalg.norm(T_direct + T_react[0]) < 0.02 * np.linalg.norm(T_direct)
+
+
+def test_face_charges_reproduce_getFT():
+    """F = ∮σB dA on the magnet's faces against magpylib.getFT's volume mesh, in a coil's field."""
+    loops = [magpy.current.Circle(diameter=0.04, current=100.0, position=(0, 0, z)) for z in (0.002, 0.01, 0.02)]
+    magnet = magpy.magnet.Cylinder(dimension=(0.0254, 0.0127), polarization=(0, 0, 1.32),
+                                   position=(0.008, 0.001, -0.009))
+    F_ref, T_ref = magpy.getFT(loops, magnet, pivot=(0, 0, -0.15), meshing=3000)
+    pts, q = iron.magnet_faces(magnet.position, (0, 0, 1), 0.0254, 0.0127, 1.32)
+    F, T = iron.charge_wrench(pts, q, magpy.getB(loops, pts, sumup=True), pivot=(0, 0, -0.15))
+    assert np.allclose(F, F_ref.sum(axis=0), atol=2e-3 * np.abs(F_ref.sum(axis=0)).max())
+    assert np.allclose(T, T_ref.sum(axis=0), atol=2e-3 * np.abs(T_ref.sum(axis=0)).max())
+
+
+def test_bad_mesh_level():
+    with pytest.raises(InputError, match="level"):
+        iron.mesh_parameters(9)
+
+
+# --- the torque model --------------------------------------------------------------------------------------------
+
+def test_air_core_reproduces_todays_map(design):
+    R = so3.random(5, 3)
+    c = np.random.default_rng(3).choice([-1.0, 0.0, 1.0], size=(5, len(design.stator)))
+    today = TorqueMap.build(design)
+    air = iron_model(design, air_coil(design.coil_ampere_turns))
+    assert np.array_equal(air.torque(R, c), today.torque(R, c))
+    assert np.array_equal(air.energy(R, c), today.energy(R, c))
+
+
+def test_iron_model_is_a_torque_model_with_a_detent(model, design):
+    from spherestep.statics import TorqueModel
+    assert isinstance(model, IronTorqueMap) and isinstance(model, TorqueModel)
+    R = so3.random(4, 5)
+    T0 = model.torque(R, np.zeros(len(design.stator)))
+    assert np.all(np.linalg.norm(T0, axis=1) > 1e-3)  # the iron pulls with every coil off
+    # linear in the currents: T(c) = T(0) + K c
+    c = np.random.default_rng(5).uniform(-1, 1, (4, len(design.stator)))
+    K = model.torque_matrix(R)
+    assert np.allclose(model.torque(R, c), T0 + np.einsum("kin,kn->ki", K, c), atol=1e-12, rtol=1e-10)
+
+
+def test_torque_is_minus_the_energy_gradient(model, design):
+    """τ·e = −dE/dθ along a turn exp(θ e) R, by central differences of the energy (to 1e-6 relative)."""
+    rng = np.random.default_rng(7)
+    R = so3.random(6, rng)
+    c = rng.choice([-1.0, 0.0, 1.0], size=(6, len(design.stator)))
+    e = rng.normal(size=(6, 3))
+    e /= np.linalg.norm(e, axis=1, keepdims=True)
+    h = 1e-6
+    Ep = model.energy(so3.exp(h * e) @ R, c)
+    Em = model.energy(so3.exp(-h * e) @ R, c)
+    dE = (Ep - Em) / (2 * h)
+    tau = np.einsum("ki,ki->k", model.torque(R, c), e)
+    scale = np.linalg.norm(model.torque(R, c), axis=1)
+    assert np.all(np.abs(tau + dE) <= 1e-6 * scale)
+
+
+# --- the fast model against stored full solves ------------------------------------------------------------------
+
+def _csv(name):
+    path = DATA / name
+    if not path.exists():
+        pytest.fail(f"{path} missing: run the script named in docs/magnetics.md")
+    return np.genfromtxt(path, delimiter=",", names=True, comments="#")
+
+
+def test_fast_model_against_fem(model):
+    """The fast model's pair torques within 5 % of the peak pair torque of the FEM (data/iron_fem.csv, the mesh
+    all angles were solved on; its convergence is in docs/magnetics.md)."""
+    fem = _csv("iron_fem.csv")
+    sizes, counts = np.unique(fem["maxh_face_m"], return_counts=True)
+    finest = fem["maxh_face_m"] == sizes[np.argmax(counts)]  # the mesh every angle was solved on
+    assert finest.sum() >= 5
+    a = np.radians(fem["alpha_deg"][finest])
+    for part, tab in (("detent_Nm", model.detent), ("linear_Nm", model.linear)):
+        ref = fem[part][finest]
+        peak = np.abs(ref).max()
+        assert np.abs(tab.pair(a) - ref).max() <= 0.05 * peak, part
+
+
+def test_pairwise_against_full_multibody_solve(design):
+    """Sum of pair tables against the full solve of two cores under the whole rotor (data/iron_multibody.csv)."""
+    mb = _csv("iron_multibody.csv")
+    full = np.c_[mb["full_x"], mb["full_y"], mb["full_z"]]
+    pair = np.c_[mb["pair_x"], mb["pair_y"], mb["pair_z"]]
+    err = np.linalg.norm(full - pair, axis=1) / np.linalg.norm(full, axis=1)
+    assert np.median(err) < 0.05
