@@ -225,7 +225,7 @@ def _single(field, sign, coils, R, c, order, energy, value, lead):
     """:func:`fast_evaluate` for one orientation ``R (3, 3)`` and ``order ≤ 1``."""
     live = np.flatnonzero(c)
     if len(live) == 0:
-        return (energy.reshape(lead),) + ((np.zeros(lead + (3,)),) if order else ())
+        return (None if energy is None else energy.reshape(lead),) + ((np.zeros(lead + (3,)),) if order else ())
     w = c[live]
     x = coils[live] @ R  # rows x_k = Rᵀ v_k
     F, g, _ = field.fields(x, order, value)
