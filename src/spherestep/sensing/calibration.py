@@ -25,6 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .. import so3
+from .._threads import single_blas_thread
 from ..errors import bad_value
 from .array import SensorArray
 from .estimate import Estimator
@@ -68,6 +69,7 @@ class Calibration:
         return (np.asarray(readings, dtype=float) - self.offsets) / self.gains
 
 
+@single_blas_thread
 def calibrate(design, array: SensorArray, readings, poses, rounds: int = 4) -> Calibration:
     """Self-calibration (module doc) from ``readings (K, S, 3)`` (sensor frame, coils off) taken at ``K``
     orientations known roughly as ``poses (K, 3, 3)`` (e.g. the nominal model's estimates)."""

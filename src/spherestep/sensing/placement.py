@@ -18,6 +18,7 @@ from functools import lru_cache
 import numpy as np
 
 from .. import so3
+from .._threads import single_blas_thread
 from ..errors import bad_value
 from .array import SensorArray, candidate_positions
 from .estimate import Estimator, super_fibonacci
@@ -79,6 +80,7 @@ class Placement:
             return np.degrees(1.0 / np.sqrt(np.maximum(self.worst_information, 0.0)))
 
 
+@single_blas_thread
 def greedy_placement(design, count: int = DEFAULT_COUNT, candidates=None, rotations: int = PLACEMENT_ROTATIONS,
                      part=TMAG5273A2) -> Placement:
     """Greedy E-optimal placement of ``count`` sensors (module doc); ``candidates`` default
@@ -130,6 +132,7 @@ class Accuracy:
         return dict(self.__dict__)
 
 
+@single_blas_thread
 def accuracy(design, array: SensorArray, samples: int = 200, coils_on: int = 4, current_error: float = 0.01,
              start_error_deg: float = 1.0, seed=0) -> Accuracy:
     """Monte Carlo accuracy of ``array``: Haar-random orientations, readings by magpylib with ``coils_on``

@@ -17,6 +17,7 @@ import magpylib as magpy
 import numpy as np
 
 from .. import so3
+from .._threads import single_blas_thread
 from ..errors import bad_value
 from ..magnetics import equilibrium, state_currents, torque_map
 from ..statics import holding_torque
@@ -98,6 +99,7 @@ class MarkerEffect:
         return dict(self.__dict__)
 
 
+@single_blas_thread
 def marker_effect(design, marked, states: int = 2, samples: int = 200, seed=0) -> MarkerEffect:
     """Measure :class:`MarkerEffect` for ``marked`` (from :func:`marked_design`) against ``design``."""
     pole = int(np.nonzero(np.asarray(marked.polarity) != np.asarray(design.polarity))[0][0])
