@@ -51,6 +51,17 @@ def test_collision_check(design):
     assert len(cand) > 100 and not sensing.coil_collisions(design, cand).any()
 
 
+def test_hall_sensor_noise_override(design, array):
+    """``noise_T=0``: readings are the exact field rounded to the LSB; a negative noise is refused."""
+    hall = sensing.HallSensor(design, array=array, noise_T=0.0)
+    R = so3.random(1, 14)[0]
+    m = hall.readings(R)
+    exact = np.einsum("sji,sj->si", array.axes, hall.table.field(R))
+    assert np.abs(m - exact).max() <= 0.5 * array.part.lsb_T + 1e-15
+    with pytest.raises(InputError, match="noise_T"):
+        sensing.HallSensor(design, array=array, noise_T=-1.0)
+
+
 def test_bad_array_input():
     with pytest.raises(InputError, match="positions"):
         sensing.SensorArray(np.zeros((2, 2)), np.zeros((2, 3, 3)))

@@ -13,6 +13,7 @@ the servo's ``measure(t, R_true, currents)`` form (:func:`spherestep.dynamics.si
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 
@@ -40,17 +41,21 @@ class HallSensor:
     fields beside the coils (e.g. an iron model's); ``current_error``: RMS relative error of the currents the
     controller believes flow (the coil-field subtraction's residual); ``truth``: ``"table"`` simulates the
     rotor's field with the estimator's table (max error 1e-7 T, fast for loops) or ``"magpylib"``;
-    ``iterations``: Gauss–Newton steps per update; ``start_readings``: readings averaged for the global start
+    ``iterations``: Gauss–Newton steps per update; ``noise_T``: RMS noise per axis in place of the part's;
+    ``start_readings``: readings averaged for the global start
     (the rotor at rest at power-up); ``seed``: noise. A rotor whose field has a symmetry group (the unmarked
     prototype's 60 rotations) is found only up to that group from no prior; a marked rotor is found exactly,
     the marker's near-symmetry resolved by :meth:`Estimator.initialise`."""
 
     def __init__(self, design, array: SensorArray | None = None, known=(), current_error: float = 0.0,
-                 truth: str = "table", iterations: int = 1, start_readings: int = 32, seed=None):
+                 truth: str = "table", iterations: int = 1, start_readings: int = 32, noise_T: float | None = None,
+                 seed=None):
         if truth not in ("table", "magpylib"):
             raise bad_value("truth", "'table' or 'magpylib'", truth)
         self.design = design
         self.array = array if array is not None else default_array(design)
+        if noise_T is not None:  # the same part with another noise (MagnetometerPart checks the value)
+            self.array = replace(self.array, part=replace(self.array.part, noise_T=noise_T))
         self.array.check_fits(design)
         self.coils = CoilField.build(design, self.array.positions)
         self.table = FieldTable.build(design, self.array.positions)
