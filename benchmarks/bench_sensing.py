@@ -1,7 +1,8 @@
 """The sensing chain on the prototype, measured in one run: table accuracy, time per update, accuracy against
 sensor count, global start, symmetry, the marker's cost, and a 1 kHz tracking run with the IMU alternatives.
 
-Run: ``OPENBLAS_NUM_THREADS=1 .venv/bin/python benchmarks/bench_sensing.py [--quick]``. Times are medians of
+Run: ``OPENBLAS_NUM_THREADS=1 .venv/bin/python benchmarks/bench_sensing.py [--quick]``, or one section with
+``--timing``, ``--model-error``, ``--servo``, ``--calibration``. Times are medians of
 repeated calls (``_timing.median_seconds``); ``× magpylib`` compares one estimator update with one magpylib
 evaluation of the rotor's field at the same sensors (what a per-iteration magpylib estimator would pay at
 least once per iteration). Errors are geodesic angles in degrees.
@@ -245,6 +246,10 @@ def servo(design, array):
 
 def main() -> None:
     quick = "--quick" in sys.argv
+    if "--timing" in sys.argv:
+        design = prototype()
+        timing(design, sensing.default_array(design))
+        return
     if "--calibration" in sys.argv:
         design = prototype()
         calibration(design, sensing.default_array(design))
