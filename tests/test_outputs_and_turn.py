@@ -158,6 +158,8 @@ def test_the_diagnosis_of_designs_that_cannot_step(proto):
     (lambda c: c.through(np.stack([2 * np.eye(3)] * 2), 3), "keys"),
     (lambda c: c.steps_for(float("nan"), 0.1), "length"),
     (lambda c: c.plan_geometric(None, "abc"), "targets"),
+    (lambda c: c.turn(None, (0, 0, 1), 30), "design"),
+    (lambda c: c.turn_targets("prototype", (0, 0, 1), 30), "design"),
 ])
 def test_the_trajectory_api_names_its_own_arguments(call, name):
     import spherestep.commutation as c

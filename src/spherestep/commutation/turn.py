@@ -46,6 +46,11 @@ def turn_targets(design, axis, angle_deg: float, steps: int | None = None) -> np
     """``(n+1, 3, 3)`` desired orientations turning ``angle_deg`` degrees about the fixed-frame ``axis`` from the
     stepper state nearest the identity (module docstring); ``steps`` equal steps, default ``STEP_FRACTION`` of
     a max step each."""
+    from ..motor import MotorDesign
+
+    if not isinstance(design, MotorDesign):
+        raise bad_value("design", "a MotorDesign (spherestep.motor.prototype() or MotorDesign.load(FILE))",
+                        type(design).__name__)
     vec = check_turn(axis, angle_deg, steps)
     states = design.states()
     if len(states) == 0:
