@@ -11,9 +11,9 @@ order is nested, so the first ``k`` sensors are the ``k``-sensor design.
 
 from __future__ import annotations
 
+import hashlib
 import time
 from dataclasses import dataclass
-from functools import lru_cache
 
 import numpy as np
 
@@ -104,14 +104,29 @@ def greedy_placement(design, count: int = DEFAULT_COUNT, candidates=None, rotati
     return Placement(cand, np.array(chosen), np.array(worst))
 
 
-@lru_cache(maxsize=4)
-def _default_placement(design) -> Placement:
-    return greedy_placement(design, DEFAULT_COUNT)
+_PLACEMENTS: dict[str, Placement] = {}
+
+
+def _design_key(design) -> str:
+    """A fingerprint of what the placement depends on: the poles, their polarity, the coils and the sizes."""
+    h = hashlib.sha256()
+    for arr in (design.rotor.centers, np.asarray(design.polarity, dtype=float), design.stator.centers,
+                design.stator_axis, [design.cap_half_angle, design.radius, design.air_gap, design.magnet_diameter,
+                                     design.magnet_length, design.coil_diameter, design.coil_length,
+                                     design.remanence]):
+        h.update(np.ascontiguousarray(np.asarray(arr, dtype=float)).tobytes())
+    return h.hexdigest()
 
 
 def default_array(design, count: int = DEFAULT_COUNT) -> SensorArray:
-    """The first ``count`` sensors of the greedy placement for ``design`` (computed once per design object)."""
-    return _default_placement(design).array(count)
+    """The first ``count`` sensors of the greedy placement for ``design`` (computed once per distinct design
+    in a process: a few seconds)."""
+    key = _design_key(design)
+    if key not in _PLACEMENTS:
+        if len(_PLACEMENTS) >= 8:
+            _PLACEMENTS.pop(next(iter(_PLACEMENTS)))
+        _PLACEMENTS[key] = greedy_placement(design, DEFAULT_COUNT)
+    return _PLACEMENTS[key].array(count)
 
 
 @dataclass(frozen=True)
