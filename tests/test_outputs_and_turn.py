@@ -166,3 +166,10 @@ def test_the_trajectory_api_names_its_own_arguments(call, name):
 
     with pytest.raises(InputError, match=f"^{name} must be"):
         call(c)
+
+
+def test_turn_with_the_potential_planner_follows_the_same_targets(proto):
+    plan = turn(proto, (0, 0, 1), 20, steps=2, planner="potential")
+    assert plan.planner == "potential" and len(plan.steps) == 3
+    assert np.allclose(plan.targets, turn_targets(proto, (0, 0, 1), 20, steps=2), atol=1e-12)
+    assert plan.summary().error_max < proto.max_step  # every step lands within reach of its target
