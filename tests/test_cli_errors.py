@@ -479,7 +479,8 @@ def measure(timeout: float = 60.0) -> dict:
                 os.chdir("/")
     finally:
         with contextlib.suppress(StopIteration):
-            next(gen)
+            next(gen)  # unmounts
+        shutil.rmtree(e["base"], ignore_errors=True)
     slow.sort(reverse=True)
     counts["slowest_s"] = [(round(t, 2), n) for t, n in slow[:5]]
     counts["median_s"] = round(sorted(t for t, _ in slow)[len(slow) // 2], 3) if slow else None
