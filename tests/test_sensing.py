@@ -60,6 +60,10 @@ def test_hall_sensor_noise_override(design, array):
     assert np.abs(m - exact).max() <= 0.5 * array.part.lsb_T + 1e-15
     with pytest.raises(InputError, match="noise_T"):
         sensing.HallSensor(design, array=array, noise_T=-1.0)
+    direct = sensing.HallSensor(design, array=array, noise_T=0.0, truth="magpylib")
+    assert np.abs(direct.readings(R) - m).max() <= array.part.lsb_T  # magpylib and the table agree to one LSB
+    with pytest.raises(InputError, match="truth"):
+        sensing.HallSensor(design, array=array, truth="exact")
 
 
 def test_bad_array_input():
