@@ -45,9 +45,9 @@ def test_entry_points_run_on_one_blas_thread_and_restore_the_callers_setting(pro
     seen = []
 
     class Spy(type(tmap)):
-        def energy(self, R, currents):
+        def evaluate(self, R, currents, order):
             seen.append(max(lib["num_threads"] for lib in threadpool_info() if lib["user_api"] == "blas"))
-            return super().energy(R, currents)
+            return super().evaluate(R, currents, order)
 
     spy = Spy(*(getattr(tmap, f) for f in tmap.__dataclass_fields__))
     states = proto.states()
