@@ -123,9 +123,12 @@ def test_step_torque_drives_to_the_next_state(proto, tmap, settled):
 def test_state_torques_rows(proto, tmap):
     rows = mg.state_torques(proto, tmap, [0])
     r = rows[0]
-    assert r["coils"] == {int(k): int(s) for k, s in proto.states().coils(0).items()}
-    assert 0 < r["holding_torque_Nm"] <= r["strongest_axis_Nm"]
-    assert r["steps"] > 0 and 0 <= r["downhill_steps"] <= r["steps"]
+    assert isinstance(r, mg.StateTorque) and r.coils == {int(k): int(s) for k, s in proto.states().coils(0).items()}
+    assert 0 < r.holding_torque_Nm <= r.strongest_axis_Nm
+    assert r.steps > 0 and 0 <= r.downhill_steps <= r.steps
+    people = r.to_dict()
+    assert people["equilibrium_offset_deg"] == math.degrees(r.equilibrium_offset_rad) and "equilibrium_offset_rad" not in people
+    assert people["weakest_axis"] == list(r.weakest_axis)
     with pytest.raises(InputError, match="^indices must be"):
         mg.state_torques(proto, tmap, [len(proto.states())])
 
@@ -141,3 +144,22 @@ def test_calibrated_potential_against_magpylib(proto, tmap):
     assert s["potential_vs_direct"]["relative_error"] < 0.35
     assert s["state_offset_deg"]["max"] < 1.0
     assert s["minima_fraction"] == {"map": 1.0, "potential": 1.0}
+
+
+def test_map_takes_the_rotation_contract_and_any_batch(proto, tmap):
+    """Any batch shape, as in every room; a non-rotation refused naming R (so3.as_rotations)."""
+    from spherestep import so3
+
+    R = so3.random(6, 9)
+    c = mg.state_currents(proto, 0)
+    flat, batch = tmap.torque(R, c), tmap.torque(R.reshape(2, 3, 3, 3), np.tile(c, (2, 3, 1)))
+    assert batch.shape == (2, 3, 3) and np.array_equal(batch.reshape(6, 3), flat)
+    assert np.array_equal(tmap.energy(R.reshape(3, 2, 3, 3), c).ravel(), tmap.energy(R, c))
+    assert tmap.torque_matrix(R.reshape(2, 3, 3, 3)).shape == (2, 3, 3, len(proto.stator))
+    assert np.allclose(tmap.torque(R[0], c), flat[0], rtol=1e-12, atol=1e-15)  # one rotation: the single-orientation path
+    for bad in (2 * np.eye(3), np.diag([1.0, 1.0, -1.0])):
+        with pytest.raises(InputError) as err:
+            tmap.torque(bad, c)
+        assert err.value.field == "R"
+    with pytest.raises(InputError, match="^currents must be"):
+        tmap.torque(R.reshape(2, 3, 3, 3), np.tile(c, (3, 2, 1)))

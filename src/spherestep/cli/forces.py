@@ -56,7 +56,7 @@ def forces(
         tmap = mg.torque_map(design)
     idx = np.sort(np.random.default_rng(seed).choice(len(st), min(states, len(st)), replace=False))
     with console.status("holding and step torques", spinner="dots") if not as_json else nullcontext():
-        rows = mg.state_torques(design, tmap, idx)
+        rows = [r.to_dict(degrees=True) for r in mg.state_torques(design, tmap, idx)]
     files = Outputs(out, ("force_curve.csv", "force_curve.png", "forces.json"))
     csv_path = out / "force_curve.csv"
     with files:
@@ -101,8 +101,8 @@ def forces(
         table.add_row(str(r["state"]), " ".join(f"{k}{'+' if s > 0 else '−'}" for k, s in r["coils"].items()),
                       f"{r['equilibrium_offset_deg']:.2f}", f"{r['holding_torque_Nm']:.3f}",
                       f"{r['strongest_axis_Nm']:.3f}", f"{r['stiffness_Nm_per_rad'][0]:.3f}",
-                      f"{r.get('downhill_steps', 0)}/{r['steps']}",
-                      f"{r['step_peak_torque_Nm']:.3f}" if "step_peak_torque_Nm" in r else "—")
+                      f"{r['downhill_steps'] or 0}/{r['steps']}",
+                      f"{r['step_peak_torque_Nm']:.3f}" if r["step_peak_torque_Nm"] is not None else "—")
     console.print(table)
     if "iron" in info:
         d = info["iron"]

@@ -1,6 +1,6 @@
 """Commutation: trajectories, the :class:`Plan`, and the planners (Sec. III)."""
 
-from ..motor.design import default_channel_map
+from ..channels import default_channel_map
 from .geometric import plan_geometric
 from .plan import Plan, PlanSummary, Step, coil_masks
 from .potential_planner import plan_potential

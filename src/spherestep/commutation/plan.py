@@ -22,6 +22,7 @@ import numpy as np
 
 from .. import so3
 from ..atomic import write_text
+from ..channels import as_channel_map
 from ..errors import bad_value
 
 FORMAT = "spherestep-plan"
@@ -272,10 +273,7 @@ def _channel_map(entries, coil_count: int) -> np.ndarray:
             if isinstance(value, bool) or not isinstance(value, int) or value < 0:
                 raise bad_value(f"{name}.{role}", "a relay channel number ≥ 0", value)
         rows.append((entry["enable"], entry["polarity"]))
-    cmap = np.array(rows, dtype=int)
-    if len(np.unique(cmap)) != cmap.size:
-        raise bad_value("plan.channel_map", "distinct channels for every coil and role", cmap.tolist())
-    return cmap
+    return as_channel_map(np.array(rows, dtype=int).reshape(-1, 2), coil_count, "plan.channel_map")
 
 
 def _matrix(value, name: str) -> np.ndarray:

@@ -18,6 +18,7 @@ import numpy as np
 
 from .. import so3
 from ..errors import bad_value
+from ..motor import coil_currents
 from .geometric import BLOCKED, DEFAULT_CANDIDATES, start_state
 from .plan import Plan, Step
 from .trajectory import check_targets
@@ -53,7 +54,7 @@ def plan_potential(design, targets, model, *, max_coils: int = DEFAULT_MAX_COILS
     N = len(design.stator)
     first = start_state(states, targets[0]) if start is None else int(start)
     coils = _trim(states.held(first), design, states.rotations[first], max_coils)
-    here = equilibrium(model, states.rotations[first], _currents(coils, N)).rotation
+    here = equilibrium(model, states.rotations[first], coil_currents(coils, N)).rotation
     _, near = states.nearest(targets, k=candidates)
     rows = [(targets[0], here, coils, "ok")]
     for i in range(1, len(targets)):
@@ -64,7 +65,7 @@ def plan_potential(design, targets, model, *, max_coils: int = DEFAULT_MAX_COILS
                              for s in np.concatenate([near[i], around])]
         unique = list({tuple(sorted(o.items())): o for o in options}.values())
         eq = equilibrium(model, np.broadcast_to(here, (len(unique), 3, 3)),
-                         np.array([_currents(o, N) for o in unique]))
+                         np.array([coil_currents(o, N) for o in unique]))
         valid = eq.converged & eq.is_minimum & (so3.distance(eq.rotation, here) <= reach)
         if not valid.any():
             rows.append((targets[i], here, coils, BLOCKED))
@@ -75,13 +76,6 @@ def plan_potential(design, targets, model, *, max_coils: int = DEFAULT_MAX_COILS
         coils, here = unique[best], eq.rotation[best]
         rows.append((targets[i], here, coils, status))
     return _assemble(design, rows)
-
-
-def _currents(coils: dict[int, int], N: int) -> np.ndarray:
-    c = np.zeros(N)
-    for k, s in coils.items():
-        c[k] = s
-    return c
 
 
 def _assemble(design, rows) -> Plan:

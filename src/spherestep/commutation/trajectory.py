@@ -54,11 +54,9 @@ def through(keys, steps: int) -> np.ndarray:
 
 
 def check_targets(targets) -> np.ndarray:
-    """``targets`` as a float array of at least two rotations ``(n+1, 3, 3)``; InputError otherwise."""
-    try:
-        targets = np.asarray(targets, dtype=float)
-    except (TypeError, ValueError):
-        raise bad_value("targets", "at least two rotations, shape (n+1, 3, 3)", targets) from None
-    if targets.ndim != 3 or targets.shape[1:] != (3, 3) or len(targets) < 2:
+    """``targets`` as at least two proper rotations ``(n+1, 3, 3)`` (:func:`spherestep.so3.as_rotations`);
+    InputError naming ``targets`` otherwise."""
+    targets = so3.as_rotations(targets, "targets")
+    if targets.ndim != 3 or len(targets) < 2:
         raise bad_value("targets", "at least two rotations, shape (n+1, 3, 3)", f"shape {targets.shape}")
     return targets

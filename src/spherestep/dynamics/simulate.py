@@ -15,6 +15,7 @@ import numpy as np
 
 from .. import so3
 from ..errors import bad_value
+from ..motor import coil_currents
 from .rotor import Rotor
 from .._threads import single_blas_thread
 
@@ -22,11 +23,8 @@ EXECUTED_TOL = math.radians(0.5)
 
 
 def currents_of(coils: dict[int, int], coil_count: int) -> np.ndarray:
-    """The current vector ``(N,)`` of a coil → ±1 map."""
-    c = np.zeros(coil_count)
-    for k, sign in coils.items():
-        c[k] = sign
-    return c
+    """The current vector ``(N,)`` of a coil → ±1 map (:func:`spherestep.motor.coil_currents`, the one helper)."""
+    return coil_currents(coils, coil_count)
 
 
 @dataclass

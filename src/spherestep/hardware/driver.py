@@ -16,6 +16,7 @@ from contextlib import contextmanager
 
 import numpy as np
 
+from ..channels import as_channel_map
 from ..commutation.plan import Step, coil_masks
 from ..errors import InputError, bad_value
 from .backend import Backend, DeviceInfo, LinkError
@@ -52,16 +53,11 @@ class CoilDriver:
     """
 
     def __init__(self, backend: Backend, channel_map, limits: ThermalLimits | None = None, jitter: float = 0.010):
-        cmap = np.asarray(channel_map)
-        if (cmap.ndim != 2 or cmap.shape[1] != 2 or cmap.shape[0] < 1 or not np.issubdtype(cmap.dtype, np.integer)
-                or cmap.min() < 0):
-            raise bad_value("channel_map", "an (N, 2) array of non-negative integer (enable, polarity) channels",
-                            cmap.tolist() if cmap.size < 20 else f"array of shape {cmap.shape}")
-        if np.unique(cmap).size != cmap.size:
-            raise bad_value("channel_map", "distinct channels (no relay shared by two coils or two roles)",
-                            cmap.tolist() if cmap.size < 20 else f"array of shape {cmap.shape}")
+        cmap = as_channel_map(channel_map)
+        if len(cmap) == 0:
+            raise bad_value("channel_map", "channels for at least one coil", "an empty map")
         self.backend = backend
-        self.channel_map = cmap.astype(int)
+        self.channel_map = cmap
         self.limits = limits if limits is not None else ThermalLimits()
         self.guard = ThermalGuard(self.limits, tolerance=jitter)
         self.coils: dict[int, int] = {}

@@ -66,25 +66,6 @@ def polar(theta, name: str = "theta") -> np.ndarray:
     return arr
 
 
-def points(u, name: str = "u") -> np.ndarray:
-    """Unit 3-vectors ``(..., 3)`` (normalised here; zero vectors are rejected)."""
-    arr = real_array(u, name)
-    if arr.shape[-1:] != (3,):
-        raise bad_value(name, "points of shape (..., 3)", f"shape {arr.shape}")
-    norm = np.linalg.norm(arr, axis=-1, keepdims=True)
-    if np.any(norm == 0.0):
-        raise bad_value(name, "non-zero 3-vectors", "a zero vector")
-    return arr / norm
-
-
-def rotations(R, name: str = "R") -> np.ndarray:
-    """Rotation matrices ``(..., 3, 3)`` with finite entries."""
-    arr = real_array(R, name)
-    if arr.shape[-2:] != (3, 3):
-        raise bad_value(name, "rotation matrices of shape (..., 3, 3)", f"shape {arr.shape}")
-    return arr
-
-
 def coefficients_s2(flm, name: str = "flm") -> tuple[np.ndarray, int]:
     """Spherical coefficients ``(..., L+1, 2L+1)``; returns the complex array and ``L``."""
     arr = _complex(flm, name)

@@ -12,6 +12,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.special import sph_harm_y, sph_legendre_p_all
 
+from ..so3 import as_rotations
+from ..sphere import as_points
 from . import _checks
 from ._wigner import wigner_D
 
@@ -39,7 +41,7 @@ def sph_harm(l, m, theta, phi) -> np.ndarray:
 
 def sph_harm_u(l, m, u) -> np.ndarray:
     """``Y_l^m(u)`` at unit vectors ``u`` ``(..., 3)`` (``u = (cos φ sin θ, sin φ sin θ, cos θ)``); broadcasts."""
-    u = _checks.points(u)
+    u = as_points(u, "u")
     theta, phi = _polar_azimuth(u)
     l = _checks.degrees(l)
     return np.asarray(sph_harm_y(l, _checks.orders(m, l, "m"), theta, phi))
@@ -110,7 +112,7 @@ def s2_evaluate(flm, u) -> np.ndarray:
     Direct summation, memory ``~ (L+1)(2L+1)`` floats per point.
     """
     flm, lmax = _checks.coefficients_s2(flm)
-    u = _checks.points(u)
+    u = as_points(u, "u")
     theta, phi = _polar_azimuth(u)
     table = np.fft.fftshift(sph_legendre_p_all(lmax, lmax, theta.ravel())[0], axes=1)  # (l, m, P)
     by_m = np.einsum("lmp,...lm->...mp", table, flm)
@@ -126,7 +128,7 @@ def s2_rotate(flm, R) -> np.ndarray:
     ``Y_l^n(Rᵀ u) = Σ_m D^l_mn(R) Y_l^m(u)``. ``R`` ``(..., 3, 3)`` broadcasts against ``flm``'s leading axes.
     """
     flm, lmax = _checks.coefficients_s2(flm)
-    R = _checks.rotations(R)
+    R = as_rotations(R, "R")
     lead = np.broadcast_shapes(flm.shape[:-2], R.shape[:-2])
     out = np.zeros(lead + flm.shape[-2:], dtype=complex)
     for l in range(lmax + 1):

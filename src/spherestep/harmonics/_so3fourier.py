@@ -89,7 +89,7 @@ def so3_inverse(fhat) -> np.ndarray:
 def so3_evaluate(fhat, R) -> np.ndarray:
     """Eq. (13) at rotations ``R`` ``(K..., 3, 3)``: ``f(R) = Σ_l (2l+1) Σ_mn f̂^l_nm U^l_mn(R)``, ``(B..., K...)``."""
     fhat, lmax = _checks.coefficients_so3(fhat)
-    R = _checks.rotations(R)
+    R = so3.as_rotations(R, "R")
     out = 0.0
     for l in range(lmax + 1):
         block = slice(lmax - l, lmax + l + 1)

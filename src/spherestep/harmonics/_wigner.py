@@ -70,7 +70,7 @@ def wigner_D(l, R) -> np.ndarray:
 def euler_zxz(R) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """ZXZ angles ``(α, β, γ)`` of ``R = R3(α) R1(β) R3(γ)``, each ``R.shape[:-2]``
     (:func:`spherestep.so3.to_euler_zxz`, exact near ``β = 0``)."""
-    angles = to_euler_zxz(_checks.rotations(R))
+    angles = to_euler_zxz(R)  # the one rotation contract, naming R
     return angles[..., 0], angles[..., 1], angles[..., 2]
 
 

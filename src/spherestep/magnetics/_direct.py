@@ -22,7 +22,8 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from ..errors import bad_value
-from ._model import as_currents, as_meshing, as_rotations, rotor_collection, rotor_magnets, stator_coils, z_to
+from ._model import (as_currents, as_meshing, as_rotations, rotor_collection, rotor_magnets, stator_coils,
+                     unflatten, z_to)
 
 MESHING = 216  # default cells per magnet for direct evaluation (0.6 % of the peak pair torque)
 EPS = 1e-6  # finite-difference step (m) for ∇B; 1e-5 and 1e-7 agree to 1e-7 of the peak torque
@@ -77,13 +78,13 @@ def force_torque(design, R, currents, meshing: int = MESHING) -> tuple[np.ndarra
     arrays of shape ``(3,)`` for one orientation, else ``(K, 3)``. Only coils with some current are
     evaluated; ``meshing`` is the number of cells per rotor magnet (see the module's convergence notes).
     """
-    R, single = as_rotations(R)
-    c = as_currents(currents, len(design.stator), design.failed_coils, len(R))
+    R, batch = as_rotations(R)
+    c = as_currents(currents, len(design.stator), design.failed_coils, batch)
     active = np.nonzero(np.any(c != 0, axis=0))[0]
     Fk, Tk = coil_wrenches(design, R, active, meshing)
     F = np.einsum("kn,kni->ki", c[:, active], Fk)
     T = np.einsum("kn,kni->ki", c[:, active], Tk)
-    return (F[0], T[0]) if single else (F, T)
+    return unflatten(F, batch), unflatten(T, batch)
 
 
 def torque(design, R, currents, meshing: int = MESHING) -> np.ndarray:
@@ -111,8 +112,8 @@ def reaction(design, R, currents, loops: int = LOOPS, segments: int = SEGMENTS) 
     For speed the computation runs in the rotor's frame, where the rotor stands still and the loops move
     along target paths ``Rᵀ x`` (vectorised by magpylib); results are turned back with ``R``.
     """
-    R, single = as_rotations(R)
-    c = as_currents(currents, len(design.stator), design.failed_coils, len(R))
+    R, batch = as_rotations(R)
+    c = as_currents(currents, len(design.stator), design.failed_coils, batch)
     loops = as_meshing(loops, "loops")
     segments = as_meshing(segments, "segments")
     if segments < 4:
@@ -140,4 +141,4 @@ def reaction(design, R, currents, loops: int = LOOPS, segments: int = SEGMENTS) 
             cf = c[sl][:, active]
             F[sl] = np.einsum("kij,kj->ki", R[sl], np.einsum("kn,kni->ki", cf, f))
             T[sl] = np.einsum("kij,kj->ki", R[sl], np.einsum("kn,kni->ki", cf, t))
-    return (F[0], T[0]) if single else (F, T)
+    return unflatten(F, batch), unflatten(T, batch)

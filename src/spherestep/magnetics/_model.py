@@ -46,6 +46,7 @@ import magpylib as magpy
 import numpy as np
 from scipy.spatial.transform import Rotation
 
+from .. import so3
 from ..errors import bad_value
 
 MU0 = float(magpy.mu_0)  # vacuum permeability, T·m/A (magpylib's value, 1.25663706127e-6)
@@ -115,33 +116,29 @@ def stator_coils(design, coils=None, currents=None) -> list:
             for i, (vk, ck) in enumerate(zip(v, c))]
 
 
-def as_rotations(R) -> tuple[np.ndarray, bool]:
-    """``R`` as ``(K, 3, 3)`` proper rotations (InputError naming ``R`` otherwise) and whether it was one."""
-    arr = np.asarray(R, dtype=float)
-    if arr.shape[-2:] != (3, 3) or arr.ndim not in (2, 3):
-        raise bad_value("R", "a rotation matrix (3, 3) or a stack of them (K, 3, 3)", f"shape {arr.shape}")
-    single = arr.ndim == 2
-    arr = arr.reshape(-1, 3, 3)
-    if not np.all(np.isfinite(arr)):
-        raise bad_value("R", "finite rotation matrices", "NaN or infinite entries")
-    err = np.abs(np.swapaxes(arr, 1, 2) @ arr - np.eye(3)).max(axis=(1, 2)) if len(arr) else np.zeros(0)
-    det = np.linalg.det(arr) if len(arr) else np.zeros(0)
-    bad = np.nonzero((err > 1e-6) | (det < 0))[0]
-    if len(bad):
-        raise bad_value("R", "proper rotation matrices (RᵀR = I within 1e-6, det +1)",
-                        f"matrix {int(bad[0])} with |RᵀR − I| = {err[bad[0]]:.3g}, det {det[bad[0]]:.3g}")
-    return arr, single
+def as_rotations(R) -> tuple[np.ndarray, tuple[int, ...]]:
+    """``R`` through the one rotation contract (:func:`spherestep.so3.as_rotations`: ``(..., 3, 3)`` proper
+    rotations, any batch shape, InputError naming ``R``), flattened to ``(K, 3, 3)``, and its batch shape."""
+    arr = so3.as_rotations(R, "R")
+    return arr.reshape(-1, 3, 3), arr.shape[:-2]
 
 
-def as_currents(currents, N: int, failed, K: int) -> np.ndarray:
-    """``currents`` as ``(K, N)`` floats (a single ``(N,)`` row is repeated); InputError naming ``currents``
-    for a wrong shape, non-finite values, or current in one of the ``failed`` coils."""
+def unflatten(x: np.ndarray, batch: tuple[int, ...]) -> np.ndarray:
+    """``x (K, ...)`` computed on flattened rotations, shaped back to ``batch + (...)``."""
+    return x.reshape(batch + x.shape[1:])
+
+
+def as_currents(currents, N: int, failed, batch: tuple[int, ...]) -> np.ndarray:
+    """``currents`` as ``(K, N)`` floats for rotations of batch shape ``batch`` (``K`` their number; a single
+    ``(N,)`` row is repeated); InputError naming ``currents`` for a wrong shape, non-finite values, or current
+    in one of the ``failed`` coils."""
     c = np.asarray(currents, dtype=float)
     if c.shape == (N,):
-        c = np.broadcast_to(c, (K, N))
-    if c.shape != (K, N):
-        raise bad_value("currents", f"one current per coil, shape ({N},) or ({K}, {N}) (nominal ±1, 0 off)",
+        c = np.broadcast_to(c, batch + (N,))
+    if c.shape != batch + (N,):
+        raise bad_value("currents", f"one current per coil, shape ({N},) or {batch + (N,)} (nominal ±1, 0 off)",
                         f"shape {c.shape}")
+    c = c.reshape(-1, N)
     if not np.all(np.isfinite(c)):
         raise bad_value("currents", "finite numbers", "NaN or infinite entries")
     live = [k for k in failed if np.any(c[:, k] != 0)]

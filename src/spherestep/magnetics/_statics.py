@@ -6,12 +6,13 @@ energy ``E(R, c)``, ``T = −∂E/∂θ`` for ``R → exp(θ̂) R``, fixed frame
 
 * :func:`equilibrium`: :func:`spherestep.statics.equilibrium` with the map's settings (``gtol`` 1e-9 of
   ``τ_ref = max|τ| Σ_k |c_k|``, steps of at most 2°, 60 iterations).
-* :func:`state_torques`: holding and stepping torques of stepper states.
+* :func:`state_torques`: holding and stepping torques of stepper states, one frozen :class:`StateTorque` each.
 """
 
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass, fields
 
 import numpy as np
 
@@ -30,21 +31,51 @@ def equilibrium(tmap: TorqueMap, R0, currents, *, gtol: float = 1e-9, max_iter: 
 
 
 def state_currents(design, index: int) -> np.ndarray:
-    """Currents ``(N,)`` that hold stepper state ``index``: each held pole's coil at the pole's polarity."""
-    c = np.zeros(len(design.stator))
-    for k, sign in design.states().coils(int(index)).items():
-        c[k] = sign
-    return c
+    """Currents ``(N,)`` that hold stepper state ``index``: each held pole's coil at the pole's polarity
+    (``design.coil_currents(design.states().coils(index))``, the one coils → currents helper)."""
+    return design.coil_currents(design.states().coils(int(index)))
 
 
-def state_torques(design, tmap: TorqueMap, indices, *, max_angle: float = math.radians(20.0)) -> list[dict]:
-    """Holding and stepping torques of the stepper states ``indices`` of ``design`` (N·m, degrees).
+@dataclass(frozen=True)
+class StateTorque:
+    """Holding and stepping torques of one stepper state (N·m; angles in radians, ``*_rad``).
 
-    Per state: its coils, the offset of the physical equilibrium from the geometric state, the stiffness
-    eigenvalues, the holding torque (weakest of the 32 axes of :func:`holding_torque`) and its axis, the
-    strongest axis, and over the steps to every state within ``design.max_step`` (next state's coils on,
-    along the geodesic between the equilibria, :func:`step_torque`): the number of steps, the largest drive
-    torque met along any of them and the smallest drive at a step's start.
+    ``coils``: its coils and their polarities; ``equilibrium_offset_rad``: Park distance of the physical
+    equilibrium from the geometric state; ``stiffness_Nm_per_rad``: the stiffness eigenvalues; the holding
+    torque (weakest of the 32 axes of :func:`~spherestep.statics.holding_torque`), its ``weakest_axis`` and the
+    strongest axis's torque; over the ``steps`` to every state within ``design.max_step``: the largest drive
+    torque met along any step, the smallest and the median drive at a step's start and the number of downhill
+    steps (all None when the state has no neighbour within a step).
+    """
+
+    state: int
+    coils: dict[int, int]
+    equilibrium_offset_rad: float
+    stiffness_Nm_per_rad: tuple[float, ...]
+    holding_torque_Nm: float
+    weakest_axis: tuple[float, float, float]
+    strongest_axis_Nm: float
+    steps: int
+    step_peak_torque_Nm: float | None = None
+    step_start_torque_min_Nm: float | None = None
+    step_start_torque_median_Nm: float | None = None
+    downhill_steps: int | None = None
+
+    def to_dict(self, degrees: bool = True) -> dict:
+        """JSON-ready dict; ``equilibrium_offset_deg`` in degrees when ``degrees``; tuples as lists."""
+        out = {f.name: getattr(self, f.name) for f in fields(self)}
+        out["stiffness_Nm_per_rad"], out["weakest_axis"] = list(self.stiffness_Nm_per_rad), list(self.weakest_axis)
+        if degrees:
+            out = {("equilibrium_offset_deg" if k == "equilibrium_offset_rad" else k):
+                   (math.degrees(v) if k == "equilibrium_offset_rad" else v) for k, v in out.items()}
+        return out
+
+
+def state_torques(design, tmap: TorqueMap, indices, *, max_angle: float = math.radians(20.0)) -> list[StateTorque]:
+    """The :class:`StateTorque` of each stepper state in ``indices`` of ``design``, on the torque map: its coils
+    on at their poles' polarities, settled into the physical equilibrium, turned about 32 axes for the holding
+    torque (:func:`holding_torque`), and stepped to every state within ``design.max_step`` (next state's coils
+    on, along the geodesic between the equilibria, :func:`step_torque`).
     """
     st = design.states()
     idx = np.asarray(indices, dtype=int).reshape(-1)
@@ -57,17 +88,18 @@ def state_torques(design, tmap: TorqueMap, indices, *, max_angle: float = math.r
     for n, i in enumerate(idx):
         nb = st.within(st.rotations[i], design.max_step)
         nb = nb[nb != i]
-        row = {"state": int(i), "coils": {int(k): int(s) for k, s in st.coils(int(i)).items()},
-               "equilibrium_offset_deg": float(np.degrees(so3.distance(eq.rotation[n], st.rotations[i]))),
-               "stiffness_Nm_per_rad": eq.stiffness[n].tolist(),
-               "holding_torque_Nm": float(hold.torque[n]), "weakest_axis": hold.weakest[n].tolist(),
-               "strongest_axis_Nm": float(hold.per_axis[n].max()), "steps": int(len(nb))}
+        steps = {}
         if len(nb):
             cb = np.array([state_currents(design, j) for j in nb])
             eqb = equilibrium(tmap, st.rotations[nb], cb)
             s = step_torque(tmap, np.repeat(eq.rotation[n][None], len(nb), axis=0), eqb.rotation, cb)
-            row |= {"step_peak_torque_Nm": float(s.peak.max()), "step_start_torque_min_Nm": float(s.start.min()),
-                    "step_start_torque_median_Nm": float(np.median(s.start)),
-                    "downhill_steps": int(np.sum(s.least > 0))}
-        rows.append(row)
+            steps = dict(step_peak_torque_Nm=float(s.peak.max()), step_start_torque_min_Nm=float(s.start.min()),
+                         step_start_torque_median_Nm=float(np.median(s.start)),
+                         downhill_steps=int(np.sum(s.least > 0)))
+        rows.append(StateTorque(
+            state=int(i), coils={int(k): int(v) for k, v in st.coils(int(i)).items()},
+            equilibrium_offset_rad=float(so3.distance(eq.rotation[n], st.rotations[i])),
+            stiffness_Nm_per_rad=tuple(eq.stiffness[n].tolist()), holding_torque_Nm=float(hold.torque[n]),
+            weakest_axis=tuple(hold.weakest[n].tolist()), strongest_axis_Nm=float(hold.per_axis[n].max()),
+            steps=int(len(nb)), **steps))
     return rows

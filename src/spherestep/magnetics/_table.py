@@ -52,7 +52,7 @@ from scipy.spatial.transform import Rotation
 from ..rotor_field import RotorField, fast_evaluate, fast_torque_matrix
 from ..statics import TorqueModelBase
 from ._direct import EPS
-from ._model import MU0, as_currents, as_meshing, as_rotations
+from ._model import MU0, as_currents, as_meshing, as_rotations, unflatten
 
 TABLE_MESHING = 1000  # cells per magnet for the table (0.1 % of the peak pair torque)
 CHUNK = 256  # orientations per vectorised block (bounds the (K, M, N) arrays)
@@ -174,10 +174,10 @@ class TorqueMap(TorqueModelBase):
     def evaluate(self, R, currents, order: int) -> tuple[np.ndarray, ...]:
         """``(E,)``, ``(E, τ)`` or ``(E, τ, H)`` through the rotor function (J, N·m, N·m/rad); ``R (K, 3, 3)`` or
         ``(3, 3)``, currents ``(K, N)`` or ``(N,)``."""
-        R, single = as_rotations(R)
-        c = as_currents(currents, len(self.coils), self.failed, len(R))
+        R, batch = as_rotations(R)
+        c = as_currents(currents, len(self.coils), self.failed, batch)
         out = fast_evaluate(self.rotor_field, 1.0, self.coils, R, c, order, 0.0)
-        return tuple(a[0] for a in out) if single else out
+        return tuple(unflatten(a, batch) for a in out)
 
     def hessian(self, R, currents) -> np.ndarray:
         """``H = ∂²E/∂θ²`` (N·m/rad, fixed frame), analytic through the rotor function, ``(K, 3, 3)`` or ``(3, 3)``."""
@@ -209,42 +209,40 @@ class TorqueMap(TorqueModelBase):
         """``K(R)`` (N·m per unit current), ``(3, N)`` or ``(K, 3, N)``: column ``k`` is coil ``k``'s torque at unit
         current, ``R (x_k × S(x_k))`` (zero for failed coils); the map is linear in the currents, so ``currents``
         does not matter."""
-        R, single = as_rotations(R)
-        K = fast_torque_matrix(self.rotor_field, 1.0, self.coils, self.failed, R)
-        return K[0] if single else K
+        R, batch = as_rotations(R)
+        return unflatten(fast_torque_matrix(self.rotor_field, 1.0, self.coils, self.failed, R), batch)
 
     def torque_matrix_pairwise(self, R, currents=None) -> np.ndarray:
         """:meth:`torque_matrix` from the pair sums :meth:`coil_torques` (the reference)."""
-        R, single = as_rotations(R)
+        R, batch = as_rotations(R)
         live = np.setdiff1d(np.arange(len(self.coils)), self.failed)
         K = np.zeros((len(R), 3, len(self.coils)))
         K[:, :, live] = np.swapaxes(self.coil_torques(R, live), 1, 2)
-        return K[0] if single else K
+        return unflatten(K, batch)
 
     def torque_reference(self, currents) -> np.ndarray:
         """``max|τ(α)| Σ_k |c_k|`` (N·m), shape ``currents.shape[:-1]``: the reference for torque tolerances."""
         return float(np.max(np.abs(self.tau))) * np.sum(np.abs(np.asarray(currents, dtype=float)), axis=-1)
 
-    def _drive(self, R, currents) -> tuple[np.ndarray, bool, np.ndarray, np.ndarray]:
-        R, single = as_rotations(R)
-        c = as_currents(currents, len(self.coils), self.failed, len(R))
+    def _drive(self, R, currents) -> tuple[np.ndarray, tuple[int, ...], np.ndarray, np.ndarray]:
+        R, batch = as_rotations(R)
+        c = as_currents(currents, len(self.coils), self.failed, batch)
         active = np.nonzero(np.any(c != 0, axis=0))[0]
-        return R, single, c[:, active], active
+        return R, batch, c[:, active], active
 
     def torque(self, R, currents) -> np.ndarray:
         """Torque (N·m, fixed frame, about the centre) for rotations ``R (K, 3, 3)`` or ``(3, 3)`` and
         currents ``(K, N)`` or ``(N,)``: ``R Σ_k c_k x_k × S(x_k)`` through the rotor function; shape ``(K, 3)``
         or ``(3,)``."""
-        R, single = as_rotations(R)
-        c = as_currents(currents, len(self.coils), self.failed, len(R))
-        T = fast_evaluate(self.rotor_field, 1.0, self.coils, R, c, 1, None, value=False)[1]
-        return T[0] if single else T
+        R, batch = as_rotations(R)
+        c = as_currents(currents, len(self.coils), self.failed, batch)
+        return unflatten(fast_evaluate(self.rotor_field, 1.0, self.coils, R, c, 1, None, value=False)[1], batch)
 
     def torque_pairwise(self, R, currents) -> np.ndarray:
         """:meth:`torque` from the pair sums ``Σ_k c_k v_k × Σ_j p_j g(α_jk) w_j`` (the reference)."""
-        R, single, c, active = self._drive(R, currents)
+        R, batch, c, active = self._drive(R, currents)
         T = np.einsum("kn,kna->ka", c, self.coil_torques(R, active)) if len(active) else np.zeros((len(R), 3))
-        return T[0] if single else T
+        return unflatten(T, batch)
 
     def energy(self, R, currents) -> np.ndarray:
         """Magnetic energy (J) of the rotor in the coils' field, ``Σ_k c_k F(x_k)`` through the rotor function,
@@ -253,13 +251,13 @@ class TorqueMap(TorqueModelBase):
 
     def energy_pairwise(self, R, currents) -> np.ndarray:
         """:meth:`energy` from the pair sums ``Σ_jk p_j c_k e(α_jk)`` (the reference)."""
-        R, single, c, active = self._drive(R, currents)
+        R, batch, c, active = self._drive(R, currents)
         E = np.zeros(len(R))
         if len(active):
             for s in range(0, len(R), CHUNK):
                 _, alpha = self._angles(R[s:s + CHUNK], active)
                 E[s:s + CHUNK] = np.einsum("kmn,m,kn->k", self.pair_energy(alpha), self.polarity, c[s:s + CHUNK])
-        return E[0] if single else E
+        return unflatten(E, batch)
 
 
 def torque_map(design, meshing: int = TABLE_MESHING) -> TorqueMap:

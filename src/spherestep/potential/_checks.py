@@ -6,15 +6,9 @@ import math
 
 import numpy as np
 
-from .. import so3
 from ..errors import bad_value
 from ..statics import as_currents
 from ..harmonics._checks import real_array  # noqa: F401  (one check for both rooms)
-
-def rotations(R, name: str = "R") -> np.ndarray:
-    """Rotation matrices ``(..., 3, 3)`` (:func:`spherestep.so3.as_rotations`)."""
-    return so3.as_rotations(R, name)
-
 
 def currents(c, count: int, failed: tuple[int, ...], name: str = "currents") -> np.ndarray:
     """Coil currents ``(..., N)`` (:func:`spherestep.statics.as_currents`)."""

@@ -66,17 +66,9 @@ PAIR_BLOCK = 1 << 18  # (orientation, coil, pole) triples per block in the pairw
 
 
 def coil_currents(design, coils) -> np.ndarray:
-    """The current vector ``(N,)`` from a mapping ``coil index → current`` (e.g. ``design.states().coils(i)``)."""
-    out = np.zeros(len(design.stator))
-    try:
-        items = dict(coils).items()
-    except (TypeError, ValueError):
-        raise bad_value("coils", "a mapping from coil index to current", coils) from None
-    for k, value in items:
-        if isinstance(k, bool) or not isinstance(k, (int, np.integer)) or not 0 <= k < len(out):
-            raise bad_value("coils", f"coil indices 0..{len(out) - 1}", k)
-        out[int(k)] = float(value)
-    return _checks.currents(out, len(out), tuple(design.failed_coils), "coils")
+    """The current vector ``(N,)`` from a mapping ``coil index → current`` (e.g. ``design.states().coils(i)``):
+    :meth:`~spherestep.motor.MotorDesign.coil_currents`, the one such helper."""
+    return design.coil_currents(coils)
 
 
 class MotorPotential(TorqueModelBase):
@@ -178,7 +170,7 @@ class MotorPotential(TorqueModelBase):
 
     # --- inputs ---------------------------------------------------------------------------------------
     def _inputs(self, R, currents) -> tuple[np.ndarray, np.ndarray]:
-        R = _checks.rotations(R)
+        R = so3.as_rotations(R)
         c = _checks.currents(currents, len(self.coils), self.failed)
         try:
             np.broadcast_shapes(R.shape[:-2], c.shape[:-1])
@@ -274,7 +266,7 @@ class MotorPotential(TorqueModelBase):
     def rotor_coefficients(self, R) -> np.ndarray:
         """Coefficients ``â_R^l = D^l(R) Â^l`` of the rotated rotor field (corrected eq. (16), via ``wigner_D``
         in :func:`~spherestep.harmonics.s2_rotate`), ``(..., L+1, 2L+1)``; ``f̂[l, m+L]`` multiplies ``Y_l^m``."""
-        R = _checks.rotations(R)
+        R = so3.as_rotations(R)
         return s2_rotate(self.rotor_body, R)
 
     def stator_coefficients(self, currents) -> np.ndarray:
@@ -314,13 +306,13 @@ class MotorPotential(TorqueModelBase):
         :meth:`torque_matrix_pairwise` with ``fast=False``). Zero columns for failed coils."""
         if not self.fast:
             return self.torque_matrix_pairwise(R)
-        R = _checks.rotations(R)
+        R = so3.as_rotations(R)
         return fast_torque_matrix(self.rotor_field, -2.0, self.coils, self.failed, R)
 
     def torque_matrix_pairwise(self, R, currents=None) -> np.ndarray:
         """``K(R) = ∂τ/∂c``, ``(..., 3, N)``: column ``k`` is ``2 Σ_j p_j G'(R u_j · v_k) (R u_j × v_k)``; the torque
         is linear in the currents, so ``currents`` does not matter. Zero columns for failed coils."""
-        R = _checks.rotations(R)
+        R = so3.as_rotations(R)
         W = np.swapaxes(R @ self.poles.T, -1, -2)  # (..., M, 3) poles in the fixed frame
         slope = self.kernel.evaluate(W @ self.coils.T, 1)[1] * self.polarity[:, None]  # (..., M, N) p_j G'
         Q = np.swapaxes(slope, -1, -2) @ W  # (..., N, 3): Σ_j p_j G'(t_jk) w_j
