@@ -41,13 +41,7 @@ def table(level: int = iron.IRON_LEVEL) -> None:
     t1 = time.perf_counter()
     det, lin = pair_table(design, coil, level)
     t2 = time.perf_counter()
-    from spherestep.magnetics._ironsummary import FLUX_ALPHA_DEG, core_flux_density
-    aa, pp = np.meshgrid(FLUX_ALPHA_DEG, [-1.0, 0.0, 1.0], indexing="ij")
-    B = core_flux_density(design, coil, np.radians(aa.ravel()), pp.ravel(), level)
-    _write(Path(__file__).resolve().parents[1] / "src" / "spherestep" / "data" / "iron_core_flux.csv",
-           f"Largest |B| (T) in the prototype's core (MoM level {level}, linear iron) with one pole at alpha from "
-           f"the axis and the coil at pc = polarity x current. Produced by: python scripts/iron_tables.py table",
-           ["alpha_deg", "pc", "max_B_T"], np.c_[aa.ravel(), pp.ravel(), B])
+    flux(level)
     _write(Path(__file__).resolve().parents[1] / "src" / "spherestep" / "data" / "iron_pair_table.csv",
            f"Iron-core pair torques of the prototype (spherestep.magnetics._iron.pair_tables), MoM level {level}: "
            f"{len(iron.core_solver(iron.CoreGeometry.of(design, coil), level).cells)} cells.\n"
@@ -56,6 +50,22 @@ def table(level: int = iron.IRON_LEVEL) -> None:
            f"ampere-turns).\nfactorisation {t1 - t0:.1f} s, {len(TABLE_NODES_DEG)} angles {t2 - t1:.1f} s. "
            f"Produced by: python scripts/iron_tables.py table",
            ["alpha_deg", "detent_Nm", "linear_Nm"], np.c_[TABLE_NODES_DEG, det, lin])
+
+
+def flux(level: int = iron.IRON_LEVEL) -> None:
+    """The saturation grid: mean |B| of the pole's face layer over alpha x pc."""
+    from spherestep.magnetics import _ironsummary as summ
+    design, coil = prototype(), iron_coil()
+    aa, pp = np.meshgrid(summ.FLUX_ALPHA_DEG, [-1.0, 0.0, 1.0], indexing="ij")
+    path = Path(__file__).resolve().parents[1] / "src" / "spherestep" / "data" / summ.FLUX_FILE
+    if path.exists():
+        path.unlink()  # compute, do not interpolate the old grid
+    B = summ.core_flux_density(design, coil, np.radians(aa.ravel()), pp.ravel(), level)
+    _write(path,
+           f"Mean |B| (T) in the prototype's centre pole within {1e3 * summ.FACE_LAYER:g} mm of the face (MoM level "
+           f"{level}, linear iron) with one pole at alpha from the axis and the coil at pc = polarity x current.\n"
+           f"Produced by: python scripts/iron_tables.py flux",
+           ["alpha_deg", "pc", "mean_face_B_T"], np.c_[aa.ravel(), pp.ravel(), B])
 
 
 def convergence(levels=(0, 1)) -> None:
@@ -81,7 +91,7 @@ def multibody(level: int = 0) -> None:
     """Two neighbouring cores under the whole rotor: full solve against the sum of pair tables (same level)."""
     from spherestep.magnetics._ironmap import IronTorqueMap
     design, coil = prototype(), iron_coil()
-    v = design.stator.centers
+    v = np.array(design.stator.centers)
     k0 = int(np.argmin(v[:, 2]))
     k1 = int(np.argsort(v @ v[k0])[-2])
     coils = [k0, k1]
@@ -95,8 +105,12 @@ def multibody(level: int = 0) -> None:
         base = Rotation.align_vectors(target[None], design.rotor.centers[j][None])[0]
         R.append((Rotation.from_rotvec(target * rng.uniform(0, 2 * np.pi)) * base).as_matrix())
     R = np.array(R)
-    det, lin = pair_table(design, coil, level, nodes_deg=TABLE_NODES_DEG)
-    model = IronTorqueMap.from_tables(design, coil, np.radians(TABLE_NODES_DEG), det, lin, level=level)
+    if level == iron.IRON_LEVEL:
+        from spherestep.magnetics import iron_model
+        model = iron_model(design, coil)  # the stored table of this level
+    else:
+        det, lin = pair_table(design, coil, level, nodes_deg=TABLE_NODES_DEG)
+        model = IronTorqueMap.from_tables(design, coil, np.radians(TABLE_NODES_DEG), det, lin, level=level)
     rows = []
     for currents in ([0.0, 0.0], [1.0, 0.0], [1.0, -1.0]):
         t0 = time.perf_counter()
@@ -139,4 +153,4 @@ def everything() -> None:
 
 if __name__ == "__main__":
     what = sys.argv[1] if len(sys.argv) > 1 else "all"
-    {"all": everything, "table": table, "convergence": convergence, "multibody": multibody, "fig6": fig6}[what]()
+    {"all": everything, "table": table, "convergence": convergence, "multibody": multibody, "fig6": fig6, "flux": flux}[what]()

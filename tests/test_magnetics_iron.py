@@ -79,6 +79,7 @@ def rod():
     return iron.CoreSolver(geom, level=0)
 
 
+@pytest.mark.slow
 def test_factorised_solve_equals_apply_demag(rod):
     """One back-substitution of the factorised system reproduces magpylib-material-response's own apply_demag."""
     magnet = magpy.magnet.Cylinder(dimension=(0.01, 0.005), polarization=(0, 0, 1.3), position=(0.003, 0, -0.004))
@@ -93,6 +94,7 @@ def test_factorised_solve_equals_apply_demag(rod):
     assert np.abs(mine - ref).max() < 1e-9 * np.abs(ref).max()
 
 
+@pytest.mark.slow
 def test_reaction_equals_direct_force_on_the_magnet(rod):
     """Newton's third law across two computations: the force on the magnet from the solved rod's field (charges on
     the magnet's faces) against minus the magnet's force on the rod's cells (what magnet_wrenches uses)."""

@@ -50,6 +50,12 @@ def pair_table(design, coil: CoilSpec, level: int = _iron.IRON_LEVEL, nodes_deg=
     return det, lin
 
 
+def read_table(path) -> np.ndarray:
+    """The numbers of a stored ``#``-commented CSV with one header line, ``(rows, columns)``."""
+    lines = [line for line in path.read_text().splitlines() if line and not line.startswith("#")][1:]
+    return np.array([[float(v) for v in line.split(",")] for line in lines])
+
+
 def _key(design, coil: CoilSpec, level: int) -> tuple:
     return (round(design.radius, 9), round(design.magnet_diameter, 9), round(design.magnet_length, 9),
             round(design.coil_diameter, 9), round(design.coil_length, 9), round(design.air_gap, 9),
@@ -62,7 +68,7 @@ def _tables(key: tuple, design, coil: CoilSpec, level: int):
     if key == _key(prototype(), iron_coil(), _iron.IRON_LEVEL):
         path = resources.files("spherestep.data") / TABLE_FILE
         if path.is_file():
-            arr = np.loadtxt(path.open(), delimiter=",", comments="#", skiprows=1, ndmin=2)
+            arr = read_table(path)
             return np.radians(arr[:, 0]), arr[:, 1], arr[:, 2]
     det, lin = pair_table(design, coil, level)
     return np.radians(TABLE_NODES_DEG), det, lin

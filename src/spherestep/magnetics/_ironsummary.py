@@ -10,8 +10,8 @@
   torque;
 * polarity: the pair torque with the coil driven against the pole (``p c = −1``) near the axis: negative means
   the iron still pulls the pole in (the paper's polarity switching then only weakens the attraction);
-* saturation: the largest ``|B|`` in the core (method of moments, linear iron) with the pole on the axis and the
-  coil aiding it, against the material's knee;
+* saturation: the mean ``|B|`` in the centre pole's face layer (method of moments, linear iron) over the sampled
+  states' energised coils with their nearest poles, and with a pole on the axis, against the material's knee;
 * power per coil at nominal current against the supply.
 """
 
@@ -92,24 +92,30 @@ FLUX_ALPHA_DEG = np.arange(0.0, 31.0, 2.0)
 FLUX_FILE = "iron_core_flux.csv"
 
 
+FACE_LAYER = 2e-3  # m: depth of the pole's face layer whose mean |B| is compared with the knee
+
+
 def core_flux_density(design, coil: CoilSpec, alpha, pc, level: int = _iron.IRON_LEVEL) -> np.ndarray:
-    """Largest ``|B|`` (T) over the core's cells with one pole at ``alpha`` (rad, ``(K,)``) from the axis and the
-    coil at ``pc`` (pole polarity × current, ``(K,)``), linear iron (MoM). For the prototype's coil the stored
-    grid (``spherestep/data/iron_core_flux.csv``, 2° × pc ∈ {−1, 0, 1}) is interpolated (linear in both)."""
+    """Flux density (T) in the core with one pole at ``alpha`` (rad, ``(K,)``) from the axis and the coil at ``pc``
+    (pole polarity × current, ``(K,)``), linear iron (MoM): the volume-weighted mean ``|B|`` of the centre pole's
+    cells within ``FACE_LAYER`` of the face (where the magnet's flux enters; single cells of the coarse mesh at the
+    magnet's rim reach several times more and are not a physical peak), shape ``(K,)``. For the prototype's coil
+    the stored grid (``spherestep/data/iron_core_flux.csv``, 2° × pc ∈ {−1, 0, 1}) is interpolated."""
     import magpylib as magpy
     from importlib import resources
 
     from ..motor import prototype
-    from ._ironmap import _key
+    from ._ironmap import _key, read_table
     path = resources.files("spherestep.data") / FLUX_FILE
     if _key(design, coil, level) == _key(prototype(), iron_coil(), _iron.IRON_LEVEL) and path.is_file():
         from scipy.interpolate import RegularGridInterpolator
-        arr = np.loadtxt(path.open(), delimiter=",", comments="#", skiprows=1, ndmin=2)
+        arr = read_table(path)
         grid = arr[:, 2].reshape(len(FLUX_ALPHA_DEG), 3)
         f = RegularGridInterpolator((FLUX_ALPHA_DEG, [-1.0, 0.0, 1.0]), grid)
         a = np.clip(np.degrees(np.atleast_1d(alpha)), 0.0, FLUX_ALPHA_DEG[-1])
         return f(np.c_[a, np.clip(np.atleast_1d(pc), -1.0, 1.0)])
-    solver = _iron.core_solver(_iron.CoreGeometry.of(design, coil), level)
+    geom = _iron.CoreGeometry.of(design, coil)
+    solver = _iron.core_solver(geom, level)
     a = np.atleast_1d(np.asarray(alpha, dtype=float))
     face = design.radius + design.air_gap
     w = np.stack([np.sin(a), np.zeros_like(a), np.cos(a)], axis=1)
@@ -118,7 +124,11 @@ def core_flux_density(design, coil: CoilSpec, alpha, pc, level: int = _iron.IRON
     B_src = magpy.getB(magnet, solver.centroids, squeeze=False).reshape(len(a), -1, 3)
     B_src = B_src + np.asarray(pc, dtype=float).reshape(-1, 1, 1) * magpy.getB(solver.loops[0], solver.centroids,
                                                                                   sumup=True)[None]
-    return solver.flux_density(solver.polarization(B_src)).max(axis=1)
+    B = solver.flux_density(solver.polarization(B_src))
+    r = np.hypot(solver.centroids[:, 0], solver.centroids[:, 1])
+    layer = (r < geom.r_p) & (solver.centroids[:, 2] < FACE_LAYER)
+    vol = np.array([c.volume for c in solver.cells])[layer]
+    return (B[:, layer] * vol).sum(axis=1) / vol.sum()
 
 
 def iron_summary(design, coil: CoilSpec | None = None, *, states: int = 12, starts: int = 12, seed: int = 0,
