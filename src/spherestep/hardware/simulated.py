@@ -13,6 +13,7 @@ from collections.abc import Mapping
 
 import numpy as np
 
+from .. import so3
 from ..dynamics import Integrator, Rotor, currents_of
 from ..errors import bad_value
 from .backend import Backend, DeviceInfo
@@ -27,7 +28,7 @@ class Simulated(Backend):
 
     def __init__(self, design, model, start, rotor: Rotor | None = None, dt: float = 5e-3,
                  channels: int | None = None):
-        start = np.asarray(start, dtype=float)
+        start = so3.as_rotations(start, "start")
         if start.shape != (3, 3):
             raise bad_value("start", "a 3×3 rotation matrix", f"shape {start.shape}")
         self.coil_count = len(design.stator)

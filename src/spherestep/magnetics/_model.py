@@ -97,7 +97,7 @@ def rotor_collection(design, R=None) -> magpy.Collection:
     orientation is a path of ``K`` rotations (every magnet turns with it about the origin)."""
     rotor = magpy.Collection(*rotor_magnets(design), style_label=f"{design.name} rotor")
     if R is not None:
-        rotor.orientation = Rotation.from_matrix(np.asarray(R, dtype=float).reshape(-1, 3, 3))
+        rotor.orientation = Rotation.from_matrix(so3.as_rotations(R, "R").reshape(-1, 3, 3))
     return rotor
 
 

@@ -163,7 +163,7 @@ class Estimator:
     def track(self, readings, R_prev, currents=None, iterations: int = 1) -> Estimate:
         """``iterations`` Gauss–Newton steps from ``R_prev`` (the loop's update; no line search)."""
         b, weight = self._prepare(readings, currents)
-        R = np.asarray(R_prev, dtype=float).reshape(3, 3)
+        R = so3.as_rotations(R_prev, "R_prev").reshape(3, 3)
         for _ in range(iterations):
             H, g, cost = self._normal_equations(R, b, weight)
             delta = np.linalg.solve(H, g)

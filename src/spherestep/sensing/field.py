@@ -134,7 +134,7 @@ class FieldTable:
 
 def rotor_field(design, positions, R) -> np.ndarray:
     """Reference rotor field ``(K, S, 3)`` (tesla, fixed frame) by magpylib for rotations ``R (K, 3, 3)``."""
-    R = np.asarray(R, dtype=float).reshape(-1, 3, 3)
+    R = so3.as_rotations(R, "R").reshape(-1, 3, 3)
     B = rotor_collection(design, R).getB(np.asarray(positions, dtype=float).reshape(-1, 3))
     return np.asarray(B).reshape(len(R), -1, 3)
 

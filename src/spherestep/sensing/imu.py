@@ -58,7 +58,7 @@ class Imu:
     def sample(self, R, omega, currents=None):
         """``(gyro (3,), accel (3,), mag (3,))`` in the body frame."""
         p, n = self.part, self.rng.normal
-        R = np.asarray(R, dtype=float)
+        R = so3.as_rotations(R, "R")
         gyro = np.asarray(omega, dtype=float) + self.gyro_bias + n(0.0, p.gyro_noise_density / math.sqrt(self.dt), 3)
         accel = R.T @ np.array([0.0, 0.0, GRAVITY]) + self.accel_bias + n(0.0, p.accel_noise_density / math.sqrt(self.dt), 3)
         mag = R.T @ self.reference_field(currents) + self.mag_bias + n(0.0, p.mag_noise_T, 3)

@@ -11,6 +11,7 @@ from __future__ import annotations
 import magpylib as magpy
 import numpy as np
 
+from .. import so3
 from ..errors import bad_value
 from .field import CoilField, rotor_field
 
@@ -19,7 +20,7 @@ def true_field(design, array, R, currents=None, coil_field: CoilField | None = N
     """Noise-free field ``(K, S, 3)`` (fixed frame, tesla): rotor by magpylib at ``R (K, 3, 3)``, coils at
     ``currents`` (``(N,)`` or ``(K, N)``) by magpylib (linear, so ``coil_field``'s unit-current fields are
     exact), and ``extra`` magpylib sources fixed in the stator."""
-    R = np.asarray(R, dtype=float).reshape(-1, 3, 3)
+    R = so3.as_rotations(R, "R").reshape(-1, 3, 3)
     B = rotor_field(design, array.positions, R)
     if currents is not None:
         coils = coil_field or CoilField.build(design, array.positions)

@@ -72,7 +72,7 @@ class HallSensor:
 
     def readings(self, R_true, currents=None) -> np.ndarray:
         """One set of readings ``(S, 3)`` for the true orientation and the commanded currents."""
-        R = np.asarray(R_true, dtype=float)
+        R = so3.as_rotations(R_true, "R_true")
         if R.shape != (3, 3):
             raise bad_value("R_true", "one rotation matrix (3, 3)", f"shape {R.shape}")
         if self.truth == "table":
