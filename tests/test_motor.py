@@ -297,3 +297,21 @@ def test_within_takes_one_rotation_or_a_batch(proto):
                  lambda: states.within(np.eye(3), -1.0)):
         with pytest.raises(InputError):
             call()
+
+
+def test_result_dict_turns_angles_into_degrees_only():
+    from dataclasses import dataclass
+
+    from spherestep.units import result_dict
+
+    @dataclass(frozen=True)
+    class Result:
+        offset_rad: float
+        stiffness_Nm_per_rad: tuple[float, ...]
+        missing_rad: float | None
+        count: int
+
+    r = Result(math.pi / 2, (1.5, 2.0), None, 3)
+    assert result_dict(r) == {"offset_deg": 90.0, "stiffness_Nm_per_rad": [1.5, 2.0], "missing_deg": None, "count": 3}
+    assert result_dict(r, degrees=False) == {"offset_rad": math.pi / 2, "stiffness_Nm_per_rad": [1.5, 2.0],
+                                             "missing_rad": None, "count": 3}

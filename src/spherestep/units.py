@@ -6,6 +6,7 @@ Accepted: a number (metres) or a string ``"<number> <unit>"`` with unit one of m
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import re
 
@@ -63,3 +64,18 @@ def in_unit(metres, unit: str):
     if unit not in METRES_PER_UNIT:
         raise bad_value("unit", f"one of {', '.join(sorted(METRES_PER_UNIT))}", unit)
     return metres / METRES_PER_UNIT[unit]
+
+
+def result_dict(result, degrees: bool = True) -> dict:
+    """A frozen-dataclass result as a JSON-ready dict, angles for people: an angle field, named ``*_rad`` (not a
+    rate ``*_per_rad``), becomes ``*_deg`` in degrees when ``degrees`` (None stays None); tuples become lists.
+    The one ``to_dict`` of the results (``DesignMetrics``, ``CoilFailure``, ``StateTorque``)."""
+    out = {}
+    for f in dataclasses.fields(result):
+        value = getattr(result, f.name)
+        value = list(value) if isinstance(value, tuple) else value
+        if degrees and f.name.endswith("_rad") and not f.name.endswith("_per_rad"):
+            out[f.name.removesuffix("_rad") + "_deg"] = None if value is None else math.degrees(value)
+        else:
+            out[f.name] = value
+    return out

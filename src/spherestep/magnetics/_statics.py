@@ -12,12 +12,13 @@ energy ``E(R, c)``, ``T = −∂E/∂θ`` for ``R → exp(θ̂) R``, fixed frame
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, fields
+from dataclasses import dataclass
 
 import numpy as np
 
 from .. import so3
 from ..errors import bad_value
+from ..units import result_dict
 from ..statics import Equilibrium, holding_torque, step_torque
 from ..statics import equilibrium as descend
 from ._table import TorqueMap
@@ -62,13 +63,9 @@ class StateTorque:
     downhill_steps: int | None = None
 
     def to_dict(self, degrees: bool = True) -> dict:
-        """JSON-ready dict; ``equilibrium_offset_deg`` in degrees when ``degrees``; tuples as lists."""
-        out = {f.name: getattr(self, f.name) for f in fields(self)}
-        out["stiffness_Nm_per_rad"], out["weakest_axis"] = list(self.stiffness_Nm_per_rad), list(self.weakest_axis)
-        if degrees:
-            out = {("equilibrium_offset_deg" if k == "equilibrium_offset_rad" else k):
-                   (math.degrees(v) if k == "equilibrium_offset_rad" else v) for k, v in out.items()}
-        return out
+        """JSON-ready dict; ``equilibrium_offset_deg`` in degrees when ``degrees``; tuples as lists
+        (:func:`spherestep.units.result_dict`)."""
+        return result_dict(self, degrees)
 
 
 def state_torques(design, tmap: TorqueMap, indices, *, max_angle: float = math.radians(20.0)) -> list[StateTorque]:

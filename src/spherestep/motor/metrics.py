@@ -12,13 +12,14 @@
 from __future__ import annotations
 
 import math
-from dataclasses import asdict, dataclass, fields
+from dataclasses import dataclass
 
 import numpy as np
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
 from .. import so3
+from ..units import result_dict
 
 ESCAPE_CONE = math.radians(45.0)
 
@@ -109,15 +110,9 @@ class DesignMetrics:
     escape_violations: tuple[int, ...] | None
 
     def to_dict(self, degrees: bool = True) -> dict:
-        """The metrics as a dict: ``*_rad`` fields become ``*_deg`` in degrees when ``degrees``; tuples lists."""
-        out = {}
-        for f in fields(self):
-            value = getattr(self, f.name)
-            if f.name.endswith("_rad") and degrees:
-                out[f.name.removesuffix("_rad") + "_deg"] = math.degrees(value)
-            else:
-                out[f.name] = list(value) if isinstance(value, tuple) else value
-        return out
+        """The metrics as a dict: ``*_rad`` fields become ``*_deg`` in degrees when ``degrees``; tuples lists
+        (:func:`spherestep.units.result_dict`)."""
+        return result_dict(self, degrees)
 
 
 @dataclass(frozen=True)
@@ -134,10 +129,7 @@ class CoilFailure:
 
     def to_dict(self, degrees: bool = True) -> dict:
         """JSON-ready dict, the resolution in degrees (``resolution_median_deg``) when ``degrees``."""
-        out = asdict(self)
-        if degrees:
-            out["resolution_median_deg"] = math.degrees(out.pop("resolution_median_rad"))
-        return out
+        return result_dict(self, degrees)
 
 
 def design_metrics(design, samples: int = 20_000, seed: int = 0, escape: bool = True) -> DesignMetrics:
