@@ -191,7 +191,7 @@ OUTPUT_COMMANDS = {  # command line with {out} for the output folder
     "export": ["export", "{design}", "--out", "{out}"],
     "forces": ["forces", "--out", "{out}", "--json"],
     "explore": ["explore", "--quick", "--out", "{out}", "--threads", "--workers", "1"],
-}
+}  # move, capability and sense check --out only after ~8 s of work (reported); their options are below
 FILE_COMMANDS = {  # command line with {out} for an output file, and its suffix
     "report": (["report", "-o", "{out}"], ".html"),
     "packing": (["packing", "cube", "--out", "{out}"], ".csv"),
@@ -224,6 +224,18 @@ NUMERIC_OPTIONS = {  # command line before the option, the option, values out of
     ("explore", "--tols"): (["explore", "--quick", "--out", "{base}/o", "--threads"], ["0", "-1", "90"]),
     ("explore", "--rotor-levels"): (["explore", "--quick", "--out", "{base}/o", "--threads"], ["-1", "9", "a"]),
     ("explore", "--primary-ratio"): (["explore", "--quick", "--out", "{base}/o", "--threads"], ["0.5", "x"]),
+    ("move", "--time"): (["move", *AX, "--angle", "30", "--out", "{base}/o"], ["0", "-1"]),
+    ("move", "--sensor-noise"): (["move", *AX, "--angle", "30", "--out", "{base}/o"], ["-1"]),
+    ("move", "--rate"): (["move", *AX, "--angle", "30", "--out", "{base}/o"], ["0", "-1"]),
+    ("capability", "--samples"): (["capability", "--out", "{base}/o"], ["0", "-1"]),
+    ("capability", "--seed"): (["capability", "--out", "{base}/o"], ["-1"]),
+    ("capability", "--threshold"): (["capability", "--out", "{base}/o"], ["-1"]),
+    ("sense", "--sensors"): (["sense", "--out", "{base}/o"], ["0", "-1"]),
+    ("sense", "--samples"): (["sense", "--out", "{base}/o"], ["0", "-1"]),
+    ("sense", "--seed"): (["sense", "--out", "{base}/o"], ["-1"]),
+}
+KNOWN = {  # cases whose fix belongs to another room's owner (reported): expected to fail until then
+    "capability--seed[-1]": "capability --seed -1 reaches NumPy's ValueError (exit 1)",
 }
 AXIS_COMMANDS = {
     "demo": ["demo", "--out", "{base}/o"],
@@ -366,10 +378,11 @@ def test_the_table_is_long_and_covers_every_subcommand():
     assert len(CASES) >= 300
     firsts = {argv[0] + (" " + argv[1] if argv[0] == "design" else "") for _, argv in CASES}
     assert {"demo", "plan", "simulate", "report", "export", "forces", "packing", "explore", "run", "design new",
-            "design validate", "design show"} <= firsts
+            "design validate", "design show", "move", "capability", "sense"} <= firsts
 
 
-@pytest.mark.parametrize("argv", [argv for _, argv in CASES], ids=[name for name, _ in CASES])
+@pytest.mark.parametrize("argv", [pytest.param(argv, marks=pytest.mark.xfail(reason=KNOWN[name])) if name in KNOWN
+                                  else argv for name, argv in CASES], ids=[name for name, _ in CASES])
 def test_a_mistake_is_one_line_and_exit_2(argv, env, capsys, tmp_path, monkeypatch):
     if "{ro}" in " ".join(argv) and env["ro_kind"] == "chmod" and ROOT:
         pytest.skip("root ignores permission bits and tmpfs could not be mounted")
