@@ -44,15 +44,19 @@ def dask_client(scheduler: str | None = None, *, threads: bool = False, workers:
         raise bad_value("workers", "an integer in 1..512", workers)
     if scheduler is not None:
         if threads or workers is not None:
-            raise InputError("scheduler: an existing cluster brings its own workers; give either scheduler or "
-                             "threads/workers, not both")
+            error = InputError("scheduler: an existing cluster brings its own workers; give either scheduler or "
+                               "threads/workers, not both")
+            error.field = "scheduler"
+            raise error
         if not _SCHEDULER.match(scheduler):
             raise bad_value("scheduler", "an address like tcp://HOST:PORT", scheduler)
         try:
             client = Client(scheduler, timeout=CONNECT_TIMEOUT)
         except (OSError, TimeoutError) as exc:
-            raise InputError(f"scheduler: could not connect to {scheduler} within {CONNECT_TIMEOUT:g} s ({exc}); "
-                             "start a scheduler there, or leave out the scheduler for a local cluster") from None
+            error = InputError(f"scheduler: could not connect to {scheduler} within {CONNECT_TIMEOUT:g} s ({exc}); "
+                               "start a scheduler there, or leave out the scheduler for a local cluster")
+            error.field = "scheduler"
+            raise error from None
         try:
             yield client
         finally:
