@@ -240,7 +240,7 @@ class Plan:
                    design=str(data.get("design", "design")), planner=str(data.get("planner", "geometric")))
 
     @classmethod
-    def from_json(cls, path: str | Path) -> "Plan":
+    def from_json(cls, path: str | Path) -> Plan:
         """Read a plan written by :meth:`to_json`."""
         path = Path(path)
         if path.exists() and not path.is_file():  # a folder, or a FIFO that would block the read
