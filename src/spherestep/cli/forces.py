@@ -109,8 +109,8 @@ def forces(
         t = Table(title=f"{design.name}: air against iron cores (pole–coil pair, N·m; states: {d['states_sampled']})")
         for col in ("", "air", "iron"):
             t.add_column(col, justify="right")
-        t.add_row("peak pull-in torque, +1 coil", f"{d['air_peak_Nm']:.3f}",
-                  f"{d['detent_peak_Nm'] + d['linear_peak_Nm']:.3f} (detent {d['detent_peak_Nm']:.3f})")
+        t.add_row("peak pull-in torque of a +1 coil", f"{d['air_peak_Nm']:.3f}", f"{d['linear_peak_Nm']:.3f}")
+        t.add_row("peak detent (coil off)", "0", f"{d['detent_peak_Nm']:.3f} at {d['detent_peak_angle_deg']:.1f}°")
         t.add_row("rest poses with all coils off", "none (no torque)",
                   f"{d['unpowered_minima']}/{d['unpowered_starts']} starts, holding median "
                   f"{d['unpowered_holding_median_Nm']:.3f}")
@@ -119,7 +119,7 @@ def forces(
                   f"{d['iron_offset_median_deg']:.2f} (max {d['iron_offset_max_deg']:.2f})")
         t.add_row("holding torque, median", f"{d['air_holding_median_Nm']:.3f}", f"{d['iron_holding_median_Nm']:.3f}")
         t.add_row("coil against the pole still pulls in", "no", "yes" if d["wrong_polarity_attracts"] else "no")
-        t.add_row("largest |B| in a core (knee)", "—", f"{d['max_core_B_T']:.2f} T ({d['knee_T']:.2f} T)")
+        t.add_row("pole-face |B|, linear iron (knee)", "—", f"{d['max_core_B_T']:.2f} T ({d['knee_T']:.2f} T)")
         t.add_row("power per coil at nominal current", "—",
                   f"{d['electrics']['power_W']:.1f} W ({d['electrics']['supply_W']:.0f} W supply)")
         console.print(t)
