@@ -5,7 +5,6 @@ its own argument (``exc.field``); and the rooms accept the same batches."""
 import math
 
 import numpy as np
-import pytest
 
 from spherestep import commutation, harmonics, so3, sphere, statics
 from spherestep.errors import InputError

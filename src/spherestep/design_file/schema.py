@@ -11,7 +11,7 @@ from __future__ import annotations
 import functools
 import math
 import re
-from typing import Annotated, Any, Literal, Union
+from typing import Annotated, Any, Literal
 
 import numpy as np
 from pydantic import (AfterValidator, BaseModel, BeforeValidator, ConfigDict, Discriminator, Field, Tag,
@@ -141,7 +141,7 @@ def _polarity_form(value: Any) -> str | None:
 
 
 Polarity = Annotated[
-    Union[Annotated[list[Sign], Tag("<list>")], Annotated[PolarityRule, Tag("<rule>")]],
+    Annotated[list[Sign], Tag("<list>")] | Annotated[PolarityRule, Tag("<rule>")],
     Discriminator(_polarity_form, custom_error_type="polarity_form",
                   custom_error_message="must be a list of +1/-1, one per rotor pole, or a rule like "
                                        "{primary: +1, filled: -1}"),
@@ -165,9 +165,7 @@ def _coils_form(value: Any) -> str | None:
 
 
 Coils = Annotated[
-    Union[Annotated[str, AfterValidator(_fit), Tag("<fit>")],
-          Annotated[list[Index], Tag("<indices>"), Field(min_length=1, max_length=MAX_POLES)],
-          Annotated[list[DirectionIn], Tag("<directions>"), Field(min_length=1, max_length=MAX_POLES)]],
+    Annotated[str, AfterValidator(_fit), Tag("<fit>")] | Annotated[list[Index], Tag("<indices>"), Field(min_length=1, max_length=MAX_POLES)] | Annotated[list[DirectionIn], Tag("<directions>"), Field(min_length=1, max_length=MAX_POLES)],
     Discriminator(_coils_form, custom_error_type="coils_form",
                   custom_error_message="must be 'fit', a list of cap indices of stator.packing, or a list of "
                                        "coil directions"),

@@ -177,7 +177,7 @@ class MotorDesign:
                       sphere_diameter, magnet_diameter, magnet_length, coil_diameter, coil_length, air_gap,
                       rotor_refine: int = 0, stator_refine: int = 0,
                       polarity: PolarityRule | Sequence[int] = PolarityRule(1, -1),
-                      coils: str | Sequence[int] = "fit", check_fit: bool = True, **options) -> "MotorDesign":
+                      coils: str | Sequence[int] = "fit", check_fit: bool = True, **options) -> MotorDesign:
         """A motor from packings: the one place where coil angle, polarity rule and cap selection are decided.
 
         ``rotor``/``stator``: a packing name (:func:`spherestep.packing.names`) refined ``rotor_refine`` /
@@ -239,7 +239,7 @@ class MotorDesign:
 
     # --- design files ---------------------------------------------------------------------------------
     @classmethod
-    def load(cls, path) -> "MotorDesign":
+    def load(cls, path) -> MotorDesign:
         """Read a design file, YAML or ``.toml`` (see :mod:`spherestep.design_file`); DesignFileError naming
         the file's field otherwise."""
         from .. import design_file  # pydantic and YAML only when a file is read (design_file never imports motor)
@@ -247,7 +247,7 @@ class MotorDesign:
         return design_file.build(design_file.read(path), cls)
 
     @classmethod
-    def loads(cls, text: str, fmt: str = "yaml", source: str = "<design>") -> "MotorDesign":
+    def loads(cls, text: str, fmt: str = "yaml", source: str = "<design>") -> MotorDesign:
         """The design written in ``text`` (``fmt`` 'yaml' or 'toml'; ``source`` names it in errors)."""
         from .. import design_file
 
@@ -309,7 +309,7 @@ class MotorDesign:
 
         return coil_currents(coils, len(self.stator), self.failed_coils)
 
-    def without_coils(self, coils) -> "MotorDesign":
+    def without_coils(self, coils) -> MotorDesign:
         """The same motor with the given coils failed (they are never energised)."""
         return replace(self, failed_coils=tuple(self.failed_coils) + tuple(int(k) for k in coils))
 

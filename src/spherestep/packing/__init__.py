@@ -41,6 +41,6 @@ def named(name: str, level: int = 0) -> Packing:
     return _named(name, int(level))
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _named(name: str, level: int) -> Packing:
     return refine(by_name(name), levels=level)

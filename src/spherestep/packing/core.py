@@ -72,7 +72,7 @@ class Packing:
         """KD-tree on the centres (built once)."""
         return self._tree
 
-    def subset(self, indices, name: str = "indices") -> "Packing":
+    def subset(self, indices, name: str = "indices") -> Packing:
         """The caps ``indices`` (in that order), keeping name, family and level; InputError naming ``name``
         for an index out of range or repeated (``field`` is ``name[k]``)."""
         idx = np.asarray(indices)
@@ -88,7 +88,7 @@ class Packing:
                             "once)", int(idx[k]))
         return Packing(self.centers[idx], self.radii[idx], name=self.name, family=self.family, level=self.level)
 
-    def within_cap(self, axis, half_angle: float, min_radius: float = 0.0) -> "Packing":
+    def within_cap(self, axis, half_angle: float, min_radius: float = 0.0) -> Packing:
         """The caps whose centres lie within ``half_angle`` (rad) of the unit vector ``axis``
         (``c · axis ≥ cos half_angle − 1e-12``) and whose radius is at least ``min_radius`` (room for a part),
         in this packing's order, keeping name, family and level."""
@@ -171,7 +171,7 @@ class Packing:
             out.append(f"{len(lonely)} caps kiss no other cap (first: cap {lonely[0]})")
         return out
 
-    def validate(self, tol: float = CONTACT_TOL) -> "Packing":
+    def validate(self, tol: float = CONTACT_TOL) -> Packing:
         """Raise InputError unless no two caps overlap by more than ``tol`` and every cap kisses another."""
         problems = self.problems(tol)
         if problems:
