@@ -27,7 +27,7 @@ import numpy as np
 from _timing import median_seconds
 from spherestep import packing as pk
 from spherestep.commutation import about_axis, plan_geometric, steps_for
-from spherestep.motor import prototype
+from spherestep.motor import PolarityRule, prototype
 from spherestep.motor import states as st
 
 
@@ -53,10 +53,10 @@ def main() -> None:
     levels = args.levels
     print(f"{'rotor poles':>11} {'coils':>5} {'tol °':>6} {'states':>9} {'enumerate s':>11} {'plan steps/s':>12}")
     for level in levels:
-        rotor = pk.refine(pk.by_name("truncated-icosahedron"), levels=level)
+        rotor = pk.named("truncated-icosahedron", level)
         tol = min(math.radians(1.0), 0.25 * rotor.min_separation())
-        design = base if level == 1 else replace(
-            base, rotor=rotor, polarity=np.where(np.arange(len(rotor)) < 60, 1, -1), tol=tol,
+        design = base if level == 1 else replace(  # the prototype's polarity rule on the finer rotor
+            base, rotor=rotor, polarity=PolarityRule(1, -1).signs(len(rotor), len(pk.named(rotor.name))), tol=tol,
             magnet_diameter=base.sphere_diameter * math.tan(0.5 * rotor.min_separation()) * 0.9)
         t_enum = median_seconds(repeats, st.find_states, design, design.state_tol)
         states = design.states()
