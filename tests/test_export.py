@@ -142,7 +142,7 @@ def test_export_command(tmp_path, capsys):
     (tmp_path / "afile").write_text("x")
     for args, words in ((["export", str(path), "--out", str(tmp_path / "o"), "--unit", "cm"], "--unit"),
                         (["export", str(path), "--out", str(tmp_path / "afile")], "a folder"),
-                        (["export", str(tmp_path / "none.yaml"), "--out", str(tmp_path / "o")], "does not exist")):
+                        (["export", str(tmp_path / "none.yaml"), "--out", str(tmp_path / "o")], "must be an existing file")):
         assert main(args) == 2
         err = capsys.readouterr().err
         assert err.count("\n") == 1 and words in err and "Traceback" not in err

@@ -35,7 +35,7 @@ def test_run_simulate_cli(tmp_path, capsys):
     capsys.readouterr()
     assert main(["run", str(tmp_path / "plan.json"), "--rate", "0.8", "--simulate"]) == 0
     out = capsys.readouterr().out
-    assert "simulated 3 steps" in out and "all coils off" in out
+    assert "simulated 3 frames (the start and 2 steps)" in out and "all coils off" in out
     for extra in (["--dry-run"], ["--design", str(tmp_path / "none.yaml")]):
         args = ["run", str(tmp_path / "plan.json"), "--rate", "1"] + extra
         if extra[0] == "--dry-run":
