@@ -15,13 +15,27 @@ def test_demo_writes_plan_figures_simulation_and_report(tmp_path, capsys):
     assert info["plan"]["error_final_deg"] < info["resolution_p95_deg"]
     sim = info["simulation"]
     assert sim["steps"] == info["plan"]["steps"] and sim["final_error_to_target_deg"] < info["resolution_p95_deg"]
-    for name in ("plan.csv", "plan.json", "commutation_steps.png", "motor_3d.png", "plan_error.png", "summary.json",
-                 "trajectory.csv", "simulation.png", "report.html"):
+    from spherestep.demo import DEMO_FILES
+
+    for name in DEMO_FILES:
         assert (out / name).stat().st_size > 100
     assert (out / "commutation_steps.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    # the three drives: relays settled and ramped, the servo; the servo within the issue's targets
+    modes = {m["mode"]: m for m in info["drives"]["modes"]}
+    assert set(modes) == {"settled", "ramped", "servo"}
+    assert modes["servo"]["time_s"] <= 2.0 and modes["servo"]["final_error_deg"] <= 0.05
+    assert modes["servo"]["mean_power_W"] <= 100.0
+    assert modes["servo"]["time_s"] < modes["ramped"]["time_s"] < modes["settled"]["time_s"]
+    assert info["drives"]["bang_bang_bound_s"] <= modes["servo"]["time_s"]
+    assert json.loads((out / "drives.json").read_text()) == info["drives"]
+    # capability of both cores, and what the iron changes
+    assert info["capability"]["available_torque_N_m"]["50"] > 0
+    assert info["iron"]["unpowered_minima"] > 0 and info["iron"]["detent_peak_Nm"] < 0
     text = (out / "report.html").read_text()
-    # motor 3-D, histogram, commutation slider, simulated run
-    assert f"<b>{info['plan']['steps']} steps</b>" in text and text.count("Plotly.newPlot(") == 4
+    # motor 3-D, histogram, commutation slider, simulated run, capability map, servo run
+    assert f"<b>{info['plan']['steps']} steps</b>" in text and text.count("Plotly.newPlot(") == 6
+    for anchor in ("capability", "iron", "drives", "servo"):
+        assert f'id="section-{anchor}"' in text
 
 
 def test_plan_command_and_bad_input(tmp_path, capsys):

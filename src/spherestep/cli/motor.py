@@ -2,30 +2,17 @@
 
 from __future__ import annotations
 
-import math
 import sys
 from pathlib import Path
 
 import typer
 
 from .app import app
-from .common import check_axis, console, design_from, number, parse_vector, print_json, usable, write_json
+from .common import check_axis, console, design_from, number, parse_vector, print_json, usable
 
 DEMO_AXIS = "1,0.5,2"
 SHOWN_ESCAPE_STATES = 50  # escape-violating states listed on stdout (all of them are in summary.json)
-PLAN_FILES = ("plan.csv", "plan.json", "commutation_steps.png", "motor_3d.png", "plan_error.png")
-SIMULATION_FILES = ("trajectory.csv", "simulation.png")
 ANGLE = number("a non-zero angle in degrees, at most 36000 (100 turns) in size", -36_000, 36_000, nonzero=True)
-
-
-def metrics_for_people(design, metrics) -> dict:
-    """The design's summary and :class:`~spherestep.motor.metrics.DesignMetrics` with angles in degrees: the
-    count of escape-violating states and every one of them listed."""
-    out = design.summary() | metrics.to_dict(degrees=True)
-    states = out.pop("escape_violations") or []
-    out["escape_violations"] = len(states)
-    out["escape_violation_states"] = states
-    return out
 
 
 def print_summary(info: dict) -> None:
@@ -58,35 +45,6 @@ def warn(text: str) -> None:
     print(f"spherestep: warning: {text}", file=sys.stderr)
 
 
-def write_plan_files(design, plan, axis, out: Path) -> None:
-    """The plan (CSV, JSON) and its figures (:data:`PLAN_FILES`) into ``out``."""
-    from .. import plots
-
-    plan.to_csv(out / "plan.csv")
-    plan.to_json(out / "plan.json")
-    plots.save_figure(plots.figure_steps(design, plan, axis), out / "commutation_steps.png")
-    plots.save_figure(plots.figure_motor_3d(design, plan.steps[0].achieved), out / "motor_3d.png")
-    plots.save_figure(plots.figure_plan_error(plan), out / "plan_error.png")
-
-
-def simulate_and_write(design, plan, axis, out: Path, physics=None, tuning=None):
-    """Run ``plan`` on the rotor under the magnets' torque map (tuned damping, dwell and time step); write
-    :data:`SIMULATION_FILES`. Returns ``(simulation, summary dict)``."""
-    from .. import plots, so3
-    from ..dynamics import simulate, tune
-    from ..magnetics import torque_map
-
-    physics = torque_map(design) if physics is None else physics
-    tuning = tune(design, physics) if tuning is None else tuning
-    sim = simulate(design, plan, physics, dwell=tuning.dwell, rotor=tuning.rotor, dt=tuning.dt, record_every=1)
-    sim.to_csv(out / "trajectory.csv", axis)
-    plots.save_figure(plots.figure_simulation(sim, plan, axis, tuning.dwell), out / "simulation.png")
-    summary = sim.summary() | {
-        "dwell_s": tuning.dwell, "damping_N_m_s": tuning.rotor.damping,
-        "final_error_to_target_deg": math.degrees(float(so3.distance(sim.settled[-1], plan.targets[-1])))}
-    return sim, summary
-
-
 @app.command()
 def demo(
     out: Path = typer.Option(Path("spherestep-out"), "--out", help="Output folder."),
@@ -97,62 +55,53 @@ def demo(
                                                        "in summary.json)."),
     quiet: bool = typer.Option(False, "--quiet", help="Print nothing but errors."),
 ) -> None:
-    """The main job on the built-in prototype: states, resolution, range, a commutated 360° turn about a
-    tilted axis, and the plan, figures and HTML report (report.html) in the output folder.
+    """The main job on the built-in prototype (iron-cored coils, as the paper's): states, resolution, range,
+    torque capability over SO(3), a commutated 360° turn about a tilted axis driven three ways (the paper's settled
+    relay steps, ramped relay steps, the current-controlled servo) on the rotor's dynamics, and the plan, figures,
+    drives.json and the HTML report (report.html) in the output folder.
 
     Example: [bold]spherestep demo --out spherestep-out[/bold]
     """
     from rich.progress import Progress, SpinnerColumn, TextColumn, TimeElapsedColumn
 
-    from ..commutation import turn
+    from ..demo import DEMO_FILES, run_demo
     from ..motor import prototype
     from ..outputs import Outputs, output_folder
 
     out = output_folder(out, "--out")
     axis_vec = parse_vector(axis, "--axis")
-    from ..report import write_report  # plotly loads once the command line is known to be good
-    files = Outputs(out, PLAN_FILES + SIMULATION_FILES + ("report.html", "summary.json"))
+    files = Outputs(out, DEMO_FILES)
     with files, Progress(SpinnerColumn(), TextColumn("{task.description}"), TimeElapsedColumn(), console=console,
                          disable=quiet or as_json, transient=True) as progress:
         task = progress.add_task("building the prototype", total=None)
-        design = prototype()
-        progress.update(task, description="enumerating stepper states")
-        design.states()
-        progress.update(task, description="measuring resolution, range and escape directions")
-        metrics = design.metrics()
-        info = metrics_for_people(design, metrics)
-        progress.update(task, description="commutating")
-        plan = turn(design, axis_vec, angle)
-        progress.update(task, description="writing plan and figures")
-        write_plan_files(design, plan, axis_vec, out)
-        progress.update(task, description="simulating the plan on the magnets' torque map")
-        sim, info["simulation"] = simulate_and_write(design, plan, axis_vec, out)
-        progress.update(task, description="writing the HTML report")
-        write_report(out / "report.html", design, metrics, plan, simulation=sim, axis=axis_vec)
-        summary = plan.summary(max_step=design.max_step)
-        info["plan"] = summary.to_dict() | {"axis": (axis_vec / math.sqrt(axis_vec @ axis_vec)).tolist(),
-                                            "angle_deg": angle}
-        info["files"] = [str(p) for p in files.paths]
-        write_json(out / "summary.json", info)
-    for text in summary.warnings:
+        info = run_demo(prototype(), out, axis_vec, angle,
+                        progress=lambda text: progress.update(task, description=text))
+    for text in info["plan"].get("warnings", []):
         warn(text)
-    shown = info["escape_violation_states"][:SHOWN_ESCAPE_STATES]
-    if len(shown) < info["escape_violations"]:
-        info["escape_violation_states"] = shown
-        info["escape_violation_states_note"] = (f"the first {len(shown)} of {info['escape_violations']}; all of "
-                                                f"them in {out / 'summary.json'}")
+    states = info.pop("escape_violations") or []
+    info["escape_violations"] = len(states)
+    info["escape_violation_states"] = states[:SHOWN_ESCAPE_STATES]
+    if len(states) > SHOWN_ESCAPE_STATES:
+        info["escape_violation_states_note"] = (f"the first {SHOWN_ESCAPE_STATES} of {len(states)}; all of them in "
+                                                f"{out / 'summary.json'}")
+    info["files"] = [str(p) for p in files.paths]
     if as_json:
         print_json(info)
     elif not quiet:
         print_summary(info)
-        axis_text = ", ".join(f"{a:.3f}" for a in info["plan"]["axis"])
-        console.print(f"commutated {angle:g}° about ({axis_text}): {summary.line()}")
-        r = info["simulation"]
-        console.print(f"simulated {r['simulated_s']:.0f} s on the magnets' torque map: "
-                      f"{r['steps'] - len(r['missed_steps'])} of {r['steps']} steps settled within "
-                      f"{r['tolerance_deg']:g}° of the plan (median {r['settled_error_median_deg']:.2f}°, max "
-                      f"{r['settled_error_max_deg']:.2f}°); final pose {r['final_error_to_target_deg']:.2f}° from "
-                      "the target")
+        p = info["plan"]
+        axis_text = ", ".join(f"{a:.3f}" for a in p["axis"])
+        console.print(f"commutated {angle:g}° about ({axis_text}): {p['steps']} steps, final error "
+                      f"{p['error_final_deg']:.2f}°")
+        cap = info["capability"]["available_torque_N_m"]
+        console.print(f"torque model {info['torque_model']}: torque available in every direction median "
+                      f"{cap[50]:.2f} N·m, 5th percentile {cap[5]:.2f} N·m")
+        d = info["drives"]
+        for m in d["modes"]:
+            console.print(f"  {m['mode']:>8}: {m['time_s']:7.2f} s, final error {m['final_error_deg']:.3f}°, max "
+                          f"tracking error {m['max_tracking_error_deg']:.2f}°, power peak {m['peak_power_W']:.0f} W "
+                          f"mean {m['mean_power_W']:.0f} W")
+        console.print(f"  bang-bang bound {d['bang_bang_bound_s']:.2f} s (servo {d['servo_over_bound']:.2f}× it)")
         console.print(f"wrote {len(files.paths)} files to {out}/")
 
 
@@ -182,6 +131,8 @@ def plan(
     axis_vec = parse_vector(axis, "--axis")
     design = usable(design_from(design_path), "--design", design_path)
     result = turn(design, axis_vec, angle, steps)
+    from ..demo import PLAN_FILES, write_plan_files
+
     files = Outputs(out, PLAN_FILES)
     with files:
         write_plan_files(design, result, axis_vec, out)

@@ -10,7 +10,7 @@ import typer
 from ..errors import bad_value
 from .app import app
 from .common import check_axis, console, design_from, number, parse_vector, print_json, usable, write_json
-from .motor import ANGLE, simulate_and_write
+from .motor import ANGLE
 
 PLANNERS = ("geometric", "potential")
 
@@ -113,6 +113,8 @@ def simulate(
         else:
             plan = turn(design, axis_vec, angle, steps, planner)
             with console.status("simulating"):
+                from ..demo import simulate_and_write
+
                 _, result = simulate_and_write(design, plan, axis_vec, out, physics, tuning)
             summary |= {"closed_loop": False} | result
         summary["files"] = [str(p) for p in files.paths]

@@ -132,6 +132,16 @@ def simulate(design, plan, model, dwell: float | None = None, *, rotor: Rotor | 
     resolving the stiffest well); give all three to skip the tuning. ``record_every``: keep every k-th
     integration step in the trajectory.
     """
+    from ..commutation import Plan
+
+    if not isinstance(plan, Plan):
+        raise bad_value("plan", "a spherestep.commutation.Plan (commutation.turn, plan_geometric, Plan.from_json)",
+                        type(plan).__name__)
+    if not all(callable(getattr(model, name, None)) for name in ("torque", "energy")):
+        raise bad_value("model", "a torque model with torque(R, c) and energy(R, c) (spherestep.statics.TorqueModel)",
+                        type(model).__name__)
+    if plan.coil_count != len(design.stator):
+        raise bad_value("plan", f"a plan for this design's {len(design.stator)} coils", f"{plan.coil_count} coils")
     if dwell is None or rotor is None or dt is None:
         from .tuning import tune
 

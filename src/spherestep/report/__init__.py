@@ -14,10 +14,10 @@ in the rotor and shows how far it has turned, the dotted one where it started. P
 :data:`MAX_FRAMES` steps are animated on evenly spaced steps (the table lists them all).
 """
 
-from .figures import (MAX_FRAMES, commutation_figure, energy_figure, frame_steps, motor_figure, resolution_distances,
-                      resolution_figure, trajectory_figure)
+from .figures import (MAX_FRAMES, capability_figure, commutation_figure, energy_figure, frame_steps, motor_figure,
+                      resolution_distances, resolution_figure, servo_figure, trajectory_figure)
 from .page import Section, build_report, design_tables, plan_table, write_report
 
-__all__ = ["MAX_FRAMES", "Section", "build_report", "commutation_figure", "design_tables", "energy_figure", "frame_steps",
-           "motor_figure", "plan_table", "resolution_distances", "resolution_figure", "trajectory_figure",
-           "write_report"]
+__all__ = ["MAX_FRAMES", "Section", "build_report", "capability_figure", "commutation_figure", "design_tables",
+           "energy_figure", "frame_steps", "motor_figure", "plan_table", "resolution_distances", "resolution_figure",
+           "servo_figure", "trajectory_figure", "write_report"]

@@ -393,3 +393,54 @@ def energy_figure(energy_map) -> go.Figure:
     return fig
 
 
+
+
+def capability_figure(capability) -> go.Figure:
+    """The torque capability over SO(3) (a :class:`~spherestep.control.Capability`): the torque available in
+    every direction and the smallest singular value of ``K(R)``, both against the sampled orientations' rotation
+    angle, with their distribution; N·m."""
+    angle = np.degrees(so3.angle(capability.rotations))
+    order = np.argsort(capability.radius)
+    fig = make_subplots(rows=1, cols=2, column_widths=[0.62, 0.38], horizontal_spacing=0.09,
+                        subplot_titles=("per sampled orientation", "fraction of SO(3) with at least"))
+    fig.add_trace(go.Scatter(x=_f32(angle), y=_f32(capability.radius), mode="markers", name="available in every "
+                             "direction (N·m)", marker={"size": 4, "color": "#2c6fbb"}), row=1, col=1)
+    fig.add_trace(go.Scatter(x=_f32(angle), y=_f32(capability.singular_values[:, 2]), mode="markers",
+                             name="σ_min of K(R) (N·m per unit current)", marker={"size": 4, "color": "#c0392b"}),
+                  row=1, col=1)
+    torque = capability.radius[order]
+    fig.add_trace(go.Scatter(x=_f32(torque), y=_f32(1.0 - np.arange(len(torque)) / len(torque)), mode="lines",
+                             line={"shape": "hv", "color": "#2c6fbb"}, showlegend=False), row=1, col=2)
+    fig.update_xaxes(title_text="rotation angle of the sample (°)", row=1, col=1)
+    fig.update_xaxes(title_text="torque available in every direction (N·m)", row=1, col=2)
+    fig.update_yaxes(title_text="N·m", row=1, col=1)
+    fig.update_yaxes(title_text="fraction of samples", range=[0, 1.02], row=1, col=2)
+    fig.update_layout(_layout(height=420, margin={"l": 60, "r": 20, "t": 60, "b": 50},
+                              legend={"x": 0.01, "y": -0.25, "orientation": "h"}))
+    return fig
+
+
+def servo_figure(run) -> go.Figure:
+    """A servo run (a :class:`~spherestep.dynamics.ServoRun`): tracking error (°) and coil currents (A) over time,
+    and the electrical power drawn from the supply (W)."""
+    keep = np.unique(np.linspace(0, len(run.times) - 1, min(len(run.times), MAX_TRACE_POINTS)).round().astype(int))
+    t = _f32(run.times[keep])
+    fig = make_subplots(rows=3, cols=1, shared_xaxes=True, row_heights=[0.36, 0.4, 0.24], vertical_spacing=0.05)
+    fig.add_trace(go.Scatter(x=t, y=_f32(np.degrees(run.tracking_error[keep])), mode="lines", name="rotor − trajectory",
+                             line={"color": "#c0392b", "width": 1.2}), row=1, col=1)
+    fig.add_trace(go.Scatter(x=t, y=_f32(np.degrees(so3.distance(run.estimates[keep], run.orientations[keep]))),
+                             mode="lines", name="sensor − rotor", line={"color": "#888", "width": 1}), row=1, col=1)
+    for k in range(run.currents.shape[1]):
+        fig.add_trace(go.Scatter(x=t, y=_f32(run.currents[keep, k]), mode="lines", name=f"coil {k}",
+                                 line={"width": 0.8}, showlegend=False, hovertemplate=f"coil {k}: %{{y:.3f}} A"),
+                      row=2, col=1)
+    fig.add_trace(go.Scatter(x=t, y=_f32(run.power[keep]), mode="lines", name="supply power",
+                             line={"color": "#2c6fbb", "width": 1.2}), row=3, col=1)
+    fig.update_yaxes(title_text="error (°)", row=1, col=1)
+    fig.update_yaxes(title_text="current (A)", row=2, col=1)
+    fig.update_yaxes(title_text="power (W)", row=3, col=1)
+    fig.update_xaxes(title_text="time (s)", row=3, col=1)
+    fig.update_layout(_layout(height=620, margin={"l": 70, "r": 20, "t": 40, "b": 50},
+                              title={"text": "Servo run: tracking error, coil currents, supply power", "x": 0.02},
+                              legend={"x": 0.7, "y": 0.99, "bgcolor": "rgba(255,255,255,0.8)"}))
+    return fig
