@@ -2,6 +2,7 @@
 
     OPENBLAS_NUM_THREADS=1 nice -n 5 python scripts/fem_iron.py            # data/iron_fem.csv (~10-20 min)
     OPENBLAS_NUM_THREADS=1 nice -n 5 python scripts/fem_iron.py --quick    # one angle, the convergence only
+    ... scripts/fem_iron.py --angles 12 20   then   scripts/fem_iron.py --merge   # a share of the angles in parallel
 
 Formulation (coil frame: axis z, core face at z = 0, body z > 0). The field is ``H = T0 − ∇ψ`` with a
 total scalar potential ψ (H1, order 2, ψ = 0 on a sphere of 0.2 m) and two sources that need no field from
@@ -125,13 +126,17 @@ HEADER = ("# NGSolve 3-D FEM (total scalar potential, order 2) of one +1 rotor m
           "alpha_deg,maxh_face_m,elements,detent_Nm,linear_Nm,mesh_s,solve_s\n")
 
 
-def main(quick: bool = False):
+def main(quick: bool = False, angles=None):
     design, coil = prototype(), iron_coil()
-    runs = [(8.0, 2.0e-3)]
-    if not quick:
-        runs += [(a, 2.0e-3) for a in (2.0, 5.0, 12.0, 20.0)]
-    runs += [(8.0, 1.4e-3), (8.0, 1.0e-3)]
-    out = DATA / "iron_fem.csv"
+    if angles:  # a share of the angles, for running in parallel: data/iron_fem_<angles>.csv, merge with --merge
+        runs = [(a, 2.0e-3) for a in angles]
+        out = DATA / ("iron_fem_" + "_".join(f"{a:g}" for a in angles) + ".csv")
+    else:
+        runs = [(8.0, 2.0e-3)]
+        if not quick:
+            runs += [(a, 2.0e-3) for a in (2.0, 5.0, 12.0, 20.0)]
+        runs += [(8.0, 1.4e-3), (8.0, 1.0e-3)]
+        out = DATA / "iron_fem.csv"
     rows = []
     for a, h in runs:
         det, lin, ne, tm, ts = pair(design, coil, math.radians(a), h)
@@ -143,5 +148,25 @@ def main(quick: bool = False):
     print("wrote", out)
 
 
+def merge():
+    """Rows of data/iron_fem.csv and every data/iron_fem_<angles>.csv into data/iron_fem.csv (the parts removed)."""
+    parts = sorted(DATA.glob("iron_fem_*.csv"))
+    rows = []
+    for p in [DATA / "iron_fem.csv", *parts]:
+        if p.exists():
+            rows += [line for line in p.read_text().splitlines() if line and line[0].isdigit()]
+    out = DATA / "iron_fem.csv"
+    tmp = out.with_suffix(".tmp")
+    tmp.write_text(HEADER + "\n".join(rows) + "\n")
+    tmp.replace(out)
+    for p in parts:
+        p.unlink()
+
+
 if __name__ == "__main__":
-    main("--quick" in sys.argv)
+    if "--merge" in sys.argv:
+        merge()
+    elif "--angles" in sys.argv:
+        main(angles=[float(a) for a in sys.argv[sys.argv.index("--angles") + 1:]])
+    else:
+        main("--quick" in sys.argv)
