@@ -109,8 +109,7 @@ def pair(design, coil, alpha: float, maxh_face: float):
     pts = pts + inward
     pivot = np.array([0.0, 0.0, -face])
     B = {}
-    for key, (mu_r, c, m) in {"iron": (g.mu_r, 0.0, True), "coil": (g.mu_r, 1.0, True),
-                              "air": (1.0, 0.0, True)}.items():
+    for key, (mu_r, c) in {"iron": (g.mu_r, 0.0), "coil": (g.mu_r, 1.0), "air": (1.0, 0.0)}.items():
         gfu = solve(mesh, g, w, design, mu_r, c)
         B[key] = field_at(mesh, gfu, pts)
     t2 = time.perf_counter()

@@ -69,7 +69,7 @@ class CoreGeometry:
     mu_r: float
 
     @classmethod
-    def of(cls, design, coil) -> "CoreGeometry":
+    def of(cls, design, coil) -> CoreGeometry:
         r_p, r_w, depth = coil.groove(design.coil_diameter, design.coil_length)
         return cls(0.5 * design.coil_diameter, design.coil_length, r_p, r_w, depth,
                    coil.nominal_ampere_turns(design.coil_diameter, design.coil_length),

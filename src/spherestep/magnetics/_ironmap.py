@@ -104,7 +104,7 @@ class IronTorqueMap(TorqueModelBase):
     def failed(self) -> tuple[int, ...]:
         return self.linear.failed
 
-    def subset(self, coils) -> "IronTorqueMap":
+    def subset(self, coils) -> IronTorqueMap:
         """The same model with only the cores ``coils`` present (indices into the stator)."""
         idx = np.asarray(coils, dtype=int)
         failed = tuple(int(np.nonzero(idx == k)[0][0]) for k in self.failed if k in idx)
