@@ -6,10 +6,8 @@ import json
 import math
 from pathlib import Path
 
-import numpy as np
 import typer
 
-from .. import so3
 
 from ..errors import bad_value
 from .app import app
@@ -25,6 +23,12 @@ def _check_mode(ctx: typer.Context, param: typer.CallbackParam, value):
     return value
 
 
+def _check_sensor(ctx: typer.Context, param: typer.CallbackParam, value):
+    if value not in ("ideal", "hall", "imu") and not ctx.resilient_parsing:
+        raise typer.BadParameter(f"must be ideal, hall or imu; instead received {value!r}")
+    return value
+
+
 @app.command()
 def move(
     axis: str = typer.Option(..., "--axis", callback=check_axis, help="Rotation axis X,Y,Z in the fixed (stator) "
@@ -37,6 +41,10 @@ def move(
                              help="servo (continuous currents), ramped (relay steps at the pull-out rate) or "
                                   "settled (relay steps, each settled)."),
     design_path: Path = typer.Option(None, "--design", help="Design file; default the built-in prototype."),
+    sensor: str = typer.Option("ideal", "--sensor", callback=_check_sensor,
+                               help="Servo: where the orientation comes from: ideal (the true one, plus "
+                                    "--sensor-noise), hall (the stator's magnetometer array and its estimator) or "
+                                    "imu (gyro, accelerometer and magnetometer in the rotor)."),
     sensor_noise: float = typer.Option(0.0, "--sensor-noise", callback=number("degrees", 0, 10,
                                                                               what="sensor noise σ"),
                                        help="Servo: orientation sensor noise σ in degrees."),
@@ -73,8 +81,13 @@ def move(
     design = usable(design_from(design_path))
     if port is not None or emulate:
         return _on_hardware(design, axis, angle, time, port, emulate, rate, out, as_json)
+    if sensor != "ideal" and mode != "servo":
+        raise bad_value("--sensor", "ideal unless --mode servo (relay modes run open loop)", sensor)
+    if sensor != "ideal" and sensor_noise:
+        raise bad_value("--sensor-noise", "left out with --sensor hall or imu (their noise is the part's own)",
+                        sensor_noise)
     result = drive(design, parse_vector(axis, "--axis"), math.radians(angle), mode=mode, duration=time,
-                   sensor_noise=math.radians(sensor_noise))
+                   sensor_noise=math.radians(sensor_noise), sensor=sensor)
     written = result.write(out)
     s = result.summary
     if as_json:
@@ -88,6 +101,9 @@ def move(
 
 def _on_hardware(design, axis, angle, time, port, emulate, rate, out, as_json) -> None:
     """The servo on a controller or the emulated motor: live status, streamed log, summary (docs/protocol.md)."""
+    import numpy as np
+
+    from .. import so3
     from ..atomic import write_text
     from ..hardware.session import move_on_hardware
 

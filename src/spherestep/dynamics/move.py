@@ -117,11 +117,18 @@ def figure_drive(times, errors, currents, power, title: str = ""):
     return fig
 
 
+SENSORS = ("ideal", "hall", "imu")
+
+
 def drive_turn(design, axis, angle: float, *, mode: str = "servo", duration: float | None = None,
-         sensor_noise: float = 0.0, model=None, limits: DriveLimits | None = None, seed: int = 0) -> Move:
+               sensor_noise: float = 0.0, sensor: str = "ideal", model=None, limits: DriveLimits | None = None,
+               seed: int = 0) -> Move:
     """Drive a turn of ``angle`` rad about ``axis`` (fixed frame) with ``mode`` (see the module); ``duration``
-    (s) only for the servo (default: the fastest turn within the guaranteed torque); ``sensor_noise`` σ (rad)
-    of the servo's orientation sensor."""
+    (s) only for the servo (default: the fastest turn within the guaranteed torque). The servo's orientation
+    comes from ``sensor``: ``"ideal"`` (the true orientation turned by noise of σ ``sensor_noise`` rad),
+    ``"hall"`` (the stator's magnetometer array and its estimator, :class:`spherestep.sensing.HallSensor`, with
+    the coils' field subtracted at a 1 % current error) or ``"imu"`` (a gyro, accelerometer and magnetometer
+    in the rotor, :class:`spherestep.sensing.ImuSensor`), both tracking from the known start."""
     from ..commutation import turn
 
     if mode not in MODES:
@@ -132,6 +139,11 @@ def drive_turn(design, axis, angle: float, *, mode: str = "servo", duration: flo
         raise bad_value("duration", "a positive time in seconds", duration)
     if not (isinstance(sensor_noise, (int, float)) and math.isfinite(sensor_noise) and sensor_noise >= 0):
         raise bad_value("sensor_noise", "a non-negative angle in radians", sensor_noise)
+    if sensor not in SENSORS:
+        raise bad_value("sensor", f"one of {', '.join(SENSORS)}", sensor)
+    if sensor != "ideal" and sensor_noise:
+        raise bad_value("sensor_noise", "0 with the hall and imu sensors (their noise is the part's own)",
+                        sensor_noise)
     if model is None:
         from ..magnetics import torque_map
 
@@ -143,7 +155,7 @@ def drive_turn(design, axis, angle: float, *, mode: str = "servo", duration: flo
     base = {"mode": mode, "axis": n.tolist(), "angle_deg": math.degrees(angle)}
     In = limits.nominal_current
     if mode == "servo":
-        from .servo import NoisySensor, simulate_servo
+        from .servo import simulate_servo
 
         rotor = Rotor.from_design(design)
         if duration is None:
@@ -151,10 +163,12 @@ def drive_turn(design, axis, angle: float, *, mode: str = "servo", duration: flo
         else:
             traj = Trajectory.turn(start, n, angle, 4.0 * abs(angle) / duration ** 2)
         run = simulate_servo(design, traj, model, limits=limits, rotor=rotor,
-                             sensor=NoisySensor(sensor_noise, rng=seed), settle=0.3)
+                             sensor=_sensor(design, sensor, sensor_noise, traj.start, seed), settle=0.3)
         s = run.summary()
         summary = base | {"time_s": s["arrival_time_s"], "final_error_deg": math.degrees(
-            float(so3.distance(run.orientations[-1], end)))} | s | {"sensor_noise_deg": math.degrees(sensor_noise)}
+            float(so3.distance(run.orientations[-1], end)))} | s | {
+            "sensor": sensor, "sensor_noise_deg": math.degrees(sensor_noise),
+            "sensor_error_max_deg": math.degrees(float(so3.distance(run.estimates, run.orientations).max()))}
         return Move(mode, run.times, run.orientations, run.targets, run.currents, run.power, summary)
     from .tuning import tune
 
@@ -180,3 +194,16 @@ def drive_turn(design, axis, angle: float, *, mode: str = "servo", duration: flo
         float(so3.distance(sim.settled[-1], end))), "peak_power_W": float(power.max()),
         "mean_power_W": float(power.mean()), "dwell_s": tuning.dwell}
     return Move(mode, sim.times, sim.orientations, plan.targets[idx], sim.active_coils * In, power, summary)
+
+
+def _sensor(design, kind: str, noise: float, start, seed: int):
+    """The servo's orientation sensor of kind ``kind`` (see :func:`drive_turn`), at the control rate."""
+    from .servo import CONTROL_RATE, NoisySensor
+
+    if kind == "ideal":
+        return NoisySensor(noise, rng=seed)
+    from ..sensing import HallSensor, ImuSensor, LoopSensor
+
+    inner = HallSensor(design, current_error=0.01, seed=seed) if kind == "hall" else \
+        ImuSensor(design, 1.0 / CONTROL_RATE, seed=seed)
+    return LoopSensor(inner, rate=CONTROL_RATE, start=start)
