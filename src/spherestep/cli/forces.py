@@ -20,16 +20,16 @@ def forces(
     states: int = typer.Option(8, "--states", help="Number of stepper states to sample for the torque table."),
     seed: int = typer.Option(0, "--seed", help="Seed of the state sample."),
     as_json: bool = typer.Option(False, "--json", help="Print the results as JSON."),
-    core: str = typer.Option("both", "--core", help="Coil cores to report: air (today's model), iron (pot-core "
-                             "coils, spherestep.motor.coil.iron_coil: detent, states, polarity, saturation, power) "
-                             "or both."),
+    core: str = typer.Option("air", "--core", help="Coil cores to report: air (today's model), or both: also the "
+                             "iron-cored coils of spherestep.motor.coil.iron_coil (detent, states, polarity, "
+                             "saturation, power; a few minutes; minutes more for a design other than the prototype)."),
 ) -> None:
     """Physical forces by magpylib: the Fig. 6 force curve (one magnet slid under one coil, simulated) with its
     4th-order fit (force_curve.csv, force_curve.png), and holding and stepping torques (N·m) of a sample of
     stepper states (forces.json; a table, or --json).
 
-    With --core iron or both (the default) also the iron-cored coils against the air cores: detent, stepper
-    states, polarity, saturation and power (iron.json, iron.png).
+    With --core both also the iron-cored coils against the air cores: detent, stepper states, polarity,
+    saturation and power (iron.json, iron.png).
 
     Example: [bold]spherestep forces --out forces --states 10 --core both[/bold]
     """
@@ -45,8 +45,8 @@ def forces(
         raise bad_value("--states", "a number of states from 1 to 10000", states)
     if seed < 0:
         raise bad_value("--seed", "a whole number ≥ 0", seed)
-    if core not in ("air", "iron", "both"):
-        raise bad_value("--core", "air, iron or both", core)
+    if core not in ("air", "both"):
+        raise bad_value("--core", "air or both", core)
     out = output_folder(out, "--out")
     design = usable(design_from(design_path), "--design", design_path)
     st = design.states()
