@@ -234,9 +234,7 @@ NUMERIC_OPTIONS = {  # command line before the option, the option, values out of
     ("sense", "--samples"): (["sense", "--out", "{base}/o"], ["0", "-1"]),
     ("sense", "--seed"): (["sense", "--out", "{base}/o"], ["-1"]),
 }
-KNOWN = {  # cases whose fix belongs to another room's owner (reported): expected to fail until then
-    "capability--seed[-1]": "capability --seed -1 reaches NumPy's ValueError (exit 1)",
-}
+KNOWN: dict[str, str] = {}  # cases expected to fail until their owner fixes them (none left)
 AXIS_COMMANDS = {
     "demo": ["demo", "--out", "{base}/o"],
     "plan": ["plan", "--angle", "30", "--out", "{base}/o"],
