@@ -13,7 +13,7 @@ settings.register_profile("ci", derandomize=True)
 if os.environ.get("CI"):
     settings.load_profile("ci")
 
-from spherestep.motor import prototype
+from spherestep.motor import prototype  # noqa: E402  (after the Hypothesis profile is chosen)
 
 
 @pytest.fixture(scope="session")

@@ -23,7 +23,7 @@ _MODULES = {
     "store": ("COLUMNS", "MEASURED", "SCHEMA", "ResultStore"),
 }
 _HOME = {name: module for module, names in _MODULES.items() for name in names}
-__all__ = sorted(_HOME)
+__all__ = sorted(_HOME)  # noqa: PLE0605  (the lazy table is the one list of names)
 
 
 def __getattr__(name: str):

@@ -39,19 +39,19 @@ MAX_SAMPLES = 1_000_000
 MAX_TORQUE_STATES = 1000
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def distinct_names() -> tuple[str, ...]:
     """The 16 pairwise non-congruent base packings (of the 21), in :func:`spherestep.packing.names` order."""
     return tuple(p.name for p in pk.distinct([pk.by_name(n) for n in pk.names()]))
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def symmetry_family(name: str) -> str:
     """'T', 'O' or 'I': the rotation group of base packing ``name`` (order 12, 24 or 60)."""
     return FAMILY_OF_ORDER[pk.by_name(name).symmetry_order()]
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def primary_radius(name: str) -> float:
     """Angular radius (rad) of the primary circles of base packing ``name`` (all its caps are equal)."""
     return float(pk.by_name(name).radii[0])
@@ -153,7 +153,7 @@ class DesignPoint:
         return hashlib.sha256(text.encode()).hexdigest()[:16]
 
     @classmethod
-    def from_params(cls, params: dict | str) -> "DesignPoint":
+    def from_params(cls, params: dict | str) -> DesignPoint:
         """The point of a :attr:`params` dict (or its JSON text), as stored in the results table."""
         data = json.loads(params) if isinstance(params, str) else dict(params)
         data["stator_axis"] = tuple(data["stator_axis"])
@@ -229,10 +229,10 @@ class Grid:
             if any(not 0 <= v <= MAX_REFINE for v in levels):
                 raise bad_value(label, f"refinement levels 0..{MAX_REFINE}", list(levels))
             object.__setattr__(self, label, levels)
-        caps = _tuple(getattr(self, "cap_half_angles_deg"), "cap_half_angles_deg", (int, float))
+        caps = _tuple(self.cap_half_angles_deg, "cap_half_angles_deg", (int, float))
         if any(not 0 < c < 90 for c in caps):
             raise bad_value("cap_half_angles_deg", "angles in (0, 90) degrees", list(caps))
-        tols = _tuple(getattr(self, "tolerances_deg"), "tolerances_deg", (int, float))
+        tols = _tuple(self.tolerances_deg, "tolerances_deg", (int, float))
         if any(not 0 < t < math.degrees(0.5) for t in tols):
             raise bad_value("tolerances_deg", f"angles in (0, {math.degrees(0.5):.4g}) degrees", list(tols))
         object.__setattr__(self, "cap_half_angles_deg", tuple(float(c) for c in caps))

@@ -53,7 +53,7 @@ class Backend(ABC):
         """Switch every output off."""
         self.write(0, 0, {})
 
-    def close(self) -> None:
+    def close(self) -> None:  # noqa: B027  (an optional hook: most back ends hold nothing to release)
         """Release the connection (outputs are already off: the driver calls :meth:`off` first)."""
 
     def clock(self) -> float:

@@ -124,7 +124,7 @@ class TorqueMap(TorqueModelBase):
         object.__setattr__(self, "_g_ends", (float(slope(0.0)), -float(slope(math.pi))))
 
     @classmethod
-    def build(cls, design, meshing: int = TABLE_MESHING) -> "TorqueMap":
+    def build(cls, design, meshing: int = TABLE_MESHING) -> TorqueMap:
         """The map of ``design`` (table cached per magnet and coil geometry)."""
         nodes, tau = _table(_geometry_key(design), as_meshing(meshing))
         return cls(design.rotor.centers.copy(), design.polarity.astype(float), design.stator.centers.copy(),

@@ -65,7 +65,7 @@ class ZonalKernel:
         self._build()
 
     @classmethod
-    def overlap(cls, first: ZonalProfile, second: ZonalProfile, lmax: int, rtol: float = 1e-12) -> "ZonalKernel":
+    def overlap(cls, first: ZonalProfile, second: ZonalProfile, lmax: int, rtol: float = 1e-12) -> ZonalKernel:
         """``G(t) = ∫ f1(u·w) f2(u·v) du`` truncated at degree ``lmax``: ``g_l = λ_l(f1) λ_l(f2) (2l+1)/(4π)``."""
         for label, profile in (("first", first), ("second", second)):
             if not isinstance(profile, ZonalProfile):

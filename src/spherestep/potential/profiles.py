@@ -160,7 +160,7 @@ class VonMisesFisher(ZonalProfile):
         object.__setattr__(self, "amplitude", _checks.positive(self.amplitude, "amplitude"))
 
     @classmethod
-    def from_half_width(cls, angle, amplitude=1.0) -> "VonMisesFisher":
+    def from_half_width(cls, angle, amplitude=1.0) -> VonMisesFisher:
         """The bump falling to half its peak at the angular radius ``angle`` (radians, in (0, π/2]):
         ``κ = ln 2 / (1 − cos angle)``."""
         if isinstance(angle, bool) or not isinstance(angle, (int, float, np.floating)) or \
@@ -183,7 +183,7 @@ class VonMisesFisher(ZonalProfile):
         lmax = _checks.count(lmax, "lmax")
         return self.amplitude * (2 * np.pi) ** 1.5 / np.sqrt(self.kappa) * ive(np.arange(lmax + 1) + 0.5, self.kappa)
 
-    def overlap(self, other: "VonMisesFisher", t, derivative: int = 0) -> np.ndarray:
+    def overlap(self, other: VonMisesFisher, t, derivative: int = 0) -> np.ndarray:
         """``G(t) = ∫ f(u·w) g(u·v) du`` for ``t = w · v`` in closed form (independent of any expansion), or its
         derivative ``G'(t)`` for ``derivative=1``.
 
