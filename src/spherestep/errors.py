@@ -18,10 +18,6 @@ class InputError(SpherestepError, ValueError):
     """A value is out of its domain: "`name` must be …; instead received …"."""
 
 
-class InputTypeError(SpherestepError, TypeError):
-    """A value has the wrong type."""
-
-
 class ComputationError(SpherestepError, RuntimeError):
     """A computation could not complete on valid input (CLI exit status 1)."""
 

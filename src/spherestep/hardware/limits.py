@@ -66,10 +66,6 @@ class ThermalGuard:
         self._since: dict[int, float] = {}
         self._history: dict[int, deque[tuple[float, float]]] = {}
 
-    def on_since(self, coil: int) -> float | None:
-        """Time the coil was switched on if it is on now, else None."""
-        return self._since.get(coil)
-
     def on_time(self, coil: int, start: float, end: float) -> float:
         """Seconds the coil was on within ``[start, end]`` according to the record."""
         spans = list(self._history.get(coil, ()))
