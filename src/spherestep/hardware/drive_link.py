@@ -23,7 +23,7 @@ from .backend import LinkError
 from .protocol import BAUDRATE, NAK_CODES, RETRYABLE, Frame, FrameError, LineReader, decode, encode, \
     parse_decimal
 from .protocol2 import MAX_FRAME2, NAK_CODES2, TRIP_CODES, VERSION2, State, encode_block, parse_state
-from .serialport import NakError
+from .serialport import NakError, check_link
 from .transcript import Transcript
 
 _POLL = 0.002  # seconds one read waits before the deadline is checked again
@@ -69,13 +69,7 @@ class DriveLink:
 
     def __init__(self, port: str, *, baudrate: int = BAUDRATE, timeout: float = 0.02, retries: int = 2,
                  open_timeout: float = 3.0, transcript: Transcript | None = None):
-        if not isinstance(port, str) or not port.strip():
-            raise bad_value("port", "a serial device name such as /dev/ttyACM0 or COM3", port)
-        for name, value in (("timeout", timeout), ("open_timeout", open_timeout)):
-            if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
-                raise bad_value(name, "a positive number of seconds", value)
-        if not isinstance(retries, int) or retries < 0:
-            raise bad_value("retries", "a non-negative integer", retries)
+        check_link(port, baudrate, timeout, retries, open_timeout)
         self.port, self.baudrate, self.timeout, self.retries = port, baudrate, float(timeout), retries
         self.open_timeout = float(open_timeout)
         self.transcript = transcript

@@ -26,6 +26,20 @@ from .transcript import Transcript
 _POLL = 0.005  # seconds one read waits before the deadline is checked again
 
 
+def check_link(port, baudrate, timeout, retries, open_timeout) -> None:
+    """The one check of a serial link's settings (both protocol versions): a device name, a positive baud
+    rate, positive timeouts in seconds, a non-negative retry count."""
+    if not isinstance(port, str) or not port.strip():
+        raise bad_value("port", "a serial device name such as /dev/ttyUSB0, /dev/ttyACM0 or COM3", port)
+    for name, value in (("timeout", timeout), ("open_timeout", open_timeout)):
+        if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
+            raise bad_value(name, "a positive number of seconds", value)
+    if not isinstance(retries, int) or retries < 0:
+        raise bad_value("retries", "a non-negative integer", retries)
+    if not isinstance(baudrate, int) or baudrate <= 0:
+        raise bad_value("baudrate", "a positive integer such as 115200", baudrate)
+
+
 class NakError(LinkError):
     """The device refused a command with a NAK that a retry cannot cure; ``code`` is the NAK code."""
 
@@ -44,15 +58,7 @@ class Serial(Backend):
 
     def __init__(self, port: str, *, baudrate: int = BAUDRATE, timeout: float = 0.25, retries: int = 3,
                  open_timeout: float = 3.0, transcript: Transcript | None = None):
-        if not isinstance(port, str) or not port.strip():
-            raise bad_value("port", "a serial device name such as /dev/ttyUSB0 or COM3", port)
-        for name, value in (("timeout", timeout), ("open_timeout", open_timeout)):
-            if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
-                raise bad_value(name, "a positive number of seconds", value)
-        if not isinstance(retries, int) or retries < 0:
-            raise bad_value("retries", "a non-negative integer", retries)
-        if not isinstance(baudrate, int) or baudrate <= 0:
-            raise bad_value("baudrate", "a positive integer such as 115200", baudrate)
+        check_link(port, baudrate, timeout, retries, open_timeout)
         self.port = port
         self.baudrate = baudrate
         self.timeout = float(timeout)
