@@ -14,7 +14,6 @@ using wire::parseDecimal;
 using wire::parseHex;
 using wire::same;
 
-const size_t MAX_FIELDS = 8;
 
 class Reply : public wire::Reply {
  public:
@@ -67,10 +66,7 @@ CurrentDevice::CurrentDevice(Bridges& bridges, uint8_t coils, uint8_t sensors, u
       trips_(0),
       tripCoil_(-1),
       badFrames_(0),
-      lastValidUs_(0),
-      len_(0),
-      inFrame_(false),
-      overflow_(false) {
+      lastValidUs_(0) {
   const double h = loop.periodUs * 1e-6;
   kp_ = loop.bandwidth * loop.inductance / loop.supply;
   ki_ = kp_ * limits.resistance / loop.inductance * h;
@@ -158,23 +154,7 @@ void CurrentDevice::step(uint32_t nowUs) {
 }
 
 size_t CurrentDevice::receive(char c, uint32_t nowUs, char* reply) {
-  if (c == '$') {
-    len_ = 0;
-    inFrame_ = true;
-    overflow_ = false;
-    return 0;
-  }
-  if (!inFrame_ || c == '\r') return 0;
-  if (c == '\n') {
-    inFrame_ = false;
-    return process(nowUs, reply);
-  }
-  if (len_ < MAX_FRAME2) {
-    buf_[len_++] = c;
-  } else {
-    overflow_ = true;
-  }
-  return 0;
+  return frame_.feed(c) ? process(nowUs, reply) : 0;
 }
 
 size_t CurrentDevice::damaged(const char* code, uint32_t nowUs, char* reply) {
@@ -218,27 +198,10 @@ size_t CurrentDevice::state(const char* verb, int seq, uint32_t nowUs, char* rep
 
 size_t CurrentDevice::process(uint32_t nowUs, char* reply) {
   tick(nowUs);
-  if (overflow_) return damaged("FRAME", nowUs, reply);
-  buf_[len_] = '\0';
-  size_t star = len_;
-  for (size_t i = 0; i < len_; ++i) {
-    if (buf_[i] < 0x20 || buf_[i] > 0x7E) return damaged("FRAME", nowUs, reply);
-    if (buf_[i] == '*') star = i;
-  }
-  uint64_t received = 0;
-  if (star == len_ || !parseHex(buf_ + star + 1, 4, 4, &received)) return damaged("FRAME", nowUs, reply);
-  if (crc16(buf_, star) != (uint16_t)received) return damaged("CRC", nowUs, reply);
-  buf_[star] = '\0';
-  const char* fields[MAX_FIELDS];
-  size_t count = 1;
-  fields[0] = buf_;
-  for (size_t i = 0; i < star; ++i) {
-    if (buf_[i] == ',') {
-      buf_[i] = '\0';
-      if (count < MAX_FIELDS) fields[count] = buf_ + i + 1;
-      ++count;
-    }
-  }
+  const char* fields[wire::MAX_FIELDS];
+  size_t count = 0;
+  const wire::FrameStatus status = frame_.split(fields, &count);
+  if (status != wire::FRAME_OK) return damaged(status == wire::FRAME_CRC ? "CRC" : "FRAME", nowUs, reply);
   if (count < 2 || fields[1][0] == '\0') return damaged("FRAME", nowUs, reply);
   uint64_t seq64 = 0;
   if (!parseHex(fields[0], 2, 2, &seq64)) return damaged("FRAME", nowUs, reply);

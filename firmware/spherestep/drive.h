@@ -11,6 +11,8 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "wire.h"
+
 namespace spherestep {
 
 uint16_t crc16(const char* data, size_t length);  // protocol.cpp: CRC-16/CCITT-FALSE
@@ -119,10 +121,7 @@ class CurrentDevice {
   int tripCoil_;
   uint8_t badFrames_;
   uint32_t lastValidUs_;
-  char buf_[MAX_FRAME2 + 1];
-  size_t len_;
-  bool inFrame_;
-  bool overflow_;
+  wire::FrameBuffer<MAX_FRAME2> frame_;
 };
 
 }  // namespace spherestep

@@ -11,7 +11,6 @@ using wire::parseDecimal;
 using wire::parseHex;
 using wire::same;
 
-const size_t MAX_FIELDS = 8;  // sequence, verb and up to six arguments are kept; more are only counted
 
 class Reply : public wire::Reply {
  public:
@@ -38,9 +37,6 @@ Device::Device(Outputs& outputs, uint8_t channels, uint16_t watchdogMs, const ch
       channels_(channels),
       watchdogMs_(watchdogMs),
       name_(name),
-      len_(0),
-      inFrame_(false),
-      overflow_(false),
       enable_(0),
       polarity_(0),
       session_(false),
@@ -82,49 +78,15 @@ void Device::tick(uint32_t nowMs) {
 }
 
 size_t Device::receive(char c, uint32_t nowMs, char* reply) {
-  if (c == '$') {
-    len_ = 0;
-    inFrame_ = true;
-    overflow_ = false;
-    return 0;
-  }
-  if (!inFrame_ || c == '\r') return 0;
-  if (c == '\n') {
-    inFrame_ = false;
-    return process(nowMs, reply);
-  }
-  if (len_ < MAX_FRAME) {
-    buf_[len_++] = c;
-  } else {
-    overflow_ = true;
-  }
-  return 0;
+  return frame_.feed(c) ? process(nowMs, reply) : 0;
 }
 
 size_t Device::process(uint32_t nowMs, char* reply) {
   tick(nowMs);
-  if (overflow_) return nak(reply, -1, "FRAME");
-  buf_[len_] = '\0';
-  size_t star = len_;
-  for (size_t i = 0; i < len_; ++i) {
-    if (buf_[i] < 0x20 || buf_[i] > 0x7E) return nak(reply, -1, "FRAME");
-    if (buf_[i] == '*') star = i;
-  }
-  uint64_t received = 0;
-  if (star == len_ || !parseHex(buf_ + star + 1, 4, 4, &received)) return nak(reply, -1, "FRAME");
-  if (crc16(buf_, star) != (uint16_t)received) return nak(reply, -1, "CRC");
-  buf_[star] = '\0';
-
-  const char* fields[MAX_FIELDS];
-  size_t count = 1;
-  fields[0] = buf_;
-  for (size_t i = 0; i < star; ++i) {
-    if (buf_[i] == ',') {
-      buf_[i] = '\0';
-      if (count < MAX_FIELDS) fields[count] = buf_ + i + 1;
-      ++count;
-    }
-  }
+  const char* fields[wire::MAX_FIELDS];
+  size_t count = 0;
+  const wire::FrameStatus status = frame_.split(fields, &count);
+  if (status != wire::FRAME_OK) return nak(reply, -1, status == wire::FRAME_CRC ? "CRC" : "FRAME");
   if (count < 2 || fields[1][0] == '\0') return nak(reply, -1, "FRAME");
   uint64_t seq = 0;
   if (!parseHex(fields[0], 2, 2, &seq)) return nak(reply, -1, "FRAME");

@@ -10,6 +10,8 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "wire.h"
+
 namespace spherestep {
 
 const uint8_t PROTOCOL_VERSION = 1;
@@ -61,10 +63,7 @@ class Device {
   uint8_t channels_;
   uint16_t watchdogMs_;
   const char* name_;
-  char buf_[MAX_FRAME + 1];
-  size_t len_;
-  bool inFrame_;
-  bool overflow_;
+  wire::FrameBuffer<MAX_FRAME> frame_;
   uint64_t enable_;
   uint64_t polarity_;
   bool session_;

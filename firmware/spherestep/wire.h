@@ -57,6 +57,71 @@ inline bool same(const char* a, const char* b) {
 }
 
 // Builds "$SS,..." into a caller's buffer of `capacity` bytes and seals it with "*CCCC\n".
+// One frame "$<body>*<crc>\n" being received, for both protocol versions: feed() collects the bytes between '$'
+// and the end of line (a '$' restarts, '\r' is ignored, overflow is remembered), and split() checks the frame
+// (printable, CRC-16 of the body) and cuts the body into comma-separated fields in place.
+enum FrameStatus { FRAME_OK = 0, FRAME_BAD = 1, FRAME_CRC = 2 };
+const size_t MAX_FIELDS = 8;  // sequence, verb and up to six arguments are kept; more are only counted
+
+template <size_t N, size_t MAX_FIELDS_T = MAX_FIELDS>
+class FrameBuffer {
+ public:
+  FrameBuffer() : len_(0), inFrame_(false), overflow_(false) {}
+
+  // true when a line has ended and a frame is ready for split()
+  bool feed(char c) {
+    if (c == '$') {
+      len_ = 0;
+      inFrame_ = true;
+      overflow_ = false;
+      return false;
+    }
+    if (!inFrame_ || c == '\r') return false;
+    if (c == '\n') {
+      inFrame_ = false;
+      return true;
+    }
+    if (len_ < N) {
+      buf_[len_++] = c;
+    } else {
+      overflow_ = true;
+    }
+    return false;
+  }
+
+  // fields[0..min(count, MAX_FIELDS_T)) point into the buffer; count is the number of fields in the frame
+  FrameStatus split(const char** fields, size_t* count) {
+    if (overflow_) return FRAME_BAD;
+    buf_[len_] = '\0';
+    size_t star = len_;
+    for (size_t i = 0; i < len_; ++i) {
+      if (buf_[i] < 0x20 || buf_[i] > 0x7E) return FRAME_BAD;
+      if (buf_[i] == '*') star = i;
+    }
+    uint64_t received = 0;
+    if (star == len_ || !parseHex(buf_ + star + 1, 4, 4, &received)) return FRAME_BAD;
+    if (crc16(buf_, star) != (uint16_t)received) return FRAME_CRC;
+    buf_[star] = '\0';
+    size_t n = 1;
+    fields[0] = buf_;
+    for (size_t i = 0; i < star; ++i) {
+      if (buf_[i] == ',') {
+        buf_[i] = '\0';
+        if (n < MAX_FIELDS_T) fields[n] = buf_ + i + 1;
+        ++n;
+      }
+    }
+    *count = n;
+    return FRAME_OK;
+  }
+
+ private:
+  char buf_[N + 1];
+  size_t len_;
+  bool inFrame_;
+  bool overflow_;
+};
+
 class Reply {
  public:
   Reply(char* buffer, size_t capacity, int seq) : buf_(buffer), cap_(capacity), len_(0) {
