@@ -401,3 +401,22 @@ def test_cli_help_has_an_example(capsys):
     assert main(["explore", "--help"]) == 0
     text = capsys.readouterr().out
     assert "spherestep explore --budget-coils 32 --out" in text and "--scheduler" in text and "--quick" in text
+
+
+def test_torque_capability_is_measured_and_maximised_on_the_front():
+    from spherestep.control import DriveLimits, torque_capability
+    from spherestep.explore import CAPABILITY, objectives, pareto_mask
+    from spherestep.magnetics import torque_map
+
+    point = DesignPoint("truncated-icosahedron", 0, "truncated-cuboctahedron", 0, 60.0, samples=200, seed=5,
+                        torque_states=2)
+    row = evaluate(point)
+    design = build_design(point)
+    direct = torque_capability(design, torque_map(design), DriveLimits(), samples=100, seed=5).radius
+    assert row["capability_median_Nm"] == pytest.approx(np.median(direct), rel=1e-12)
+    assert row["capability_p5_Nm"] == pytest.approx(np.percentile(direct, 5), rel=1e-12)
+    assert 0 < row["capability_p5_Nm"] <= row["capability_median_Nm"]
+    table = pd.DataFrame({"resolution_median_deg": [3.0, 3.0], "coils": [20, 20], CAPABILITY: [1.0, 2.0]})
+    assert objectives(table)[-1] == CAPABILITY
+    # equal resolution and coils: the larger capability dominates when maximised
+    assert list(pareto_mask(table[objectives(table)].to_numpy(), maximize=[2])) == [False, True]

@@ -14,10 +14,11 @@ from importlib import import_module
 
 _MODULES = {
     "build": ("LIMIT_STATUSES", "STATUSES", "Limits", "Unbuildable", "build_design", "candidate_count",
-              "evaluate", "holding_torques", "lookup_voxels", "motor_fingerprint", "part_sizes"),
+              "evaluate", "holding_torques", "torque_capability_sample", "lookup_voxels", "motor_fingerprint", "part_sizes"),
     "grid": ("DesignPoint", "Grid", "default_grid", "distinct_names", "primary_ratio", "quick_grid",
              "symmetry_family"),
-    "pareto": ("OBJECTIVES", "TORQUE", "eligible", "figure_pareto", "objectives", "pareto_front", "pareto_mask"),
+    "pareto": ("CAPABILITY", "OBJECTIVES", "TORQUE", "eligible", "figure_pareto", "objectives", "pareto_front",
+               "pareto_mask"),
     "outputs": ("Proposal", "design_file_name", "propose", "write_designs", "write_table"),
     "run": ("SweepSummary", "dask_client", "finished_keys", "run_sweep"),
     "store": ("COLUMNS", "MEASURED", "SCHEMA", "ResultStore"),

@@ -40,6 +40,7 @@ from ..packing import named
 from ..sphere import NearestPointGrid, shell_voxels
 from .grid import DesignPoint, primary_ratio
 
+CAPABILITY_SAMPLES = 100  # orientations per design for the torque capability (a sweep objective)
 STATUSES = ("ok", "too_large", "does_not_fit", "over_budget", "no_states", "failed")
 LIMIT_STATUSES = ("too_large", "over_budget")  # outcomes that depend on the sweep's limits, not the design
 
@@ -153,6 +154,15 @@ def lookup_voxels(design: MotorDesign) -> float:
     return float(len(shell_voxels(NearestPointGrid.side(separation, design.state_tol))))
 
 
+def torque_capability_sample(design: MotorDesign, seed: int, samples: int = CAPABILITY_SAMPLES) -> np.ndarray:
+    """The torque (N·m) available in every direction at ``samples`` orientations drawn uniformly (``seed``), on
+    the magnets' torque map with the default drive limits (:func:`spherestep.control.torque_capability`)."""
+    from ..control import DriveLimits, torque_capability
+    from ..magnetics import torque_map
+
+    return torque_capability(design, torque_map(design), DriveLimits(), samples=samples, seed=seed).radius
+
+
 def holding_torques(design: MotorDesign, count: int, seed: int) -> np.ndarray:
     """Holding torques (N·m) of ``count`` stepper states drawn at random (``seed``), on the physical model.
 
@@ -235,6 +245,9 @@ def evaluate(point: DesignPoint, limits: Limits = Limits()) -> dict:
                                holding_torque_min_Nm=float(torques.min()))
                 else:
                     row["reason"] = "holding torque not measured: no equilibrium search converged"
+            available = torque_capability_sample(design, point.seed)
+            row.update(capability_median_Nm=float(np.median(available)),
+                       capability_p5_Nm=float(np.percentile(available, 5)))
     except Unbuildable as exc:
         row.update(status=exc.status, reason=exc.reason)
         if exc.coils is not None:

@@ -20,6 +20,7 @@ from ..errors import bad_value
 
 OBJECTIVES = ("resolution_median_deg", "coils")  # both minimised
 TORQUE = "holding_torque_median_Nm"  # maximised, when measured
+CAPABILITY = "capability_p5_Nm"  # maximised, when measured: torque available in every direction on 95 % of SO(3)
 
 
 def pareto_mask(values, maximize=()) -> np.ndarray:
@@ -56,9 +57,8 @@ def eligible(table: pd.DataFrame, budget_coils: int, require_reach_all: bool = T
 
 
 def objectives(table: pd.DataFrame) -> list[str]:
-    """:data:`OBJECTIVES`, and :data:`TORQUE` when ``table`` has a measured holding torque."""
-    with_torque = TORQUE in table.columns and table[TORQUE].notna().any()
-    return list(OBJECTIVES) + ([TORQUE] if with_torque else [])
+    """:data:`OBJECTIVES`, and :data:`TORQUE` and :data:`CAPABILITY` when ``table`` has them measured."""
+    return list(OBJECTIVES) + [c for c in (TORQUE, CAPABILITY) if c in table.columns and table[c].notna().any()]
 
 
 def pareto_front(table: pd.DataFrame, budget_coils: int, require_reach_all: bool = True) -> pd.DataFrame:
@@ -68,7 +68,7 @@ def pareto_front(table: pd.DataFrame, budget_coils: int, require_reach_all: bool
     pool = table[eligible(table, budget_coils, require_reach_all)].drop_duplicates("motor")
     columns = objectives(pool)
     values = pool[columns].astype("float64").to_numpy()
-    front = pool[pareto_mask(values, maximize=[columns.index(TORQUE)] if TORQUE in columns else ())]
+    front = pool[pareto_mask(values, maximize=[columns.index(c) for c in (TORQUE, CAPABILITY) if c in columns])]
     return front.sort_values(["coils", "resolution_median_deg", "key"]).reset_index(drop=True)
 
 
@@ -109,7 +109,9 @@ def figure_pareto(table: pd.DataFrame, front: pd.DataFrame, budget_coils: int) -
     panels = [("resolution_median_deg", "median distance to the nearest stepper state (°)", "Resolution")]
     if TORQUE in objectives(table):
         panels.append((TORQUE, "median holding torque of sampled states (N·m)", "Holding torque"))
-    fig = Figure(figsize=(9.0 if len(panels) == 1 else 14.0, 6.0))
+    if CAPABILITY in objectives(table):
+        panels.append((CAPABILITY, "torque available in every direction on 95 % of SO(3) (N·m)", "Capability"))
+    fig = Figure(figsize=(9.0 if len(panels) == 1 else 7.0 * len(panels), 6.0))
     for n, (column, label, title) in enumerate(panels):
         ax = fig.add_subplot(1, len(panels), n + 1)
         _scatter(ax, table, column)
@@ -124,7 +126,7 @@ def figure_pareto(table: pd.DataFrame, front: pd.DataFrame, budget_coils: int) -
                 ax.annotate(str(rank), (xi, yi), xytext=(5, 5), textcoords="offset points", fontsize=8,
                             color="#7b241c")
         ax.axvline(budget_coils + 0.5, color="#555555", ls="--", lw=1.0, label=f"budget: {budget_coils} coils")
-        if column != TORQUE:
+        if column == "resolution_median_deg":
             _log_ticks(ax)
         ax.set_xlabel("coils")
         ax.set_ylabel(label)

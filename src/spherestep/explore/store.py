@@ -36,6 +36,7 @@ SCHEMA = pa.schema([
     ("state_graph_components", pa.int64()), ("reaches_all", pa.bool_()), ("escape_violations", pa.int64()),
     ("holding_torque_median_Nm", pa.float64()), ("holding_torque_min_Nm", pa.float64()),
     ("holding_torque_states", pa.int32()),
+    ("capability_median_Nm", pa.float64()), ("capability_p5_Nm", pa.float64()),
     ("inertia_isotropy", pa.float64()), ("seconds", pa.float64()), ("worker", pa.string()), ("params", pa.string()),
 ])
 COLUMNS = SCHEMA.names
