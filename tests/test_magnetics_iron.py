@@ -187,7 +187,7 @@ def _fem_rows():
     return {k: v[keep] for k, v in fem.items()}
 
 
-@pytest.mark.xfail(strict=True, reason="MoM level-0 tables miss the FEM by up to 34 % of the peak near the axis "
+@pytest.mark.xfail(strict=True, reason="MoM level-0 tables miss the FEM by up to 31 % of the peak near the axis "
                    "(docs/magnetics.md, 'Independent check'); the issue's target is 5 %")
 def test_fast_model_against_fem(model):
     """The issue's target: the fast model's pair torques within 5 % of the FEM's peak pair torque at every angle."""
@@ -205,7 +205,7 @@ def test_fast_model_against_fem_away_from_the_axis(model):
     peak = max(np.abs(fem["detent_Nm"]).max(), np.abs(fem["linear_Nm"]).max())
     far = fem["alpha_deg"] >= 8.0
     farther = fem["alpha_deg"] >= 12.0
-    assert far.sum() >= 2 and farther.sum() >= 1
+    assert len(fem["alpha_deg"]) >= 5 and far.sum() >= 2 and farther.sum() >= 1
     assert np.abs(model.detent.pair(np.radians(fem["alpha_deg"][far])) - fem["detent_Nm"][far]).max() <= 0.05 * peak
     assert np.abs(model.linear.pair(np.radians(fem["alpha_deg"][farther])) - fem["linear_Nm"][farther]).max() \
         <= 0.05 * peak
