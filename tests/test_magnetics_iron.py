@@ -209,3 +209,15 @@ def test_fast_model_against_fem_away_from_the_axis(model):
     assert np.abs(model.detent.pair(np.radians(fem["alpha_deg"][far])) - fem["detent_Nm"][far]).max() <= 0.05 * peak
     assert np.abs(model.linear.pair(np.radians(fem["alpha_deg"][farther])) - fem["linear_Nm"][farther]).max() \
         <= 0.05 * peak
+
+
+@pytest.mark.xfail(strict=True, reason="pairwise superposition misses the two-core full solve by a median 32 % "
+                   "(docs/magnetics.md): the coupling through the cores is not modelled")
+def test_pairwise_against_full_multibody_solve():
+    """The issue's target: the sum of pair tables within 5 % of the full solve of two cores under the whole rotor
+    (data/iron_multibody.csv, same mesh level, 4 orientations × 3 drives)."""
+    mb = _csv("iron_multibody.csv")
+    full = np.c_[mb["full_x"], mb["full_y"], mb["full_z"]]
+    pair = np.c_[mb["pair_x"], mb["pair_y"], mb["pair_z"]]
+    err = np.linalg.norm(full - pair, axis=1) / np.linalg.norm(full, axis=1)
+    assert np.median(err) < 0.05
