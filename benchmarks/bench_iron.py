@@ -20,6 +20,7 @@ from _timing import median_seconds
 from spherestep import so3
 from spherestep.magnetics import _iron as iron
 from spherestep.magnetics import iron_model, torque_map
+from spherestep.magnetics._ironmap import read_table
 from spherestep.motor import prototype
 from spherestep.motor.coil import iron_coil
 
@@ -47,7 +48,7 @@ def main() -> None:
     one_iron = median_seconds(50, model.torque, R[0], c[0])
     one_air = median_seconds(50, air.torque, R[0], c[0])
     fem_path = Path(__file__).resolve().parents[1] / "data" / "iron_fem.csv"
-    fem = np.genfromtxt(fem_path, delimiter=",", names=True, comments="#") if fem_path.exists() else None
+    fem = read_table(fem_path) if fem_path.exists() else None  # alpha, maxh, elements, detent, linear, mesh_s, solve_s
     print(f"# bench_iron {datetime.date.today()} ({len(solver.cells)} cells at level {level})")
     print("| what | time | ratio |")
     print("|---|---|---|")
@@ -56,8 +57,8 @@ def main() -> None:
     print(f"| iron map: 1000 orientations | {1e3 * t_iron:.1f} ms | {t_iron / t_air:.2f} × air map |")
     print(f"| iron map: one orientation | {1e6 * one_iron:.0f} µs | {one_iron / one_air:.2f} × air map |")
     if fem is not None:
-        solve = float(np.median(fem["solve_s"]))
-        mesh = float(np.median(fem["mesh_s"]))
+        solve = float(np.median(fem[:, 6]))
+        mesh = float(np.median(fem[:, 5]))
         print(f"| FEM (NGSolve): mesh one angle | {mesh:.1f} s | |")
         print(f"| FEM (NGSolve): one solve | {solve:.1f} s | {solve / per_angle:.0f} × MoM per angle; "
               f"{solve / one_iron:.2g} × iron map per orientation |")
