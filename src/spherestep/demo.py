@@ -166,7 +166,8 @@ def _iron_table(effects, capability) -> str:
         ("holding torque of the states, median: air / iron", f"{e.air_holding_median_Nm:.2f} / "
                                                              f"{e.iron_holding_median_Nm:.2f} N·m"),
         ("a coil driven against its pole still attracts it", "yes" if e.wrong_polarity_attracts else "no"),
-        ("largest mean |B| in a core's pole face (coils on / off) against the knee",
+        ("largest mean |B| in the pole face of an energised coil at the sampled states, linear iron (coils on / "
+         "off; a pole 4° off axis reaches 2.9 T: docs/magnetics.md), against the knee",
          f"{e.max_core_B_T:.2f} / {e.max_core_B_off_T:.2f} T against {e.knee_T:.2f} T"
          + (" — saturated" if e.saturated else "")),
         ("torque available in every direction (iron), median / 5th percentile",
