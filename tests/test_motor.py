@@ -315,3 +315,13 @@ def test_result_dict_turns_angles_into_degrees_only():
     assert result_dict(r) == {"offset_deg": 90.0, "stiffness_Nm_per_rad": [1.5, 2.0], "missing_deg": None, "count": 3}
     assert result_dict(r, degrees=False) == {"offset_rad": math.pi / 2, "stiffness_Nm_per_rad": [1.5, 2.0],
                                              "missing_rad": None, "count": 3}
+
+
+def test_summaries_convert_their_angles_to_radians():
+    import math
+
+    from spherestep.units import in_radians
+
+    out = in_radians({"time_s": 1.5, "final_error_deg": 0.05, "max_tracking_error_deg": None, "mode": "servo"})
+    assert out == {"time_s": 1.5, "final_error_rad": math.radians(0.05), "max_tracking_error_rad": None,
+                   "mode": "servo"}

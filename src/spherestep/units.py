@@ -79,3 +79,10 @@ def result_dict(result, degrees: bool = True) -> dict:
         else:
             out[f.name] = value
     return out
+
+
+def in_radians(summary: dict) -> dict:
+    """A summary written for people (angles ``*_deg``) with its angles in radians (``*_rad``) instead: the
+    ``degrees=False`` form of the run summaries (``ServoRun``, ``RampedRun``)."""
+    return {(k.removesuffix("_deg") + "_rad" if k.endswith("_deg") else k):
+            (math.radians(v) if k.endswith("_deg") and v is not None else v) for k, v in summary.items()}

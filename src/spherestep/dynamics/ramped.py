@@ -29,6 +29,7 @@ from .. import so3
 from ..control.limits import DriveLimits
 from ..errors import bad_value
 from .._threads import single_blas_thread
+from ..units import in_radians
 from .rotor import Rotor
 from .simulate import EXECUTED_TOL, Integrator, currents_of
 
@@ -98,11 +99,7 @@ class RampedRun:
 
     def to_dict(self, degrees: bool = True) -> dict:
         """The :meth:`summary` (angles in degrees; ``degrees=False`` gives radians)."""
-        out = self.summary()
-        if not degrees:
-            for key in ("final_error_deg", "max_tracking_error_deg"):
-                out[key.replace("_deg", "_rad")] = math.radians(out.pop(key))
-        return out
+        return self.summary() if degrees else in_radians(self.summary())
 
     def summary(self) -> dict:
         """Arrival time and last step (s), lost steps, final error to the turn's target and largest distance to

@@ -33,6 +33,7 @@ from ..control.controller import CONTROL_RATE
 from ..errors import bad_value
 from ..statics import TorqueModel
 from .._threads import single_blas_thread
+from ..units import in_radians
 from .electrics import CoilDrive
 from .rotor import Rotor
 
@@ -135,11 +136,7 @@ class ServoRun:
 
     def to_dict(self, degrees: bool = True) -> dict:
         """The :meth:`summary` (angles in degrees; ``degrees=False`` gives radians)."""
-        out = self.summary()
-        if not degrees:
-            for key in ("final_error_deg", "max_tracking_error_deg"):
-                out[key.replace("_deg", "_rad")] = math.radians(out.pop(key))
-        return out
+        return self.summary() if degrees else in_radians(self.summary())
 
 
 @single_blas_thread
