@@ -208,7 +208,8 @@ def test_bad_port_is_an_input_error():
         Serial("/dev/spherestep-no-such-port").open()
     assert one_line(err.value) == ("port '/dev/spherestep-no-such-port' could not be opened (No such file or "
                                    "directory); give the serial device of the coil controller, such as "
-                                   "/dev/ttyUSB0 or COM3 (python -m serial.tools.list_ports lists them)")
+                                   "/dev/ttyUSB0, /dev/ttyACM0 or COM3 (python -m serial.tools.list_ports lists "
+                                   "them)")
 
 
 def test_masks_sent_are_those_of_the_plan_convention(device_factory):

@@ -18,12 +18,12 @@ from dataclasses import dataclass
 import numpy as np
 import serial as pyserial
 
-from ..errors import InputError, bad_value
+from ..errors import bad_value
 from .backend import LinkError
 from .protocol import BAUDRATE, NAK_CODES, RETRYABLE, Frame, FrameError, LineReader, decode, encode, \
     parse_decimal
 from .protocol2 import MAX_FRAME2, NAK_CODES2, TRIP_CODES, VERSION2, State, encode_block, parse_state
-from .serialport import NakError, check_link
+from .serialport import NakError, check_link, open_port
 from .transcript import Transcript
 
 _POLL = 0.002  # seconds one read waits before the deadline is checked again
@@ -96,13 +96,7 @@ class DriveLink:
 
     def open(self) -> DriveInfo:
         """Open the port and shake hands; the device reports coils, sensors, watchdog, period and limits."""
-        try:
-            self._link = pyserial.Serial(self.port, self.baudrate, timeout=_POLL, write_timeout=self.timeout,
-                                         exclusive=True)
-        except (pyserial.SerialException, OSError, ValueError) as exc:
-            reason = os.strerror(exc.errno) if getattr(exc, "errno", None) else str(exc)
-            raise InputError(f"port {self.port!r} could not be opened ({reason}); give the serial device of the "
-                             "coil controller, such as /dev/ttyACM0") from None
+        self._link = open_port(self.port, self.baudrate, self.timeout, _POLL)
         try:
             self._link.reset_input_buffer()
             ack = self._transact("HELLO", VERSION2, attempts=max(1, math.ceil(self.open_timeout / 0.25)),

@@ -40,6 +40,18 @@ def check_link(port, baudrate, timeout, retries, open_timeout) -> None:
         raise bad_value("baudrate", "a positive integer such as 115200", baudrate)
 
 
+def open_port(port: str, baudrate: int, write_timeout: float, poll: float = _POLL) -> pyserial.Serial:
+    """The serial device ``port`` opened exclusively, reads waiting at most ``poll`` s (both protocol versions);
+    an :class:`InputError` naming the port and how to find the right one when it cannot be opened."""
+    try:
+        return pyserial.Serial(port, baudrate, timeout=poll, write_timeout=write_timeout, exclusive=True)
+    except (pyserial.SerialException, OSError, ValueError) as exc:
+        reason = os.strerror(exc.errno) if getattr(exc, "errno", None) else str(exc)
+        raise InputError(f"port {port!r} could not be opened ({reason}); give the serial device of the coil "
+                         "controller, such as /dev/ttyUSB0, /dev/ttyACM0 or COM3 (python -m serial.tools.list_ports "
+                         "lists them)") from None
+
+
 class NakError(LinkError):
     """The device refused a command with a NAK that a retry cannot cure; ``code`` is the NAK code."""
 
@@ -77,14 +89,7 @@ class Serial(Backend):
     # -- connection -------------------------------------------------------------------------------------------
     def open(self) -> DeviceInfo:
         """Open the port and shake hands: the device reports protocol version, channels and watchdog."""
-        try:
-            self._link = pyserial.Serial(self.port, self.baudrate, timeout=_POLL, write_timeout=self.timeout,
-                                         exclusive=True)
-        except (pyserial.SerialException, OSError, ValueError) as exc:
-            reason = os.strerror(exc.errno) if getattr(exc, "errno", None) else str(exc)
-            raise InputError(f"port {self.port!r} could not be opened ({reason}); give the serial device of the "
-                             "coil controller, such as /dev/ttyUSB0 or COM3 (python -m serial.tools.list_ports "
-                             "lists them)") from None
+        self._link = open_port(self.port, self.baudrate, self.timeout)
         try:
             self._link.reset_input_buffer()
             attempts = max(1, math.ceil(self.open_timeout / self.timeout))
