@@ -125,7 +125,8 @@ def test_every_fault_ends_with_all_coils_off_within_the_watchdog(rig, biased, fa
     s = run(rig, hold(np.eye(3)), 1.5, faults=faults)
     assert s.report.outcome in codes, s.report.to_dict()
     assert s.report.message
-    assert FAULT_AT <= s.final.off_at <= FAULT_AT + s.watchdog, (s.final.off_at, s.final.trips)
+    # off at the fault (to the emulated clock's rounding: a stop detected on the fault's own tick) or within the watchdog
+    assert FAULT_AT - 1e-9 <= s.final.off_at <= FAULT_AT + s.watchdog, (s.final.off_at, s.final.trips)
     assert not s.final.enabled
     assert np.abs(s.final.i).max() < 1e-3  # the coils' current has decayed
 
