@@ -190,7 +190,8 @@ def _dynamics(design, model) -> tuple[float, float]:
     tuning = tune(design, model)
     c = currents_of(states.coils(0), len(design.stator))
     R0 = so3.exp(np.radians([3.0, 0.0, 0.0])) @ states.rotations[0]
-    duration = 0.5
+    duration = 5.0
+    Integrator(model, tuning.rotor, tuning.dt).run(R0, np.zeros(3), c, tuning.dt)  # compile / warm up
     start = time.perf_counter()
     Integrator(model, tuning.rotor, tuning.dt).run(R0, np.zeros(3), c, duration, record_every=10)
     return tuning.dt, duration / (time.perf_counter() - start)

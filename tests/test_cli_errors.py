@@ -307,6 +307,7 @@ MISC = [  # (id, argv): other mistakes, all exit 2
     ("design-new-exists", ["design", "new", "{design}"]),
     ("design-new-folder", ["design", "new", "{dir}"]),
     ("design-new-from-missing", ["design", "new", "{base}/new.yaml", "--from", "{base}/nope.yaml"]),
+    ("design-new-core", ["design", "new", "{base}/new.yaml", "--core", "copper"]),
     ("design-validate-missing-arg", ["design", "validate"]),
     ("explore-rotors", ["explore", "--quick", "--out", "{base}/o", "--threads", "--rotors", "no-such"]),
     ("explore-stators-empty", ["explore", "--quick", "--out", "{base}/o", "--threads", "--stators", ","]),

@@ -21,6 +21,7 @@ from spherestep import packing as pk
 from spherestep.cli import main
 from spherestep.errors import InputError
 from spherestep.motor import MotorDesign, prototype
+from spherestep.motor.coil import CoilSpec, IronMaterial, air_coil, iron_coil
 
 BASE = yaml.safe_load(df.prototype_text())
 
@@ -37,7 +38,7 @@ def assert_same(a: MotorDesign, b: MotorDesign, tol: float = 0.0) -> None:
     assert np.array_equal(a.channel_map, b.channel_map)
     for f in ("cap_half_angle", "sphere_diameter", "magnet_diameter", "magnet_length", "coil_diameter", "coil_length",
               "air_gap", "tol", "remanence", "coil_ampere_turns", "name", "allow_hemisphere", "max_coils",
-              "failed_coils"):
+              "failed_coils", "coil"):
         assert getattr(a, f) == getattr(b, f), f
 
 
@@ -74,9 +75,12 @@ def test_shipped_prototype_file_builds_the_prototype_bit_for_bit():
 def test_the_documented_examples_load():
     page = (Path(__file__).parents[1] / "docs" / "design-files.md").read_text()
     blocks = page.split("```yaml\n")[1:]
-    assert len(blocks) == 2
+    assert len(blocks) == 3
     assert_same(MotorDesign.loads(blocks[0].split("```")[0]), prototype())
-    six = yaml.safe_load(blocks[1].split("```")[0])
+    coil = yaml.safe_load(blocks[1].split("```")[0])["coil"]
+    air = MotorDesign.loads(yaml.safe_dump(mutate(coil=coil)))
+    assert air.coil == CoilSpec(core="air", wire_diameter=0.5e-3, fill_factor=0.55, supply_power=150.0)
+    six = yaml.safe_load(blocks[2].split("```")[0])
     design = MotorDesign.loads(yaml.safe_dump(mutate(rotor=six["rotor"])))
     assert design.rotor.label == "six" and np.allclose(np.abs(design.rotor.centers).sum(axis=1), 1, atol=1e-15)
 
@@ -91,6 +95,12 @@ def test_save_then_load_the_prototype_is_identical_and_uses_the_named_forms(tmp_
     assert doc["dimensions"] == {"sphere_diameter": "12 in", "magnet_diameter": "1 in", "magnet_length": "0.5 in",
                                  "coil_diameter": "2 in", "coil_length": "1.625 in", "air_gap": "0.005 in"}
     assert "channel_map" not in doc and "tolerance" not in doc  # defaults are left out
+    assert doc["schema_version"] == 2 and doc["coil"] == {  # the coil as built is always stated
+        "core": "iron", "material": {"name": "low-carbon steel (AISI 1010, annealed)",
+                                     "relative_permeability": 1000.0, "knee": "1.5 T"},
+        "pole_diameter": "1 in", "wall_thickness": "0.125 in", "back_thickness": "0.375 in",
+        "wire_diameter": "286 um", "fill_factor": 0.6, "supply_voltage": "24 V", "supply_power": "100 W",
+        "coils_on": 4}
     assert [p.name for p in tmp_path.iterdir()] == ["proto.yaml"]  # no temporary file left behind
 
 
@@ -112,10 +122,42 @@ def test_save_load_round_trip_of_varied_designs(proto, data):
         air_gap=data.draw(st.floats(0.0, 1e-3)), name=data.draw(st.text(st.characters(categories=["L", "N", "P", "S", "Zs"]), min_size=1, max_size=12)
                                                      .filter(str.isprintable)),
         max_coils=data.draw(st.integers(len(coils), 64)),
+        coil=CoilSpec(core=data.draw(st.sampled_from(["air", "iron"])),
+                      material=IronMaterial(relative_permeability=data.draw(st.floats(1.0, 1e5))),
+                      wire_diameter=data.draw(st.floats(1e-5, 1e-3)), fill_factor=data.draw(st.floats(0.01, 0.9)),
+                      wall_thickness=data.draw(st.floats(0.0, 5e-3)), supply_voltage=data.draw(st.floats(1.0, 1e3)),
+                      supply_power=data.draw(st.floats(1.0, 1e4)), coils_on=data.draw(st.integers(1, 29)),
+                      ampere_turns=data.draw(st.none() | st.floats(1.0, 1e5))),
     )
     with tempfile.TemporaryDirectory() as tmp:
         back = MotorDesign.load(design.save(Path(tmp) / "d.yaml"))
     assert_same(back, design, tol=0.0)
+
+
+@pytest.mark.parametrize("coil", [
+    air_coil(), replace(iron_coil(), core="air"), iron_coil(fill_factor=0.3, coils_on=6, back_thickness=0.0),
+    iron_coil(material=IronMaterial(name="M-19 (datasheet)", relative_permeability=4000.0, knee=1.2,
+                                    bh=((0.0, 0.0), (50.0, 0.6), (200.0, 1.3), (3000.0, 1.7)),
+                                    source="vendor datasheet, 2024"), supply_voltage=12.5, wire_diameter=0.4e-3),
+    CoilSpec(core="air", material=IronMaterial(relative_permeability=50.0)),
+], ids=["air_coil", "air-winding", "iron-changed", "iron-own-material", "air-own-material"])
+def test_save_then_load_keeps_the_coil(tmp_path, coil):
+    design = replace(prototype(), coil=coil)
+    back = MotorDesign.load(design.save(tmp_path / "coil.yaml"))
+    assert back.coil == coil and back.coil.material.bh == coil.material.bh
+    assert_same(back, design)
+
+
+def test_a_missing_coil_section_is_the_prototypes_iron_coil():
+    old = mutate(schema_version=1, coil=None)  # a file of schema version 1
+    assert MotorDesign.loads(yaml.safe_dump(old)).coil == iron_coil()
+    assert MotorDesign.loads(yaml.safe_dump(mutate(coil=None))).coil == iron_coil()
+    assert MotorDesign.loads(yaml.safe_dump(mutate(coil={"core": "air"}))).coil == replace(iron_coil(), core="air")
+    text = yaml.safe_dump(mutate(coil={"wire_diameter": "0.286 mm", "material": {"bh": [[0, 0], [100, 1], [900, 2]],
+                                                                                  "knee": 1.1}}))
+    coil = MotorDesign.loads(text).coil
+    assert coil.wire_diameter == pytest.approx(0.286e-3, rel=1e-15) and coil.material.knee == 1.1
+    assert coil.material.bh == ((0.0, 0.0), (100.0, 1.0), (900.0, 2.0)) and hash(coil)
 
 
 def test_explicit_poles_and_coil_directions_round_trip_to_1e12(tmp_path):
@@ -239,8 +281,24 @@ BAD = [
     (mutate(dimensions__coil_diameter="6 in"), "stator.coils", "selecting at least one cap"),
     (mutate(stator__refine=3, stator__cap_half_angle="89 deg", dimensions__coil_diameter="0.5 in"), "stator.coils",
      "overrides.max_coils"),
-    (mutate(schema_version=2), "schema_version", "must be 1"),
-    (mutate(schema_version=None), "schema_version", "schema_version: 1"),
+    (mutate(schema_version=3), "schema_version", "must be 1 or 2"),
+    (mutate(schema_version=None), "schema_version", "schema_version: 2"),
+    (mutate(schema_version=1), "coil", "set schema_version: 2"),
+    (mutate(coil__core="copper"), "coil.core", "must be 'air' or 'iron'; instead received 'copper'"),
+    (mutate(coil__colour="red"), "coil.colour", "not a known key"),
+    (mutate(coil__fill_factor=1.2), "coil.fill_factor", "a copper fraction in (0, 0.907]"),
+    (mutate(coil__fill_factor="0.6"), "coil.fill_factor", "valid number"),
+    (mutate(coil__wire_diameter=0.0003), "coil.wire_diameter", "with its unit, like '12 in'"),
+    (mutate(coil__wall_thickness="-1 mm"), "coil.wall_thickness", "non-negative length"),
+    (mutate(coil__supply_voltage="24 A"), "coil.supply_voltage", "a voltage in V, mV or kV"),
+    (mutate(coil__supply_power="-5 W"), "coil.supply_power", "finite positive power"),
+    (mutate(coil__coils_on=0), "coil.coils_on", "greater than or equal to 1"),
+    (mutate(coil__ampere_turns=0), "coil.ampere_turns", "greater than 0"),
+    (mutate(coil__material__relative_permeability=0.5), "coil.material.relative_permeability", ">= 1"),
+    (mutate(coil__material__knee="9 T"), "coil.material.knee", "inside the B–H curve's range"),
+    (mutate(coil__material__bh=[[0, 0], [10, 1], [5, 2]]), "coil.material.bh", "strictly increasing"),
+    (mutate(coil__material__bh=[[0, 0, 1], [10, 1]]), "coil.material.bh[0]", "at most 2 items"),
+    (mutate(coil__material="steel"), "coil.material", "mapping of keys"),
     (mutate(tolerance="45 deg"), "tolerance", "between 0 and 0.5 radians (0° and 28.65°)"),
     (mutate(channel_map=[[0, 1]]), "channel_map", "29 pairs"),
     (mutate(failed_coils=[40]), "failed_coils", "coil indices 0..28"),
@@ -371,6 +429,35 @@ def one_line_error(capsys) -> str:
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and err.startswith("spherestep: error:") and "Traceback" not in err
     return err
+
+
+def test_design_new_with_a_core_and_show(tmp_path, capsys):
+    path = tmp_path / "air.yaml"
+    assert main(["design", "new", str(path), "--core", "air"]) == 0
+    assert "(air core)" in capsys.readouterr().out
+    design = MotorDesign.load(path)
+    assert design.coil == replace(iron_coil(), core="air")
+    assert_same(design, replace(prototype(), coil=design.coil))
+    assert main(["design", "show", str(path)]) == 0
+    out = capsys.readouterr().out
+    assert "coil core" in out and " air " in out and "coil turns" in out and "2824" in out
+    assert main(["design", "show", str(path), "--json"]) == 0
+    coil = json.loads(capsys.readouterr().out)["coil"]
+    assert coil == design.coil.electrics(design.coil_diameter, design.coil_length) and coil["core"] == "air"
+    back = tmp_path / "iron.yaml"
+    assert main(["design", "new", str(back), "--from", str(path), "--core", "iron"]) == 0
+    assert MotorDesign.load(back).coil == iron_coil()
+    capsys.readouterr()
+    assert main(["design", "new", str(tmp_path / "c.yaml"), "--core", "copper"]) == 2
+    assert "--core must be air or iron; instead received 'copper'" in one_line_error(capsys)
+    assert not (tmp_path / "c.yaml").exists()
+
+
+def test_design_show_says_when_the_winding_does_not_fit(tmp_path, capsys):
+    path = write(tmp_path, mutate(dimensions__coil_length="0.25 in"))  # shorter than the back plate
+    assert main(["design", "show", str(path), "--json"]) == 0
+    coil = json.loads(capsys.readouterr().out)["coil"]
+    assert coil["core"] == "iron" and "centre pole narrower than the groove" in coil["winding"]
 
 
 def test_design_new_validate_show(tmp_path, capsys):

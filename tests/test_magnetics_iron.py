@@ -139,6 +139,32 @@ def test_air_core_reproduces_todays_map(design):
     assert np.array_equal(air.energy(R, c), today.energy(R, c))
 
 
+def test_the_design_states_its_coil(model, design):
+    """iron_model reads design.coil: a thinner fill of the same wire (half the turns, twice the current, the same
+    N I) keeps the stored tables; an air coil is the air map at the winding's N I; iron_summary needs iron."""
+    from dataclasses import replace
+
+    from spherestep.control import DriveLimits
+    from spherestep.magnetics import iron_summary
+
+    thin = replace(design, coil=iron_coil(fill_factor=0.3))
+    m = iron_model(thin)
+    assert isinstance(m, IronTorqueMap) and m.coil is thin.coil and model.coil == iron_coil()
+    assert np.array_equal(m.linear.tau, model.linear.tau) and np.array_equal(m.detent.tau, model.detent.tau)
+    D, L = design.coil_diameter, design.coil_length
+    assert DriveLimits.from_spec(m.coil, thin).nominal_current == pytest.approx(
+        2 * DriveLimits.from_spec(model.coil, design).nominal_current, rel=1e-3)
+    assert iron_model(thin, iron_coil()).coil == iron_coil()  # the explicit argument wins
+    air = replace(design, coil=replace(iron_coil(), core="air"))
+    ni = air.coil.nominal_ampere_turns(D, L)
+    R = so3.random(3, 9)
+    c = np.random.default_rng(9).choice([-1.0, 0.0, 1.0], size=(3, len(design.stator)))
+    np.testing.assert_allclose(iron_model(air).torque(R, c),
+                               TorqueMap.build(design).torque(R, c) * ni / design.coil_ampere_turns, rtol=1e-12)
+    with pytest.raises(InputError, match="iron-cored"):
+        iron_summary(design, air_coil())
+
+
 def test_iron_model_is_a_torque_model_with_a_detent(model, design):
     from spherestep.statics import TorqueModel
     assert isinstance(model, IronTorqueMap) and isinstance(model, TorqueModel)

@@ -227,6 +227,13 @@ def test_from_packings_builds_the_prototype_bit_for_bit(proto):
     (dict(magnet_diameter="5 in"), "rotor"),
     (dict(max_coils=3), "stator"),
     (dict(coils=[0], cap_half_angle=math.radians(10)), "stator[0]"),
+    (dict(coil="iron"), "coil"),
+    (dict(coil={"core": "copper"}), "coil.core"),
+    (dict(coil={"colour": "red"}), "coil"),
+    (dict(coil={"fill_factor": 2.0}), "coil.fill_factor"),
+    (dict(coil={"material": {"knee": 9.0}}), "coil.material.knee"),
+    (dict(coil={"material": {"mu": 9.0}}), "coil.material"),
+    (dict(coil={"material": "steel"}), "coil.material"),
 ])
 def test_from_packings_errors_carry_the_field(change, field):
     from spherestep.motor import MotorDesign
@@ -234,6 +241,28 @@ def test_from_packings_errors_carry_the_field(change, field):
     with pytest.raises(InputError) as err:
         MotorDesign.from_packings(**(SMALL | change))
     assert err.value.field == field and "\n" not in str(err.value)
+
+
+def test_the_coil_as_built(proto):
+    """Default the prototype's iron coil; a mapping or a CoilSpec; checked by MotorDesign; not part of the
+    geometry (stepper states, the air-core table key)."""
+    from spherestep.magnetics._table import _geometry_key
+    from spherestep.motor import MotorDesign
+    from spherestep.motor.coil import CoilSpec, air_coil, iron_coil
+
+    assert proto.coil == iron_coil() and MotorDesign.from_packings(**SMALL).coil == iron_coil()
+    mapped = MotorDesign.from_packings(**(SMALL | dict(coil={"core": "air", "fill_factor": 0.5,
+                                                             "material": {"relative_permeability": 200.0}})))
+    assert mapped.coil == CoilSpec(core="air", fill_factor=0.5, material=replace(iron_coil().material,
+                                                                                relative_permeability=200.0))
+    with pytest.raises(InputError) as err:
+        replace(proto, coil={"core": "air"})  # a mapping is the builder's convenience, the field holds a CoilSpec
+    assert err.value.field == "coil" and "CoilSpec" in str(err.value)
+    air = replace(proto, coil=air_coil())
+    assert air.without_coils([3]).coil == air_coil()
+    assert _geometry_key(air) == _geometry_key(proto)
+    assert np.array_equal(air.states().rotations, proto.states().rotations)
+    assert proto.summary()["coil"]["turns"] == 2824
 
 
 def test_polarity_rule_and_explicit_rotor():

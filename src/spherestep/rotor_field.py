@@ -31,7 +31,8 @@ Two evaluators return the same fields (``F``, ``g``, ``Hess F`` at unit vectors 
   ``ð²F``, in the ``θ̂, φ̂`` basis). Each synthesis has a fixed cost (a Legendre transform and an FFT of about
   ``(2 lmax)²`` points, ~0.7 ms for ``lmax = 68``) and then ~0.15 µs per point, so it wins for large batches.
 * ``"direct"``: the sum over the poles with the model's own kernel ``h, h', h''`` (``O(M)`` per point, no
-  fixed cost): used below ``direct_below`` points, where it is faster, for fields given without ``lmax``
+  fixed cost) — compiled (:mod:`spherestep._zonal_sums`, numba) when the kernel comes in one of its compiled
+  forms, NumPy otherwise: used below ``direct_below`` points, where it is faster, for fields given without ``lmax``
   (the torque map: its spline kernel is not band-limited, and its harmonic series converges slowly — with
   ``lmax = 384`` still 7e-5 of the peak torque off), and as the reference of the harmonic evaluator.
 
@@ -63,7 +64,8 @@ class RotorField:
 
     ``poles (M, 3)`` unit vectors ``u_j`` and ``polarity (M,)`` ``p_j`` (body frame); ``kernel(t, orders)`` returns
     the derivatives of ``h`` of the given ``orders`` (a tuple from 0, 1, 2) at ``t`` (any shape), used by the
-    direct evaluator.
+    direct evaluator; ``compiled``: the same ``h`` as ``(kind, params)`` of :mod:`spherestep._zonal_sums`
+    (``"quintic"`` or ``"angle_spline"``), which makes the direct sum compiled.
     With ``lmax``: the ducc0 evaluator; ``exact(t)`` (default ``kernel(t, (0,))[0]``) the most accurate ``h``,
     used once to sample ``F`` for its spherical-harmonic coefficients up to degree ``lmax`` on a
     Gauss–Legendre grid of ``rings ≥ lmax + 1`` rings; ``epsilon``: ducc0's synthesis accuracy; ``nthreads``:
@@ -72,10 +74,18 @@ class RotorField:
     """
 
     def __init__(self, poles, polarity, kernel, lmax: int | None = None, *, exact=None, rings: int | None = None,
-                 epsilon: float = 1e-13, nthreads: int = 1, direct_below: int = DIRECT_BELOW):
+                 epsilon: float = 1e-13, nthreads: int = 1, direct_below: int = DIRECT_BELOW, compiled=None):
         self.poles = np.ascontiguousarray(poles, dtype=float)
         self.polarity = np.ascontiguousarray(polarity, dtype=float)
         self.kernel = kernel
+        self.compiled = None
+        if compiled is not None:
+            from ._zonal_sums import kernel_params
+
+            kind, arrays = compiled
+            if kind not in ("quintic", "angle_spline"):
+                raise bad_value("compiled", "a kernel kind 'quintic' or 'angle_spline'", kind)
+            self.compiled = kernel_params(kind, arrays)
         self.lmax = None if lmax is None else int(lmax)
         self.epsilon = float(epsilon)
         self.nthreads = threads(nthreads)
@@ -121,6 +131,8 @@ class RotorField:
 
     # --- direct sum over the poles -----------------------------------------------------------------------
     def _direct(self, x: np.ndarray, order: int, value: bool):
+        if self.compiled is not None:
+            return self._compiled(x, order, value)
         t = x @ self.poles.T  # (P, M)
         orders = tuple(range(0 if value else 1, order + 1))
         hs = dict(zip(orders, self.kernel(t, orders)))
@@ -136,6 +148,16 @@ class RotorField:
         P = np.eye(3) - x[:, :, None] * x[:, None, :]
         hess = P @ M @ P - radial[:, None, None] * P
         return F, g, (np.trace(hess, axis1=1, axis2=2), hess)
+
+    def _compiled(self, x: np.ndarray, order: int, value: bool):
+        from . import _zonal_sums
+
+        P = len(x)
+        F, g = np.empty(P), np.empty((P if order >= 1 else 0, 3))
+        lap, hess = np.empty(P if order >= 2 else 0), np.empty((P if order >= 2 else 0, 3, 3))
+        _zonal_sums.zonal_fields(self.compiled, np.ascontiguousarray(x, dtype=float), self.poles, self.polarity,
+                                 order, F, g, lap, hess)
+        return (F if value else None), (g if order >= 1 else None), ((lap, hess) if order >= 2 else None)
 
     # --- spherical-harmonic synthesis (ducc0) -------------------------------------------------------------
     def _harmonic(self, x: np.ndarray, order: int, value: bool):
@@ -189,11 +211,13 @@ def fast_evaluate(field: RotorField, sign: float, coils: np.ndarray, R: np.ndarr
     Only the (orientation, coil) pairs with a non-zero current are evaluated (a planner's batch of candidate
     activations energises a few coils each). ``value=False`` skips ``F`` (the returned energy is then ``None``:
     for callers that need only the torque)."""
+    if R.ndim == 2 and c.ndim == 1 and order < 2:  # one orientation: plain sums over its energised coils
+        return _single(field, sign, coils, R, c, order, float(constant) if value else None, value, ())
     lead = np.broadcast_shapes(R.shape[:-2], c.shape[:-1])
     Rf = (R if R.shape[:-2] == lead else np.broadcast_to(R, lead + (3, 3))).reshape(-1, 3, 3)
     cf = (c if c.shape[:-1] == lead else np.broadcast_to(c, lead + c.shape[-1:])).reshape(-1, c.shape[-1])
     energy = np.array(np.broadcast_to(constant, lead), dtype=float).reshape(-1) if value else None
-    if len(Rf) == 1 and order < 2:  # one orientation: plain sums over its energised coils (fewer NumPy calls)
+    if len(Rf) == 1 and order < 2:
         return _single(field, sign, coils, Rf[0], cf[0], order, energy, value, lead)
     rows, cols = np.nonzero(cf)  # row-major: rows ascending
     out = [energy] + [np.zeros((len(Rf),) + shape) for shape in ((3,), (3, 3))[:order]]
@@ -223,6 +247,14 @@ def fast_evaluate(field: RotorField, sign: float, coils: np.ndarray, R: np.ndarr
 
 def _single(field, sign, coils, R, c, order, energy, value, lead):
     """:func:`fast_evaluate` for one orientation ``R (3, 3)`` and ``order ≤ 1``."""
+    if field.compiled is not None:  # one compiled call
+        from ._zonal_sums import one_orientation
+
+        torque = np.empty(3)
+        e = one_orientation(field.compiled, np.ascontiguousarray(R), coils,
+                            np.ascontiguousarray(c, dtype=float), field.poles, field.polarity, sign, torque)
+        out = (None if energy is None else np.reshape(energy + e, lead),)
+        return out + ((torque.reshape(lead + (3,)),) if order else ())
     live = np.flatnonzero(c)
     if len(live) == 0:
         return (None if energy is None else energy.reshape(lead),) + ((np.zeros(lead + (3,)),) if order else ())
@@ -248,3 +280,19 @@ def fast_torque_matrix(field: RotorField, sign: float, coils: np.ndarray, failed
     out = np.zeros((len(Rf), 3, len(coils)))
     out[:, :, live] = sign * (Rf @ np.swapaxes(cross(x, g), -1, -2))
     return out.reshape(lead + (3, len(coils)))
+
+
+def pack_terms(terms) -> tuple | None:
+    """A torque model's zonal terms ``[(field, sign, coils, c), ...]`` — its torque is
+    ``Σ sign R Σ_k c_k x_k × g(x_k)`` over the terms — as the flat arrays of
+    :func:`spherestep._zonal_sums.terms_torque` ``(params, offsets, coils, C, poles, P, signs)``, or ``None`` when
+    a term has no compiled kernel or the terms do not share their poles and coils."""
+    fields = [t[0] for t in terms]
+    poles, coils = fields[0].poles, np.ascontiguousarray(terms[0][2], dtype=float)
+    if any(f.compiled is None or f.poles is not poles and not np.array_equal(f.poles, poles) for f in fields) \
+            or any(not np.array_equal(t[2], coils) for t in terms[1:]):
+        return None
+    offsets = np.concatenate([[0], np.cumsum([len(f.compiled) for f in fields])])
+    return (np.concatenate([f.compiled for f in fields]), offsets, coils,
+            np.stack([np.asarray(t[3], dtype=float) for t in terms]), poles, np.stack([f.polarity for f in fields]),
+            np.array([float(t[1]) for t in terms]))

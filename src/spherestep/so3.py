@@ -35,8 +35,9 @@ def as_rotations(R, name: str = "R") -> np.ndarray:
         raise bad_value(name, "rotation matrices of shape (..., 3, 3)", f"shape {arr.shape}")
     if arr.size == 0:
         return arr
-    if arr.ndim == 2:
-        worst = np.max(np.abs(arr.T @ arr - np.eye(3)))
+    if arr.size == 9:  # one matrix: plain floats, a few µs (NumPy's per-call overhead would dominate)
+        _single_rotation(arr.ravel().tolist(), name)
+        return arr
     else:  # RᵀR − I from the columns' dot products: 10× faster than a batched 3 × 3 matmul
         a, b, c = arr[..., 0], arr[..., 1], arr[..., 2]
         dot = functools.partial(np.einsum, "...k,...k->...")
@@ -52,6 +53,18 @@ def as_rotations(R, name: str = "R") -> np.ndarray:
         raise bad_value(name, "proper rotation matrices (RᵀR = I within 1e-6, determinant +1)",
                         "a matrix that is not a rotation")
     return arr
+
+
+def _single_rotation(m: list, name: str) -> None:
+    """:func:`as_rotations`' test for one matrix given as its 9 entries, row-major."""
+    if not all(map(math.isfinite, m)):
+        raise bad_value(name, "finite rotation matrices", "NaN or infinite entries")
+    a, b, c, d, e, f, g, h, i = m
+    worst = max(abs(a * a + d * d + g * g - 1), abs(b * b + e * e + h * h - 1), abs(c * c + f * f + i * i - 1),
+                abs(a * b + d * e + g * h), abs(a * c + d * f + g * i), abs(b * c + e * f + h * i))
+    if not (worst <= ORTHOGONALITY_TOL and a * (e * i - f * h) - b * (d * i - f * g) + c * (d * h - e * g) > 0):
+        raise bad_value(name, "proper rotation matrices (RᵀR = I within 1e-6, determinant +1)",
+                        "a matrix that is not a rotation")
 
 
 def _as_scipy(R) -> Rotation:

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import typer
 
-from ..errors import InputError
+from ..errors import InputError, bad_value
 from .app import app
 from .common import console, input_file, print_json, usable
 
@@ -26,16 +26,22 @@ def new(
     source: str = typer.Option("prototype", "--from", help="'prototype' (the built-in design, with comments) or "
                                                          "an existing design file to copy."),
     force: bool = typer.Option(False, "--force", help="Overwrite FILE if it exists."),
+    core: str = typer.Option(None, "--core", help="The coils' core, air or iron (default: as in --from; the "
+                                                  "prototype's are iron); the winding and supply stay."),
 ) -> None:
     """Write a starting design file.
 
-    Example: [bold]spherestep design new mymotor.yaml --from prototype[/bold]
+    Example: [bold]spherestep design new mymotor.yaml --from prototype --core air[/bold]
     """
+    from dataclasses import replace
+
     from .. import design_file
     from ..atomic import write_text
     from ..motor import MotorDesign
     from ..outputs import Outputs, output_file
 
+    if core is not None and core not in ("air", "iron"):
+        raise bad_value("--core", "air or iron", core)
     if file.suffix.lower() == ".toml":
         raise InputError(f"FILE {str(file)!r}: design files are written as YAML; use a name ending in .yaml")
     file = output_file(file, "FILE", suffixes=(".yaml", ".yml"), force=force)
@@ -45,9 +51,13 @@ def new(
     else:
         design = MotorDesign.load(input_file(Path(source), "--from"))
         text = design.dumps()
+    if core is not None and core != design.coil.core:
+        design = replace(design, coil=replace(design.coil, core=core))
+        text = design.dumps()
     with Outputs(file.parent, [file.name], "FILE"):
         write_text(file, text)
-    print(f"wrote {file}: design {design.name!r}, {len(design.rotor)} poles, {len(design.stator)} coils")
+    print(f"wrote {file}: design {design.name!r}, {len(design.rotor)} poles, {len(design.stator)} coils "
+          f"({design.coil.core} core)")
 
 
 @design_app.command("validate")
@@ -76,7 +86,8 @@ def show(
     file: Path = typer.Argument(..., help="Design file (.yaml, .yml or .toml)."),
     as_json: bool = typer.Option(False, "--json", help="Print the summary as JSON."),
 ) -> None:
-    """Summary of a design: packings, pole and coil counts, dimensions (mm), tolerance and step (degrees).
+    """Summary of a design: packings, pole and coil counts, dimensions (mm), tolerance and step (degrees), and
+    the coil as built (core, turns, resistance, nominal current, ampere-turns, power per coil, supply).
 
     Example: [bold]spherestep design show mymotor.yaml --json[/bold]
     """
@@ -92,5 +103,9 @@ def show(
     table.add_column("field", no_wrap=True)
     table.add_column("value", justify="right", no_wrap=True)
     for key, value in info.items():
-        table.add_row(key, _cell(value))
+        if isinstance(value, dict):  # the coil as built
+            for name, item in value.items():
+                table.add_row(f"{key} {name}", _cell(item))
+        else:
+            table.add_row(key, _cell(value))
     console.print(table)

@@ -21,15 +21,16 @@ def forces(
     seed: int = typer.Option(0, "--seed", help="Seed of the state sample."),
     as_json: bool = typer.Option(False, "--json", help="Print the results as JSON."),
     core: str = typer.Option("air", "--core", help="Coil cores to report: air (today's model), or both: also the "
-                             "iron-cored coils of spherestep.motor.coil.iron_coil (detent, states, polarity, "
-                             "saturation, power; a few minutes; minutes more for a design other than the prototype)."),
+                             "design's coils (its coil section; the prototype's: iron) on iron cores (detent, states, "
+                             "polarity, saturation, power; a few minutes; minutes more for a design or coil other "
+                             "than the prototype's)."),
 ) -> None:
     """Physical forces by magpylib: the Fig. 6 force curve (one magnet slid under one coil, simulated) with its
     4th-order fit (force_curve.csv, force_curve.png), and holding and stepping torques (N·m) of a sample of
     stepper states (forces.json; a table, or --json).
 
-    With --core both also the iron-cored coils against the air cores: detent, stepper states, polarity,
-    saturation and power (iron.json, iron.png).
+    With --core both also the design's coils with iron cores against the air cores: detent, stepper states,
+    polarity, saturation and power (iron.json, iron.png).
 
     Example: [bold]spherestep forces --out forces --states 10 --core both[/bold]
     """

@@ -2,11 +2,13 @@
 
 Named packings and rules are written where they reproduce the design exactly (centres to 1e-12), explicit
 lists otherwise; lengths and angles as the shortest decimal that reads back to the same float; defaults are
-left out. :func:`dumps` checks that the text loads back to a motor before it is returned.
+left out, except the coil as built, which is always stated. :func:`dumps` checks that the text loads back to a
+motor before it is returned.
 """
 
 from __future__ import annotations
 
+import dataclasses
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -17,7 +19,7 @@ from .. import packing as pk
 from ..atomic import write_text
 from ..channels import MAX_COILS, default_channel_map
 from .load import build, validate
-from .quantities import angle_text, length_text, tesla_text
+from .quantities import angle_text, length_text, tesla_text, volts_text, watts_text
 from .schema import MATCH_TOL, MAX_REFINE, SCHEMA_VERSION, DesignFileError, Dimensions
 
 if TYPE_CHECKING:
@@ -76,6 +78,32 @@ def _stator_dict(design: MotorDesign) -> dict:
     return {"packing": stator.name, "refine": stator.level} | head | {"coils": "fit" if fits else idx.tolist()}
 
 
+def _coil_dict(coil) -> dict:
+    """The coil section of a ``CoilSpec``: core, pot, winding and supply always; the material's name, μr and knee
+    for an iron core, its B–H curve and source where they differ from the default material's (read off
+    the dataclass, as this package does not import the motor); an air core's material only if not the default."""
+    material = coil.material
+    default = {f.name: f.default for f in dataclasses.fields(material)}
+    changed = {k: getattr(material, k) for k, v in default.items() if getattr(material, k) != v}
+    out = {"core": coil.core}
+    if coil.core == "iron" or changed:
+        out["material"] = {"name": material.name, "relative_permeability": float(material.relative_permeability),
+                           "knee": tesla_text(float(material.knee))}
+        if "bh" in changed:
+            out["material"]["bh"] = [[float(h), float(b)] for h, b in material.bh]
+        if "source" in changed:
+            out["material"]["source"] = material.source
+    out |= {"pole_diameter": length_text(float(coil.pole_diameter)),
+            "wall_thickness": length_text(float(coil.wall_thickness)),
+            "back_thickness": length_text(float(coil.back_thickness)),
+            "wire_diameter": length_text(float(coil.wire_diameter), units=("um", "mm", "in", "m")),
+            "fill_factor": float(coil.fill_factor), "supply_voltage": volts_text(float(coil.supply_voltage)),
+            "supply_power": watts_text(float(coil.supply_power)), "coils_on": int(coil.coils_on)}
+    if coil.ampere_turns is not None:
+        out["ampere_turns"] = float(coil.ampere_turns)
+    return out
+
+
 def to_dict(design: MotorDesign) -> dict:
     """The document of ``design``: named packings and rules where they reproduce it, explicit lists otherwise."""
     data = {
@@ -100,6 +128,7 @@ def to_dict(design: MotorDesign) -> dict:
         data["overrides"] = overrides
     if design.failed_coils:
         data["failed_coils"] = list(design.failed_coils)
+    data["coil"] = _coil_dict(design.coil)
     return data
 
 

@@ -137,6 +137,8 @@ class Document:
             channel_map=None if spec.channel_map is None else np.array(spec.channel_map, dtype=int).reshape(-1, 2),
             allow_hemisphere=spec.overrides.allow_hemisphere, max_coils=spec.overrides.max_coils,
             failed_coils=tuple(spec.failed_coils),
+            # the keys given; CoilSpec fills in the rest (design_file does not import the motor's defaults)
+            coil=None if spec.coil is None else spec.coil.model_dump(exclude_none=True),
         )
 
 

@@ -1,8 +1,10 @@
-"""Quantities with units in design files: ``"12 in"``, ``"80 deg"``, ``"1.32 T"`` → SI, and back.
+"""Quantities with units in design files: ``"12 in"``, ``"80 deg"``, ``"1.32 T"``, ``"24 V"``, ``"100 W"`` → SI,
+and back.
 
-Reading requires the unit (a bare number is refused, so a file never mixes metres and inches silently); the
-length units are :data:`spherestep.units.METRES_PER_UNIT`. Writing gives the shortest decimal that converts
-back to the same float, so a saved design loads back bit for bit. The parsers raise ``ValueError`` with a
+Reading lengths and angles requires the unit (a bare number is refused, so a file never mixes metres and inches
+silently); the length units are :data:`spherestep.units.METRES_PER_UNIT`. A flux density, voltage or power may be
+a bare number in its SI unit (T, V, W), which no other unit of the file could be mistaken for. Writing gives the
+shortest decimal that converts back to the same float, so a saved design loads back bit for bit. The parsers raise ``ValueError`` with a
 message saying what was expected (the schema turns it into a :class:`DesignFileError` naming the field).
 """
 
@@ -17,6 +19,8 @@ from ..units import METRES_PER_UNIT
 LENGTH_UNITS = METRES_PER_UNIT
 ANGLE_UNITS = ("deg", "°", "rad")
 TESLA_UNITS = {"T": 1.0, "mT": 1e-3}
+VOLT_UNITS = {"V": 1.0, "mV": 1e-3, "kV": 1e3}
+WATT_UNITS = {"W": 1.0, "mW": 1e-3, "kW": 1e3}
 
 
 def show(value: Any) -> str:
@@ -62,18 +66,35 @@ def parse_angle(value: Any) -> float:
     return radians
 
 
+def _parse_scaled(value: Any, what: str, scales: dict[str, float], example: str) -> float:
+    """SI value of a number (already SI) or of ``"<number> <unit>"`` with a unit of ``scales``; positive."""
+    if isinstance(value, (int, float)) and not isinstance(value, bool):
+        result = float(value)
+    else:
+        number, unit = split_quantity(value, f"a {what}", example)
+        if unit not in scales:
+            *rest, last = scales
+            raise ValueError(f"must be a {what} in {', '.join(rest)} or {last}, like {example!r}; instead received "
+                             f"{show(value)}")
+        result = number * scales[unit]
+    if not (math.isfinite(result) and result > 0):
+        raise ValueError(f"must be a finite positive {what}, like {example!r}; instead received {show(value)}")
+    return result
+
+
 def parse_tesla(value: Any) -> float:
     """Tesla of a number or of ``"<number> T"`` / ``"<number> mT"``; positive."""
-    if isinstance(value, (int, float)) and not isinstance(value, bool):
-        tesla = float(value)
-    else:
-        number, unit = split_quantity(value, "a flux density", "1.32 T")
-        if unit not in TESLA_UNITS:
-            raise ValueError(f"must be a flux density in T or mT, like '1.32 T'; instead received {show(value)}")
-        tesla = number * TESLA_UNITS[unit]
-    if not (math.isfinite(tesla) and tesla > 0):
-        raise ValueError(f"must be a finite positive flux density, like '1.32 T'; instead received {show(value)}")
-    return tesla
+    return _parse_scaled(value, "flux density", TESLA_UNITS, "1.32 T")
+
+
+def parse_volts(value: Any) -> float:
+    """Volts of a number or of ``"<number> V"`` (``mV``, ``kV``); positive."""
+    return _parse_scaled(value, "voltage", VOLT_UNITS, "24 V")
+
+
+def parse_watts(value: Any) -> float:
+    """Watts of a number or of ``"<number> W"`` (``mW``, ``kW``); positive."""
+    return _parse_scaled(value, "power", WATT_UNITS, "100 W")
 
 
 def _shortest(guess: float, target: float, back) -> str | None:
@@ -85,9 +106,9 @@ def _shortest(guess: float, target: float, back) -> str | None:
     return None
 
 
-def length_text(metres: float) -> str:
-    """``metres`` as the shortest exact string in inches, millimetres or metres (``"12 in"``)."""
-    for unit in ("in", "mm", "m"):
+def length_text(metres: float, units: tuple[str, ...] = ("in", "mm", "m")) -> str:
+    """``metres`` as the shortest exact string in the first of ``units`` that has one (``"12 in"``)."""
+    for unit in units:
         factor = LENGTH_UNITS[unit]
         text = _shortest(metres / factor, metres, lambda x, f=factor: x * f)
         if text is not None:
@@ -105,3 +126,12 @@ def tesla_text(tesla: float) -> str:
     """``tesla`` as an exact string ``"1.32 T"``."""
     return f"{_shortest(tesla, tesla, float)} T"
 
+
+def volts_text(volts: float) -> str:
+    """``volts`` as an exact string ``"24 V"``."""
+    return f"{_shortest(volts, volts, float)} V"
+
+
+def watts_text(watts: float) -> str:
+    """``watts`` as an exact string ``"100 W"``."""
+    return f"{_shortest(watts, watts, float)} W"

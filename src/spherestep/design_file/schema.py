@@ -1,4 +1,5 @@
-"""The design-file schema, version 1: what a file may hold, checked by pydantic, and its one error type.
+"""The design-file schema, version 2 (version 1, without the ``coil`` section, is still read): what a file may
+hold, checked by pydantic, and its one error type.
 
 Each section is a frozen pydantic model (``extra="forbid"``, strict types); lengths and angles are
 :mod:`~spherestep.design_file.quantities`. :func:`translate` turns pydantic's first error into the field path
@@ -15,15 +16,15 @@ from typing import Annotated, Any, Literal
 
 import numpy as np
 from pydantic import (AfterValidator, BaseModel, BeforeValidator, ConfigDict, Discriminator, Field, Tag,
-                      ValidationError, field_validator, model_validator)
+                      ValidationError, ValidationInfo, field_validator, model_validator)
 
 from .. import packing as pk
 from ..channels import MAX_COILS
 from ..errors import InputError
 from ..sphere import UNIT_TOL
-from .quantities import parse_angle, parse_length, parse_tesla, show
+from .quantities import parse_angle, parse_length, parse_tesla, parse_volts, parse_watts, show
 
-SCHEMA_VERSION = 1
+SCHEMA_VERSION = 2  # 2 added the coil section; files of version 1 are read as they always were
 MAX_REFINE = 4  # 4862 caps for the largest base packing; level 5 takes seconds and has 14 582
 MAX_POLES = 10_000
 MAX_BYTES = 8 * 2 ** 20
@@ -49,6 +50,8 @@ Length = Annotated[float, BeforeValidator(parse_length)]
 Gap = Annotated[float, BeforeValidator(functools.partial(parse_length, allow_zero=True))]
 Angle = Annotated[float, BeforeValidator(parse_angle)]
 Tesla = Annotated[float, BeforeValidator(parse_tesla)]
+Volts = Annotated[float, BeforeValidator(parse_volts)]
+Watts = Annotated[float, BeforeValidator(parse_watts)]
 Sign = Literal[1, -1]
 Index = Annotated[int, Field(ge=0, le=MAX_INDEX)]
 Channel = Annotated[int, Field(ge=0, le=MAX_CHANNEL)]
@@ -126,6 +129,7 @@ def _printable(text: str) -> str:
 
 
 Name = Annotated[str, Field(min_length=1, max_length=200), AfterValidator(_printable)]
+Text = Annotated[str, Field(min_length=1, max_length=2000), AfterValidator(_printable)]
 PackingName = Annotated[str, BeforeValidator(lambda v: _packing_name(v) if isinstance(v, str) else v)]
 
 
@@ -243,10 +247,40 @@ class Overrides(_Model):
     allow_hemisphere: bool = False
 
 
-class DesignSpec(_Model):
-    """A design file, schema version 1 (angles in radians and lengths in metres once parsed)."""
+class CoilMaterial(_Model):
+    """The cores' soft iron; a key left out keeps ``spherestep.motor.coil.IronMaterial``'s default. ``bh``: the
+    normal B–H curve as ``[H, B]`` pairs in A/m and T (bare numbers), from ``[0, 0]``, increasing."""
 
-    schema_version: Literal[1]
+    name: Name | None = None
+    relative_permeability: float | None = None
+    knee: Tesla | None = None
+    bh: Annotated[list[Annotated[list[float], Field(min_length=2, max_length=2)]],
+                  Field(min_length=2, max_length=MAX_POLES)] | None = None
+    source: Text | None = None
+
+
+class CoilSection(_Model):
+    """Every stator coil as built (``spherestep.motor.coil.CoilSpec``): core, pot, winding, supply; a key left out
+    keeps CoilSpec's default (the prototype's iron coil)."""
+
+    core: Literal["air", "iron"] | None = None
+    material: CoilMaterial | None = None
+    pole_diameter: Length | None = None
+    wall_thickness: Gap | None = None
+    back_thickness: Gap | None = None
+    wire_diameter: Length | None = None
+    fill_factor: float | None = None
+    supply_voltage: Volts | None = None
+    supply_power: Watts | None = None
+    coils_on: Annotated[int, Field(ge=1, le=MAX_INDEX)] | None = None
+    ampere_turns: Annotated[float, Field(gt=0)] | None = None
+
+
+class DesignSpec(_Model):
+    """A design file, schema version 1 or 2 (angles in radians and lengths in metres once parsed); only version
+    2 has ``coil`` (without it, the prototype's iron coil)."""
+
+    schema_version: Literal[1, 2]
     name: Name = "design"
     rotor: RotorSpec
     stator: StatorSpec
@@ -258,16 +292,25 @@ class DesignSpec(_Model):
                            Field(max_length=MAX_POLES)] | None = None
     overrides: Overrides = Overrides()
     failed_coils: Annotated[list[Index], Field(max_length=MAX_POLES)] = []
+    coil: CoilSection | None = None
+
+    @field_validator("coil")
+    @classmethod
+    def _coil_needs_version_2(cls, value: CoilSection | None, info: ValidationInfo) -> CoilSection | None:
+        if value is not None and info.data.get("schema_version") == 1:
+            raise ValueError("is a section of schema version 2: set schema_version: 2 (a version 1 file has no "
+                             "coil section; its coils are the prototype's iron coils)")
+        return value
 
 
 _SECTIONS: dict[str, type[BaseModel]] = {
     "": DesignSpec, "rotor": RotorSpec, "rotor.polarity": PolarityRule, "rotor.poles": Direction,
     "stator": StatorSpec, "stator.axis": Direction, "stator.coils": Direction, "dimensions": Dimensions,
-    "overrides": Overrides,
+    "overrides": Overrides, "coil": CoilSection, "coil.material": CoilMaterial,
 }
 
 EXAMPLES: dict[str, str] = {
-    "schema_version": "1", "name": "prototype", "rotor": "{packing: truncated-icosahedron, refine: 1, polarity: "
+    "schema_version": "2", "name": "prototype", "rotor": "{packing: truncated-icosahedron, refine: 1, polarity: "
     "{primary: +1, filled: -1}}", "rotor.packing": "truncated-icosahedron", "rotor.refine": "1",
     "rotor.poles": "[[0, 0, 1], {phi: 90 deg, theta: 90 deg}]", "rotor.polarity": "{primary: +1, filled: -1}",
     "rotor.polarity.primary": "+1", "rotor.polarity.filled": "-1", "stator": "{packing: truncated-cuboctahedron, "
@@ -279,6 +322,12 @@ EXAMPLES: dict[str, str] = {
     "dimensions.coil_length": "1.625 in", "dimensions.air_gap": "0.005 in", "tolerance": "1 deg",
     "remanence": "1.32 T", "coil_ampere_turns": "1000", "channel_map": "[[0, 29], [1, 30], ...]",
     "overrides.max_coils": "40", "overrides.allow_hemisphere": "true", "failed_coils": "[3, 17]",
+    "coil": "{core: iron}", "coil.core": "iron", "coil.material": "{name: AISI 1010, relative_permeability: 1000, "
+    "knee: 1.5 T}", "coil.material.name": "AISI 1010", "coil.material.relative_permeability": "1000",
+    "coil.material.knee": "1.5 T", "coil.material.bh": "[[0, 0], [238.7, 0.2003], [636.6, 1.0001], ...]",
+    "coil.material.source": "vendor data sheet", "coil.pole_diameter": "1 in", "coil.wall_thickness": "0.125 in",
+    "coil.back_thickness": "0.375 in", "coil.wire_diameter": "0.286 mm", "coil.fill_factor": "0.6",
+    "coil.supply_voltage": "24 V", "coil.supply_power": "100 W", "coil.coils_on": "4", "coil.ampere_turns": "1000",
 }
 
 

@@ -16,7 +16,8 @@ import numpy as np
 from .. import so3
 from ..errors import bad_value
 from ..motor import coil_currents
-from .rotor import Rotor
+from ..rotor_field import pack_terms
+from .rotor import YOSHIDA, Rotor
 from .._threads import single_blas_thread
 
 EXECUTED_TOL = math.radians(0.5)
@@ -95,7 +96,11 @@ class Simulation:
 
 
 class Integrator:
-    """Integrates one rotor under ``model`` (``torque``/``energy`` of ``(R, currents)``) with time step ``dt``."""
+    """Integrates one rotor under ``model`` (``torque``/``energy`` of ``(R, currents)``) with time step ``dt``.
+
+    A model with ``zonal_terms`` whose kernels are compiled (the potential, the magnets' map, the iron model) runs
+    the same scheme compiled (:func:`spherestep._zonal_sums.integrate`, equal to :meth:`Rotor.step` to rounding,
+    ``tests/test_fast_path.py``); any other model runs :meth:`Rotor.step` with batched ``(1, 3, 3)`` calls."""
 
     def __init__(self, model, rotor: Rotor, dt: float):
         if not (math.isfinite(dt) and dt > 0):
@@ -106,6 +111,21 @@ class Integrator:
         """Integrate for ``duration`` s from ``(R, ω)``; returns ``(R, ω, times, Rs, ωs, energies)``, the
         trajectory sampled every ``record_every`` steps (times relative to the start)."""
         steps = max(1, int(round(duration / self.dt)))
+        zonal_terms = getattr(self.model, "zonal_terms", None)
+        terms = zonal_terms(currents) if zonal_terms else None
+        packed = pack_terms(terms) if terms else None
+        if packed is not None:  # the same scheme compiled (spherestep._zonal_sums.integrate)
+            from .._zonal_sums import integrate
+
+            count = steps // record_every + (steps % record_every != 0)
+            Rs, ws = np.empty((count, 3, 3)), np.empty((count, 3))
+            rotor = self.rotor
+            R, w = integrate(*packed[:2], np.array(R, dtype=float), np.array(w, dtype=float), *packed[2:],
+                             rotor.inertia, rotor.damping, rotor.friction, self.dt, steps, record_every,
+                             np.array(YOSHIDA), Rs, ws)
+            times = self.dt * np.r_[np.arange(record_every, steps + 1, record_every), steps][:count]
+            energy = self.rotor.kinetic_energy(ws) + self.model.energy(Rs, np.broadcast_to(currents, (count, len(currents))))
+            return R, w, times, Rs, ws, energy
         torque = lambda Rb: self.model.torque(Rb, currents[None])  # noqa: E731
         R, w = R[None], w[None]
         times, Rs, ws = [], [], []

@@ -24,7 +24,7 @@ read when the design and coil match it; any other geometry is solved on first us
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import astuple, dataclass
 from functools import lru_cache
 from importlib import resources
 
@@ -57,9 +57,12 @@ def read_table(path) -> np.ndarray:
 
 
 def _key(design, coil: CoilSpec, level: int) -> tuple:
+    """What the pair tables depend on, rounded (to 1 nm, 1e-9 A-turns) so that the same coil written another
+    way (``0.286 mm`` or ``286 um`` of wire) finds the same tables."""
     return (round(design.radius, 9), round(design.magnet_diameter, 9), round(design.magnet_length, 9),
             round(design.coil_diameter, 9), round(design.coil_length, 9), round(design.air_gap, 9),
-            round(design.remanence, 6), repr(_iron.CoreGeometry.of(design, coil)), level)
+            round(design.remanence, 6), tuple(round(v, 9) for v in astuple(_iron.CoreGeometry.of(design, coil))),
+            level)
 
 
 @lru_cache(maxsize=8)
@@ -127,6 +130,10 @@ class IronTorqueMap(TorqueModelBase):
         """``D(R)`` (N·m, fixed frame): the torque with every coil off."""
         return self.detent.torque(R, self._ones(R))
 
+    def zonal_terms(self, currents) -> list:
+        """The detent's and the coils' zonal terms (:func:`spherestep.rotor_field.pack_terms`)."""
+        return self.detent.zonal_terms(np.ones(self.coil_count)) + self.linear.zonal_terms(self.as_currents(currents))
+
     def torque(self, R, currents) -> np.ndarray:
         """``D(R) + L(R) c`` (N·m, fixed frame, about the centre), ``(K, 3)`` or ``(3,)``."""
         c = self.as_currents(currents)
@@ -148,12 +155,10 @@ class IronTorqueMap(TorqueModelBase):
 
 
 def iron_model(design, coil: CoilSpec | None = None, level: int = _iron.IRON_LEVEL):
-    """The torque model of ``design`` with coils built as ``coil`` (default the design's ``coil`` if it has
-    one, else :func:`~spherestep.motor.coil.iron_coil`): an :class:`IronTorqueMap` for an iron core, today's
-    air-core :class:`TorqueMap` for ``core="air"`` (at the coil's ampere-turns; ``air_coil()`` reproduces it
-    exactly)."""
-    coil = getattr(design, "coil", None) if coil is None else coil
-    coil = iron_coil() if coil is None else coil
+    """The torque model of ``design`` with coils built as ``coil`` (default ``design.coil``): an
+    :class:`IronTorqueMap` for an iron core, today's air-core :class:`TorqueMap` for ``core="air"`` (at the
+    coil's nominal ampere-turns; ``air_coil(design.coil_ampere_turns)`` reproduces it exactly)."""
+    coil = design.coil if coil is None else coil
     if not isinstance(coil, CoilSpec):
         raise bad_value("coil", "a spherestep.motor.coil.CoilSpec", type(coil).__name__)
     if coil.core == "air":

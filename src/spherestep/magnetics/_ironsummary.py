@@ -18,11 +18,12 @@
 from __future__ import annotations
 
 import math
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 
 import numpy as np
 
 from .. import so3
+from ..errors import bad_value
 from ..motor.coil import CoilSpec, air_coil, iron_coil
 from ..statics import equilibrium, holding_torque
 from . import _iron
@@ -69,9 +70,10 @@ class IronSummary:
         return d
 
     def figure(self, design, coil: CoilSpec | None = None):
-        """Matplotlib figure: pair torques of air and iron (detent, linear, wrong polarity) against ``α``."""
+        """Matplotlib figure: pair torques of air and iron (detent, linear, wrong polarity) against ``α``; ``coil``
+        as for :func:`iron_summary`."""
         import matplotlib.pyplot as plt
-        model = iron_model(design, coil)
+        model = iron_model(design, _iron_cored(design, coil))
         air = iron_model(design, air_coil(design.coil_ampere_turns))
         a = np.radians(np.linspace(0.0, 40.0, 401))
         fig, ax = plt.subplots(figsize=(7, 4))
@@ -131,10 +133,22 @@ def core_flux_density(design, coil: CoilSpec, alpha, pc, level: int = _iron.IRON
     return (B[:, layer] * vol).sum(axis=1) / vol.sum()
 
 
+def _iron_cored(design, coil: CoilSpec | None = None) -> CoilSpec:
+    """The iron-cored coil to measure: ``coil`` (which must have an iron core), else ``design.coil`` on an iron
+    core (itself when it has one; an air coil's winding, supply and material otherwise)."""
+    if coil is None:
+        return design.coil if design.coil.core == "iron" else replace(design.coil, core="iron")
+    if not isinstance(coil, CoilSpec) or coil.core != "iron":
+        raise bad_value("coil", "an iron-cored spherestep.motor.coil.CoilSpec (the summary sets iron against air)",
+                        getattr(coil, "core", type(coil).__name__))
+    return coil
+
+
 def iron_summary(design, coil: CoilSpec | None = None, *, states: int = 12, starts: int = 12, seed: int = 0,
                  level: int = _iron.IRON_LEVEL) -> IronSummary:
-    """Measure what iron cores change for ``design`` (see the module docstring)."""
-    coil = iron_coil() if coil is None else coil
+    """Measure what iron cores change for ``design`` (see the module docstring) with the coils built as ``coil``
+    (an iron core); default ``design.coil``, on an iron core if it has none (its winding, supply and material)."""
+    coil = _iron_cored(design, coil)
     rng = np.random.default_rng(seed)
     model = iron_model(design, coil, level)
     air = iron_model(design, air_coil(design.coil_ampere_turns))

@@ -167,9 +167,14 @@ class TorqueMap(TorqueModelBase):
         """``F(x) = Σ_j p_j e(acos(x · u_j))`` with its gradient and Hessian (see the module docstring)."""
         field = self.__dict__.get("_field")
         if field is None:
-            field = RotorField(self.poles, self.polarity, self._zonal)
+            spline = ("angle_spline", (self._tau.x, self._tau.c, self._e.c, self._g_ends))
+            field = RotorField(self.poles, self.polarity, self._zonal, compiled=spline)
             object.__setattr__(self, "_field", field)
         return field
+
+    def zonal_terms(self, currents) -> list:
+        """``[(rotor_field, 1, coils, c)]``: the torque as a zonal sum (:func:`spherestep.rotor_field.pack_terms`)."""
+        return [(self.rotor_field, 1.0, self.coils, as_currents(currents, len(self.coils), self.failed, ())[0])]
 
     def evaluate(self, R, currents, order: int) -> tuple[np.ndarray, ...]:
         """``(E,)``, ``(E, τ)`` or ``(E, τ, H)`` through the rotor function (J, N·m, N·m/rad); ``R (K, 3, 3)`` or

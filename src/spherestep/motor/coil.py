@@ -68,6 +68,7 @@ class IronMaterial:
                             f"{len(arr)} points")
         if not (isinstance(self.knee, (int, float)) and 0 < self.knee < arr[-1, 1]):
             raise bad_value("material.knee", "a flux density (T) inside the B–H curve's range", self.knee)
+        object.__setattr__(self, "bh", tuple(tuple(p) for p in arr.tolist()))  # hashable, whatever was given
 
     def flux_density(self, H) -> np.ndarray:
         """``B(H)`` (T) on the normal curve, linear between points, odd in ``H`` (A/m); beyond the last point
@@ -98,7 +99,7 @@ class CoilSpec:
     pole, around which the winding sits), ``wall_thickness`` (outer wall), ``back_thickness`` (back plate).
     Winding: ``wire_diameter`` (bare copper), ``fill_factor`` (copper area / groove area). Supply:
     ``supply_voltage``, ``supply_power``, ``coils_on`` (coils energised at once, sharing the supply).
-    ``ampere_turns`` fixes the nominal ampere-turns instead of deriving them (old design files: 1000).
+    ``ampere_turns`` fixes the nominal ampere-turns instead of deriving them (``air_coil()``: 1000).
     """
 
     core: str = "iron"
@@ -116,6 +117,8 @@ class CoilSpec:
     def __post_init__(self):
         if self.core not in ("air", "iron"):
             raise bad_value("core", "'air' or 'iron'", self.core)
+        if not isinstance(self.material, IronMaterial):
+            raise bad_value("material", "a spherestep.motor.coil.IronMaterial", type(self.material).__name__)
         for name in ("pole_diameter", "wire_diameter", "supply_voltage", "supply_power"):
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v <= 0:
@@ -186,7 +189,8 @@ class CoilSpec:
 
 
 def air_coil(ampere_turns: float = 1000.0) -> CoilSpec:
-    """Today's coil model: air core at a fixed ``ampere_turns`` (what every design without a coil spec means)."""
+    """The air-core model at a fixed ``ampere_turns`` (the :class:`~spherestep.magnetics.TorqueMap` of a design
+    at its ``coil_ampere_turns``)."""
     return CoilSpec(core="air", ampere_turns=ampere_turns)
 
 

@@ -8,18 +8,19 @@ pole faces outwards; a coil driven with polarity ``s`` attracts poles of polarit
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
-from dataclasses import dataclass, field, replace
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field, fields, replace
 from functools import cached_property
 
 import numpy as np
 
 from .. import packing as pk
 from ..channels import MAX_COILS, as_channel_map, default_channel_map
-from ..errors import bad_value
+from ..errors import InputError, bad_value
 from ..packing import Packing
 from ..sphere import as_points, disc_angle
 from ..units import length
+from .coil import CoilSpec, IronMaterial, iron_coil
 
 __all__ = ["DEFAULT_TOL", "MAX_COILS", "MotorDesign", "PolarityRule", "check_fits", "default_channel_map"]
 
@@ -89,6 +90,31 @@ def _stator_axis(axis) -> np.ndarray:
     return axis / np.linalg.norm(axis)
 
 
+def _coil(value: CoilSpec | Mapping) -> CoilSpec:
+    """A :class:`CoilSpec` as given, or built from a mapping of its fields (``material`` a mapping of
+    :class:`IronMaterial`'s); the errors of a mapping name ``coil.<field>``."""
+    if not isinstance(value, Mapping):
+        return value  # MotorDesign checks its type
+    known = {f.name for f in fields(CoilSpec)}
+    unknown = sorted(str(k) for k in value if k not in known)
+    if unknown:
+        raise bad_value("coil", f"a mapping of CoilSpec's fields ({', '.join(sorted(known))})", unknown)
+    values = dict(value)
+    try:
+        if isinstance(values.get("material"), Mapping):
+            material = values["material"]
+            names = {f.name for f in fields(IronMaterial)}
+            if not set(material) <= names:
+                raise bad_value("material", f"a mapping of IronMaterial's fields ({', '.join(sorted(names))})",
+                                sorted(str(k) for k in material if k not in names))
+            values["material"] = IronMaterial(**material)
+        return CoilSpec(**values)
+    except InputError as exc:
+        error = InputError(f"coil.{exc}")
+        error.field = f"coil.{exc.field}"
+        raise error from None
+
+
 def _packing(value: str | Packing, level: int, name: str) -> Packing:
     """A :class:`Packing` as given, or the named one refined ``level`` times (shared, :func:`packing.named`)."""
     if isinstance(value, Packing):
@@ -112,6 +138,10 @@ class MotorDesign:
     coil ``coil_diameter`` × ``coil_length``, ``air_gap`` between rotor surface and coil faces. ``tol``
     (radians) is how close a pole must sit to a coil to count as held; ``channel_map`` gives each coil its
     (enable, polarity) relay channel. ``allow_hemisphere`` and ``max_coils`` lift the paper's limits.
+    ``coil_ampere_turns`` drives the air-core torque model (:class:`~spherestep.magnetics.TorqueMap`); ``coil``
+    is every coil as built (:class:`~spherestep.motor.coil.CoilSpec`: core, winding, supply; default the
+    prototype's iron-cored :func:`~spherestep.motor.coil.iron_coil`), read by the iron model and the drive limits.
+    Whether its winding fits the coil's size is checked where its electrics are computed (``CoilSpec.groove``).
 
     This class's checks are the only validation of a motor: every error is an
     :class:`~spherestep.errors.InputError` whose ``field`` names the field at fault (``stator[k]`` for coil
@@ -137,6 +167,7 @@ class MotorDesign:
     allow_hemisphere: bool = False
     max_coils: int = MAX_COILS
     failed_coils: tuple[int, ...] = field(default=())
+    coil: CoilSpec = field(default_factory=iron_coil)
 
     def __post_init__(self):
         polarity = np.asarray(self.polarity)
@@ -166,6 +197,9 @@ class MotorDesign:
         bad = [k for k in self.failed_coils if not 0 <= k < len(self.stator)]
         if bad:
             raise bad_value("failed_coils", f"coil indices 0..{len(self.stator) - 1}", bad)
+        if not isinstance(self.coil, CoilSpec):
+            raise bad_value("coil", "a spherestep.motor.coil.CoilSpec (iron_coil(), air_coil() or CoilSpec(...))",
+                            type(self.coil).__name__)
         object.__setattr__(self, "polarity", polarity.astype(int))
         object.__setattr__(self, "stator_axis", axis)
         object.__setattr__(self, "channel_map", cmap)
@@ -177,7 +211,8 @@ class MotorDesign:
                       sphere_diameter, magnet_diameter, magnet_length, coil_diameter, coil_length, air_gap,
                       rotor_refine: int = 0, stator_refine: int = 0,
                       polarity: PolarityRule | Sequence[int] = PolarityRule(1, -1),
-                      coils: str | Sequence[int] = "fit", check_fit: bool = True, **options) -> MotorDesign:
+                      coils: str | Sequence[int] = "fit", coil: CoilSpec | Mapping | None = None,
+                      check_fit: bool = True, **options) -> MotorDesign:
         """A motor from packings: the one place where coil angle, polarity rule and cap selection are decided.
 
         ``rotor``/``stator``: a packing name (:func:`spherestep.packing.names`) refined ``rotor_refine`` /
@@ -186,7 +221,9 @@ class MotorDesign:
         mapping ``{"primary": 1, "filled": -1}`` of one, or one ±1 per pole. ``coils``: ``"fit"`` keeps the stator caps within ``cap_half_angle`` (rad) of
         ``stator_axis`` that are at least as wide as a coil face, ``atan(d_c / 2 / (R + g))``
         (:meth:`Packing.within_cap`); ``"all"`` keeps every cap; a list of cap indices keeps those, in order.
-        Sizes are metres or strings with units (``"12 in"``, :func:`spherestep.units.length`).
+        Sizes are metres or strings with units (``"12 in"``, :func:`spherestep.units.length`). ``coil``: a
+        :class:`~spherestep.motor.coil.CoilSpec`, a mapping of its fields (``material`` a mapping too; errors
+        name ``coil.<field>``), or None for the default, the prototype's iron coil.
         ``check_fit`` also refuses overlapping magnets or coils (:func:`check_fits`). ``options`` are the
         remaining fields (``tol``, ``name``, ``channel_map``, ``max_coils``, ...). Errors are InputErrors whose
         ``field`` names the argument (``coils[k]`` for the ``k``-th listed cap).
@@ -231,6 +268,8 @@ class MotorDesign:
             raise bad_value("coils", "'fit', 'all' or a list of cap indices", coils)
         else:
             chosen = full.subset(coils, name="coils")
+        if coil is not None:
+            options["coil"] = _coil(coil)
         design = cls(rotor=rotor_packing, polarity=polarity, stator=chosen, stator_axis=axis,
                      cap_half_angle=cap_half_angle, **sizes, **options)
         if check_fit:
@@ -343,8 +382,17 @@ class MotorDesign:
 
         return design_metrics(self, samples=samples, seed=seed, escape=escape)
 
+    def coil_electrics(self) -> dict:
+        """The coil as built at this design's coil size: its core and :meth:`CoilSpec.electrics` (turns, Ω, A,
+        A-turns, W), or its core and why the winding does not fit (``winding``)."""
+        try:
+            return self.coil.electrics(self.coil_diameter, self.coil_length)
+        except InputError as exc:
+            return {"core": self.coil.core, "winding": str(exc)}
+
     def summary(self) -> dict:
-        """Poles, coils and dimensions as a JSON-ready dict (degrees and millimetres for people)."""
+        """Poles, coils and dimensions as a JSON-ready dict (degrees and millimetres for people); ``coil`` is
+        :meth:`coil_electrics`."""
         return {
             "name": self.name,
             "rotor": self.rotor.label,
@@ -357,6 +405,7 @@ class MotorDesign:
             "magnet_mm": [1e3 * self.magnet_diameter, 1e3 * self.magnet_length],
             "coil_mm": [1e3 * self.coil_diameter, 1e3 * self.coil_length],
             "air_gap_mm": 1e3 * self.air_gap,
+            "coil": self.coil_electrics(),
             "state_tol_deg": math.degrees(self.state_tol),
             "max_step_deg": math.degrees(self.max_step),
             "rotor_inertia_isotropy": self.rotor.inertia_isotropy(),

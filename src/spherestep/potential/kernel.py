@@ -87,6 +87,11 @@ class ZonalKernel:
         return npleg.legval(np.clip(np.asarray(t, dtype=float), -1.0, 1.0), coefficients)
 
     # --- tabulated -----------------------------------------------------------------------------------
+    @property
+    def table(self) -> tuple[np.ndarray, float]:
+        """``(coefficients (n, 6), n/2)``: interval ``k`` holds ``G`` as ``Σ_i c_i s^i`` in ``s = (t + 1) n/2 − k``."""
+        return self._table, self._inv_h
+
     def value(self, t) -> np.ndarray:
         """``G(t)`` from the table."""
         x, piece = self._locate(t)

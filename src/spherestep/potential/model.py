@@ -128,7 +128,7 @@ class MotorPotential(TorqueModelBase):
         L = self.bandlimit = _checks.count(bandlimit, "bandlimit")
         self.poles = np.asarray(design.rotor.centers, dtype=float)
         self.polarity = np.asarray(design.polarity, dtype=float)
-        self.coils = np.asarray(design.stator.centers, dtype=float)
+        self.coils = np.ascontiguousarray(design.stator.centers, dtype=float)
         self.failed = tuple(design.failed_coils)
         self.coil_count = len(self.coils)
         self.lambda_rotor = self.rotor_profile.legendre_coefficients(L)
@@ -172,6 +172,8 @@ class MotorPotential(TorqueModelBase):
     def _inputs(self, R, currents) -> tuple[np.ndarray, np.ndarray]:
         R = so3.as_rotations(R)
         c = _checks.currents(currents, len(self.coils), self.failed)
+        if R.ndim == 2 and c.ndim == 1:
+            return R, c
         try:
             np.broadcast_shapes(R.shape[:-2], c.shape[:-1])
         except ValueError:
@@ -182,8 +184,8 @@ class MotorPotential(TorqueModelBase):
     def _constant(self, c: np.ndarray, pairwise: bool) -> np.ndarray:
         """``‖Â‖² + cᵀ S c``: the part of ``V`` that does not depend on ``R``."""
         if pairwise:
-            return self._rotor_norm2_pairwise + np.sum((c @ self._stator_gram_pairwise) * c, axis=-1)
-        return self.rotor_norm2 + np.sum((c @ self.stator_gram) * c, axis=-1)
+            return self._rotor_norm2_pairwise + (c @ self._stator_gram_pairwise * c).sum(-1)
+        return self.rotor_norm2 + (c @ self.stator_gram * c).sum(-1)
 
     # --- fast path: the rotor function at the coils ------------------------------------------------------
     @property
@@ -192,7 +194,7 @@ class MotorPotential(TorqueModelBase):
         use (exact: ``F`` has degree ``L``)."""
         if self._field is None:
             self._field = RotorField(self.poles, self.polarity, self._kernel_derivatives, self.bandlimit,
-                                     nthreads=self.nthreads)
+                                     nthreads=self.nthreads, compiled=("quintic", self.kernel.table))
         return self._field
 
     def _kernel_derivatives(self, t: np.ndarray, orders: tuple[int, ...]) -> tuple[np.ndarray, ...]:
@@ -207,6 +209,12 @@ class MotorPotential(TorqueModelBase):
     def _fast(self, R: np.ndarray, c: np.ndarray, order: int, value: bool = True) -> tuple[np.ndarray, ...]:
         constant = self._constant(c, pairwise=True) if value else None
         return fast_evaluate(self.rotor_field, -2.0, self.coils, R, c, order, constant, value)
+
+    def zonal_terms(self, currents) -> list | None:
+        """``[(rotor_field, −2, coils, c)]``: the torque as a zonal sum (:func:`spherestep.rotor_field.pack_terms`;
+        the compiled integrator's input), ``None`` with ``fast=False``."""
+        c = _checks.currents(currents, len(self.coils), self.failed)
+        return [(self.rotor_field, -2.0, self.coils, c)] if self.fast else None
 
     def energy(self, R, currents) -> np.ndarray:
         """``V(R, c)`` (eq. (4)): the fast path, or :meth:`energy_harmonic` with ``fast=False``."""
