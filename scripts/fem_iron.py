@@ -1,7 +1,7 @@
 """Independent 3-D finite-element check of the iron pair torques with NGSolve (total scalar potential).
 
     OPENBLAS_NUM_THREADS=1 nice -n 5 python scripts/fem_iron.py            # data/iron_fem.csv (~10-20 min)
-    OPENBLAS_NUM_THREADS=1 nice -n 5 python scripts/fem_iron.py --quick    # one angle, the convergence only
+    OPENBLAS_NUM_THREADS=1 nice -n 5 python scripts/fem_iron.py --quick    # 8° at 2, 1.4, 1 mm: data/iron_fem_8.csv
     ... scripts/fem_iron.py --angles 12 20   then   scripts/fem_iron.py --merge   # a share of the angles in parallel
 
 Formulation (coil frame: axis z, core face at z = 0, body z > 0). The field is ``H = T0 − ∇ψ`` with a
@@ -127,14 +127,15 @@ HEADER = ("# NGSolve 3-D FEM (total scalar potential, order 2) of one +1 rotor m
 
 def main(quick: bool = False, angles=None):
     design, coil = prototype(), iron_coil()
+    if quick:  # the mesh convergence alone, merged into data/iron_fem.csv with --merge
+        angles, sizes = [8.0], (2.0e-3, 1.4e-3, 1.0e-3)
+    else:
+        sizes = (2.0e-3,) if angles else (2.0e-3, 1.4e-3, 1.0e-3)
     if angles:  # a share of the angles, for running in parallel: data/iron_fem_<angles>.csv, merge with --merge
-        runs = [(a, 2.0e-3) for a in angles]
+        runs = [(a, h) for a in angles for h in sizes]
         out = DATA / ("iron_fem_" + "_".join(f"{a:g}" for a in angles) + ".csv")
     else:
-        runs = [(8.0, 2.0e-3)]
-        if not quick:
-            runs += [(a, 2.0e-3) for a in (2.0, 5.0, 12.0, 20.0)]
-        runs += [(8.0, 1.4e-3), (8.0, 1.0e-3)]
+        runs = [(a, 2.0e-3) for a in (8.0, 2.0, 5.0, 12.0, 20.0)] + [(8.0, h) for h in sizes[1:]]
         out = DATA / "iron_fem.csv"
     rows = []
     for a, h in runs:

@@ -251,8 +251,11 @@ def _single(field, sign, coils, R, c, order, energy, value, lead):
         from ._zonal_sums import one_orientation
 
         torque = np.empty(3)
-        e = one_orientation(field.compiled, np.ascontiguousarray(R), coils,
-                            np.ascontiguousarray(c, dtype=float), field.poles, field.polarity, sign, torque)
+        e = one_orientation(field.compiled, R if R.flags.c_contiguous else np.ascontiguousarray(R), coils,
+                            c if c.flags.c_contiguous else np.ascontiguousarray(c), field.poles, field.polarity,
+                            sign, torque)
+        if not lead:
+            return (None if energy is None else np.float64(energy + e),) + ((torque,) if order else ())
         out = (None if energy is None else np.reshape(energy + e, lead),)
         return out + ((torque.reshape(lead + (3,)),) if order else ())
     live = np.flatnonzero(c)

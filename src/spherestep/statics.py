@@ -91,7 +91,7 @@ def as_currents(currents, coil_count: int, failed: tuple[int, ...] = (), name: s
         raise bad_value(name, "an array of real numbers", type(currents).__name__) from None
     if arr.ndim < 1 or arr.shape[-1] != coil_count:
         raise bad_value(name, f"one current per stator coil, shape (..., {coil_count})", f"shape {arr.shape}")
-    if not np.isfinite(arr).all():
+    if not math.isfinite(arr.sum()) and not np.isfinite(arr).all():  # the sum: one reduction (finite unless overflow)
         raise bad_value(name, "finite real numbers", "NaN or infinite entries")
     if failed and np.any(arr[..., list(failed)] != 0):
         raise bad_value(name, f"zero on the failed coils {list(failed)} (they cannot be energised)",
