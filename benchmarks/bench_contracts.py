@@ -5,7 +5,7 @@ Run: ``.venv/bin/python benchmarks/bench_contracts.py [--quick]``.
 * ``prototype()`` through ``MotorDesign.from_packings``: the first call in a process refines both packings,
   later calls share them (``packing.named`` caches; a design is immutable). The baseline is the same design
   with the packings refined afresh (what every call did before the cache).
-* ``so3.as_rotations`` on one rotation and on a batch of 10,000, beside the work it guards (``so3.angle`` of the
+* ``so3.as_rotations`` on one rotation (plain floats), 12 (a planner's batch: one batched matmul) and 10,000, beside the work it guards (``so3.angle`` of the
   same batch, which includes the check) — the contract's share of a call; baseline: ``RᵀR − I`` by a batched
   3 × 3 matmul, as the check was first written.
 * ``sphere.as_points`` on 10,000 points beside ``sphere.arc_distance`` of the same points.
@@ -59,6 +59,8 @@ def main() -> None:
         ("prototype(), packings cached", median_seconds(repeats, prototype), None),
         ("prototype(), packings refined afresh (baseline)", median_seconds(repeats, uncached_prototype), None),
         ("as_rotations, 1 rotation", median_seconds(repeats * 100, so3.as_rotations, R[0]), None),
+        ("as_rotations, 12 rotations (one batched matmul)", median_seconds(repeats * 100, so3.as_rotations, R[:12]),
+         None),
         ("as_rotations, 10,000 rotations", median_seconds(repeats, so3.as_rotations, R), None),
         ("max|RᵀR − I| by batched matmul, 10,000 (baseline)", median_seconds(repeats, matmul_orthogonality, R), None),
         ("so3.angle, 10,000 rotations (includes the check)", median_seconds(repeats, so3.angle, R), None),

@@ -149,15 +149,19 @@ def main(quick: bool = False, angles=None):
 
 
 def merge():
-    """Rows of data/iron_fem.csv and every data/iron_fem_<angles>.csv into data/iron_fem.csv (the parts removed)."""
+    """Rows of data/iron_fem.csv and every data/iron_fem_<angles>.csv into data/iron_fem.csv (the parts removed;
+    a later solve at the same angle and mesh size replaces an earlier one)."""
     parts = sorted(DATA.glob("iron_fem_*.csv"))
-    rows = []
+    rows = {}
     for p in [DATA / "iron_fem.csv", *parts]:
         if p.exists():
-            rows += [line for line in p.read_text().splitlines() if line and line[0].isdigit()]
+            for line in p.read_text().splitlines():
+                if line and line[0].isdigit():
+                    alpha, maxh = (float(v) for v in line.split(",")[:2])
+                    rows[alpha, maxh] = line
     out = DATA / "iron_fem.csv"
     tmp = out.with_suffix(".tmp")
-    tmp.write_text(HEADER + "\n".join(rows) + "\n")
+    tmp.write_text(HEADER + "\n".join(rows.values()) + "\n")
     tmp.replace(out)
     for p in parts:
         p.unlink()

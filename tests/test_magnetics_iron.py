@@ -247,3 +247,16 @@ def test_pairwise_against_full_multibody_solve():
     pair = np.c_[mb["pair_x"], mb["pair_y"], mb["pair_z"]]
     err = np.linalg.norm(full - pair, axis=1) / np.linalg.norm(full, axis=1)
     assert np.median(err) < 0.05
+
+
+def test_fem_mesh_convergence():
+    """The FEM reference converges: at 8° the pair torques on successively finer face meshes (2 mm, 1.4 mm, ...)
+    change by less than 2 % of the peak pair torque between the last two sizes (data/iron_fem.csv,
+    ``scripts/fem_iron.py --quick``)."""
+    fem = _csv("iron_fem.csv")
+    at8 = np.flatnonzero(fem["alpha_deg"] == 8.0)
+    at8 = at8[np.argsort(-fem["maxh_face_m"][at8])]  # coarse to fine
+    assert len(at8) >= 2 and fem["elements"][at8[-1]] > 2 * fem["elements"][at8[0]]
+    peak = max(np.abs(fem["detent_Nm"]).max(), np.abs(fem["linear_Nm"]).max())
+    for column in ("detent_Nm", "linear_Nm"):
+        assert abs(fem[column][at8[-1]] - fem[column][at8[-2]]) <= 0.02 * peak

@@ -100,18 +100,19 @@ class Integrator:
 
     A model with ``zonal_terms`` whose kernels are compiled (the potential, the magnets' map, the iron model) runs
     the same scheme compiled (:func:`spherestep._zonal_sums.integrate`, equal to :meth:`Rotor.step` to rounding,
-    ``tests/test_fast_path.py``); any other model runs :meth:`Rotor.step` with batched ``(1, 3, 3)`` calls."""
+    ``tests/test_fast_path.py``); any other model, or ``compiled=False`` (the reference), runs :meth:`Rotor.step`
+    with batched ``(1, 3, 3)`` calls."""
 
-    def __init__(self, model, rotor: Rotor, dt: float):
+    def __init__(self, model, rotor: Rotor, dt: float, compiled: bool = True):
         if not (math.isfinite(dt) and dt > 0):
             raise bad_value("dt", "a positive time step in seconds", dt)
-        self.model, self.rotor, self.dt = model, rotor, float(dt)
+        self.model, self.rotor, self.dt, self.compiled = model, rotor, float(dt), bool(compiled)
 
     def run(self, R: np.ndarray, w: np.ndarray, currents: np.ndarray, duration: float, record_every: int = 1):
         """Integrate for ``duration`` s from ``(R, ω)``; returns ``(R, ω, times, Rs, ωs, energies)``, the
         trajectory sampled every ``record_every`` steps (times relative to the start)."""
         steps = max(1, int(round(duration / self.dt)))
-        zonal_terms = getattr(self.model, "zonal_terms", None)
+        zonal_terms = getattr(self.model, "zonal_terms", None) if self.compiled else None
         terms = zonal_terms(currents) if zonal_terms else None
         packed = pack_terms(terms) if terms else None
         if packed is not None:  # the same scheme compiled (spherestep._zonal_sums.integrate)
