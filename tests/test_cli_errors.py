@@ -191,7 +191,10 @@ OUTPUT_COMMANDS = {  # command line with {out} for the output folder
     "export": ["export", "{design}", "--out", "{out}"],
     "forces": ["forces", "--out", "{out}", "--json"],
     "explore": ["explore", "--quick", "--out", "{out}", "--threads", "--workers", "1"],
-}  # move, capability and sense check --out only after ~8 s of work (reported); their options are below
+    "move": ["move", *AX, "--angle", "30", "--out", "{out}"],
+    "capability": ["capability", "--samples", "10", "--out", "{out}"],
+    "sense": ["sense", "--sensors", "4", "--samples", "5", "--out", "{out}"],
+}
 FILE_COMMANDS = {  # command line with {out} for an output file, and its suffix
     "report": (["report", "-o", "{out}"], ".html"),
     "packing": (["packing", "cube", "--out", "{out}"], ".csv"),

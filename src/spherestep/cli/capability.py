@@ -7,6 +7,7 @@ from pathlib import Path
 import typer
 from rich.table import Table
 
+from ..outputs import output_folder
 from .app import app
 from .common import console, design_from, number, print_json, usable, write_json
 
@@ -32,6 +33,7 @@ def capability(
     from .. import plots
     from ..control import figure_capability, torque_capability
 
+    out = output_folder(out, "--out")  # before the work: a bad location costs nothing
     design = usable(design_from(design_path))
     cap = torque_capability(design, samples=int(samples), seed=seed)
     summary = cap.to_dict() | {"threshold_N_m": threshold, "fraction_at_threshold": cap.fraction_at_least(threshold)}

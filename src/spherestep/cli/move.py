@@ -10,6 +10,7 @@ import typer
 
 
 from ..errors import bad_value
+from ..outputs import output_folder
 from .app import app
 from .common import check_axis, console, design_from, number, parse_vector, print_json, usable
 from .motor import ANGLE
@@ -78,6 +79,7 @@ def move(
             raise bad_value("--mode", "servo with --port/--emulate (relay plans run with spherestep run)", mode)
         if port is not None and emulate:
             raise bad_value("--port", "left out with --emulate (one or the other)", port)
+    out = output_folder(out, "--out")  # before the work: a bad location costs nothing
     design = usable(design_from(design_path))
     if port is not None or emulate:
         return _on_hardware(design, axis, angle, time, port, emulate, rate, out, as_json)

@@ -7,6 +7,7 @@ from pathlib import Path
 import typer
 from rich.table import Table
 
+from ..outputs import output_folder
 from .app import app
 from .common import console, design_from, number, print_json, usable, write_json
 
@@ -34,6 +35,7 @@ def sense(
 
     from .. import sensing
 
+    out = output_folder(out, "--out")  # before the work: a bad location costs nothing
     design = usable(design_from(design_path))
     if marked:
         design = sensing.marked_design(design)
