@@ -30,6 +30,8 @@ import math
 import numpy as np
 from numba import njit
 
+from .so3 import exp_entries
+
 
 QUINTIC, ANGLE_SPLINE = 0, 1
 
@@ -201,20 +203,17 @@ def terms_torque(params, offsets, R, coils, C, poles, P, signs, torque):
     return energy
 
 
+_exp_entries = njit(cache=True)(exp_entries)
+
+
 @njit(cache=True)
 def _exp(v):
-    """:func:`spherestep.so3.exp` of one rotation vector (same formula and series)."""
-    x, y, z = v[0], v[1], v[2]
-    t2 = x * x + y * y + z * z
-    if t2 < 1e-8:
-        a, b = 1.0 - t2 / 6.0 + t2 * t2 / 120.0, 0.5 - t2 / 24.0 + t2 * t2 / 720.0
-    else:
-        t = math.sqrt(t2)
-        a, b = math.sin(t) / t, (1.0 - math.cos(t)) / t2
+    """:func:`spherestep.so3.exp` of one rotation vector (its scalar formula, compiled)."""
+    e = _exp_entries(v[0], v[1], v[2])
     E = np.empty((3, 3))
-    E[0, 0], E[0, 1], E[0, 2] = 1.0 - b * (y * y + z * z), b * x * y - a * z, b * x * z + a * y
-    E[1, 0], E[1, 1], E[1, 2] = b * x * y + a * z, 1.0 - b * (x * x + z * z), b * y * z - a * x
-    E[2, 0], E[2, 1], E[2, 2] = b * x * z - a * y, b * y * z + a * x, 1.0 - b * (x * x + y * y)
+    E[0, 0], E[0, 1], E[0, 2] = e[0], e[1], e[2]
+    E[1, 0], E[1, 1], E[1, 2] = e[3], e[4], e[5]
+    E[2, 0], E[2, 1], E[2, 2] = e[6], e[7], e[8]
     return E
 
 

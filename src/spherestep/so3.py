@@ -179,15 +179,21 @@ def exp(rotvec) -> np.ndarray:
 
 def _exp_one(x: float, y: float, z: float) -> np.ndarray:
     """:func:`exp` of one rotation vector with Python floats (same formula and series)."""
+    return np.array(exp_entries(x, y, z)).reshape(3, 3)
+
+
+def exp_entries(x: float, y: float, z: float) -> tuple[float, ...]:
+    """The 9 entries (row-major) of :func:`exp` of ``(x, y, z)`` in scalar arithmetic: the one formula for Python
+    floats and for the compiled integrator (:mod:`spherestep._zonal_sums` compiles this function)."""
     t2 = x * x + y * y + z * z
     if t2 < 1e-8:
         a, b = 1.0 - t2 / 6.0 + t2 * t2 / 120.0, 0.5 - t2 / 24.0 + t2 * t2 / 720.0
     else:
         t = math.sqrt(t2)
         a, b = math.sin(t) / t, (1.0 - math.cos(t)) / t2
-    return np.array([[1.0 - b * (y * y + z * z), b * x * y - a * z, b * x * z + a * y],
-                     [b * x * y + a * z, 1.0 - b * (x * x + z * z), b * y * z - a * x],
-                     [b * x * z - a * y, b * y * z + a * x, 1.0 - b * (x * x + y * y)]])
+    return (1.0 - b * (y * y + z * z), b * x * y - a * z, b * x * z + a * y,
+            b * x * y + a * z, 1.0 - b * (x * x + z * z), b * y * z - a * x,
+            b * x * z - a * y, b * y * z + a * x, 1.0 - b * (x * x + y * y))
 
 
 def from_euler_zxz(angles) -> np.ndarray:
