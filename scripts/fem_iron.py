@@ -3,6 +3,9 @@
     OPENBLAS_NUM_THREADS=1 nice -n 5 python scripts/fem_iron.py            # data/iron_fem.csv (~10-20 min)
     OPENBLAS_NUM_THREADS=1 nice -n 5 python scripts/fem_iron.py --quick    # 8° at 2, 1.4, 1 mm: data/iron_fem_8.csv
     ... scripts/fem_iron.py --angles 12 20   then   scripts/fem_iron.py --merge   # a share of the angles in parallel
+    ... scripts/fem_iron.py --table 0 2 & scripts/fem_iron.py --table 1 2; scripts/fem_iron.py --merge
+        # the pair tables' FEM nodes (1°…20° and 1.5°, 2.5°, 3.5°, but not the reference angles) in 2 shares:
+        # data/iron_fem_table.csv; --table-angles A B ... solves the given angles only
 
 Formulation (coil frame: axis z, core face at z = 0, body z > 0). The field is ``H = T0 − ∇ψ`` with a
 total scalar potential ψ (H1, order 2, ψ = 0 on a sphere of 0.2 m) and two sources that need no field from
@@ -118,6 +121,8 @@ def pair(design, coil, alpha: float, maxh_face: float):
     return det, lin, mesh.ne, t1 - t0, (t2 - t1) / 3
 
 
+REFERENCE_DEG = (2.0, 5.0, 8.0, 12.0, 20.0)  # data/iron_fem.csv: held out of the tables, they check them
+TABLE_DEG = tuple(sorted({1.5, 2.5, 3.5} | {float(a) for a in range(1, 21)} - set(REFERENCE_DEG)))  # the FEM nodes
 HEADER = ("# NGSolve 3-D FEM (total scalar potential, order 2) of one +1 rotor magnet and one iron-cored coil of the "
           "prototype (scripts/fem_iron.py).\n# Torque about the sphere's centre (N m), positive away from the axis; "
           "linear per nominal current (the -nominal case is detent - linear: the problem is linear); maxh_face the "
@@ -148,20 +153,43 @@ def main(quick: bool = False, angles=None):
     print("wrote", out)
 
 
+def table(angles):
+    """FEM pair torques at ``angles`` (degrees; 2 mm face mesh): data/iron_fem_table_<first angle>.csv, merged
+    into data/iron_fem_table.csv by ``--merge``."""
+    design, coil = prototype(), iron_coil()
+    out = DATA / f"iron_fem_table_{angles[0]:g}.csv"
+    rows = []
+    for a in angles:
+        det, lin, ne, tm, ts = pair(design, coil, math.radians(a), 2.0e-3)
+        print(a, ne, det, lin, tm, ts, flush=True)
+        rows.append([a, 2.0e-3, ne, det, lin, tm, ts])
+        tmp = out.with_suffix(".tmp")
+        tmp.write_text(HEADER + "".join(",".join(f"{v:.9g}" for v in r) + "\n" for r in rows))
+        tmp.replace(out)
+
+
 def merge():
-    """Rows of data/iron_fem.csv and every data/iron_fem_<angles>.csv into data/iron_fem.csv (the parts removed;
-    a later solve at the same angle and mesh size replaces an earlier one)."""
-    parts = sorted(DATA.glob("iron_fem_*.csv"))
+    """Rows of data/iron_fem.csv and every data/iron_fem_<angles>.csv into data/iron_fem.csv, and the table shares
+    data/iron_fem_table_<k>.csv into data/iron_fem_table.csv (the parts removed; a later solve at the same angle
+    and mesh size replaces an earlier one; rows sorted by angle, then mesh size)."""
+    for name, parts in (("iron_fem_table.csv", sorted(DATA.glob("iron_fem_table_*.csv"))),
+                        ("iron_fem.csv", sorted(set(DATA.glob("iron_fem_*.csv")) - set(DATA.glob("iron_fem_table*"))))):
+        _merge(DATA / name, parts)
+
+
+def _merge(out: Path, parts: list[Path]) -> None:
     rows = {}
-    for p in [DATA / "iron_fem.csv", *parts]:
+    for p in [out, *parts]:
         if p.exists():
             for line in p.read_text().splitlines():
                 if line and line[0].isdigit():
                     alpha, maxh = (float(v) for v in line.split(",")[:2])
                     rows[alpha, maxh] = line
-    out = DATA / "iron_fem.csv"
+    if not rows:
+        return
     tmp = out.with_suffix(".tmp")
-    tmp.write_text(HEADER + "\n".join(rows.values()) + "\n")
+    tmp.write_text(HEADER + "\n".join(line for _, line in sorted(rows.items(), key=lambda kv: (kv[0][0], -kv[0][1])))
+                   + "\n")
     tmp.replace(out)
     for p in parts:
         p.unlink()
@@ -170,6 +198,12 @@ def merge():
 if __name__ == "__main__":
     if "--merge" in sys.argv:
         merge()
+    elif "--table" in sys.argv:
+        at = sys.argv.index("--table")
+        share, shares = (int(v) for v in sys.argv[at + 1:at + 3]) if len(sys.argv) > at + 2 else (0, 1)
+        table(TABLE_DEG[share::shares])
+    elif "--table-angles" in sys.argv:
+        table([float(a) for a in sys.argv[sys.argv.index("--table-angles") + 1:]])
     elif "--angles" in sys.argv:
         main(angles=[float(a) for a in sys.argv[sys.argv.index("--angles") + 1:]])
     else:

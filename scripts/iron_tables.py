@@ -1,7 +1,10 @@
-"""Build the prototype's iron-core tables by the method of moments (magpylib-material-response) and store them.
+"""Build the prototype's iron-core tables by the method of moments (magpylib-material-response) and store them;
+assemble the pair table the prototype's model reads from the FEM nodes (``scripts/fem_iron.py --table``) below 21°
+and the moment method from 21° on (the two agree within 1 % of the peak at 20°, docs/magnetics.md).
 
     OPENBLAS_NUM_THREADS=1 nice -n 5 python scripts/iron_tables.py              # all of the below at the default level
-    OPENBLAS_NUM_THREADS=1 nice -n 5 python scripts/iron_tables.py table        # src/spherestep/data/iron_*.csv
+    OPENBLAS_NUM_THREADS=1 nice -n 5 python scripts/iron_tables.py table        # data/iron_pair_table_mom.csv, flux
+    python scripts/iron_tables.py fem-table   # src/spherestep/data/iron_pair_table.csv: FEM below 21°, MoM above
     OPENBLAS_NUM_THREADS=1 nice -n 5 python scripts/iron_tables.py convergence  # data/iron_convergence.csv
     OPENBLAS_NUM_THREADS=1 nice -n 5 python scripts/iron_tables.py multibody    # data/iron_multibody.csv
     OPENBLAS_NUM_THREADS=1 nice -n 5 python scripts/iron_tables.py fig6         # data/iron_fig6.csv
@@ -42,7 +45,7 @@ def table(level: int = iron.IRON_LEVEL) -> None:
     det, lin = pair_table(design, coil, level)
     t2 = time.perf_counter()
     flux(level)
-    _write(Path(__file__).resolve().parents[1] / "src" / "spherestep" / "data" / "iron_pair_table.csv",
+    _write(DATA / "iron_pair_table_mom.csv",
            f"Iron-core pair torques of the prototype (spherestep.magnetics._iron.pair_tables), MoM level {level}: "
            f"{len(iron.core_solver(iron.CoreGeometry.of(design, coil), level).cells)} cells.\n"
            f"One +1 rotor magnet at angle alpha from one iron coil's axis; torque about the sphere's centre (N m), "
@@ -50,6 +53,25 @@ def table(level: int = iron.IRON_LEVEL) -> None:
            f"ampere-turns).\nfactorisation {t1 - t0:.1f} s, {len(TABLE_NODES_DEG)} angles {t2 - t1:.1f} s. "
            f"Produced by: python scripts/iron_tables.py table",
            ["alpha_deg", "detent_Nm", "linear_Nm"], np.c_[TABLE_NODES_DEG, det, lin])
+
+
+def fem_table(switch_deg: float = 21.0) -> None:
+    """``src/spherestep/data/iron_pair_table.csv``: 0 at 0° (symmetry), the FEM nodes of data/iron_fem_table.csv
+    below ``switch_deg``, the moment-method rows of data/iron_pair_table_mom.csv from it on."""
+    from spherestep.magnetics._ironmap import read_table
+
+    fem = read_table(DATA / "iron_fem_table.csv")  # alpha, maxh, elements, detent, linear, mesh_s, solve_s
+    mom = read_table(DATA / "iron_pair_table_mom.csv")  # alpha, detent, linear
+    fem = fem[fem[:, 0] < switch_deg]
+    rows = np.r_[[[0.0, 0.0, 0.0]], fem[:, [0, 3, 4]], mom[mom[:, 0] >= switch_deg]]
+    _write(Path(__file__).resolve().parents[1] / "src" / "spherestep" / "data" / "iron_pair_table.csv",
+           f"Iron-core pair torques of the prototype: NGSolve 3-D FEM (scripts/fem_iron.py --table, order 2, 2 mm at "
+           f"the core's face) at {len(fem)} angles below {switch_deg:g} deg, except the reference angles of "
+           f"data/iron_fem.csv, which check it;\nthe moment method (data/iron_pair_table_mom.csv, level 0) from "
+           f"{switch_deg:g} deg on; 0 at 0 deg by symmetry.\nOne +1 rotor magnet at angle alpha from one iron coil's "
+           f"axis; torque about the sphere's centre (N m), positive away from the axis; linear per nominal current.\n"
+           f"Produced by: python scripts/iron_tables.py fem-table",
+           ["alpha_deg", "detent_Nm", "linear_Nm"], rows)
 
 
 def flux(level: int = iron.IRON_LEVEL) -> None:
@@ -153,4 +175,4 @@ def everything() -> None:
 
 if __name__ == "__main__":
     what = sys.argv[1] if len(sys.argv) > 1 else "all"
-    {"all": everything, "table": table, "convergence": convergence, "multibody": multibody, "fig6": fig6, "flux": flux}[what]()
+    {"all": everything, "table": table, "fem-table": fem_table, "convergence": convergence, "multibody": multibody, "fig6": fig6, "flux": flux}[what]()

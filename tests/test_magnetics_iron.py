@@ -213,28 +213,32 @@ def _fem_rows():
     return {k: v[keep] for k, v in fem.items()}
 
 
-@pytest.mark.xfail(strict=True, reason="MoM level-0 tables miss the FEM by up to 31 % of the peak near the axis "
-                   "(docs/magnetics.md, 'Independent check'); the issue's target is 5 %")
 def test_fast_model_against_fem(model):
-    """The issue's target: the fast model's pair torques within 5 % of the FEM's peak pair torque at every angle."""
+    """The issue's target: the prototype's fast model within 5 % of the FEM's peak pair torque at every reference
+    angle of data/iron_fem.csv (2°, 5°, 8°, 12°, 20°), none of which is a node of its table (held out: the check
+    covers the table's interpolation too)."""
     fem = _fem_rows()
     a = np.radians(fem["alpha_deg"])
+    assert not np.any(np.isclose(model.detent.nodes[:, None], a[None, :]))  # held out
     peak = max(np.abs(fem["detent_Nm"]).max(), np.abs(fem["linear_Nm"]).max())
     assert np.abs(model.detent.pair(a) - fem["detent_Nm"]).max() <= 0.05 * peak
     assert np.abs(model.linear.pair(a) - fem["linear_Nm"]).max() <= 0.05 * peak
 
 
-def test_fast_model_against_fem_away_from_the_axis(model):
-    """Where the moment method's mesh resolves the geometry (detent at α ≥ 8°, coil at α ≥ 12°) the fast model is
-    within 5 % of the FEM's peak pair torque."""
+def test_moment_method_against_fem(design):
+    """The moment method (data/iron_pair_table_mom.csv, level 0) meets the FEM within 5 % of its peak only where
+    its mesh resolves the geometry (detent at α ≥ 8°, coil at α ≥ 12°); near the axis it misses by 20–31 %, which is
+    why the prototype's table takes the FEM below 21° (docs/magnetics.md)."""
     fem = _fem_rows()
+    mom = _csv("iron_pair_table_mom.csv")
+    m = IronTorqueMap.from_tables(design, iron_coil(), np.radians(mom["alpha_deg"]), mom["detent_Nm"],
+                                  mom["linear_Nm"])
+    a = fem["alpha_deg"]
     peak = max(np.abs(fem["detent_Nm"]).max(), np.abs(fem["linear_Nm"]).max())
-    far = fem["alpha_deg"] >= 8.0
-    farther = fem["alpha_deg"] >= 12.0
-    assert len(fem["alpha_deg"]) >= 5 and far.sum() >= 2 and farther.sum() >= 1
-    assert np.abs(model.detent.pair(np.radians(fem["alpha_deg"][far])) - fem["detent_Nm"][far]).max() <= 0.05 * peak
-    assert np.abs(model.linear.pair(np.radians(fem["alpha_deg"][farther])) - fem["linear_Nm"][farther]).max() \
-        <= 0.05 * peak
+    err_d = np.abs(m.detent.pair(np.radians(a)) - fem["detent_Nm"]) / peak
+    err_l = np.abs(m.linear.pair(np.radians(a)) - fem["linear_Nm"]) / peak
+    assert np.all(err_d[a >= 8.0] <= 0.05) and np.all(err_l[a >= 12.0] <= 0.05)
+    assert max(err_d.max(), err_l.max()) > 0.2  # the near-axis miss the FEM table replaces
 
 
 @pytest.mark.xfail(strict=True, reason="pairwise superposition misses the two-core full solve by a median 32 % "

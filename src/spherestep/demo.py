@@ -8,9 +8,9 @@
 3. a turn about a tilted axis commutated by the paper's geometric planner (:func:`spherestep.commutation.turn`):
    plan CSV/JSON and figures;
 4. the turn driven three ways (:func:`spherestep.dynamics.compare_drives`): the paper's settled relay steps, ramped
-   relay steps at the pull-out rate, and the current-controlled servo, with the bang-bang bound. These run on the
-   air-core model: with iron cores the stepper states move by degrees (measured in step 2), so the geometric plan's
-   relay steps would have to be planned on the iron model first (docs/magnetics.md);
+   relay steps at the pull-out rate, and the current-controlled servo, with the bang-bang bound, on the air-core
+   model; then on the iron-cored model (:func:`iron_drives`): the relay steps as the potential planner finds them
+   there (the detent holds the rotor: few or none move it) and the servo, which does turn it;
 5. the HTML report with every section, and ``summary.json``.
 
 :data:`DEMO_FILES` names everything written, so a caller can check the folder before the work and count what was
@@ -31,6 +31,7 @@ from .atomic import write_text
 
 PLAN_FILES = ("plan.csv", "plan.json", "commutation_steps.png", "motor_3d.png", "plan_error.png")
 SIMULATION_FILES = ("trajectory.csv", "simulation.png")
+IRON_SERVO_TIME = 3.0  # s: the servo's time for the demo turn on the iron-cored model (see iron_drives)
 DRIVE_FILES = ("drives.json", "servo.png", "capability.png", "iron.png")
 DEMO_FILES = PLAN_FILES + SIMULATION_FILES + DRIVE_FILES + ("report.html", "summary.json")
 CAPABILITY_SAMPLES = 400
@@ -106,10 +107,12 @@ def run_demo(design, out: Path, axis, angle_deg: float, *,
     say("driving the turn three ways: settled relays, ramped relays, servo")
     drives = compare_drives(design, axis, math.radians(angle_deg), model, limits=limits)
     info["drives"] = drives.to_dict()
-    write_text(out / "drives.json", json.dumps(info["drives"], indent=1))
     run = drives.servo_run
     plots.save_figure(figure_drive(run.times, run.tracking_error, run.currents, run.power,
                                    title="servo: the demo's turn"), out / "servo.png")
+    say("driving the turn on the iron-cored model: relay steps planned on it, and the servo")
+    info["iron_drives"] = iron_drives(design, axis, math.radians(angle_deg), iron, iron_limits)
+    write_text(out / "drives.json", json.dumps(info["drives"] | {"iron": info["iron_drives"]}, indent=1))
     say("writing the HTML report")
     sections = (
         Section("capability", "Torque capability over SO(3)",
@@ -120,7 +123,8 @@ def run_demo(design, out: Path, axis, angle_deg: float, *,
                      f"{np.percentile(capability.radius, 5):.2f} N·m.",
                 figure=capability_figure(capability), height=440),
         Section("iron", "Iron: detent and saturation", html=_iron_table(iron_effects, iron_capability)),
-        Section("drives", "The turn driven three ways", html=_drives_table(drives)),
+        Section("drives", "The turn driven three ways", html=_drives_table(drives) + _iron_drives_note(
+            info["iron_drives"])),
         Section("servo", "Servo run", note="The servo's run of the same turn: tracking error against the "
                 "trajectory and the sensor's error, every coil's current, and the power drawn from the supply.",
                 figure=servo_figure(run), height=640),
@@ -128,6 +132,32 @@ def run_demo(design, out: Path, axis, angle_deg: float, *,
     write_report(out / "report.html", design, metrics, plan, simulation=sim, axis=axis, sections=sections)
     write_text(out / "summary.json", json.dumps(info, indent=1, default=_jsonable))
     return info
+
+
+def iron_drives(design, axis, angle: float, model, limits, duration: float = IRON_SERVO_TIME) -> dict:
+    """The turn on the iron-cored ``model``: the relay steps as the potential planner finds them on it (how many
+    of its steps move the rotor, and the final error of the plan), and the servo (``limits`` of the iron coil's
+    winding) over ``duration`` s — a fixed time, because the fastest-turn planner needs torque in every direction
+    all along the path, which the detent denies (docs/magnetics.md)."""
+    from .commutation import turn
+    from .dynamics import drive_turn
+
+    plan = turn(design, axis, math.degrees(angle), planner="potential", model=model)
+    s = plan.summary(max_step=design.max_step).to_dict()
+    servo = drive_turn(design, axis, angle, mode="servo", model=model, limits=limits, duration=duration).summary
+    keep = ("time_s", "final_error_deg", "max_tracking_error_deg", "peak_power_W", "mean_power_W",
+            "peak_current_A", "reachable_fraction")
+    return {"relay_steps": s["steps"], "relay_moves": s["moves"], "relay_final_error_deg": s["error_final_deg"],
+            "servo": {k: servo[k] for k in keep}}
+
+
+def _iron_drives_note(d: dict) -> str:
+    s = d["servo"]
+    return (f'<p class="note">On the iron-cored model: the potential planner moves the rotor in {d["relay_moves"]} '
+            f'of {d["relay_steps"]} relay steps (final error {d["relay_final_error_deg"]:.1f}°: the detent holds it); '
+            f'the servo turns it in {s["time_s"]:.2f} s, final error {s["final_error_deg"]:.4f}°, max tracking '
+            f'error {s["max_tracking_error_deg"]:.2f}°, peak power {s["peak_power_W"]:.0f} W, mean '
+            f'{s["mean_power_W"]:.1f} W.</p>')
 
 
 def _jsonable(value):

@@ -102,6 +102,15 @@ def demo(
                           f"tracking error {m['max_tracking_error_deg']:.2f}°, power peak {m['peak_power_W']:.0f} W "
                           f"mean {m['mean_power_W']:.0f} W")
         console.print(f"  bang-bang bound {d['bang_bang_bound_s']:.2f} s (servo {d['servo_over_bound']:.2f}× it)")
+        icap, iron, idr = info["iron_capability"]["available_torque_N_m"], info["iron"], info["iron_drives"]
+        console.print(f"iron-cored coils: detent peak {-iron['detent_peak_Nm']:.2f} N·m at "
+                      f"{iron['detent_peak_angle_deg']:.1f}°; unpowered the rotor holds {iron['unpowered_minima']} of "
+                      f"{iron['unpowered_starts']} random poses; torque available in every direction median "
+                      f"{icap[50]:.2f} N·m, 5th percentile {icap[5]:.2f} N·m")
+        console.print(f"  relay steps planned on iron move the rotor in {idr['relay_moves']} of {idr['relay_steps']} "
+                      f"steps (final error {idr['relay_final_error_deg']:.1f}°); servo {idr['servo']['time_s']:.2f} s, "
+                      f"final error {idr['servo']['final_error_deg']:.4f}°, power peak "
+                      f"{idr['servo']['peak_power_W']:.0f} W")
         console.print(f"wrote {len(files.paths)} files to {out}/")
 
 

@@ -17,8 +17,10 @@ torque on the rotor) as long as the iron stays linear; :func:`iron_saturation` c
 Pairwise superposition leaves out a magnet acting on another through a core and the cores on each other;
 ``data/iron_multibody.csv`` measures that against a full solve (docs/magnetics.md).
 
-The prototype's tables (``spherestep/data/iron_pair_table.csv``, by ``python scripts/iron_tables.py table``) are
-read when the design and coil match it; any other geometry is solved on first use (minutes) and cached.
+The prototype's tables (``spherestep/data/iron_pair_table.csv``: NGSolve FEM nodes below 21°, the moment method
+from 21° on; ``python scripts/iron_tables.py fem-table``) are read when the design and coil match it; any other
+geometry is solved by the moment method on first use (minutes) and cached — its error near the axis is up to
+~30 % of the peak (docs/magnetics.md).
 """
 
 from __future__ import annotations

@@ -11,7 +11,9 @@
 * polarity: the pair torque with the coil driven against the pole (``p c = −1``) near the axis: negative means
   the iron still pulls the pole in (the paper's polarity switching then only weakens the attraction);
 * saturation: the mean ``|B|`` in the centre pole's face layer (method of moments, linear iron) over the sampled
-  states' energised coils with their nearest poles, and with a pole on the axis, against the material's knee;
+  states' energised coils with their nearest poles where the rotor rests on the iron model (the equilibria, not
+  the geometric states: there the poles sit degrees off the axes), and with a pole on the axis, against the
+  material's knee;
 * power per coil at nominal current against the supply.
 """
 
@@ -173,11 +175,12 @@ def iron_summary(design, coil: CoilSpec | None = None, *, states: int = 12, star
         offs = so3.distance(eq.rotation, st.rotations[idx])
         hold = holding_torque(m, eq.rotation[ok], c[ok]).torque if ok.any() else np.zeros(0)
         out[name] = (int(ok.sum()), offs[ok], hold)
+        rest = eq.rotation  # the last: the iron model's rest poses
     # polarity
     probe = np.radians([2.0, 4.0, 6.0, 8.0])
     wrong = model.detent.pair(probe) - model.linear.pair(probe)
-    # saturation: every energised coil of the sampled states with its nearest pole, and the pole on the axis
-    W = np.einsum("kab,mb->kma", st.rotations[idx], design.rotor.centers)
+    # saturation: every energised coil of the sampled states with its nearest pole at rest, and the pole on the axis
+    W = np.einsum("kab,mb->kma", rest, design.rotor.centers)
     alphas, pcs = [0.0, 0.0], [1.0, 0.0]
     for n in range(len(idx)):
         for k in np.flatnonzero(c[n]):
