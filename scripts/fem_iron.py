@@ -131,7 +131,6 @@ HEADER = ("# NGSolve 3-D FEM (total scalar potential, order 2) of one +1 rotor m
 
 
 def main(quick: bool = False, angles=None):
-    design, coil = prototype(), iron_coil()
     if quick:  # the mesh convergence alone, merged into data/iron_fem.csv with --merge
         angles, sizes = [8.0], (2.0e-3, 1.4e-3, 1.0e-3)
     else:
@@ -142,6 +141,19 @@ def main(quick: bool = False, angles=None):
     else:
         runs = [(a, 2.0e-3) for a in (8.0, 2.0, 5.0, 12.0, 20.0)] + [(8.0, h) for h in sizes[1:]]
         out = DATA / "iron_fem.csv"
+    solve_pairs(runs, out)
+
+
+def table(angles):
+    """FEM pair torques at ``angles`` (degrees; 2 mm face mesh): data/iron_fem_table_<first angle>.csv, merged
+    into data/iron_fem_table.csv by ``--merge``."""
+    solve_pairs([(a, 2.0e-3) for a in angles], DATA / f"iron_fem_table_{angles[0]:g}.csv")
+
+
+def solve_pairs(runs, out: Path) -> None:
+    """Pair torques at each ``(angle in degrees, face mesh size in m)`` of ``runs``, written to ``out`` (CSV,
+    rewritten after every solve, so a stopped run keeps what it finished)."""
+    design, coil = prototype(), iron_coil()
     rows = []
     for a, h in runs:
         det, lin, ne, tm, ts = pair(design, coil, math.radians(a), h)
@@ -151,21 +163,6 @@ def main(quick: bool = False, angles=None):
         tmp.write_text(HEADER + "".join(",".join(f"{v:.9g}" for v in r) + "\n" for r in rows))
         tmp.replace(out)
     print("wrote", out)
-
-
-def table(angles):
-    """FEM pair torques at ``angles`` (degrees; 2 mm face mesh): data/iron_fem_table_<first angle>.csv, merged
-    into data/iron_fem_table.csv by ``--merge``."""
-    design, coil = prototype(), iron_coil()
-    out = DATA / f"iron_fem_table_{angles[0]:g}.csv"
-    rows = []
-    for a in angles:
-        det, lin, ne, tm, ts = pair(design, coil, math.radians(a), 2.0e-3)
-        print(a, ne, det, lin, tm, ts, flush=True)
-        rows.append([a, 2.0e-3, ne, det, lin, tm, ts])
-        tmp = out.with_suffix(".tmp")
-        tmp.write_text(HEADER + "".join(",".join(f"{v:.9g}" for v in r) + "\n" for r in rows))
-        tmp.replace(out)
 
 
 def merge():

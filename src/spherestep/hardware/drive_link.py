@@ -23,7 +23,7 @@ from .backend import LinkError
 from .protocol import BAUDRATE, NAK_CODES, RETRYABLE, Frame, FrameError, LineReader, decode, encode, \
     parse_decimal
 from .protocol2 import MAX_FRAME2, NAK_CODES2, TRIP_CODES, VERSION2, State, encode_block, parse_state
-from .serialport import NakError, check_link, open_port
+from .serialport import NakError, check_link, close_quietly, open_port
 from .transcript import Transcript
 
 _POLL = 0.002  # seconds one read waits before the deadline is checked again
@@ -109,11 +109,7 @@ class DriveLink:
 
     def close(self) -> None:
         link, self._link = self._link, None
-        if link is not None:
-            try:
-                link.close()
-            except (pyserial.SerialException, OSError):
-                pass
+        close_quietly(link)
 
     def drive(self, currents) -> State:
         """Set every coil's current (A, ``(N,)``) and return the device's state."""

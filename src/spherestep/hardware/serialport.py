@@ -52,6 +52,15 @@ def open_port(port: str, baudrate: int, write_timeout: float, poll: float = _POL
                          "lists them)") from None
 
 
+def close_quietly(link: pyserial.Serial | None) -> None:
+    """Close ``link`` if there is one, ignoring the errors of a device that has already vanished."""
+    if link is not None:
+        try:
+            link.close()
+        except (pyserial.SerialException, OSError):
+            pass
+
+
 class NakError(LinkError):
     """The device refused a command with a NAK that a retry cannot cure; ``code`` is the NAK code."""
 
@@ -118,11 +127,7 @@ class Serial(Backend):
     def close(self) -> None:
         """Close the port (safe to call twice, and after the device vanished)."""
         link, self._link = self._link, None
-        if link is not None:
-            try:
-                link.close()
-            except (pyserial.SerialException, OSError):
-                pass
+        close_quietly(link)
 
     # -- outputs ----------------------------------------------------------------------------------------------
     def write(self, enable: int, polarity: int, coils: Mapping[int, int]) -> None:
