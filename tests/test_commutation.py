@@ -161,6 +161,23 @@ def test_potential_planner_lands_on_equilibria(proto, model):
     assert np.median(plan.errors) < math.radians(6)
 
 
+def test_planner_activations_are_the_trimmed_state_activations(proto):
+    """The planner's one-pass candidate currents (_activations) are, row by row, the coil → polarity maps of
+    _trim (each state's held pairs, the max_coils closest at the target) — including states holding more pairs
+    than max_coils."""
+    from spherestep.commutation.potential_planner import _activations, _trim
+    from spherestep.potential import coil_currents
+
+    states = proto.states()
+    rng = np.random.default_rng(3)
+    ids = np.concatenate([rng.integers(len(states), size=40), np.flatnonzero(states.counts > 3)[:10]])
+    target = so3.random(1, rng)[0]
+    for max_coils in (2, 3, 4):
+        got = _activations(states, proto, target, ids, max_coils)
+        want = [coil_currents(proto, _trim(states.held(int(i)), proto, target, max_coils)) for i in ids]
+        assert np.array_equal(got, np.array(want))
+
+
 def test_potential_planner_beats_or_matches_geometric_on_a_turn(proto, model):
     from spherestep.commutation import plan_potential
 

@@ -480,3 +480,25 @@ def test_as_rotations_accepts_batches_and_rounding():
     # the issue's example: a scaled identity is no rotation, so no distance
     with pytest.raises(InputError, match="^R2 must be"):
         so3.distance(np.eye(3), 5 * np.eye(3))
+
+
+def test_to_quaternion_matches_scipy_up_to_sign():
+    """Shepperd's method (so3.to_quaternion, batched and one matrix) equals SciPy's quaternion up to sign, to
+    rounding, including the half-turns where w = 0 and the identity."""
+    from scipy.spatial.transform import Rotation
+
+    R = so3.random(500, np.random.default_rng(4))
+    R[0], R[1], R[2], R[3] = np.eye(3), np.diag([1.0, -1.0, -1.0]), np.diag([-1.0, 1.0, -1.0]), np.diag([-1.0, -1.0, 1.0])
+    want = Rotation.from_matrix(R).as_quat()
+    got = so3.to_quaternion(R)
+    assert np.max(np.abs(np.abs(np.sum(got * want, axis=-1)) - 1.0)) <= 1e-14
+    for i in range(8):
+        assert abs(abs(so3.to_quaternion(R[i]) @ want[i]) - 1.0) <= 1e-14
+    assert so3.to_quaternion(R[:1]).shape == (1, 4)
+
+
+def test_trusted_distance_equals_the_checked_one():
+    rng = np.random.default_rng(8)
+    A, B = so3.random(50, rng), so3.random(50, rng)
+    assert np.array_equal(so3.distance(A, B, trusted=True), so3.distance(A, B))
+    assert np.allclose(so3.distance(A, B), so3.angle(np.swapaxes(A, -1, -2) @ B), atol=1e-15)

@@ -1,14 +1,13 @@
-"""Compiled sums over the rotor's poles of a zonal kernel (numba): the direct evaluator's hot loop.
+"""Compiled sums over the rotor's poles of a zonal kernel (numba): the fast path's hot loops.
 
 For each point ``x`` (a coil's direction in the rotor frame), with ``t_j = x · u_j``:
 
     F = Σ_j p_j h(t_j),   S = Σ_j p_j h'(t_j) u_j,   M = Σ_j p_j h''(t_j) u_j u_jᵀ,
     g = S − (S · x) x,    Hess F = P M P − (S · x) P,   P = I − x xᵀ,
 
-exactly as :class:`spherestep.rotor_field.RotorField` defines them (same formulas as its NumPy direct sum, to
-rounding). One flat float array ``params`` (:func:`kernel_params`: a header ``[kind, n, ...]`` then the data)
-carries one of two kernel kinds — one argument of one type, so that a call costs one array's unboxing and
-numba's on-disk cache holds every function:
+exactly as :class:`spherestep.rotor_field.RotorField` defines them. One flat float array ``params``
+(:func:`kernel_params`: a header ``[kind, n, cut, ...]`` then the data) carries one kernel — one argument of one
+type, so that a call costs one array's unboxing and numba's on-disk cache holds every function:
 
 * ``QUINTIC`` (``table (n, 6), inv_h``): ``h`` a uniform piecewise quintic in ``t`` on ``[−1, 1]``, interval
   ``k`` holding ``Σ_i c_i s^i`` in ``s = (t + 1) inv_h − k`` (the table of
@@ -18,9 +17,19 @@ numba's on-disk cache holds every function:
   ``h = −∫τ``, ``h' = τ / sin α`` (the limits ``g_ends`` within 1e-6 rad of the ends), ``h'' = −(τ' sin α −
   τ cos α) / sin³ α`` with ``α`` kept 1e-3 rad from the ends — :meth:`spherestep.magnetics.TorqueMap._zonal`.
 
+``cut``: poles with ``t < cut`` are left out of the sums — the kernel's tail beyond the cut-off angle, below a
+stated bound (:func:`spherestep.rotor_field.cutoff`; ``cut = −2`` keeps every pole). The poles inside are found
+by one pass of dot products, compacted without branches, then evaluated.
+
+The rest builds on :func:`zonal_fields`: :func:`terms_evaluate` gives the energy, fixed-frame torque and Hessian
+of a sum of zonal terms at one orientation (the formulas of :mod:`spherestep.rotor_field`),
+:func:`batch_evaluate` over a batch, :func:`integrate` the rotor's Yoshida–Verlet steps and :func:`descend` the
+safeguarded Newton descent of :func:`spherestep.statics.equilibrium`, step for step.
+
 Why compiled: for the few points of one orientation (a simulation step, a Newton iteration) the NumPy form costs
-~40 array operations whose fixed overhead (1–5 µs each) dominates; one compiled loop costs ~10–30 ns per
-(point, pole) pair. numba compiles on first use (seconds), then loads from its on-disk cache.
+~40 array operations whose fixed overhead (1–5 µs each) dominates; the compiled loops cost ~5–12 ns per
+(point, pole) pair (``fastmath``: sums may be reassociated, which changes results at rounding level only).
+numba compiles on first use (seconds), then loads from its on-disk cache.
 """
 
 from __future__ import annotations
@@ -34,35 +43,38 @@ from .so3 import exp_entries
 
 
 QUINTIC, ANGLE_SPLINE = 0, 1
+NO_CUT = -2.0
+_FAST = {"contract", "reassoc", "nsz", "arcp"}  # no "nnan"/"ninf": the clamps of t keep their meaning
 
 
-def kernel_params(kind: str, arrays) -> np.ndarray:
-    """``params`` of a ``"quintic"`` kernel from ``(table (n, 6), inv_h)``: ``[0, n, inv_h, table…]``, or of an
-    ``"angle_spline"`` one from ``(breaks (n+1,), tau (4, n), energy (5, n), g_ends (2,))``: ``[1, n, breaks…,
-    tau…, energy…, g_ends…]`` (row-major)."""
+def kernel_params(kind: str, arrays, cut: float = NO_CUT) -> np.ndarray:
+    """``params`` of a ``"quintic"`` kernel from ``(table (n, 6), inv_h)``: ``[0, n, cut, inv_h, table…]``, or of
+    an ``"angle_spline"`` one from ``(breaks (n+1,), tau (4, n), energy (5, n), g_ends (2,))``: ``[1, n, cut,
+    breaks…, tau…, energy…, g_ends…]`` (row-major)."""
     if kind == "quintic":
         table, inv_h = arrays
-        parts = [[QUINTIC, len(table), inv_h], table]
+        parts = [[QUINTIC, len(table), cut, inv_h], table]
     else:
         breaks, tau, energy, ends = arrays
-        parts = [[ANGLE_SPLINE, len(breaks) - 1], breaks, tau, energy, ends]
+        parts = [[ANGLE_SPLINE, len(breaks) - 1, cut], breaks, tau, energy, ends]
     return np.concatenate([np.ravel(np.asarray(a, dtype=float)) for a in parts])
 
 
 @njit(cache=True)
 def _unpack(params):
-    """``(kind, table, inv_h, breaks, tau, energy, g_ends)`` views of ``params`` (:func:`kernel_params`)."""
+    """``(kind, cut, table, inv_h, breaks, tau, energy, g_ends)`` views of ``params`` (:func:`kernel_params`)."""
     n = int(params[1])
     if params[0] == QUINTIC:
         empty = params[:0]
-        return QUINTIC, params[3:].reshape(n, 6), params[2], empty, empty.reshape(0, n), empty.reshape(0, n), empty
-    b = 2 + n + 1
-    return (ANGLE_SPLINE, params[:0].reshape(0, 6), 0.0, params[2:b], params[b:b + 4 * n].reshape(4, n),
+        return (QUINTIC, params[2], params[4:].reshape(n, 6), params[3], empty, empty.reshape(0, n),
+                empty.reshape(0, n), empty)
+    b = 3 + n + 1
+    return (ANGLE_SPLINE, params[2], params[:0].reshape(0, 6), 0.0, params[3:b], params[b:b + 4 * n].reshape(4, n),
             params[b + 4 * n:b + 9 * n].reshape(5, n), params[b + 9 * n:b + 9 * n + 2])
 
 
-@njit(cache=True)
-def _quintic(table, inv_h, t):
+@njit(cache=True, fastmath=_FAST)
+def _quintic(table, inv_h, t, order):
     n = table.shape[0]
     t = min(max(t, -1.0), 1.0)
     s = (t + 1.0) * inv_h
@@ -70,8 +82,8 @@ def _quintic(table, inv_h, t):
     u = s - k
     c0, c1, c2, c3, c4, c5 = table[k, 0], table[k, 1], table[k, 2], table[k, 3], table[k, 4], table[k, 5]
     h = c0 + u * (c1 + u * (c2 + u * (c3 + u * (c4 + u * c5))))
-    d = (c1 + u * (2.0 * c2 + u * (3.0 * c3 + u * (4.0 * c4 + u * 5.0 * c5)))) * inv_h
-    dd = (2.0 * c2 + u * (6.0 * c3 + u * (12.0 * c4 + u * 20.0 * c5))) * inv_h * inv_h
+    d = (c1 + u * (2.0 * c2 + u * (3.0 * c3 + u * (4.0 * c4 + u * 5.0 * c5)))) * inv_h if order >= 1 else 0.0
+    dd = (2.0 * c2 + u * (6.0 * c3 + u * (12.0 * c4 + u * 20.0 * c5))) * inv_h * inv_h if order >= 2 else 0.0
     return h, d, dd
 
 
@@ -115,106 +127,277 @@ def _angle_spline(breaks, tau, energy, g_ends, t, order):
     return h, d, dd
 
 
-@njit(cache=True)
-def zonal_fields(params, x, poles, polarity, order, F, g, lap, hess):
-    """Fill ``F (P,)``, and for ``order ≥ 1`` ``g (P, 3)``, for ``order = 2`` ``lap (P,)`` and ``hess (P, 3, 3)``,
-    at unit vectors ``x (P, 3)`` (module docstring)."""
-    kind, table, inv_h, breaks, tau, energy, g_ends = _unpack(params)
-    for p in range(x.shape[0]):
-        x0, x1, x2 = x[p, 0], x[p, 1], x[p, 2]
-        f = r = 0.0
-        S = np.zeros(3)
-        M = np.zeros((3, 3))
-        for j in range(poles.shape[0]):
-            u0, u1, u2 = poles[j, 0], poles[j, 1], poles[j, 2]
-            t = x0 * u0 + x1 * u1 + x2 * u2
-            if kind == QUINTIC:
-                h, d, dd = _quintic(table, inv_h, t)
-            else:
-                h, d, dd = _angle_spline(breaks, tau, energy, g_ends, t, order)
+@njit(cache=True, fastmath=_FAST)
+def _near(cut, x0, x1, x2, poles, t, near):
+    """All ``t_j = x · u_j`` into ``t`` (one vectorised pass), then the indices of the poles with ``t_j ≥ cut`` into
+    ``near`` without branches; returns their count."""
+    n = poles.shape[1]
+    for j in range(n):
+        t[j] = x0 * poles[0, j] + x1 * poles[1, j] + x2 * poles[2, j]
+    count = 0
+    for j in range(n):
+        near[count] = j
+        count += t[j] >= cut
+    return count
+
+
+@njit(cache=True, fastmath=_FAST)
+def _accumulate(w, h, d, dd, u0, u1, u2, order, S, M):
+    """``S += w h' u`` and ``M += w h'' u uᵀ`` (upper triangle) for one pole, by ``order``."""
+    if order >= 1:
+        wd = w * d
+        S[0] += wd * u0
+        S[1] += wd * u1
+        S[2] += wd * u2
+        if order >= 2:
+            wdd = w * dd
+            M[0] += wdd * u0 * u0
+            M[1] += wdd * u0 * u1
+            M[2] += wdd * u0 * u2
+            M[3] += wdd * u1 * u1
+            M[4] += wdd * u1 * u2
+            M[5] += wdd * u2 * u2
+
+
+@njit(cache=True, fastmath=_FAST)
+def _point(kernel, x0, x1, x2, poles, polarity, order, S, M, t, near):
+    """``F`` at ``x`` for the unpacked ``kernel`` (:func:`_unpack`) and ``poles (3, P)`` (columns ``u_j``);
+    ``S (3,)`` and the upper triangle of ``M`` (``M[0..5]`` = 00, 01, 02, 11, 12, 22) filled for ``order ≥ 1, 2``
+    (module docstring). ``t, near``: scratch of the poles' length. One loop per kernel kind."""
+    kind, cut, table, inv_h, breaks, tau, energy, g_ends = kernel
+    count = _near(cut, x0, x1, x2, poles, t, near)
+    f = 0.0
+    S[:] = 0.0
+    M[:] = 0.0
+    if kind == QUINTIC and order <= 1:  # the hot case, branch-free: value and gradient
+        s0 = s1 = s2 = 0.0
+        for i in range(count):
+            j = near[i]
+            h, d, _ = _quintic(table, inv_h, t[j], 1)
             w = polarity[j]
             f += w * h
-            if order >= 1:
-                S[0] += w * d * u0
-                S[1] += w * d * u1
-                S[2] += w * d * u2
-            if order >= 2:
-                wdd = w * dd
-                M[0, 0] += wdd * u0 * u0
-                M[0, 1] += wdd * u0 * u1
-                M[0, 2] += wdd * u0 * u2
-                M[1, 1] += wdd * u1 * u1
-                M[1, 2] += wdd * u1 * u2
-                M[2, 2] += wdd * u2 * u2
-        F[p] = f
-        if order >= 1:
-            r = S[0] * x0 + S[1] * x1 + S[2] * x2
-            g[p, 0] = S[0] - r * x0
-            g[p, 1] = S[1] - r * x1
-            g[p, 2] = S[2] - r * x2
-        if order >= 2:
-            M[1, 0], M[2, 0], M[2, 1] = M[0, 1], M[0, 2], M[1, 2]
-            P = -np.outer(x[p], x[p])
-            for a in range(3):
-                P[a, a] += 1.0
-            H = P @ M @ P - r * P
-            hess[p] = H
-            lap[p] = H[0, 0] + H[1, 1] + H[2, 2]
+            wd = w * d
+            s0 += wd * poles[0, j]
+            s1 += wd * poles[1, j]
+            s2 += wd * poles[2, j]
+        S[0], S[1], S[2] = s0, s1, s2
+    elif kind == QUINTIC:
+        for i in range(count):
+            j = near[i]
+            h, d, dd = _quintic(table, inv_h, t[j], 2)
+            w = polarity[j]
+            f += w * h
+            _accumulate(w, h, d, dd, poles[0, j], poles[1, j], poles[2, j], 2, S, M)
+    else:
+        for i in range(count):
+            j = near[i]
+            h, d, dd = _angle_spline(breaks, tau, energy, g_ends, t[j], order)
+            w = polarity[j]
+            f += w * h
+            _accumulate(w, h, d, dd, poles[0, j], poles[1, j], poles[2, j], order, S, M)
+    return f
 
 
 @njit(cache=True)
-def one_orientation(params, R, coils, c, poles, polarity, sign, torque):
-    """``sign Σ_k c_k F(x_k)`` with ``x_k = Rᵀ v_k`` over the coils with ``c_k ≠ 0``, and the fixed-frame torque
-    ``sign R Σ_k c_k x_k × g(x_k)`` written into ``torque (3,)``: one orientation ``R (3, 3)`` in one call."""
-    energy = 0.0
-    b0 = b1 = b2 = 0.0
-    x = np.empty((1, 3))
-    F = np.empty(1)
-    g = np.empty((1, 3))
-    lap = np.empty(0)
-    hess = np.empty((0, 3, 3))
-    for k in range(coils.shape[0]):
-        ck = c[k]
-        if ck == 0.0:
-            continue
-        for a in range(3):
-            x[0, a] = R[0, a] * coils[k, 0] + R[1, a] * coils[k, 1] + R[2, a] * coils[k, 2]
-        zonal_fields(params, x, poles, polarity, 1, F, g, lap, hess)
-        energy += ck * F[0]
-        b0 += ck * (x[0, 1] * g[0, 2] - x[0, 2] * g[0, 1])
-        b1 += ck * (x[0, 2] * g[0, 0] - x[0, 0] * g[0, 2])
-        b2 += ck * (x[0, 0] * g[0, 1] - x[0, 1] * g[0, 0])
+def _hessian_on_sphere(x0, x1, x2, S, M, hess):
+    """``Hess F = P M P − (S·x) P`` into ``hess (3, 3)`` from ``M``'s upper triangle (``P M P = M − x (Mx)ᵀ −
+    (Mx) xᵀ + (x·Mx) x xᵀ``, scalar arithmetic); returns ``S · x``."""
+    r = S[0] * x0 + S[1] * x1 + S[2] * x2
+    m = ((M[0], M[1], M[2]), (M[1], M[3], M[4]), (M[2], M[4], M[5]))
+    x = (x0, x1, x2)
+    Mx = (m[0][0] * x0 + m[0][1] * x1 + m[0][2] * x2, m[1][0] * x0 + m[1][1] * x1 + m[1][2] * x2,
+          m[2][0] * x0 + m[2][1] * x1 + m[2][2] * x2)
+    xMx = x0 * Mx[0] + x1 * Mx[1] + x2 * Mx[2]
     for a in range(3):
-        torque[a] = sign * (R[a, 0] * b0 + R[a, 1] * b1 + R[a, 2] * b2)
-    return sign * energy
+        for b in range(3):
+            P = (1.0 if a == b else 0.0) - x[a] * x[b]
+            hess[a, b] = m[a][b] - x[a] * Mx[b] - Mx[a] * x[b] + xMx * x[a] * x[b] - r * P
+    return r
 
 
 @njit(cache=True)
-def terms_torque(params, offsets, R, coils, C, poles, P, signs, torque):
-    """Energy and torque (into ``torque (3,)``) of a sum of zonal terms at one orientation: term ``i`` has the
-    kernel ``params[offsets[i]:offsets[i+1]]``, currents ``C[i]``, pole weights ``P[i]`` and sign ``signs[i]``
-    (:func:`spherestep.rotor_field.pack_terms`)."""
-    energy = 0.0
-    part = np.empty(3)
-    torque[:] = 0.0
-    for i in range(signs.shape[0]):
-        energy += one_orientation(params[offsets[i]:offsets[i + 1]], R, coils, C[i], poles, P[i], signs[i], part)
-        torque += part
-    return energy
+def _rotate(R, A, out):
+    """``out = R A Rᵀ`` for ``3 × 3`` arrays, scalar arithmetic (no temporaries)."""
+    for a in range(3):
+        for b in range(3):
+            total = 0.0
+            for i in range(3):
+                Ri = R[a, i]
+                for j in range(3):
+                    total += Ri * A[i, j] * R[b, j]
+            out[a, b] = total
 
 
 _exp_entries = njit(cache=True)(exp_entries)
 
 
 @njit(cache=True)
-def _exp(v):
-    """:func:`spherestep.so3.exp` of one rotation vector (its scalar formula, compiled)."""
+def _turn(v, R, out):
+    """``out = exp(v̂) R`` (:func:`spherestep.so3.exp`'s scalar formula, compiled), scalar arithmetic."""
     e = _exp_entries(v[0], v[1], v[2])
-    E = np.empty((3, 3))
-    E[0, 0], E[0, 1], E[0, 2] = e[0], e[1], e[2]
-    E[1, 0], E[1, 1], E[1, 2] = e[3], e[4], e[5]
-    E[2, 0], E[2, 1], E[2, 2] = e[6], e[7], e[8]
-    return E
+    for a in range(3):
+        for b in range(3):
+            out[a, b] = e[3 * a] * R[0, b] + e[3 * a + 1] * R[1, b] + e[3 * a + 2] * R[2, b]
+
+
+@njit(cache=True)
+def zonal_fields(params, x, poles, polarity, order, F, g, lap, hess):
+    """Fill ``F (P,)``, and for ``order ≥ 1`` ``g (P, 3)``, for ``order = 2`` ``lap (P,)`` and ``hess (P, 3, 3)``,
+    at unit vectors ``x (P, 3)``, ``poles (3, M)`` (module docstring)."""
+    S, M = np.empty(3), np.empty(6)
+    t, near = np.empty(poles.shape[1]), np.empty(poles.shape[1], dtype=np.int64)
+    kernel = _unpack(params)
+    for p in range(x.shape[0]):
+        x0, x1, x2 = x[p, 0], x[p, 1], x[p, 2]
+        F[p] = _point(kernel, x0, x1, x2, poles, polarity, order, S, M, t, near)
+        if order >= 1:
+            r = S[0] * x0 + S[1] * x1 + S[2] * x2
+            g[p, 0] = S[0] - r * x0
+            g[p, 1] = S[1] - r * x1
+            g[p, 2] = S[2] - r * x2
+        if order >= 2:
+            _hessian_on_sphere(x0, x1, x2, S, M, hess[p])
+            lap[p] = hess[p, 0, 0] + hess[p, 1, 1] + hess[p, 2, 2]
+
+
+@njit(cache=True)
+def workspace(poles):
+    """Scratch for :func:`terms_evaluate`: ``(floats (30 + M,), ints (M,))`` for ``poles (3, M)``."""
+    return np.empty(30 + poles.shape[1]), np.empty(poles.shape[1], dtype=np.int64)
+
+
+@njit(cache=True)
+def terms_evaluate(params, offsets, R, coils, C, poles, P, signs, order, torque, H, work, near):
+    """Energy (returned), fixed-frame torque (into ``torque (3,)``, ``order ≥ 1``) and Hessian (into ``H (3, 3)``,
+    ``order = 2``) at one orientation ``R (3, 3)`` of the sum of zonal terms ``Σ_i signs[i] Σ_k C[i, k]
+    F_i(Rᵀ v_k)``: term ``i`` has the kernel ``params[offsets[i]:offsets[i+1]]`` and pole weights ``P[i]``
+    (:func:`spherestep.rotor_field.pack_terms`); coils with zero current are skipped. The torque is
+    ``s R Σ c_k x_k × g_k`` and the Hessian ``s R [Σ c_k (ΔF P_k − Hess F + ½(g xᵀ + x gᵀ))] Rᵀ``
+    (:mod:`spherestep.rotor_field`). ``work, near``: :func:`workspace`."""
+    S, M, t = work[0:3], work[3:9], work[30:]
+    hess, Hb = work[9:18].reshape(3, 3), work[18:27].reshape(3, 3)
+    body = work[27:30]
+    body[:] = 0.0
+    Hb[:, :] = 0.0
+    energy = 0.0
+    for i in range(signs.shape[0]):
+        kernel = _unpack(params[offsets[i]:offsets[i + 1]])
+        polarity = P[i]
+        s = signs[i]
+        for k in range(coils.shape[0]):
+            ck = C[i, k]
+            if ck == 0.0:
+                continue
+            v0, v1, v2 = coils[k, 0], coils[k, 1], coils[k, 2]
+            x0 = R[0, 0] * v0 + R[1, 0] * v1 + R[2, 0] * v2
+            x1 = R[0, 1] * v0 + R[1, 1] * v1 + R[2, 1] * v2
+            x2 = R[0, 2] * v0 + R[1, 2] * v1 + R[2, 2] * v2
+            w = s * ck
+            energy += w * _point(kernel, x0, x1, x2, poles, polarity, order, S, M, t, near)
+            if order >= 1:
+                r = S[0] * x0 + S[1] * x1 + S[2] * x2
+                g0, g1, g2 = S[0] - r * x0, S[1] - r * x1, S[2] - r * x2
+                body[0] += w * (x1 * g2 - x2 * g1)
+                body[1] += w * (x2 * g0 - x0 * g2)
+                body[2] += w * (x0 * g1 - x1 * g0)
+                if order >= 2:
+                    _hessian_on_sphere(x0, x1, x2, S, M, hess)
+                    lap = hess[0, 0] + hess[1, 1] + hess[2, 2]
+                    x = (x0, x1, x2)
+                    g = (g0, g1, g2)
+                    for a in range(3):
+                        for b in range(3):
+                            per = (lap * ((1.0 if a == b else 0.0) - x[a] * x[b]) - hess[a, b]
+                                   + 0.5 * (g[a] * x[b] + x[a] * g[b]))
+                            Hb[a, b] += w * per
+    if order >= 1:
+        for a in range(3):
+            torque[a] = R[a, 0] * body[0] + R[a, 1] * body[1] + R[a, 2] * body[2]
+    if order >= 2:
+        _rotate(R, Hb, H)
+    return energy
+
+
+@njit(cache=True)
+def batch_evaluate(params, offsets, R, coils, C, poles, P, signs, order, E, torque, H):
+    """:func:`terms_evaluate` for ``R (B, 3, 3)`` and ``C (B, T, N)`` into ``E (B,)``, ``torque (B, 3)``, ``H (B, 3,
+    3)`` (the last two unused below their order)."""
+    tau, h = np.empty(3), np.empty((3, 3))
+    work, near = workspace(poles)
+    for b in range(R.shape[0]):
+        E[b] = terms_evaluate(params, offsets, R[b], coils, C[b], poles, P, signs, order, tau, h, work, near)
+        if order >= 1:
+            torque[b] = tau
+        if order >= 2:
+            H[b] = h
+
+
+@njit(cache=True)
+def _norm(v):
+    return math.sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2])
+
+
+@njit(cache=True)
+def newton_direction(H, tau, max_step):
+    """``ω = Σ_i (e_i·τ/|h_i|) e_i`` over the eigenpairs of ``H`` (``|h_i|`` floored at ``1e-8 max|h|``), shortened
+    to ``|ω| ≤ max_step`` — :func:`spherestep.statics.equilibrium`'s step."""
+    h, e = np.linalg.eigh(H)
+    floor = 1e-8 * max(abs(h[0]), abs(h[1]), abs(h[2])) + 2.2250738585072014e-308
+    omega = np.zeros(3)
+    for i in range(3):
+        coeff = (e[0, i] * tau[0] + e[1, i] * tau[1] + e[2, i] * tau[2]) / max(abs(h[i]), floor)
+        for a in range(3):
+            omega[a] += coeff * e[a, i]
+    length = _norm(omega)
+    return omega * min(1.0, max_step / max(length, 2.2250738585072014e-308))
+
+
+@njit(cache=True)
+def descend(params, offsets, R0, coils, C, poles, P, signs, constant, tol, max_iter, max_step, R, E, torque, H,
+            iterations, converged):
+    """:func:`spherestep.statics.equilibrium`'s descent, row by row, on the zonal terms (:func:`batch_evaluate`'s
+    arguments) plus the model's ``constant (B,)`` (it sets the rounding level of the line search): from ``R0 (B,
+    3, 3)`` with torque tolerances ``tol (B,)``; writes the end points' ``R, E, torque, H``, ``iterations`` and
+    ``converged``."""
+    tau_t, H_t, Rt = np.empty(3), np.empty((3, 3)), np.empty((3, 3))
+    work, near = workspace(poles)
+    for b in range(R0.shape[0]):
+        Rb = R0[b].copy()
+        Cb = C[b]
+        tau, Hb = torque[b], H[b]
+        offset = constant[b]
+        Eb = offset + terms_evaluate(params, offsets, Rb, coils, Cb, poles, P, signs, 2, tau, Hb, work, near)
+        done = _norm(tau) <= tol[b]
+        count = 0
+        for _ in range(max_iter):
+            if done:
+                break
+            omega = newton_direction(Hb, tau, max_step)
+            slope = tau[0] * omega[0] + tau[1] * omega[1] + tau[2] * omega[2]
+            step = 1.0
+            accepted = False
+            for _ in range(40):
+                _turn(step * omega, Rb, Rt)
+                Et = offset + terms_evaluate(params, offsets, Rt, coils, Cb, poles, P, signs, 2, tau_t, H_t, work,
+                                              near)
+                armijo = Et <= Eb - 1e-4 * step * slope
+                flat = abs(Et - Eb) <= 1e-13 * max(abs(Eb), 1.0) and _norm(tau_t) < _norm(tau)
+                if armijo or flat:
+                    accepted = True
+                    break
+                step *= 0.5
+            if not accepted:
+                break
+            Rb[:, :] = Rt
+            Eb = Et
+            tau[:] = tau_t
+            Hb[:, :] = H_t
+            count += 1
+            done = _norm(tau) <= tol[b]
+        R[b] = Rb
+        E[b] = Eb
+        iterations[b] = count
+        converged[b] = done
 
 
 @njit(cache=True)
@@ -231,18 +414,22 @@ def _dissipate(w, inertia, damping, friction, t):
 @njit(cache=True)
 def integrate(params, offsets, R, w, coils, C, poles, P, signs, inertia, damping, friction, h, steps, record_every,
               weights, Rs, ws):
-    """:meth:`spherestep.dynamics.Rotor.step` ``steps`` times under the torque of :func:`terms_torque` (constant
-    currents), composition ``weights`` (Yoshida's); writes every ``record_every``-th step and the last into
-    ``Rs, ws``; returns the final ``(R, ω)``."""
+    """:meth:`spherestep.dynamics.Rotor.step` ``steps`` times under the torque of :func:`terms_evaluate` (constant
+    currents ``C (T, N)``), composition ``weights`` (Yoshida's); writes every ``record_every``-th step and the
+    last into ``Rs, ws``; returns the final ``(R, ω)``."""
     tau = np.empty(3)
-    terms_torque(params, offsets, R, coils, C, poles, P, signs, tau)
+    H, turned = np.empty((3, 3)), np.empty((3, 3))
+    work, near = workspace(poles)
+    R = R.copy()
+    terms_evaluate(params, offsets, R, coils, C, poles, P, signs, 1, tau, H, work, near)
     k = 0
     for n in range(1, steps + 1):
         w = _dissipate(w, inertia, damping, friction, 0.5 * h)
         for weight in weights:
             w = w + (0.5 * weight * h / inertia) * tau
-            R = _exp(weight * h * w) @ R
-            terms_torque(params, offsets, R, coils, C, poles, P, signs, tau)
+            _turn(weight * h * w, R, turned)
+            R[:, :] = turned
+            terms_evaluate(params, offsets, R, coils, C, poles, P, signs, 1, tau, H, work, near)
             w = w + (0.5 * weight * h / inertia) * tau
         w = _dissipate(w, inertia, damping, friction, 0.5 * h)
         if n % record_every == 0 or n == steps:

@@ -42,11 +42,18 @@ results do not depend on it beyond rounding.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from .errors import bad_value
 
-DIRECT_BELOW = 400  # points: below this the direct sum is faster than ducc0's synthesis (benchmarks/bench_potential.py)
+# the compiled sums leave out poles whose terms of h, h', h'' are all below these shares of their peaks (h'' is
+# itself tabulated to ~1e-9 of its peak and h' to ~1e-11: spherestep.potential.kernel)
+CUTOFF_TAILS = (1e-13, 1e-12, 1e-10)
+# points: below these the direct sum is faster than ducc0's synthesis, in NumPy and compiled (measured for the
+# prototype, L = 68: compiled 0.71 µs per point for F and g against ducc0's 0.69 at 6,400 points, 1.0 at 3,200)
+DIRECT_BELOW, COMPILED_DIRECT_BELOW = 400, 8000
 SPIN2_SIGN = -1.0  # ducc0's spin-2 (Q, U) are minus the trace-free Hessian's (θθ − φφ, 2θφ) parts (tests/test_fast_path.py)
 
 
@@ -74,26 +81,42 @@ class RotorField:
     """
 
     def __init__(self, poles, polarity, kernel, lmax: int | None = None, *, exact=None, rings: int | None = None,
-                 epsilon: float = 1e-13, nthreads: int = 1, direct_below: int = DIRECT_BELOW, compiled=None):
+                 epsilon: float = 1e-13, nthreads: int = 1, direct_below: int | None = None, compiled=None):
         self.poles = np.ascontiguousarray(poles, dtype=float)
+        self.poles_t = np.ascontiguousarray(self.poles.T)  # (3, M): the compiled sums' layout
         self.polarity = np.ascontiguousarray(polarity, dtype=float)
+        self.polarity_row = self.polarity[None]  # (1, M): one term's pole weights
+        self._workspace = None
         self.kernel = kernel
         self.compiled = None
+        self.cut = None
         if compiled is not None:
             from ._zonal_sums import kernel_params
 
             kind, arrays = compiled
             if kind not in ("quintic", "angle_spline"):
                 raise bad_value("compiled", "a kernel kind 'quintic' or 'angle_spline'", kind)
-            self.compiled = kernel_params(kind, arrays)
+            self.cut = cutoff(kernel, self.polarity, CUTOFF_TAILS)
+            self.compiled = kernel_params(kind, arrays, -2.0 if self.cut is None else math.cos(self.cut))
         self.lmax = None if lmax is None else int(lmax)
         self.epsilon = float(epsilon)
         self.nthreads = threads(nthreads)
+        if direct_below is None:
+            direct_below = DIRECT_BELOW if compiled is None else COMPILED_DIRECT_BELOW
         self.direct_below = int(direct_below)
         self._pu = self.polarity[:, None] * self.poles  # p_j u_j
         self._puu = (self._pu[:, :, None] * self.poles[:, None, :]).reshape(-1, 9)  # p_j u_j u_jᵀ, flattened
         if self.lmax is not None:
             self._build_harmonic(exact, rings)
+
+    @property
+    def workspace(self) -> tuple[np.ndarray, np.ndarray]:
+        """Scratch of the compiled single-orientation call (:func:`spherestep._zonal_sums.workspace`), made once."""
+        if self._workspace is None:
+            from ._zonal_sums import workspace
+
+            self._workspace = workspace(self.poles_t)
+        return self._workspace
 
     def _build_harmonic(self, exact, rings) -> None:
         import ducc0
@@ -119,8 +142,8 @@ class RotorField:
     def fields(self, x: np.ndarray, order: int = 1, value: bool = True, method: str | None = None):
         """``(F, g, Hess F)`` at unit vectors ``x (P, 3)``: ``F (P,)`` if ``value`` (else ``None``),
         ``g (P, 3)`` the tangential gradient for ``order ≥ 1``, for ``order = 2`` the pair ``(ΔF (P,),
-        Hess F (P, 3, 3))``. ``method``: ``"ducc0"``, ``"direct"`` or ``None`` (the direct sum below ``direct_below``
-        points or without ``lmax``)."""
+        Hess F (P, 3, 3))``. ``method``: ``"ducc0"``, ``"direct"`` or ``None`` (the direct sum below
+        ``direct_below`` points or without ``lmax``)."""
         if method is None:
             method = "direct" if self.lmax is None or len(x) < self.direct_below else "ducc0"
         if method == "direct":
@@ -155,7 +178,7 @@ class RotorField:
         P = len(x)
         F, g = np.empty(P), np.empty((P if order >= 1 else 0, 3))
         lap, hess = np.empty(P if order >= 2 else 0), np.empty((P if order >= 2 else 0, 3, 3))
-        _zonal_sums.zonal_fields(self.compiled, np.ascontiguousarray(x, dtype=float), self.poles, self.polarity,
+        _zonal_sums.zonal_fields(self.compiled, np.ascontiguousarray(x, dtype=float), self.poles_t, self.polarity,
                                  order, F, g, lap, hess)
         return (F if value else None), (g if order >= 1 else None), ((lap, hess) if order >= 2 else None)
 
@@ -197,6 +220,21 @@ class RotorField:
         return F, g, (lap, hess)
 
 
+def cutoff(kernel, polarity, tails) -> float | None:
+    """The angle ``θc`` (rad) beyond which the poles' terms are negligible: for every sampled ``α ≥ θc`` (steps of
+    0.05°), ``Σ_j |p_j| |h⁽ⁿ⁾(cos α)| ≤ tails[n] · max|h⁽ⁿ⁾|`` for ``n = 0, 1, 2``; ``None`` when no such angle
+    exists (the magnets' pair energy tends to a constant, not to zero, so their fields keep every pole)."""
+    alpha = np.linspace(0.0, math.pi, 3601)
+    weight = float(np.abs(polarity).sum())
+    ok = np.ones(len(alpha), dtype=bool)
+    for values, tail in zip(kernel(np.cos(alpha), (0, 1, 2)), tails):
+        ok &= weight * np.abs(values) <= tail * np.max(np.abs(values))
+    failing = np.flatnonzero(~ok)
+    if len(failing) == 0 or failing[-1] + 1 >= len(alpha):
+        return None
+    return float(alpha[failing[-1] + 1])
+
+
 def threads(n) -> int:
     """A thread count for ducc0: an integer ≥ 1."""
     if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
@@ -209,16 +247,32 @@ def fast_evaluate(field: RotorField, sign: float, coils: np.ndarray, R: np.ndarr
     """``(E,)``, ``(E, τ)`` or ``(E, τ, H)`` of ``E = constant + sign Σ_k c_k F(Rᵀ v_k)`` (module docstring) for
     validated ``R (..., 3, 3)`` and ``c (..., N)`` (leading axes broadcast), ``coils (N, 3)`` the ``v_k``.
     Only the (orientation, coil) pairs with a non-zero current are evaluated (a planner's batch of candidate
-    activations energises a few coils each). ``value=False`` skips ``F`` (the returned energy is then ``None``:
-    for callers that need only the torque)."""
-    if R.ndim == 2 and c.ndim == 1 and order < 2:  # one orientation: plain sums over its energised coils
-        return _single(field, sign, coils, R, c, order, float(constant) if value else None, value, ())
+    activations energises a few coils each): in one compiled call (:func:`spherestep._zonal_sums.batch_evaluate`)
+    when the field has a compiled kernel, else through :meth:`RotorField.fields`. ``value=False`` skips ``F``
+    (the returned energy is then ``None``: for callers that need only the torque)."""
+    if field.compiled is not None and R.ndim == 2 and c.ndim == 1:  # one orientation: one compiled call
+        from ._zonal_sums import terms_evaluate
+
+        torque, H = np.empty(3), np.empty((3, 3))
+        e = terms_evaluate(field.compiled, _OFFSETS[len(field.compiled)], R if R.flags.c_contiguous else
+                           np.ascontiguousarray(R), coils, c[None] if c.flags.c_contiguous else
+                           np.ascontiguousarray(c)[None], field.poles_t, field.polarity_row, _SIGNS[sign], order,
+                           torque, H, *field.workspace)
+        return (np.float64(e + constant) if value else None,) + (torque, H)[:order]
     lead = np.broadcast_shapes(R.shape[:-2], c.shape[:-1])
     Rf = (R if R.shape[:-2] == lead else np.broadcast_to(R, lead + (3, 3))).reshape(-1, 3, 3)
     cf = (c if c.shape[:-1] == lead else np.broadcast_to(c, lead + c.shape[-1:])).reshape(-1, c.shape[-1])
+    if field.compiled is not None and (field.lmax is None or np.count_nonzero(cf) < field.direct_below):
+        from ._zonal_sums import batch_evaluate
+
+        n = len(Rf)
+        E, torque, H = np.empty(n), np.empty((n if order >= 1 else 0, 3)), np.empty((n if order >= 2 else 0, 3, 3))
+        batch_evaluate(field.compiled, _OFFSETS[len(field.compiled)], np.ascontiguousarray(Rf), coils,
+                       np.ascontiguousarray(cf, dtype=float)[:, None, :], field.poles_t, field.polarity_row,
+                       _SIGNS[sign], order, E, torque, H)
+        out = (E.reshape(lead) + constant if value else None,)
+        return out + tuple(a.reshape(lead + a.shape[1:]) for a in (torque, H)[:order])
     energy = np.array(np.broadcast_to(constant, lead), dtype=float).reshape(-1) if value else None
-    if len(Rf) == 1 and order < 2:
-        return _single(field, sign, coils, Rf[0], cf[0], order, energy, value, lead)
     rows, cols = np.nonzero(cf)  # row-major: rows ascending
     out = [energy] + [np.zeros((len(Rf),) + shape) for shape in ((3,), (3, 3))[:order]]
     if len(rows) == 0:
@@ -245,31 +299,21 @@ def fast_evaluate(field: RotorField, sign: float, coils: np.ndarray, R: np.ndarr
     return tuple(None if a is None else a.reshape(lead + a.shape[1:]) for a in out)
 
 
-def _single(field, sign, coils, R, c, order, energy, value, lead):
-    """:func:`fast_evaluate` for one orientation ``R (3, 3)`` and ``order ≤ 1``."""
-    if field.compiled is not None:  # one compiled call
-        from ._zonal_sums import one_orientation
+class _Cache(dict):
+    """Small constant arrays of the compiled calls, built once per key (a fast path's call should not build
+    them): ``make(key)``."""
 
-        torque = np.empty(3)
-        e = one_orientation(field.compiled, R if R.flags.c_contiguous else np.ascontiguousarray(R), coils,
-                            c if c.flags.c_contiguous else np.ascontiguousarray(c), field.poles, field.polarity,
-                            sign, torque)
-        if not lead:
-            return (None if energy is None else np.float64(energy + e),) + ((torque,) if order else ())
-        out = (None if energy is None else np.reshape(energy + e, lead),)
-        return out + ((torque.reshape(lead + (3,)),) if order else ())
-    live = np.flatnonzero(c)
-    if len(live) == 0:
-        return (None if energy is None else energy.reshape(lead),) + ((np.zeros(lead + (3,)),) if order else ())
-    w = c[live]
-    x = coils[live] @ R  # rows x_k = Rᵀ v_k
-    F, g, _ = field.fields(x, order, value)
-    if value:
-        energy = energy + sign * (w @ F)
-    out = (None if energy is None else energy.reshape(lead),)
-    if order:
-        out += ((sign * (R @ (w @ cross(x, g)))).reshape(lead + (3,)),)
-    return out
+    def __init__(self, make):
+        super().__init__()
+        self.make = make
+
+    def __missing__(self, key):
+        value = self[key] = self.make(key)
+        return value
+
+
+_OFFSETS = _Cache(lambda n: np.array([0, n], dtype=np.int64))  # one kernel of length n
+_SIGNS = _Cache(lambda sign: np.array([float(sign)]))  # one term's sign
 
 
 def fast_torque_matrix(field: RotorField, sign: float, coils: np.ndarray, failed, R: np.ndarray) -> np.ndarray:
@@ -286,16 +330,24 @@ def fast_torque_matrix(field: RotorField, sign: float, coils: np.ndarray, failed
 
 
 def pack_terms(terms) -> tuple | None:
-    """A torque model's zonal terms ``[(field, sign, coils, c), ...]`` — its torque is
-    ``Σ sign R Σ_k c_k x_k × g(x_k)`` over the terms — as the flat arrays of
-    :func:`spherestep._zonal_sums.terms_torque` ``(params, offsets, coils, C, poles, P, signs)``, or ``None`` when
-    a term has no compiled kernel or the terms do not share their poles and coils."""
+    """A torque model's zonal terms ``[(field, sign, coils, c), ...]`` — its energy is ``Σ sign Σ_k c_k F(x_k)``
+    over the terms (plus a constant) — as the flat arrays ``(params, offsets, coils, C, poles (3, M), P, signs)``
+    (``C (..., T, N)``: the terms' currents ``(..., N)`` broadcast and stacked)
+    of :func:`spherestep._zonal_sums.terms_evaluate`, or ``None`` when a term has no compiled kernel or the terms
+    do not share their poles and coils."""
     fields = [t[0] for t in terms]
+    if len(terms) == 1 and fields[0].compiled is not None:  # one term: the field's own arrays
+        field, sign, coils, c = terms[0]
+        c = np.asarray(c, dtype=float)
+        return (field.compiled, _OFFSETS[len(field.compiled)], np.ascontiguousarray(coils, dtype=float),
+                c[..., None, :], field.poles_t, field.polarity_row, _SIGNS[sign])
     poles, coils = fields[0].poles, np.ascontiguousarray(terms[0][2], dtype=float)
     if any(f.compiled is None or f.poles is not poles and not np.array_equal(f.poles, poles) for f in fields) \
             or any(not np.array_equal(t[2], coils) for t in terms[1:]):
         return None
     offsets = np.concatenate([[0], np.cumsum([len(f.compiled) for f in fields])])
-    return (np.concatenate([f.compiled for f in fields]), offsets, coils,
-            np.stack([np.asarray(t[3], dtype=float) for t in terms]), poles, np.stack([f.polarity for f in fields]),
-            np.array([float(t[1]) for t in terms]))
+    currents = [np.asarray(t[3], dtype=float) for t in terms]
+    lead = np.broadcast_shapes(*(c.shape[:-1] for c in currents))
+    C = np.stack([np.broadcast_to(c, lead + c.shape[-1:]) for c in currents], axis=-2)
+    return (np.concatenate([f.compiled for f in fields]), offsets, coils, C, fields[0].poles_t,
+            np.stack([f.polarity for f in fields]), np.array([float(t[1]) for t in terms]))

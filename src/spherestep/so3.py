@@ -131,11 +131,41 @@ def angle(R) -> np.ndarray:
     return np.arctan2(sin_part, cos_part)
 
 
-def distance(R1, R2) -> np.ndarray:
-    """Park's metric ``D(R1, R2) = θ(R1ᵀ R2)`` (radians), broadcasting over leading axes."""
-    R1 = as_rotations(R1, "R1")
-    R2 = as_rotations(R2, "R2")
-    return angle(np.swapaxes(R1, -1, -2) @ R2)
+def distance(R1, R2, *, trusted: bool = False) -> np.ndarray:
+    """Park's metric ``D(R1, R2) = θ(R1ᵀ R2)`` (radians), broadcasting over leading axes. ``trusted=True`` skips
+    the input contract, for hot loops whose rotations the package made itself."""
+    if not trusted:
+        R1 = as_rotations(R1, "R1")
+        R2 = as_rotations(R2, "R2")
+    M = np.swapaxes(R1, -1, -2) @ R2
+    twice_vect = (M[..., 2, 1] - M[..., 1, 2], M[..., 0, 2] - M[..., 2, 0], M[..., 1, 0] - M[..., 0, 1])
+    sin = 0.5 * np.sqrt(twice_vect[0] ** 2 + twice_vect[1] ** 2 + twice_vect[2] ** 2)
+    return np.arctan2(sin, 0.5 * (M[..., 0, 0] + M[..., 1, 1] + M[..., 2, 2] - 1.0))
+
+
+def to_quaternion(R) -> np.ndarray:
+    """Unit quaternions ``(x, y, z, w)`` (SciPy's scalar-last order) of rotations ``(..., 3, 3)``, up to sign, by
+    Shepperd's method: of the four forms ``4 q_i q`` (``i = x, y, z, w``) the one with the largest ``q_i²``,
+    normalised. Trusted input (no contract check): for the package's KD-trees of states."""
+    R = np.asarray(R, dtype=float)
+    if R.size == 9:  # one matrix: plain floats
+        a, b, c, d, e, f, g, h, i = R.ravel().tolist()
+        rows = ((1 + a - e - i, b + d, c + g, h - f), (b + d, 1 - a + e - i, f + h, c - g),
+                (c + g, f + h, 1 - a - e + i, d - b), (h - f, c - g, d - b, 1 + a + e + i))
+        diagonal = [rows[k][k] for k in range(4)]
+        q = rows[diagonal.index(max(diagonal))]
+        norm = math.sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3])
+        return (np.array(q) / norm).reshape(R.shape[:-2] + (4,))
+    a, b, c = R[..., 0, 0], R[..., 0, 1], R[..., 0, 2]
+    d, e, f = R[..., 1, 0], R[..., 1, 1], R[..., 1, 2]
+    g, h, i = R[..., 2, 0], R[..., 2, 1], R[..., 2, 2]
+    forms = np.stack([np.stack([1 + a - e - i, b + d, c + g, h - f], -1),
+                      np.stack([b + d, 1 - a + e - i, f + h, c - g], -1),
+                      np.stack([c + g, f + h, 1 - a - e + i, d - b], -1),
+                      np.stack([h - f, c - g, d - b, 1 + a + e + i], -1)], -2)
+    best = np.argmax(np.diagonal(forms, axis1=-2, axis2=-1), axis=-1)
+    q = np.take_along_axis(forms, best[..., None, None], axis=-2)[..., 0, :]
+    return q / np.linalg.norm(q, axis=-1, keepdims=True)
 
 
 def axis_angle(R) -> tuple[np.ndarray, np.ndarray]:

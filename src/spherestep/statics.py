@@ -200,8 +200,20 @@ def _count(n, name: str) -> int:
     return int(n)
 
 
+_MODEL_TYPES: set[type] = set()  # types that passed the protocol check (a runtime Protocol check costs ~0.1 ms)
+
+
+def _is_torque_model(model) -> bool:
+    if type(model) in _MODEL_TYPES:
+        return True
+    if isinstance(model, TorqueModel):
+        _MODEL_TYPES.add(type(model))
+        return True
+    return False
+
+
 def _prepare(model, R0, currents, name: str = "R0") -> tuple[np.ndarray, np.ndarray, tuple]:
-    if not isinstance(model, TorqueModel):
+    if not _is_torque_model(model):
         raise bad_value("model", "a torque model (spherestep.statics.TorqueModel: MotorPotential, TorqueMap, …)",
                         type(model).__name__)
     R0 = so3.as_rotations(R0, name)
@@ -218,12 +230,15 @@ def _prepare(model, R0, currents, name: str = "R0") -> tuple[np.ndarray, np.ndar
 
 @single_blas_thread
 def equilibrium(model: TorqueModel, R0, currents, *, gtol: float = 1e-10, max_iter: int = 100,
-                max_step: float = math.radians(5.0)) -> Equilibrium:
+                max_step: float = math.radians(5.0), compiled: bool = True) -> Equilibrium:
     """Descend the energy from ``R0`` to a stationary point (normally the local minimum), batched.
 
     ``R0`` ``(..., 3, 3)`` and ``currents`` ``(..., N)`` broadcast. ``gtol``: torque tolerance relative to
     ``model.torque_reference(currents)``; ``max_step``: longest step (radians), which keeps the descent near the
-    steepest-descent path while far from the minimum. See the module docstring for the method.
+    steepest-descent path while far from the minimum. See the module docstring for the method. A model with
+    compiled ``zonal_terms`` (the potential, the magnets' map, the iron model) descends in one compiled call
+    (:func:`spherestep._zonal_sums.descend`, the same iteration row by row); ``compiled=False`` runs the NumPy
+    reference.
 
     >>> from spherestep.motor import prototype
     >>> from spherestep.potential import MotorPotential, coil_currents
@@ -241,6 +256,16 @@ def equilibrium(model: TorqueModel, R0, currents, *, gtol: float = 1e-10, max_it
     if np.any(scale <= 0):  # nothing energised and no detent: every orientation is at rest
         scale = np.where(scale > 0, scale, np.finfo(float).tiny)
     tol = gtol * scale
+    packed = _packed(model, c) if compiled else None
+    if packed is not None:  # the same descent compiled (spherestep._zonal_sums.descend)
+        from ._zonal_sums import descend
+
+        n = len(R)
+        out = (np.empty((n, 3, 3)), np.empty(n), np.empty((n, 3)), np.empty((n, 3, 3)), np.zeros(n, dtype=np.int64),
+               np.zeros(n, dtype=bool))
+        descend(*packed[:2], R, *packed[2:], np.ascontiguousarray(np.broadcast_to(tol, n), dtype=float), max_iter,
+                max_step, *out)
+        return _result(*out, lead)
     E, tau, H = model.evaluate(R, c, 2)
     iterations = np.zeros(len(R), dtype=int)
     converged = np.linalg.norm(tau, axis=-1) <= tol
@@ -277,6 +302,31 @@ def equilibrium(model: TorqueModel, R0, currents, *, gtol: float = 1e-10, max_it
         iterations[moved] += 1
         stalled[active[~accepted]] = True
         converged[moved] = np.linalg.norm(tau[moved], axis=-1) <= tol[moved]
+    return _result(R, E, tau, H, iterations, converged, lead)
+
+
+def _packed(model, c: np.ndarray) -> tuple | None:
+    """``(params, offsets, coils, C (B, T, N), poles, P, signs, constant (B,))``: the model's zonal terms for the
+    currents ``c (B, N)`` as compiled arrays (:func:`spherestep.rotor_field.pack_terms`) and its energy's
+    constant part (``model.zonal_constant(c)``, zero for a model without one), or ``None`` for a model without
+    compiled zonal terms."""
+    zonal_terms = getattr(model, "zonal_terms", None)
+    terms = zonal_terms(c) if zonal_terms is not None else None
+    if not terms:
+        return None
+    from .rotor_field import pack_terms
+
+    packed = pack_terms(terms)
+    if packed is None:
+        return None
+    C = np.ascontiguousarray(np.broadcast_to(packed[3], (len(c),) + packed[3].shape[-2:]))
+    zonal_constant = getattr(model, "zonal_constant", None)
+    constant = np.zeros(len(c)) if zonal_constant is None else \
+        np.ascontiguousarray(np.broadcast_to(zonal_constant(c), len(c)), dtype=float)
+    return packed[:3] + (C,) + packed[4:] + (constant,)
+
+
+def _result(R, E, tau, H, iterations, converged, lead) -> Equilibrium:
     eig = np.linalg.eigvalsh(H)
     return Equilibrium(R.reshape(lead + (3, 3)), E.reshape(lead), tau.reshape(lead + (3,)),
                        eig.reshape(lead + (3,)), iterations.reshape(lead), converged.reshape(lead))

@@ -36,6 +36,22 @@ def _trim(held: list[tuple[int, int]], design, target, max_coils: int) -> dict[i
     return {k: int(design.polarity[j]) for j, k in held}
 
 
+def _activations(states, design, target, ids: np.ndarray, max_coils: int) -> np.ndarray:
+    """The currents ``(len(ids), N)`` of :func:`_trim` applied to each of the states ``ids``, in one pass: every
+    held pair ranked within its state by closeness ``−(R u_j)·v_k`` at ``target``, the first ``max_coils`` kept."""
+    starts, counts = states.offsets[ids], np.diff(states.offsets)[ids]
+    group = np.repeat(np.arange(len(ids)), counts)
+    first = np.repeat(np.cumsum(counts) - counts, counts)
+    rows = np.arange(counts.sum()) - first + np.repeat(starts, counts)
+    j, k = states.pairs[rows, 0], states.pairs[rows, 1]
+    closeness = -np.einsum("pa,pa->p", design.rotor.centers[j] @ target.T, design.stator.centers[k])
+    order = np.lexsort((closeness, group))
+    keep = order[np.arange(len(order)) - first < max_coils]
+    currents = np.zeros((len(ids), len(design.stator)))
+    currents[group[keep], k[keep]] = design.polarity[j[keep]]
+    return currents
+
+
 @single_blas_thread
 def plan_potential(design, targets, model, *, max_coils: int = DEFAULT_MAX_COILS,
                    candidates: int = DEFAULT_CANDIDATES, max_step: float | None = None,
@@ -54,26 +70,29 @@ def plan_potential(design, targets, model, *, max_coils: int = DEFAULT_MAX_COILS
     N = len(design.stator)
     first = start_state(states, targets[0]) if start is None else int(start)
     coils = _trim(states.held(first), design, states.rotations[first], max_coils)
-    here = equilibrium(model, states.rotations[first], coil_currents(coils, N)).rotation
+    current = coil_currents(coils, N)
+    here = equilibrium(model, states.rotations[first], current).rotation
     _, near = states.nearest(targets, k=candidates)
     rows = [(targets[0], here, coils, "ok")]
     for i in range(1, len(targets)):
         # the states nearest the target, and — so a lagging rotor catches up — the reachable ones nearest it
         around = states.within(here, reach)
-        around = around[np.argsort(so3.distance(states.rotations[around], targets[i]))[:candidates]]
-        options = [coils] + [_trim(states.held(int(s)), design, targets[i], max_coils)
-                             for s in np.concatenate([near[i], around])]
-        unique = list({tuple(sorted(o.items())): o for o in options}.values())
-        eq = equilibrium(model, np.broadcast_to(here, (len(unique), 3, 3)),
-                         np.array([coil_currents(o, N) for o in unique]))
-        valid = eq.converged & eq.is_minimum & (so3.distance(eq.rotation, here) <= reach)
+        around = around[np.argsort(so3.distance(states.rotations[around], targets[i], trusted=True))[:candidates]]
+        ids = np.concatenate([near[i], around])
+        options = np.vstack([current[None], _activations(states, design, targets[i], ids, max_coils)])
+        unique = list({row.tobytes(): n for n, row in enumerate(options)}.values())  # first of each activation
+        eq = equilibrium(model, here, options[unique])
+        valid = eq.converged & eq.is_minimum & (so3.distance(eq.rotation, here, trusted=True) <= reach)
         if not valid.any():
             rows.append((targets[i], here, coils, BLOCKED))
             continue
-        error = np.where(valid, so3.distance(eq.rotation, targets[i]), np.inf)
+        error = np.where(valid, so3.distance(eq.rotation, targets[i], trusted=True), np.inf)
         best = int(np.argmin(error))
-        status = "hold" if unique[best] == coils else "ok"
-        coils, here = unique[best], eq.rotation[best]
+        status = "hold" if unique[best] == 0 else "ok"
+        if status == "ok":
+            coils = _trim(states.held(int(ids[unique[best] - 1])), design, targets[i], max_coils)
+            current = options[unique[best]]
+        here = eq.rotation[best]
         rows.append((targets[i], here, coils, status))
     return _assemble(design, rows)
 

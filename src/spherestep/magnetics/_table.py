@@ -173,8 +173,11 @@ class TorqueMap(TorqueModelBase):
         return field
 
     def zonal_terms(self, currents) -> list:
-        """``[(rotor_field, 1, coils, c)]``: the torque as a zonal sum (:func:`spherestep.rotor_field.pack_terms`)."""
-        return [(self.rotor_field, 1.0, self.coils, as_currents(currents, len(self.coils), self.failed, ())[0])]
+        """``[(rotor_field, 1, coils, c)]`` for currents ``(..., N)``: the energy as a zonal sum
+        (:func:`spherestep.rotor_field.pack_terms`)."""
+        batch = np.shape(currents)[:-1]
+        c = as_currents(currents, len(self.coils), self.failed, batch).reshape(batch + (len(self.coils),))
+        return [(self.rotor_field, 1.0, self.coils, c)]
 
     def evaluate(self, R, currents, order: int) -> tuple[np.ndarray, ...]:
         """``(E,)``, ``(E, τ)`` or ``(E, τ, H)`` through the rotor function (J, N·m, N·m/rad); ``R (K, 3, 3)`` or

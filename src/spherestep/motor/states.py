@@ -17,10 +17,9 @@ from functools import cached_property
 
 import numpy as np
 from scipy.spatial import cKDTree
-from scipy.spatial.transform import Rotation
 
 from ..errors import bad_value
-from ..so3 import as_rotations
+from ..so3 import as_rotations, to_quaternion
 from ..sphere import NearestPointGrid
 
 CHUNK = 2048
@@ -53,7 +52,7 @@ def kabsch(state: np.ndarray, pole: np.ndarray, coil: np.ndarray, count: int, u:
 def quaternion_tree(rotations: np.ndarray) -> tuple[cKDTree, int]:
     """KD-tree on ``±q`` of each rotation: the nearest point in chord distance is the nearest rotation in
     Park's metric, since ``θ = 2 acos|q1·q2|`` and ``|q1 ∓ q2|² = 2 ∓ 2 q1·q2``."""
-    q = Rotation.from_matrix(rotations).as_quat()
+    q = to_quaternion(rotations)
     return cKDTree(np.vstack([q, -q])), len(q)
 
 
@@ -132,7 +131,7 @@ class StepperStates:
         if len(self) == 0:
             raise bad_value("design", "a design with at least one stepper state", "none")
         tree, n = self._tree
-        q = Rotation.from_matrix(R.reshape(-1, 3, 3)).as_quat()
+        q = to_quaternion(R.reshape(-1, 3, 3))
         k_eff = min(k, n)
         if k_eff == 1:
             chord, idx = tree.query(q)
@@ -158,7 +157,7 @@ class StepperStates:
             found = [np.zeros(0, dtype=np.int64) for _ in range(int(np.prod(R.shape[:-2])))]
         else:
             tree, n = self._tree
-            hits = tree.query_ball_point(Rotation.from_matrix(R.reshape(-1, 3, 3)).as_quat(), chord_of_park(radius))
+            hits = tree.query_ball_point(to_quaternion(R.reshape(-1, 3, 3)), chord_of_park(radius))
             found = [np.unique(np.asarray(h, dtype=np.int64) % n) for h in hits]
         if R.ndim == 2:
             return found[0]

@@ -183,9 +183,11 @@ class MotorPotential(TorqueModelBase):
 
     def _constant(self, c: np.ndarray, pairwise: bool) -> np.ndarray:
         """``‖Â‖² + cᵀ S c``: the part of ``V`` that does not depend on ``R``."""
-        if pairwise:
-            return self._rotor_norm2_pairwise + (c @ self._stator_gram_pairwise * c).sum(-1)
-        return self.rotor_norm2 + (c @ self.stator_gram * c).sum(-1)
+        norm2, gram = (self._rotor_norm2_pairwise, self._stator_gram_pairwise) if pairwise else \
+            (self.rotor_norm2, self.stator_gram)
+        if c.ndim == 1:
+            return norm2 + c @ gram @ c
+        return norm2 + (c @ gram * c).sum(-1)
 
     # --- fast path: the rotor function at the coils ------------------------------------------------------
     @property
@@ -215,6 +217,10 @@ class MotorPotential(TorqueModelBase):
         the compiled integrator's input), ``None`` with ``fast=False``."""
         c = _checks.currents(currents, len(self.coils), self.failed)
         return [(self.rotor_field, -2.0, self.coils, c)] if self.fast else None
+
+    def zonal_constant(self, currents) -> np.ndarray:
+        """``‖Â‖² + cᵀSc``: the energy's part besides its zonal terms (:func:`spherestep.statics.equilibrium`)."""
+        return self._constant(_checks.currents(currents, len(self.coils), self.failed), pairwise=True)
 
     def energy(self, R, currents) -> np.ndarray:
         """``V(R, c)`` (eq. (4)): the fast path, or :meth:`energy_harmonic` with ``fast=False``."""
