@@ -28,10 +28,15 @@ def test_demo_writes_plan_figures_simulation_and_report(tmp_path, capsys):
     assert modes["servo"]["time_s"] < modes["ramped"]["time_s"] < modes["settled"]["time_s"]
     assert info["drives"]["bang_bang_bound_s"] <= modes["servo"]["time_s"]
     assert json.loads((out / "drives.json").read_text()) == info["drives"] | {"iron": info["iron_drives"]}
-    # on the iron-cored model the servo turns the rotor within the supply; the relay steps are counted
+    # on the iron-cored model the servo turns the rotor within the supply; the relay drives are simulated and
+    # counted (the paper's plan as settled and ramped steps, and a relay plan made on the iron model)
     iron = info["iron_drives"]
     assert iron["servo"]["final_error_deg"] <= 0.1 and iron["servo"]["peak_power_W"] <= 100.0
-    assert 0 <= iron["relay_moves"] <= iron["relay_steps"]
+    assert 0 <= iron["potential_plan"]["moves"] <= iron["potential_plan"]["steps"]
+    settled = iron["settled"]["details"]
+    assert 0 <= settled["steps_settled_on_plan"] <= settled["steps"] == info["plan"]["steps"]
+    assert settled["executed"] == (settled["steps_settled_on_plan"] == settled["steps"])
+    assert [r for r, _ in iron["ramped"]["details"]["tried"]][:3] == [2.0, 5.0, 14.0]
     # capability of both cores, and what the iron changes
     assert info["capability"]["available_torque_N_m"]["50"] > 0
     assert info["iron"]["unpowered_minima"] > 0 and info["iron"]["detent_peak_Nm"] < 0

@@ -15,14 +15,20 @@ from spherestep.commutation import about_axis, plan_geometric
 from spherestep.dynamics import Rotor, run_closed_loop, simulate
 from spherestep.dynamics.simulate import Integrator
 from spherestep.errors import InputError
+from spherestep.statics import TorqueModelBase
 
 
-class PoleCoilWells:
-    """``V(R, c) = −A Σ_jk p_j c_k e^{κ((R u_j)·v_k − 1)}``; ``τ = A κ Σ p_j c_k e^{…} (R u_j × v_k)``."""
+class PoleCoilWells(TorqueModelBase):
+    """``V(R, c) = −A Σ_jk p_j c_k e^{κ((R u_j)·v_k − 1)}``; ``τ = A κ Σ p_j c_k e^{…} (R u_j × v_k)``: a torque
+    model written independently of the package's (finite-difference Hessian from ``TorqueModelBase``)."""
 
     def __init__(self, design, amplitude=2.0, kappa=16.0):
         self.u, self.p, self.v = design.rotor.centers, design.polarity, design.stator.centers
         self.A, self.k = amplitude, kappa
+        self.coil_count, self.failed = len(self.v), ()
+
+    def torque_reference(self, c):
+        return self.A * self.k * np.abs(np.asarray(c, dtype=float)).sum(axis=-1)
 
     def energy(self, R, c):
         on = np.flatnonzero(np.any(c != 0, axis=0))  # only energised coils contribute
@@ -189,3 +195,24 @@ def test_a_potential_plan_is_executed_on_its_model(proto):
     sim = simulate(proto, plan, model, dwell=t.dwell, rotor=t.rotor, dt=5e-3, record_every=10)
     assert sim.executed, np.degrees(sim.step_errors)
     assert so3.distance(sim.settled[-1], T[-1]) < math.radians(6)
+
+
+def test_tuning_measures_the_wells_at_the_rest_poses(proto):
+    """On the iron-cored model the detent moves the rest poses degrees from the geometric states, where the
+    Hessian can be indefinite: ``tune`` measures the wells at the equilibria the states' coils reach, and finds them
+    stable and stiff (the air core's softest well is 0.23 N·m/rad)."""
+    from spherestep.dynamics import stiffness, tune
+    from spherestep.magnetics import iron_model
+    from spherestep.statics import equilibrium
+
+    model = iron_model(proto)
+    states = proto.states()
+    rng = np.random.default_rng(0)
+    picks = rng.choice(len(states), size=40, replace=False)
+    c = np.array([proto.coil_currents(states.coils(int(i))) for i in picks])
+    at_states = np.array([stiffness(model, states.rotations[i], c[n])[0] for n, i in enumerate(picks)])
+    assert np.quantile(at_states, 0.1) < 0  # the geometric states are not wells on iron
+    rest = equilibrium(model, states.rotations[picks], c)
+    assert np.median(np.degrees(so3.distance(rest.rotation, states.rotations[picks]))) > 1.0
+    t = tune(proto, model)
+    assert t.stiffness > 1.0 and math.isclose(t.dwell, 8 / t.omega, rel_tol=1e-12)

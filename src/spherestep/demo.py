@@ -9,8 +9,9 @@
    plan CSV/JSON and figures;
 4. the turn driven three ways (:func:`spherestep.dynamics.compare_drives`): the paper's settled relay steps, ramped
    relay steps at the pull-out rate, and the current-controlled servo, with the bang-bang bound, on the air-core
-   model; then on the iron-cored model (:func:`iron_drives`): the relay steps as the potential planner finds them
-   there (the detent holds the rotor: few or none move it) and the servo, which does turn it;
+   model; then on the iron-cored model (:func:`iron_drives`): the same relay plan settled and ramped, the relay
+   steps as the potential planner finds them there (the detent holds the rotor: few or none move it) and the
+   servo, which does turn it;
 5. the HTML report with every section, and ``summary.json``.
 
 :data:`DEMO_FILES` names everything written, so a caller can check the folder before the work and count what was
@@ -32,6 +33,7 @@ from .atomic import write_text
 PLAN_FILES = ("plan.csv", "plan.json", "commutation_steps.png", "motor_3d.png", "plan_error.png")
 SIMULATION_FILES = ("trajectory.csv", "simulation.png")
 IRON_SERVO_TIME = 3.0  # s: the servo's time for the demo turn on the iron-cored model (see iron_drives)
+IRON_RELAY_RATES = (2.0, 5.0, 14.0)  # steps/s: the ramped relays tried on iron (a subset of dynamics.ramped.RATES)
 DRIVE_FILES = ("drives.json", "servo.png", "capability.png", "iron.png")
 DEMO_FILES = PLAN_FILES + SIMULATION_FILES + DRIVE_FILES + ("report.html", "summary.json")
 CAPABILITY_SAMPLES = 400
@@ -110,7 +112,7 @@ def run_demo(design, out: Path, axis, angle_deg: float, *,
     run = drives.servo_run
     plots.save_figure(figure_drive(run.times, run.tracking_error, run.currents, run.power,
                                    title="servo: the demo's turn"), out / "servo.png")
-    say("driving the turn on the iron-cored model: relay steps planned on it, and the servo")
+    say("driving the turn on the iron-cored model: settled and ramped relays, relays planned on it, the servo")
     info["iron_drives"] = iron_drives(design, axis, math.radians(angle_deg), iron, iron_limits)
     write_text(out / "drives.json", json.dumps(info["drives"] | {"iron": info["iron_drives"]}, indent=1))
     say("writing the HTML report")
@@ -135,29 +137,47 @@ def run_demo(design, out: Path, axis, angle_deg: float, *,
 
 
 def iron_drives(design, axis, angle: float, model, limits, duration: float = IRON_SERVO_TIME) -> dict:
-    """The turn on the iron-cored ``model``: the relay steps as the potential planner finds them on it (how many
-    of its steps move the rotor, and the final error of the plan), and the servo (``limits`` of the iron coil's
-    winding) over ``duration`` s — a fixed time, because the fastest-turn planner needs torque in every direction
-    all along the path, which the detent denies (docs/magnetics.md)."""
+    """The turn driven three ways on the iron-cored ``model`` (``limits`` of the iron coil's winding): the paper's
+    geometric plan as settled and as ramped relay steps (:func:`spherestep.dynamics.relay_drives`, damping, dwell
+    and time step tuned on the iron's wells; ramped at :data:`IRON_RELAY_RATES`), the relay steps as the potential
+    planner finds them on the iron model (how many of its steps move the rotor), and the servo over ``duration`` s
+    — a fixed time, because the fastest-turn planner needs torque in every direction all along the path, which the
+    detent denies (docs/magnetics.md)."""
     from .commutation import turn
-    from .dynamics import drive_turn
+    from .dynamics import drive_turn, relay_drives, tune
 
-    plan = turn(design, axis, math.degrees(angle), planner="potential", model=model)
-    s = plan.summary(max_step=design.max_step).to_dict()
+    plan = turn(design, axis, math.degrees(angle))
+    settled, ramped, _ = relay_drives(design, plan, model, tune(design, model), limits, IRON_RELAY_RATES)
+    planned = turn(design, axis, math.degrees(angle), planner="potential", model=model)
+    s = planned.summary(max_step=design.max_step).to_dict()
     servo = drive_turn(design, axis, angle, mode="servo", model=model, limits=limits, duration=duration).summary
     keep = ("time_s", "final_error_deg", "max_tracking_error_deg", "peak_power_W", "mean_power_W",
             "peak_current_A", "reachable_fraction")
-    return {"relay_steps": s["steps"], "relay_moves": s["moves"], "relay_final_error_deg": s["error_final_deg"],
+    return {"settled": settled.to_dict(), "ramped": ramped.to_dict(),
+            "potential_plan": {"steps": s["steps"], "moves": s["moves"], "final_error_deg": s["error_final_deg"]},
             "servo": {k: servo[k] for k in keep}}
 
 
+def iron_drives_lines(d: dict) -> list[str]:
+    """The iron-cored turn (:func:`iron_drives`) in three sentences, for the report and the console."""
+    st, rp, pp, sv = d["settled"], d["ramped"], d["potential_plan"], d["servo"]
+    rates = ", ".join(f"{r:g}" for r, _ in rp["details"]["tried"])
+    ramped = (f"ramped relay steps lose a step at every rate tried ({rates} steps/s)" if rp["time_s"] is None else
+              f"ramped relay steps arrive in {rp['time_s']:.2f} s at {rp['details']['pull_out_rate_steps_per_s']:.1f}"
+              f" steps/s")
+    return [f"the paper's relay plan, settled ({st['details']['dwell_s']:.2f} s dwell, damping "
+            f"{st['details']['damping_N_m_s_per_rad']:.2f} N·m·s/rad tuned on the iron's wells): "
+            f"{st['details']['steps_settled_on_plan']} of {st['details']['steps']} steps settle on the plan, the "
+            f"rotor ends {st['final_error_deg']:.1f}° from the turn's end; {ramped}",
+            f"relay steps planned on the iron model move the rotor in {pp['moves']} of {pp['steps']} steps (final "
+            f"error {pp['final_error_deg']:.1f}°: the detent holds it)",
+            f"the servo turns it in {sv['time_s']:.2f} s, final error {sv['final_error_deg']:.4f}°, max tracking "
+            f"error {sv['max_tracking_error_deg']:.2f}°, peak power {sv['peak_power_W']:.0f} W, mean "
+            f"{sv['mean_power_W']:.1f} W"]
+
+
 def _iron_drives_note(d: dict) -> str:
-    s = d["servo"]
-    return (f'<p class="note">On the iron-cored model: the potential planner moves the rotor in {d["relay_moves"]} '
-            f'of {d["relay_steps"]} relay steps (final error {d["relay_final_error_deg"]:.1f}°: the detent holds it); '
-            f'the servo turns it in {s["time_s"]:.2f} s, final error {s["final_error_deg"]:.4f}°, max tracking '
-            f'error {s["max_tracking_error_deg"]:.2f}°, peak power {s["peak_power_W"]:.0f} W, mean '
-            f'{s["mean_power_W"]:.1f} W.</p>')
+    return '<p class="note">On the iron-cored model: ' + "; ".join(iron_drives_lines(d)) + ".</p>"
 
 
 def _jsonable(value):

@@ -64,7 +64,7 @@ def demo(
     """
     from rich.progress import Progress, SpinnerColumn, TextColumn, TimeElapsedColumn
 
-    from ..demo import DEMO_FILES, run_demo
+    from ..demo import DEMO_FILES, iron_drives_lines, run_demo
     from ..motor import prototype
     from ..outputs import Outputs, output_folder
 
@@ -107,10 +107,8 @@ def demo(
                       f"{iron['detent_peak_angle_deg']:.1f}°; unpowered the rotor holds {iron['unpowered_minima']} of "
                       f"{iron['unpowered_starts']} random poses; torque available in every direction median "
                       f"{icap[50]:.2f} N·m, 5th percentile {icap[5]:.2f} N·m")
-        console.print(f"  relay steps planned on iron move the rotor in {idr['relay_moves']} of {idr['relay_steps']} "
-                      f"steps (final error {idr['relay_final_error_deg']:.1f}°); servo {idr['servo']['time_s']:.2f} s, "
-                      f"final error {idr['servo']['final_error_deg']:.4f}°, power peak "
-                      f"{idr['servo']['peak_power_W']:.0f} W")
+        for line in iron_drives_lines(idr):
+            console.print(f"  {line}")
         console.print(f"wrote {len(files.paths)} files to {out}/")
 
 

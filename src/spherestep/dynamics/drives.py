@@ -54,10 +54,13 @@ class DriveResult:
     details: dict = field(default_factory=dict)
 
     def to_dict(self, degrees: bool = True) -> dict:
+        """JSON-ready; a mode that never arrives (time ``inf``, errors NaN) has ``null`` there."""
         unit, conv = ("deg", math.degrees) if degrees else ("rad", float)
-        return {"mode": self.mode, "time_s": self.time, f"final_error_{unit}": conv(self.final_error),
-                f"max_tracking_error_{unit}": conv(self.max_tracking_error), "peak_power_W": self.peak_power,
-                "mean_power_W": self.mean_power, "details": self.details}
+        out = {"mode": self.mode, "time_s": self.time, f"final_error_{unit}": conv(self.final_error),
+               f"max_tracking_error_{unit}": conv(self.max_tracking_error), "peak_power_W": self.peak_power,
+               "mean_power_W": self.mean_power}
+        return {k: v if isinstance(v, str) or math.isfinite(v) else None for k, v in out.items()} | \
+            {"details": self.details}
 
 
 @dataclass(frozen=True)
@@ -98,6 +101,36 @@ def _relay_tracking(times, orientations, step_times, targets) -> float:
     return float(so3.distance(orientations, targets[idx]).max())
 
 
+def relay_drives(design, plan, model, tuning, limits: DriveLimits, rates=RATES):
+    """The relay modes of ``plan`` on ``model`` with ``tuning``'s rotor, dwell and time step: ``(settled, ramped,
+    pull_out)`` — the settled steps (:func:`~spherestep.dynamics.simulate`) and the ramped steps at the pull-out
+    rate over ``rates`` (:func:`~spherestep.dynamics.ramped.pull_out_rate`; time ``inf`` when every rate loses a
+    step). A relay coil draws ``V I_n``."""
+    end = plan.targets[-1]
+    coil_power = limits.supply_voltage * limits.nominal_current
+    sim = simulate(design, plan, model, dwell=tuning.dwell, rotor=tuning.rotor, dt=tuning.dt, record_every=1)
+    step_times = tuning.dwell * np.arange(len(plan.steps) - 1)
+    p = coil_power * np.count_nonzero(sim.active_coils, axis=1)
+    settled = DriveResult("settled", float(sim.times[-1]), float(so3.distance(sim.settled[-1], end)),
+                          _relay_tracking(sim.times, sim.orientations, step_times, plan.targets),
+                          float(p.max()), float(p.mean()),
+                          {"steps": len(plan.steps) - 1, "dwell_s": tuning.dwell,
+                           "damping_N_m_s_per_rad": tuning.rotor.damping, "executed": sim.executed,
+                           "steps_settled_on_plan": int(np.count_nonzero(sim.step_errors <= sim.tolerance)),
+                           "plan_tolerance_deg": math.degrees(sim.tolerance)})
+    pull = pull_out_rate(design, plan, model, rotor=tuning.rotor, rates=rates, dt=tuning.dt)
+    tried = [[r, bool(lost)] for r, lost in pull.tried]
+    if pull.run is None:
+        return settled, DriveResult("ramped", math.inf, math.nan, math.nan, math.nan, math.nan, {"tried": tried}), pull
+    run = pull.run
+    ramped = DriveResult("ramped", run.arrival_time(), run.final_error,
+                         _relay_tracking(run.times, run.orientations, run.step_times, plan.targets),
+                         float(run.power.max()), float(run.power.mean()),
+                         {"pull_out_rate_steps_per_s": pull.rate, "last_step_s": float(run.step_times[-1]),
+                          "tried": tried})
+    return settled, ramped, pull
+
+
 def compare_drives(design, axis=DEMO_AXIS, angle: float = 2 * math.pi, model=None, *,
                    limits: DriveLimits | None = None, sensor_noise: float = SENSOR_NOISE, rates=RATES,
                    damped_servo: bool = False, seed: int = 0) -> DriveComparison:
@@ -115,30 +148,9 @@ def compare_drives(design, axis=DEMO_AXIS, angle: float = 2 * math.pi, model=Non
     plan = turn(design, axis, math.degrees(angle))
     n = np.asarray(axis, dtype=float) / np.linalg.norm(axis)
     start, end = plan.targets[0], plan.targets[-1]
-    coil_power = limits.supply_voltage * limits.nominal_current
     tuning = tune(design, model)
-    results = []
-
-    sim = simulate(design, plan, model, dwell=tuning.dwell, rotor=tuning.rotor, dt=tuning.dt, record_every=1)
-    step_times = tuning.dwell * np.arange(len(plan.steps) - 1)
-    p = coil_power * np.count_nonzero(sim.active_coils, axis=1)
-    results.append(DriveResult("settled", float(sim.times[-1]), float(so3.distance(sim.settled[-1], end)),
-                               _relay_tracking(sim.times, sim.orientations, step_times, plan.targets),
-                               float(p.max()), float(p.mean()),
-                               {"steps": len(plan.steps) - 1, "dwell_s": tuning.dwell,
-                                "damping_N_m_s_per_rad": tuning.rotor.damping, "executed": sim.executed}))
-
-    pull = pull_out_rate(design, plan, model, rotor=tuning.rotor, rates=rates, dt=tuning.dt)
-    if pull.run is None:
-        results.append(DriveResult("ramped", math.inf, math.nan, math.nan, math.nan, math.nan,
-                                   {"tried": [list(t) for t in pull.tried]}))
-    else:
-        run = pull.run
-        results.append(DriveResult("ramped", run.arrival_time(), run.final_error,
-                                   _relay_tracking(run.times, run.orientations, run.step_times, plan.targets),
-                                   float(run.power.max()), float(run.power.mean()),
-                                   {"pull_out_rate_steps_per_s": pull.rate, "last_step_s": float(run.step_times[-1]),
-                                    "tried": [[r, bool(lost)] for r, lost in pull.tried]}))
+    settled, ramped, pull = relay_drives(design, plan, model, tuning, limits, rates)
+    results = [settled, ramped]
 
     rotors = [("servo", Rotor.from_design(design))]
     servo_run = None

@@ -1,7 +1,10 @@
 """Choosing damping and dwell from the motor's own wells.
 
-The rotational stiffness of a stepper state is the Hessian of the energy there, ``K = −∂τ/∂ε`` (central
-differences of the model's torque, symmetrised). With the softest stiffness ``k`` (the 10th percentile over
+The rotational stiffness of a stepper state is the Hessian of the energy at the rest pose its coils hold the
+rotor in, ``K = −∂τ/∂ε`` (central differences of the model's torque, symmetrised): the equilibrium reached from the
+geometric state (:func:`spherestep.statics.equilibrium`) — a fraction of a degree away on the air-core model,
+degrees on the iron-cored one, whose detent moves the wells (at the geometric states themselves its Hessian can
+be indefinite). Sampled states whose descent does not end at a strict minimum are left out. With the softest stiffness ``k`` (the 10th percentile over
 sample states of the smallest eigenvalue: a soft well left overdamped would creep into place too slowly) and the rotor's inertia ``I``, the slowest well oscillates at
 ``ω = √(k/I)``; viscous damping ``b = 2ζ√(kI)`` gives damping ratio ``ζ`` on that mode. Every mode then
 decays at least as fast as ``e^{−λt}`` with ``λ = ζω`` for ``ζ < 1`` (stiffer modes, less damped, share the
@@ -18,7 +21,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..statics import finite_difference_hessian
+from ..statics import equilibrium, finite_difference_hessian
 from ..errors import bad_value
 from .rotor import Rotor
 from .simulate import currents_of
@@ -55,8 +58,12 @@ def tune(design, model, zeta: float = 1.0, samples: int = 40, seed: int = 0) -> 
     states = design.states()
     rng = np.random.default_rng(seed)
     picks = rng.choice(len(states), size=min(samples, len(states)), replace=False)
-    eig = np.array([stiffness(model, states.rotations[i], currents_of(states.coils(int(i)), len(design.stator)))
-                    for i in picks])
+    currents = np.array([currents_of(states.coils(int(i)), len(design.stator)) for i in picks])
+    rest = equilibrium(model, states.rotations[picks], currents)
+    eig = np.array([stiffness(model, rest.rotation[i], currents[i]) for i in np.flatnonzero(rest.is_minimum)])
+    if len(eig) == 0:
+        raise bad_value("model", "a torque model with stable wells near the stepper states",
+                        "no sampled state's descent ends at a minimum")
     k = float(np.quantile(eig[:, 0], SOFT_QUANTILE))
     if not k > 0:
         raise bad_value("model", "a torque model with stable wells at the stepper states", f"stiffness {k:.3g}")
