@@ -13,9 +13,11 @@ type, so that a call costs one array's unboxing and numba's on-disk cache holds 
   ``k`` holding ``Σ_i c_i s^i`` in ``s = (t + 1) inv_h − k`` (the table of
   :class:`spherestep.potential.kernel.ZonalKernel`);
 * ``ANGLE_SPLINE`` (``breaks, tau (4, n), energy (5, n), g_ends (2,)``): the magnets' pair
-  torque ``τ(α)`` as a cubic spline in ``α = acos t`` and its antiderivative (SciPy ``PPoly`` coefficients),
-  ``h = −∫τ``, ``h' = τ / sin α`` (the limits ``g_ends`` within 1e-6 rad of the ends), ``h'' = −(τ' sin α −
-  τ cos α) / sin³ α`` with ``α`` kept 1e-3 rad from the ends — :meth:`spherestep.magnetics.TorqueMap._zonal`.
+  torque ``τ(α)`` as a cubic spline in ``α = acos t`` and its antiderivative (SciPy ``PPoly`` coefficients,
+  stored interval by interval), ``h = −∫τ``, ``h' = τ / sin α`` (the limits ``g_ends`` within 1e-6 rad of the
+  ends), ``h'' = −(τ' sin α − τ cos α) / sin³ α`` with ``α`` kept 1e-3 rad from the ends —
+  :meth:`spherestep.magnetics.TorqueMap._zonal`. An interval is found from a uniform look-up table over
+  ``[0, π]`` finer than the shortest interval, then at most a step or two (no search).
 
 ``cut``: poles with ``t < cut`` are left out of the sums — the kernel's tail beyond the cut-off angle, below a
 stated bound (:func:`spherestep.rotor_field.cutoff`; ``cut = −2`` keeps every pole). The poles inside are found
@@ -50,27 +52,35 @@ _FAST = {"contract", "reassoc", "nsz", "arcp"}  # no "nnan"/"ninf": the clamps o
 def kernel_params(kind: str, arrays, cut: float = NO_CUT) -> np.ndarray:
     """``params`` of a ``"quintic"`` kernel from ``(table (n, 6), inv_h)``: ``[0, n, cut, inv_h, table…]``, or of
     an ``"angle_spline"`` one from ``(breaks (n+1,), tau (4, n), energy (5, n), g_ends (2,))``: ``[1, n, cut,
-    breaks…, tau…, energy…, g_ends…]`` (row-major)."""
+    1/δ, m, breaks…, τ (n, 4)…, e (n, 5)…, g_ends…, lut (m)…]`` (row-major), ``lut[i]`` the interval holding
+    ``α = i δ``, ``δ`` half the shortest interval."""
     if kind == "quintic":
         table, inv_h = arrays
         parts = [[QUINTIC, len(table), cut, inv_h], table]
     else:
-        breaks, tau, energy, ends = arrays
-        parts = [[ANGLE_SPLINE, len(breaks) - 1, cut], breaks, tau, energy, ends]
+        breaks, tau, energy, ends = (np.asarray(a, dtype=float) for a in arrays)
+        delta = 0.5 * float(np.min(np.diff(breaks)))
+        grid = np.arange(int(math.pi / delta) + 2) * delta
+        lut = np.clip(np.searchsorted(breaks, grid, side="right") - 1, 0, len(breaks) - 2)
+        parts = [[ANGLE_SPLINE, len(breaks) - 1, cut, 1.0 / delta, len(lut)], breaks, tau.T, energy.T, ends, lut]
     return np.concatenate([np.ravel(np.asarray(a, dtype=float)) for a in parts])
 
 
 @njit(cache=True)
 def _unpack(params):
-    """``(kind, cut, table, inv_h, breaks, tau, energy, g_ends)`` views of ``params`` (:func:`kernel_params`)."""
+    """``(kind, cut, table, inv_h, breaks, tau, energy, g_ends, lut)`` views of ``params`` (:func:`kernel_params`;
+    ``inv_h`` is ``1/δ`` for a spline)."""
     n = int(params[1])
+    empty = params[:0]
     if params[0] == QUINTIC:
-        empty = params[:0]
-        return (QUINTIC, params[2], params[4:].reshape(n, 6), params[3], empty, empty.reshape(0, n),
-                empty.reshape(0, n), empty)
-    b = 3 + n + 1
-    return (ANGLE_SPLINE, params[2], params[:0].reshape(0, 6), 0.0, params[3:b], params[b:b + 4 * n].reshape(4, n),
-            params[b + 4 * n:b + 9 * n].reshape(5, n), params[b + 9 * n:b + 9 * n + 2])
+        return (QUINTIC, params[2], params[4:].reshape(n, 6), params[3], empty, empty.reshape(0, 4),
+                empty.reshape(0, 5), empty, empty)
+    m = int(params[4])
+    b = 5 + n + 1
+    e = b + 4 * n
+    g = e + 5 * n
+    return (ANGLE_SPLINE, params[2], empty.reshape(0, 6), params[3], params[5:b], params[b:e].reshape(n, 4),
+            params[e:g].reshape(n, 5), params[g:g + 2], params[g + 2:g + 2 + m])
 
 
 @njit(cache=True, fastmath=_FAST)
@@ -88,42 +98,35 @@ def _quintic(table, inv_h, t, order):
 
 
 @njit(cache=True)
-def _ppoly(breaks, c, a, i, derivative):
-    """A SciPy ``PPoly`` (``c (K, n)``, highest power first) or its first derivative at ``a`` in interval ``i``."""
-    dx = a - breaks[i]
-    K = c.shape[0]
-    out = 0.0
-    if derivative:
-        for k in range(K - 1):
-            out = out * dx + (K - 1 - k) * c[k, i]
-    else:
-        for k in range(K):
-            out = out * dx + c[k, i]
-    return out
+def _interval(breaks, lut, inv_delta, a):
+    """The spline interval of ``a`` (the end intervals extrapolate): the look-up table's, stepped forward."""
+    i = int(lut[min(max(int(a * inv_delta), 0), lut.shape[0] - 1)])
+    last = breaks.shape[0] - 2
+    while i < last and breaks[i + 1] <= a:
+        i += 1
+    return i
 
 
 @njit(cache=True)
-def _interval(breaks, a):
-    """The ``PPoly`` interval of ``a`` (the end intervals extrapolate)."""
-    return min(max(np.searchsorted(breaks, a, side="right") - 1, 0), breaks.shape[0] - 2)
-
-
-@njit(cache=True)
-def _angle_spline(breaks, tau, energy, g_ends, t, order):
+def _angle_spline(breaks, lut, inv_delta, tau, energy, g_ends, t, order):
     alpha = math.acos(min(max(t, -1.0), 1.0))
-    i = _interval(breaks, alpha)
-    h = -_ppoly(breaks, energy, alpha, i, False)
+    i = _interval(breaks, lut, inv_delta, alpha)
+    x = alpha - breaks[i]  # (no row views: each would cost a reference count)
+    h = -((((energy[i, 0] * x + energy[i, 1]) * x + energy[i, 2]) * x + energy[i, 3]) * x + energy[i, 4])
     s = math.sin(alpha)
     if s < 1e-6:
         d = g_ends[0] if alpha < 1.0 else g_ends[1]
     else:
-        d = _ppoly(breaks, tau, alpha, i, False) / s
+        d = (((tau[i, 0] * x + tau[i, 1]) * x + tau[i, 2]) * x + tau[i, 3]) / s
     dd = 0.0
     if order >= 2:
         a = min(max(alpha, 1e-3), math.pi - 1e-3)
-        j = _interval(breaks, a)
-        s, c = math.sin(a), math.cos(a)
-        dd = -(_ppoly(breaks, tau, a, j, True) * s - _ppoly(breaks, tau, a, j, False) * c) / s**3
+        j = _interval(breaks, lut, inv_delta, a)
+        x = a - breaks[j]
+        value = ((tau[j, 0] * x + tau[j, 1]) * x + tau[j, 2]) * x + tau[j, 3]
+        slope = (3.0 * tau[j, 0] * x + 2.0 * tau[j, 1]) * x + tau[j, 2]
+        s, co = math.sin(a), math.cos(a)
+        dd = -(slope * s - value * co) / s**3
     return h, d, dd
 
 
@@ -164,7 +167,7 @@ def _point(kernel, x0, x1, x2, poles, polarity, order, S, M, t, near):
     """``F`` at ``x`` for the unpacked ``kernel`` (:func:`_unpack`) and ``poles (3, P)`` (columns ``u_j``);
     ``S (3,)`` and the upper triangle of ``M`` (``M[0..5]`` = 00, 01, 02, 11, 12, 22) filled for ``order ≥ 1, 2``
     (module docstring). ``t, near``: scratch of the poles' length. One loop per kernel kind."""
-    kind, cut, table, inv_h, breaks, tau, energy, g_ends = kernel
+    kind, cut, table, inv_h, breaks, tau, energy, g_ends, lut = kernel
     count = _near(cut, x0, x1, x2, poles, t, near)
     f = 0.0
     S[:] = 0.0
@@ -191,7 +194,7 @@ def _point(kernel, x0, x1, x2, poles, polarity, order, S, M, t, near):
     else:
         for i in range(count):
             j = near[i]
-            h, d, dd = _angle_spline(breaks, tau, energy, g_ends, t[j], order)
+            h, d, dd = _angle_spline(breaks, lut, inv_h, tau, energy, g_ends, t[j], order)
             w = polarity[j]
             f += w * h
             _accumulate(w, h, d, dd, poles[0, j], poles[1, j], poles[2, j], order, S, M)
