@@ -7,6 +7,7 @@ and the moment method from 21° on (the two agree within 1 % of the peak at 20°
     python scripts/iron_tables.py fem-table   # src/spherestep/data/iron_pair_table.csv: FEM below 21°, MoM above
     OPENBLAS_NUM_THREADS=1 nice -n 5 python scripts/iron_tables.py convergence  # data/iron_convergence.csv
     OPENBLAS_NUM_THREADS=1 nice -n 5 python scripts/iron_tables.py multibody    # data/iron_multibody.csv
+    OPENBLAS_NUM_THREADS=1 nice -n 5 python scripts/iron_tables.py coupling     # data/iron_coupling.csv
     OPENBLAS_NUM_THREADS=1 nice -n 5 python scripts/iron_tables.py fig6         # data/iron_fig6.csv
 
 Each file starts with ``#`` lines saying what produced it; times are wall-clock on the machine that ran it.
@@ -21,7 +22,7 @@ from pathlib import Path
 import numpy as np
 
 from spherestep.magnetics import _iron as iron
-from spherestep.magnetics._ironmap import TABLE_NODES_DEG, pair_table
+from spherestep.magnetics._ironmap import TABLE_NODES_DEG, pair_table, read_table
 from spherestep.motor import prototype
 from spherestep.motor.coil import iron_coil
 
@@ -58,8 +59,6 @@ def table(level: int = iron.IRON_LEVEL) -> None:
 def fem_table(switch_deg: float = 21.0) -> None:
     """``src/spherestep/data/iron_pair_table.csv``: 0 at 0° (symmetry), the FEM nodes of data/iron_fem_table.csv
     below ``switch_deg``, the moment-method rows of data/iron_pair_table_mom.csv from it on."""
-    from spherestep.magnetics._ironmap import read_table
-
     fem = read_table(DATA / "iron_fem_table.csv")  # alpha, maxh, elements, detent, linear, mesh_s, solve_s
     mom = read_table(DATA / "iron_pair_table_mom.csv")  # alpha, detent, linear
     fem = fem[fem[:, 0] < switch_deg]
@@ -153,6 +152,32 @@ def multibody(level: int = 0) -> None:
     np.save(DATA / "iron_multibody_R.npy", R)
 
 
+def coupling(level: int = 0) -> None:
+    """The multibody orientations, coils off: the full solve, the pair tables, and the pair tables plus the coupling
+    energy's torque (every magnet in the iron every other magnet magnetises, both cores solved together)."""
+    design, coil = prototype(), iron_coil()
+    mb = read_table(DATA / "iron_multibody.csv")  # c0, c1, orientation, full xyz, pair xyz, solve_s
+    R = np.load(DATA / "iron_multibody_R.npy")
+    v = np.array(design.stator.centers)
+    k0 = int(np.argmin(v[:, 2]))
+    coils = [k0, int(np.argsort(v @ v[k0])[-2])]
+    rows = []
+    for r in mb[(mb[:, 0] == 0) & (mb[:, 1] == 0)]:
+        t0 = time.perf_counter()
+        cross = iron.coupling_torque(design, coil, coils, R[int(r[2])], level)
+        full, pair = r[3:6], r[6:9]
+        rows.append([r[2], *full, *pair, *cross, time.perf_counter() - t0])
+        print(int(r[2]), np.linalg.norm(full - pair) / np.linalg.norm(full),
+              np.linalg.norm(full - pair - cross) / np.linalg.norm(full), flush=True)
+    _write(DATA / "iron_coupling.csv",
+           f"The coupling the pair tables leave out (spherestep.magnetics._iron.coupling_torque, MoM level {level}, "
+           f"cores {coils} solved together, magnets within 40 deg), coils off, at the orientations of "
+           f"data/iron_multibody.csv, beside that file's full solve and pair-table sum.\nProduced by: python "
+           f"scripts/iron_tables.py coupling. Torques N m, fixed frame, about the centre.",
+           ["orientation", "full_x", "full_y", "full_z", "pair_x", "pair_y", "pair_z", "coupling_x", "coupling_y",
+            "coupling_z", "solve_s"], np.array(rows))
+
+
 def fig6(level: int = iron.IRON_LEVEL) -> None:
     design, coil = prototype(), iron_coil()
     x = np.arange(0.0, 0.0605, 0.0025)
@@ -175,4 +200,5 @@ def everything() -> None:
 
 if __name__ == "__main__":
     what = sys.argv[1] if len(sys.argv) > 1 else "all"
-    {"all": everything, "table": table, "fem-table": fem_table, "convergence": convergence, "multibody": multibody, "fig6": fig6, "flux": flux}[what]()
+    {"all": everything, "table": table, "fem-table": fem_table, "convergence": convergence, "multibody": multibody,
+     "coupling": coupling, "fig6": fig6, "flux": flux}[what]()

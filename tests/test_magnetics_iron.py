@@ -242,7 +242,8 @@ def test_moment_method_against_fem(design):
 
 
 @pytest.mark.xfail(strict=True, reason="pairwise superposition misses the two-core full solve by a median 32 % "
-                   "(docs/magnetics.md): the coupling through the cores is not modelled")
+                   "(docs/magnetics.md): the coupling through the cores, measured in data/iron_coupling.csv, is not "
+                   "in the torque model yet")
 def test_pairwise_against_full_multibody_solve():
     """The issue's target: the sum of pair tables within 5 % of the full solve of two cores under the whole rotor
     (data/iron_multibody.csv, same mesh level, 4 orientations × 3 drives)."""
@@ -251,6 +252,51 @@ def test_pairwise_against_full_multibody_solve():
     pair = np.c_[mb["pair_x"], mb["pair_y"], mb["pair_z"]]
     err = np.linalg.norm(full - pair, axis=1) / np.linalg.norm(full, axis=1)
     assert np.median(err) < 0.05
+
+
+def test_coupling_energy_is_the_joint_solve_less_the_self_terms(design):
+    """``_iron.coupling_energy`` by an independent route: one solve with every near magnet's field at once, its
+    energy ``−(1/2μ0) ∫ J·B``, less each magnet's energy alone, equals the cross terms (linearity), to 1e-9."""
+    from spherestep.magnetics._model import MU0
+
+    coil = iron_coil()
+    v = design.stator.centers
+    k = int(np.argmin(v[:, 2]))
+    R = np.load(DATA / "iron_multibody_R.npy")[3]
+    got = iron.coupling_energy(design, coil, [k], R)
+    solver = iron._placed_solver(iron.CoreGeometry.of(design, coil), 0, (tuple(v[k]),),
+                                 design.radius + design.air_gap)
+    w = R @ design.rotor.centers.T
+    near = np.flatnonzero(v[k] @ w > np.cos(iron.COUPLING_REACH))
+    assert len(near) >= 2
+    r_c = iron.magnet_face_radius(design) - 0.5 * design.magnet_length
+    rotor = [iron._magnet(design, r_c * w[:, j][None], w[:, j][None], float(design.polarity[j])) for j in near]
+    pts, wts, owner = iron.cell_quadrature(solver.cells, 3, near=solver.near)
+
+    def energy(magnets):
+        J = solver.polarization(magpy.getB(magnets, solver.centroids, sumup=True))
+        B = np.zeros_like(J)
+        np.add.at(B, owner, magpy.getB(magnets, pts, sumup=True) * wts[:, None])
+        return -0.5 * np.sum(J * B) / MU0
+
+    want = energy(rotor) - sum(energy([m]) for m in rotor)
+    assert abs(got - want) <= 1e-9 * abs(want) and abs(want) > 0
+
+
+def test_coupling_brings_pairwise_toward_the_full_solve():
+    """The stored coupling study (data/iron_coupling.csv, ``scripts/iron_tables.py coupling``): with the coils off,
+    the pair tables plus the coupling energy's torque (magnets in the iron other magnets magnetise, the two cores
+    solved together) are closer to the full solve at every orientation than the pair tables alone, and within
+    31 % (median 10 %) where the pair tables miss by up to 155 % (median 39 %): the coupling is most of the gap.
+    It is not yet part of the torque model (the 5 % target above stays an expected failure)."""
+    c = _csv("iron_coupling.csv")
+    full = np.c_[c["full_x"], c["full_y"], c["full_z"]]
+    pair = np.c_[c["pair_x"], c["pair_y"], c["pair_z"]]
+    coupled = pair + np.c_[c["coupling_x"], c["coupling_y"], c["coupling_z"]]
+    before = np.linalg.norm(full - pair, axis=1) / np.linalg.norm(full, axis=1)
+    after = np.linalg.norm(full - coupled, axis=1) / np.linalg.norm(full, axis=1)
+    assert len(after) == 4 and np.all(after < before)
+    assert after.max() < 0.31 and np.median(after) < 0.11 and np.median(before) > 0.35
 
 
 def test_fem_mesh_convergence():

@@ -373,6 +373,54 @@ def rotor_iron_torque(design, coil, coils, R, currents, level: int = 0, order: i
     return -T
 
 
+COUPLING_REACH = math.radians(40.0)  # magnets farther than this from every core are left out of the coupling
+COUPLING_STEP = 1e-4  # rad: central differences of the coupling energy
+
+
+def coupling_energy(design, coil, coils, R, level: int = 0, reach: float = COUPLING_REACH, order: int = 3):
+    """The energy (J) the pair tables leave out, coils off: magnet ``q`` in the iron that magnet ``p ≠ q``
+    magnetises, with the cores ``coils`` solved together (so they also magnetise each other) at orientation
+    ``R (3, 3)``. For linear iron the energy of the polarised cores in the magnets' field is
+    ``W = −(1/2μ0) Σ_pq s_p s_q ∫ J_p · B_q dV`` (``J_p`` the polarization the solve gives for magnet ``p`` alone,
+    the integral by the cells' Gauss points); the pair tables hold the ``p = q`` terms, this returns the rest,
+    symmetrised (``∫ J_p·B_q`` and ``∫ J_q·B_p`` agree only to the discretisation), over the magnets within
+    ``reach`` of a core."""
+    geom = CoreGeometry.of(design, coil)
+    face = design.radius + design.air_gap
+    v = design.stator.centers[np.asarray(coils, dtype=int)]
+    solver = _placed_solver(geom, level, tuple(map(tuple, v)), face)
+    w = np.asarray(R, dtype=float) @ design.rotor.centers.T  # (3, M): the poles' directions
+    near = np.flatnonzero(np.max(v @ w, axis=0) > math.cos(reach))
+    r_c = magnet_face_radius(design) - 0.5 * design.magnet_length
+    magnets = [_magnet(design, r_c * w[:, j][None], w[:, j][None], float(design.polarity[j])) for j in near]
+    pts, wts, owner = cell_quadrature(solver.cells, order, near=solver.near)
+    starts = np.flatnonzero(np.r_[True, owner[1:] != owner[:-1]])
+    J = solver.polarization(np.array([magpy.getB(m, solver.centroids) for m in magnets]))  # (m, n, 3)
+    B = np.array([np.add.reduceat(magpy.getB(m, pts) * wts[:, None], starts) for m in magnets])  # ∫ B over each cell
+    G = np.einsum("pic,qic->pq", J, B) / MU0
+    G = 0.5 * (G + G.T)
+    return float(-0.5 * (G.sum() - np.trace(G)))
+
+
+@lru_cache(maxsize=4)
+def _placed_solver(geom: CoreGeometry, level: int, axes: tuple, face: float) -> CoreSolver:
+    """The cores along the unit vectors ``axes``, faces at ``face`` from the centre, solved together (cached)."""
+    v = np.array(axes)
+    rots = z_to(v)
+    return CoreSolver(geom, level, [(rots[i], face * v[i]) for i in range(len(v))])
+
+
+def coupling_torque(design, coil, coils, R, level: int = 0, step: float = COUPLING_STEP) -> np.ndarray:
+    """Torque (N·m, fixed frame, about the centre) of :func:`coupling_energy` at ``R (3, 3)``: ``−∂W/∂θ`` by
+    central differences of ``step`` rad about each fixed axis."""
+    out = np.empty(3)
+    for a in range(3):
+        turn = Rotation.from_rotvec(step * np.eye(3)[a]).as_matrix()
+        out[a] = -(coupling_energy(design, coil, coils, turn @ R, level)
+                   - coupling_energy(design, coil, coils, turn.T @ R, level)) / (2 * step)
+    return out
+
+
 def coil_inductance(design, coil, level: int = IRON_LEVEL, samples: int = 24) -> float:
     """Self-inductance (H) of one coil, rotor absent: ``L = λ / I`` with the flux linkage
     ``λ = Σ_loops (N / n_loops) Φ(r_loop, z_loop)`` of the winding's loops, ``Φ(r, z) = ∫_0^r B_z(ρ, z) 2πρ dρ``
