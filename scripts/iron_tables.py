@@ -8,6 +8,7 @@ and the moment method from 21° on (the two agree within 1 % of the peak at 20°
     OPENBLAS_NUM_THREADS=1 nice -n 5 python scripts/iron_tables.py convergence  # data/iron_convergence.csv
     OPENBLAS_NUM_THREADS=1 nice -n 5 python scripts/iron_tables.py multibody    # data/iron_multibody.csv
     OPENBLAS_NUM_THREADS=1 nice -n 5 python scripts/iron_tables.py coupling     # data/iron_coupling.csv
+    OPENBLAS_NUM_THREADS=1 nice -n 5 python scripts/iron_tables.py saturation   # data/iron_saturation.csv
     OPENBLAS_NUM_THREADS=1 nice -n 5 python scripts/iron_tables.py fig6         # data/iron_fig6.csv
 
 Each file starts with ``#`` lines saying what produced it; times are wall-clock on the machine that ran it.
@@ -178,6 +179,29 @@ def coupling(level: int = 0) -> None:
             "coupling_z", "solve_s"], np.array(rows))
 
 
+def saturation(level: int = iron.IRON_LEVEL) -> None:
+    """One pole and one coil at the FEM's reference angles, coil off and at ±nominal: the linear solve against the
+    saturating one (the linear line up to where it meets the B–H curve, the curve beyond)."""
+    design, coil = prototype(), iron_coil()
+    angles = np.array([2.0, 5.0, 8.0, 12.0, 20.0])
+    det, lin = iron.pair_tables(design, coil, np.radians(angles), level)
+    rows = []
+    for a, d, li in zip(angles, det, lin):
+        for c in (0.0, 1.0, -1.0):
+            t0 = time.perf_counter()
+            tau, peak, iterations = iron.saturated_pair_torque(design, coil, np.radians(a), c, level)
+            rows.append([a, c, d + c * li, tau, peak, iterations, time.perf_counter() - t0])
+            print(rows[-1], flush=True)
+    _write(DATA / "iron_saturation.csv",
+           f"One +1 pole and one iron coil (MoM level {level}): torque (N m, about the centre, positive away from the "
+           f"axis) of the linear solve and of the saturating one (spherestep.magnetics._iron.saturated_pair_torque: "
+           f"mu_r = {coil.material.relative_permeability:g} up to "
+           f"{iron.saturation_onset(coil.material, coil.material.relative_permeability):.0f} A/m, then the B-H curve "
+           f"of {coil.material.name}), the largest |B| in a cell, iterations, seconds.\nProduced by: python "
+           f"scripts/iron_tables.py saturation",
+           ["alpha_deg", "current", "linear_Nm", "saturated_Nm", "max_B_T", "iterations", "solve_s"], np.array(rows))
+
+
 def fig6(level: int = iron.IRON_LEVEL) -> None:
     design, coil = prototype(), iron_coil()
     x = np.arange(0.0, 0.0605, 0.0025)
@@ -201,4 +225,4 @@ def everything() -> None:
 if __name__ == "__main__":
     what = sys.argv[1] if len(sys.argv) > 1 else "all"
     {"all": everything, "table": table, "fem-table": fem_table, "convergence": convergence, "multibody": multibody,
-     "coupling": coupling, "fig6": fig6, "flux": flux}[what]()
+     "coupling": coupling, "saturation": saturation, "fig6": fig6, "flux": flux}[what]()

@@ -163,9 +163,9 @@ class CoreSolver:
         self.near = np.tile(depth < NEAR_DEPTH, len(placements))
         n = len(self.cells)
         T = demag_tensor(self.cells) * MU0
-        T = T.swapaxes(2, 3).reshape((3 * n, 3 * n)).T  # the layout of apply_demag: x1..xn, y1..yn, z1..zn
+        self.T = T.swapaxes(2, 3).reshape((3 * n, 3 * n)).T  # the layout of apply_demag: x1..xn, y1..yn, z1..zn
         self.chi = geom.mu_r - 1.0
-        self._lu = scipy.linalg.lu_factor(np.eye(3 * n) - self.chi * T, check_finite=False)
+        self._lu = scipy.linalg.lu_factor(np.eye(3 * n) - self.chi * self.T, check_finite=False)
 
     def polarization(self, B_src: np.ndarray) -> np.ndarray:
         """Cell polarizations ``J (…, n, 3)`` (T) for source fields ``B_src (…, n, 3)`` (T) at the centroids."""
@@ -174,6 +174,33 @@ class CoreSolver:
         rhs = self.chi * np.moveaxis(B.reshape(-1, n, 3), 2, 1).reshape(-1, 3 * n).T  # (3n, m)
         J = scipy.linalg.lu_solve(self._lu, rhs, check_finite=False)
         return np.moveaxis(J.T.reshape(-1, 3, n), 1, 2).reshape(B.shape)
+
+    def saturated_polarization(self, B_src: np.ndarray, material, tol: float = 1e-4, max_iter: int = 300,
+                               relax: float = 0.5) -> tuple[np.ndarray, np.ndarray, int]:
+        """Cell polarizations ``J (n, 3)`` (T) for one source field ``B_src (n, 3)`` with saturating iron: the
+        linear solve's line ``B = μ0 μr H`` up to where it meets the material's B–H curve above the knee
+        (:func:`saturation_onset`), the curve beyond — so that only saturation differs from the linear solve. Each
+        cell's susceptibility is the secant ``χ_i = B(H_i)/(μ0 H_i) − 1`` at its own ``|H_i|`` (``μ0 H = B_src +
+        T J``); fixed-point iteration on the ``χ_i`` (geometric relaxation ``relax``), a dense solve of
+        ``(I − diag(χ) T) J = diag(χ) B_src`` each time, until no ``χ_i`` moves by more than ``tol`` relative.
+        Returns ``(J, |B| per cell (T), iterations)``; raises ComputationError if it does not converge."""
+        from ..errors import ComputationError
+
+        n = len(self.cells)
+        b = np.moveaxis(np.asarray(B_src, dtype=float).reshape(n, 3), 1, 0).reshape(3 * n)
+        onset = saturation_onset(material, self.chi + 1.0)
+        chi = np.full(n, self.chi)
+        for it in range(1, max_iter + 1):
+            c3 = np.tile(chi, 3)
+            J = np.linalg.solve(np.eye(3 * n) - c3[:, None] * self.T, c3 * b)
+            H = np.linalg.norm((b + self.T @ J).reshape(3, n), axis=0) / MU0  # A/m
+            target = np.where(H > onset, material.flux_density(H) / (MU0 * np.maximum(H, onset)) - 1.0, self.chi)
+            done = np.max(np.abs(target - chi) / chi) <= tol
+            chi = chi * (target / chi) ** relax
+            if done:
+                Jc = J.reshape(3, n).T
+                return Jc, np.linalg.norm(Jc, axis=1) + MU0 * H, it
+        raise ComputationError(f"the saturating iron solve did not converge in {max_iter} iterations")
 
     def field(self, J: np.ndarray, points: np.ndarray) -> np.ndarray:
         """``B`` (T) at ``points (P, 3)`` of the cells polarised ``J (n, 3)``."""
@@ -371,6 +398,40 @@ def rotor_iron_torque(design, coil, coils, R, currents, level: int = 0, order: i
         _, Tw = magpy.getFT(rotor, loops, pivot=(0.0, 0.0, 0.0), meshing=64, squeeze=False)[:2]
         T = T + Tw[0].sum(axis=1)
     return -T
+
+
+def saturation_onset(material, mu_r: float) -> float:
+    """``H`` (A/m) where the line ``B = μ0 μr H`` last crosses the material's B–H curve from below: beyond it the
+    curve lies under the line (the iron saturates), and the saturating solve follows the curve."""
+    H = np.geomspace(1.0, 1e7, 20001)
+    below = MU0 * mu_r * H <= material.flux_density(H)
+    return float(H[np.flatnonzero(below)[-1]]) if below.any() else 0.0
+
+
+def saturated_pair_torque(design, coil, alpha: float, current: float, level: int = IRON_LEVEL,
+                          order: int = 3) -> tuple[float, float, float]:
+    """Torque (N·m about the sphere's centre, positive away from the axis, as :func:`pair_tables`) on one ``+1``
+    pole at ``alpha`` (rad) from one iron-cored coil at ``current`` (per nominal), with the iron saturating
+    (:meth:`CoreSolver.saturated_polarization`, ``coil.material``'s B–H curve); returns ``(torque, largest |B| in
+    a cell (T), iterations)``. Not linear in the current: each current is its own solve."""
+    geom = CoreGeometry.of(design, coil)
+    solver = core_solver(geom, level)
+    face = design.radius + design.air_gap
+    w = np.array([[math.sin(alpha), 0.0, math.cos(alpha)]])
+    centre = (magnet_face_radius(design) - 0.5 * design.magnet_length) * w - [0.0, 0.0, face]
+    pivot = (0.0, 0.0, -face)
+    magnet = _magnet(design, centre, w)
+    B = magpy.getB(magnet, solver.centroids)
+    loops = solver.loops[0]
+    if current:
+        B = B + current * magpy.getB(loops, solver.centroids, sumup=True)
+    J, flux, iterations = solver.saturated_polarization(B, coil.material)
+    _, T = _reaction(solver, J, magnet, pivot, order)
+    torque = -T[0]
+    if current:
+        Tw = magpy.getFT(magnet, loops, pivot=np.asarray(pivot, dtype=float), meshing=64, squeeze=False)[1]
+        torque = torque - current * Tw[0].sum(axis=1)[0]
+    return float(torque[1]), float(flux.max()), iterations
 
 
 COUPLING_REACH = math.radians(40.0)  # magnets farther than this from every core are left out of the coupling
