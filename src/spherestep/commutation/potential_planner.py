@@ -39,7 +39,8 @@ def _trim(held: list[tuple[int, int]], design, target, max_coils: int) -> dict[i
 def _activations(states, design, target, ids: np.ndarray, max_coils: int) -> np.ndarray:
     """The currents ``(len(ids), N)`` of :func:`_trim` applied to each of the states ``ids``, in one pass: every
     held pair ranked within its state by closeness ``−(R u_j)·v_k`` at ``target``, the first ``max_coils`` kept."""
-    starts, counts = states.offsets[ids], np.diff(states.offsets)[ids]
+    starts = states.offsets[ids]
+    counts = states.offsets[ids + 1] - starts
     group = np.repeat(np.arange(len(ids)), counts)
     first = np.repeat(np.cumsum(counts) - counts, counts)
     rows = np.arange(counts.sum()) - first + np.repeat(starts, counts)
