@@ -3,6 +3,7 @@
     OPENBLAS_NUM_THREADS=1 nice -n 5 python scripts/fem_iron.py            # data/iron_fem.csv (~10-20 min)
     OPENBLAS_NUM_THREADS=1 nice -n 5 python scripts/fem_iron.py --quick    # 8° at 2, 1.4, 1 mm: data/iron_fem_8.csv
     ... scripts/fem_iron.py --angles 12 20   then   scripts/fem_iron.py --merge   # a share of the angles in parallel
+    ... scripts/fem_iron.py --maxh 0.0014 --angles 12 2; scripts/fem_iron.py --merge  # convergence at more angles
     ... scripts/fem_iron.py --table 0 2 & scripts/fem_iron.py --table 1 2; scripts/fem_iron.py --merge
         # the pair tables' FEM nodes (1°…20° and 1.5°, 2.5°, 3.5°, but not the reference angles) in 2 shares:
         # data/iron_fem_table.csv; --table-angles A B ... solves the given angles only
@@ -130,11 +131,11 @@ HEADER = ("# NGSolve 3-D FEM (total scalar potential, order 2) of one +1 rotor m
           "alpha_deg,maxh_face_m,elements,detent_Nm,linear_Nm,mesh_s,solve_s\n")
 
 
-def main(quick: bool = False, angles=None):
+def main(quick: bool = False, angles=None, maxh: float | None = None):
     if quick:  # the mesh convergence alone, merged into data/iron_fem.csv with --merge
         angles, sizes = [8.0], (2.0e-3, 1.4e-3, 1.0e-3)
     else:
-        sizes = (2.0e-3,) if angles else (2.0e-3, 1.4e-3, 1.0e-3)
+        sizes = (maxh,) if maxh else (2.0e-3,) if angles else (2.0e-3, 1.4e-3, 1.0e-3)
     if angles:  # a share of the angles, for running in parallel: data/iron_fem_<angles>.csv, merge with --merge
         runs = [(a, h) for a in angles for h in sizes]
         out = DATA / ("iron_fem_" + "_".join(f"{a:g}" for a in angles) + ".csv")
@@ -201,7 +202,8 @@ if __name__ == "__main__":
         table(TABLE_DEG[share::shares])
     elif "--table-angles" in sys.argv:
         table([float(a) for a in sys.argv[sys.argv.index("--table-angles") + 1:]])
-    elif "--angles" in sys.argv:
-        main(angles=[float(a) for a in sys.argv[sys.argv.index("--angles") + 1:]])
+    elif "--angles" in sys.argv:  # [--maxh H (m)] first: the face mesh size (default 2 mm)
+        maxh = float(sys.argv[sys.argv.index("--maxh") + 1]) if "--maxh" in sys.argv else None
+        main(angles=[float(a) for a in sys.argv[sys.argv.index("--angles") + 1:]], maxh=maxh)
     else:
         main("--quick" in sys.argv)
