@@ -8,6 +8,7 @@ and the moment method from 21° on (the two agree within 1 % of the peak at 20°
     OPENBLAS_NUM_THREADS=1 nice -n 5 python scripts/iron_tables.py convergence  # data/iron_convergence.csv
     OPENBLAS_NUM_THREADS=1 nice -n 5 python scripts/iron_tables.py multibody    # data/iron_multibody.csv
     OPENBLAS_NUM_THREADS=1 nice -n 5 python scripts/iron_tables.py coupling     # data/iron_coupling.csv
+    python scripts/iron_tables.py coupling-table  # src/spherestep/data/iron_coupling_table.csv (the model's)
     OPENBLAS_NUM_THREADS=1 nice -n 5 python scripts/iron_tables.py saturation   # data/iron_saturation.csv
     OPENBLAS_NUM_THREADS=1 nice -n 5 python scripts/iron_tables.py fig6         # data/iron_fig6.csv
 
@@ -179,6 +180,24 @@ def coupling(level: int = 0) -> None:
             "coupling_z", "solve_s"], np.array(rows))
 
 
+def coupling_table(level: int = iron.IRON_LEVEL) -> None:
+    """``src/spherestep/data/iron_coupling_table.csv``: the coupling energy of two +1 poles over one core
+    (``_iron.cross_energy_table``) on the angles the model reads."""
+    from spherestep.magnetics._coupling import COUPLING_ALPHA_DEG, COUPLING_DPHI_DEG
+    from spherestep.magnetics._ironmap import COUPLING_FILE
+
+    design, coil = prototype(), iron_coil()
+    t0 = time.perf_counter()
+    X = iron.cross_energy_table(design, coil, np.radians(COUPLING_ALPHA_DEG), np.radians(COUPLING_DPHI_DEG), level)
+    a, b, d = np.meshgrid(COUPLING_ALPHA_DEG, COUPLING_ALPHA_DEG, COUPLING_DPHI_DEG, indexing="ij")
+    _write(Path(__file__).resolve().parents[1] / "src" / "spherestep" / "data" / COUPLING_FILE,
+           f"Coupling energy (J) of two +1 rotor poles over one iron core of the prototype (MoM level {level}, coils "
+           f"off): -(1/mu0) int J_p . B_q, symmetrised; pole p at alpha_p, pole q at alpha_q from the core's axis, "
+           f"dphi apart in azimuth.\nProduced by: python scripts/iron_tables.py coupling-table "
+           f"({time.perf_counter() - t0:.0f} s)",
+           ["alpha_p_deg", "alpha_q_deg", "dphi_deg", "energy_J"], np.c_[a.ravel(), b.ravel(), d.ravel(), X.ravel()])
+
+
 def saturation(level: int = iron.IRON_LEVEL) -> None:
     """One pole and one coil at the FEM's reference angles, coil off and at ±nominal: the linear solve against the
     saturating one (the linear line up to where it meets the B–H curve, the curve beyond)."""
@@ -225,4 +244,5 @@ def everything() -> None:
 if __name__ == "__main__":
     what = sys.argv[1] if len(sys.argv) > 1 else "all"
     {"all": everything, "table": table, "fem-table": fem_table, "convergence": convergence, "multibody": multibody,
-     "coupling": coupling, "saturation": saturation, "fig6": fig6, "flux": flux}[what]()
+     "coupling": coupling, "coupling-table": coupling_table, "saturation": saturation, "fig6": fig6,
+     "flux": flux}[what]()

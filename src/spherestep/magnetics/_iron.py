@@ -454,13 +454,38 @@ def coupling_energy(design, coil, coils, R, level: int = 0, reach: float = COUPL
     near = np.flatnonzero(np.max(v @ w, axis=0) > math.cos(reach))
     r_c = magnet_face_radius(design) - 0.5 * design.magnet_length
     magnets = [_magnet(design, r_c * w[:, j][None], w[:, j][None], float(design.polarity[j])) for j in near]
-    pts, wts, owner = cell_quadrature(solver.cells, order, near=solver.near)
-    starts = np.flatnonzero(np.r_[True, owner[1:] != owner[:-1]])
-    J = solver.polarization(np.array([magpy.getB(m, solver.centroids) for m in magnets]))  # (m, n, 3)
-    B = np.array([np.add.reduceat(magpy.getB(m, pts) * wts[:, None], starts) for m in magnets])  # ∫ B over each cell
+    J, B = polarized_and_integrated(solver, magnets, order)
     G = np.einsum("pic,qic->pq", J, B) / MU0
     G = 0.5 * (G + G.T)
     return float(-0.5 * (G.sum() - np.trace(G)))
+
+
+def polarized_and_integrated(solver: CoreSolver, magnets, order: int = 3) -> tuple[np.ndarray, np.ndarray]:
+    """For each magnet alone: the cells' polarization ``J (m, n, 3)`` (T) and the magnet's field integrated over
+    each cell ``(m, n, 3)`` (T·m³, the cells' Gauss points): ``−(1/μ0) Σ_i J_p,i · B_q,i`` is the energy of magnet
+    ``q`` in the iron magnet ``p`` polarises."""
+    pts, wts, owner = cell_quadrature(solver.cells, order, near=solver.near)
+    starts = np.flatnonzero(np.r_[True, owner[1:] != owner[:-1]])
+    J = solver.polarization(np.array([magpy.getB(m, solver.centroids) for m in magnets]))
+    B = np.array([np.add.reduceat(magpy.getB(m, pts) * wts[:, None], starts) for m in magnets])
+    return J, B
+
+
+def cross_energy_table(design, coil, alpha, dphi, level: int = IRON_LEVEL) -> np.ndarray:
+    """``X (A, A, D)`` (J): the coupling energy of two ``+1`` poles over one iron core, at angles ``alpha[a]``,
+    ``alpha[b]`` (rad) from its axis and azimuths ``dphi[d]`` (rad) apart, ``−(1/μ0) ∫ J_p·B_q`` symmetrised in
+    the two poles (the core's own mesh, coils off; :func:`coupling_energy` for one core)."""
+    solver = core_solver(CoreGeometry.of(design, coil), level)
+    face = design.radius + design.air_gap
+    r_c = magnet_face_radius(design) - 0.5 * design.magnet_length
+    a, p = np.meshgrid(np.asarray(alpha, dtype=float), np.asarray(dphi, dtype=float), indexing="ij")
+    w = np.stack([np.sin(a) * np.cos(p), np.sin(a) * np.sin(p), np.cos(a)], axis=-1).reshape(-1, 3)
+    magnets = [_magnet(design, r_c * wi[None] - [0.0, 0.0, face], wi[None]) for wi in w]
+    J, B = polarized_and_integrated(solver, magnets)
+    J = J.reshape(a.shape + J.shape[1:])[:, 0]  # the first pole at azimuth 0
+    B = B.reshape(a.shape + B.shape[1:])
+    X = -np.einsum("aic,bdic->abd", J, B) / MU0
+    return 0.5 * (X + X.transpose(1, 0, 2))
 
 
 @lru_cache(maxsize=4)

@@ -15,7 +15,8 @@ with energies ``E = Σ_jk e_d(α_jk) + Σ_jk p_j c_k e_1(α_jk)`` from the splin
 ``T = −∂E/∂θ`` to rounding. A quadratic ``c²`` term would act between the winding and its own core only (no
 torque on the rotor) as long as the iron stays linear; :func:`iron_saturation` checks that it does.
 Pairwise superposition leaves out a magnet acting on another through a core and the cores on each other;
-``data/iron_multibody.csv`` measures that against a full solve (docs/magnetics.md).
+``data/iron_multibody.csv`` measures that against a full solve (docs/magnetics.md). ``iron_model(...,
+coupling=True)`` adds the first (:mod:`._coupling`).
 
 The prototype's tables (``spherestep/data/iron_pair_table.csv``: NGSolve FEM nodes below 21°, the moment method
 from 21° on; ``python scripts/iron_tables.py fem-table``) are read when the design and coil match it; any other
@@ -26,20 +27,23 @@ geometry is solved by the moment method on first use (minutes) and cached — it
 from __future__ import annotations
 
 import math
-from dataclasses import astuple, dataclass
+from dataclasses import astuple, dataclass, replace
 from functools import lru_cache
 from importlib import resources
 
 import numpy as np
 
+from .. import so3
 from ..errors import bad_value
 from ..motor.coil import CoilSpec, iron_coil
 from ..statics import TorqueModelBase
 from . import _iron
+from ._coupling import COUPLING_ALPHA_DEG, COUPLING_DPHI_DEG, CoreCoupling
 from ._table import TorqueMap
 
 TABLE_NODES_DEG = np.concatenate([np.arange(0.0, 30.0, 1.0), np.arange(30.0, 60.0, 2.0), np.arange(60.0, 180.1, 5.0)])
 TABLE_FILE = "iron_pair_table.csv"
+COUPLING_FILE = "iron_coupling_table.csv"
 
 
 def pair_table(design, coil: CoilSpec, level: int = _iron.IRON_LEVEL, nodes_deg=TABLE_NODES_DEG):
@@ -90,16 +94,19 @@ class IronTorqueMap(TorqueModelBase):
     detent: TorqueMap
     linear: TorqueMap
     coil: CoilSpec
+    coupling: CoreCoupling | None = None
 
     @classmethod
-    def from_tables(cls, design, coil: CoilSpec, nodes, tau_detent, tau_linear, level: int = _iron.IRON_LEVEL):
-        """The model of ``design`` from pair tables ``τ_d``, ``τ_1`` (N·m) at ``nodes`` (rad, 0…π)."""
+    def from_tables(cls, design, coil: CoilSpec, nodes, tau_detent, tau_linear, level: int = _iron.IRON_LEVEL,
+                    coupling: CoreCoupling | None = None):
+        """The model of ``design`` from pair tables ``τ_d``, ``τ_1`` (N·m) at ``nodes`` (rad, 0…π), and the
+        ``coupling`` through the cores if given."""
         poles = design.rotor.centers.copy()
         coils = design.stator.centers.copy()
         detent = TorqueMap(poles, np.ones(len(poles)), coils, (), np.asarray(nodes), np.asarray(tau_detent), level)
         linear = TorqueMap(poles, design.polarity.astype(float), coils, tuple(design.failed_coils),
                            np.asarray(nodes), np.asarray(tau_linear), level)
-        return cls(detent, linear, coil)
+        return cls(detent, linear, coil, coupling)
 
     @property
     def coil_count(self) -> int:
@@ -117,7 +124,8 @@ class IronTorqueMap(TorqueModelBase):
         def cut(m: TorqueMap, failed_):
             return TorqueMap(m.poles, m.polarity, m.coils[idx], failed_, m.nodes, m.tau, m.meshing)
 
-        return IronTorqueMap(cut(self.detent, ()), cut(self.linear, failed), self.coil)
+        coupling = None if self.coupling is None else replace(self.coupling, coils=self.coupling.coils[idx])
+        return IronTorqueMap(cut(self.detent, ()), cut(self.linear, failed), self.coil, coupling)
 
     def torque_on(self, R, currents, coils) -> np.ndarray:
         """Torque (N·m) with only the cores ``coils`` present, their currents taken from ``currents (N,)``."""
@@ -132,19 +140,32 @@ class IronTorqueMap(TorqueModelBase):
         """``D(R)`` (N·m, fixed frame): the torque with every coil off."""
         return self.detent.torque(R, self._ones(R))
 
-    def zonal_terms(self, currents) -> list:
-        """The detent's and the coils' zonal terms (:func:`spherestep.rotor_field.pack_terms`)."""
+    def zonal_terms(self, currents) -> list | None:
+        """The detent's and the coils' zonal terms (:func:`spherestep.rotor_field.pack_terms`); ``None`` with the
+        coupling, which is not a zonal sum (the compiled paths then step aside for the NumPy ones)."""
+        if self.coupling is not None:
+            return None
         return self.detent.zonal_terms(np.ones(self.coil_count)) + self.linear.zonal_terms(self.as_currents(currents))
 
+    def _coupled(self, R, method: str) -> np.ndarray | float:
+        """The coupling's ``energy`` or ``torque`` at ``R (..., 3, 3)``, shaped like the pair terms' (0 without)."""
+        if self.coupling is None:
+            return 0.0
+        R = so3.as_rotations(R)
+        out = getattr(self.coupling, method)(R.reshape(-1, 3, 3))
+        return out.reshape(R.shape[:-2] + out.shape[1:])
+
     def torque(self, R, currents) -> np.ndarray:
-        """``D(R) + L(R) c`` (N·m, fixed frame, about the centre), ``(K, 3)`` or ``(3,)``."""
+        """``D(R) + L(R) c`` (+ the coupling's torque) (N·m, fixed frame, about the centre), ``(K, 3)`` or
+        ``(3,)``."""
         c = self.as_currents(currents)
-        return self.detent.torque(R, self._ones(R)) + self.linear.torque(R, c)
+        return self.detent.torque(R, self._ones(R)) + self.linear.torque(R, c) + self._coupled(R, "torque")
 
     def energy(self, R, currents) -> np.ndarray:
-        """``Σ e_d(α_jk) + Σ p_j c_k e_1(α_jk)`` (J), zero with every pole opposite every coil."""
+        """``Σ e_d(α_jk) + Σ p_j c_k e_1(α_jk)`` (+ the coupling's energy) (J); the pair terms are zero with
+        every pole opposite every coil."""
         c = self.as_currents(currents)
-        return self.detent.energy(R, self._ones(R)) + self.linear.energy(R, c)
+        return self.detent.energy(R, self._ones(R)) + self.linear.energy(R, c) + self._coupled(R, "energy")
 
     def torque_matrix(self, R, currents=None) -> np.ndarray:
         """``∂T/∂c = L(R)`` (N·m per nominal current), ``(3, N)`` or ``(K, 3, N)``; independent of ``currents``."""
@@ -156,10 +177,12 @@ class IronTorqueMap(TorqueModelBase):
         return float(np.max(np.abs(self.detent.tau))) + self.linear.torque_reference(c)
 
 
-def iron_model(design, coil: CoilSpec | None = None, level: int = _iron.IRON_LEVEL):
+def iron_model(design, coil: CoilSpec | None = None, level: int = _iron.IRON_LEVEL, coupling: bool = False):
     """The torque model of ``design`` with coils built as ``coil`` (default ``design.coil``): an
     :class:`IronTorqueMap` for an iron core, today's air-core :class:`TorqueMap` for ``core="air"`` (at the
-    coil's nominal ampere-turns; ``air_coil(design.coil_ampere_turns)`` reproduces it exactly)."""
+    coil's nominal ampere-turns; ``air_coil(design.coil_ampere_turns)`` reproduces it exactly). ``coupling=True``
+    adds the coupling through the cores (:mod:`._coupling`, moment method; ~10 ms per orientation, and the
+    compiled integrator and equilibria step aside for the NumPy ones)."""
     coil = design.coil if coil is None else coil
     if not isinstance(coil, CoilSpec):
         raise bad_value("coil", "a spherestep.motor.coil.CoilSpec", type(coil).__name__)
@@ -170,5 +193,24 @@ def iron_model(design, coil: CoilSpec | None = None, level: int = _iron.IRON_LEV
             return tmap
         return TorqueMap(tmap.poles, tmap.polarity, tmap.coils, tmap.failed, tmap.nodes,
                          tmap.tau * (ni / design.coil_ampere_turns), tmap.meshing)
-    nodes, det, lin = _tables(_key(design, coil, level), design, coil, level)
-    return IronTorqueMap.from_tables(design, coil, nodes, det, lin, level)
+    key = _key(design, coil, level)
+    nodes, det, lin = _tables(key, design, coil, level)
+    cross = None
+    if coupling:
+        alpha, dphi, X = _coupling_table(key, design, coil, level)
+        cross = CoreCoupling.from_table(design.rotor.centers, design.polarity, design.stator.centers, alpha, dphi, X)
+    return IronTorqueMap.from_tables(design, coil, nodes, det, lin, level, cross)
+
+
+@lru_cache(maxsize=4)
+def _coupling_table(key: tuple, design, coil: CoilSpec, level: int):
+    """``(alpha, dphi, X)`` of :func:`._iron.cross_energy_table`: the prototype's stored table
+    (``spherestep/data/iron_coupling_table.csv``, ``python scripts/iron_tables.py coupling-table``), else solved
+    (about a minute) and cached."""
+    from ..motor import prototype
+    alpha, dphi = np.radians(COUPLING_ALPHA_DEG), np.radians(COUPLING_DPHI_DEG)
+    if key == _key(prototype(), iron_coil(), _iron.IRON_LEVEL):
+        path = resources.files("spherestep.data") / COUPLING_FILE
+        if path.is_file():
+            return alpha, dphi, read_table(path)[:, 3].reshape(len(alpha), len(alpha), len(dphi))
+    return alpha, dphi, _iron.cross_energy_table(design, coil, alpha, dphi, level)
