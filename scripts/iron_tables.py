@@ -9,6 +9,7 @@ and the moment method from 21° on (the two agree within 1 % of the peak at 20°
     OPENBLAS_NUM_THREADS=1 nice -n 5 python scripts/iron_tables.py multibody    # data/iron_multibody.csv
     OPENBLAS_NUM_THREADS=1 nice -n 5 python scripts/iron_tables.py coupling     # data/iron_coupling.csv
     python scripts/iron_tables.py coupling-table  # src/spherestep/data/iron_coupling_table.csv (the model's)
+    OPENBLAS_NUM_THREADS=1 python scripts/iron_tables.py coupling-effects  # data/iron_coupling_effects.csv
     OPENBLAS_NUM_THREADS=1 nice -n 5 python scripts/iron_tables.py saturation   # data/iron_saturation.csv
     OPENBLAS_NUM_THREADS=1 nice -n 5 python scripts/iron_tables.py fig6         # data/iron_fig6.csv
 
@@ -198,6 +199,43 @@ def coupling_table(level: int = iron.IRON_LEVEL) -> None:
            ["alpha_p_deg", "alpha_q_deg", "dphi_deg", "energy_J"], np.c_[a.ravel(), b.ravel(), d.ravel(), X.ravel()])
 
 
+def coupling_effects(seed: int = 0, count: int = 12) -> None:
+    """What the coupling term changes for the motor: the samples of ``iron_summary`` (seed 0: 12 random unpowered
+    starts, 12 stepper states with their coils) brought to rest on the pairwise model and on the coupled one."""
+    from spherestep import so3
+    from spherestep.magnetics import iron_model, state_currents
+    from spherestep.statics import equilibrium
+
+    design = prototype()
+    rng = np.random.default_rng(seed)
+    R0 = so3.random(count, rng)
+    states = design.states()
+    idx = np.sort(rng.choice(len(states), count, replace=False))
+    starts = {"unpowered": (R0, np.zeros((count, len(design.stator)))),
+              "state": (states.rotations[idx], np.array([state_currents(design, i) for i in idx]))}
+    rows, rest = [], {}
+    for coupled in (False, True):
+        model = iron_model(design, coupling=coupled)
+        t0 = time.perf_counter()
+        for kind, (start, c) in starts.items():
+            eq = equilibrium(model, start, c, gtol=1e-9, max_step=np.radians(2.0))
+            rest[coupled, kind] = eq.rotation
+            apart = so3.distance(eq.rotation, rest[False, kind])
+            for n in range(count):
+                rows.append([coupled, kind == "state", n, eq.is_minimum[n],
+                             np.degrees(so3.distance(eq.rotation[n], start[n])), np.degrees(apart[n]),
+                             eq.stiffness[n, 0], time.perf_counter() - t0])
+        print("coupled" if coupled else "pairwise", time.perf_counter() - t0, flush=True)
+    _write(DATA / "iron_coupling_effects.csv",
+           "The samples of iron_summary (seed 0) brought to rest on the prototype's iron model, pairwise and with the "
+           "coupling term (iron_model(..., coupling=True)): coupled (0/1), state (0: unpowered random start, 1: "
+           "stepper state with its coils), sample, minimum (0/1), rest pose's distance from the start (deg), from "
+           "the pairwise model's rest pose (deg), softest stiffness (N m/rad), seconds so far.\nProduced by: "
+           "python scripts/iron_tables.py coupling-effects",
+           ["coupled", "state", "sample", "minimum", "moved_deg", "from_pairwise_deg", "stiffness_Nm_per_rad",
+            "seconds"], np.array(rows, dtype=float))
+
+
 def saturation(level: int = iron.IRON_LEVEL) -> None:
     """One pole and one coil at the FEM's reference angles, coil off and at ±nominal: the linear solve against the
     saturating one (the linear line up to where it meets the B–H curve, the curve beyond)."""
@@ -244,5 +282,6 @@ def everything() -> None:
 if __name__ == "__main__":
     what = sys.argv[1] if len(sys.argv) > 1 else "all"
     {"all": everything, "table": table, "fem-table": fem_table, "convergence": convergence, "multibody": multibody,
-     "coupling": coupling, "coupling-table": coupling_table, "saturation": saturation, "fig6": fig6,
+     "coupling": coupling, "coupling-table": coupling_table, "coupling-effects": coupling_effects,
+     "saturation": saturation, "fig6": fig6,
      "flux": flux}[what]()
