@@ -28,7 +28,9 @@ the local model is ``E(exp(ω̂) R) ≈ E − τ·ω + ½ ωᵀ H ω``. The step
 eigenpairs ``(h_i, e_i)`` of ``H`` (Newton where ``H`` is positive definite; along negative curvature it still
 descends, so saddles repel rather than attract), shortened to at most ``max_step`` radians, then halved until the
 Armijo condition ``E(exp(sω̂) R) ≤ E − 10⁻⁴ s τ·ω`` holds (or, once the decrease is at rounding level, until the
-torque falls). It stops when ``|τ| ≤ gtol · torque_reference(c)``.
+torque falls). It stops when ``|τ| ≤ gtol · torque_reference(c)``. For a model whose energy is a sum of compiled
+zonal terms (``zonal_terms``, plus ``zonal_constant``) the same iteration runs compiled, row by row
+(:func:`spherestep._zonal_sums.descend`).
 
 :func:`gradient_flow` follows the steepest-descent flow ``Ṙ = τ̂(R) R`` with an adaptive Runge–Kutta integrator
 until the torque is small. The basin of attraction of a minimum is the set of starts whose gradient flow ends
