@@ -401,6 +401,17 @@ def test_coupled_model_against_the_full_solve(design):
     assert np.all(after < before) and after.max() < 0.36 and np.median(after) < 0.10
 
 
+def test_coupling_effects_study():
+    """The stored study of what the coupling changes (data/iron_coupling_effects.csv, ``scripts/iron_tables.py
+    coupling-effects``): the pairwise rows are the pairwise model's rest poses (12 of 12 minima, as iron_summary
+    finds), and the coupled model's unpowered rest poses stay within 2° of them — a fraction of a degree."""
+    t = _csv("iron_coupling_effects.csv")
+    pairwise, coupled = t["coupled"] == 0, t["coupled"] == 1
+    assert np.count_nonzero(pairwise & (t["minimum"] == 1)) == 24 and np.all(t["from_pairwise_deg"][pairwise] == 0)
+    unpowered = coupled & (t["state"] == 0) & (t["minimum"] == 1)
+    assert np.count_nonzero(unpowered) >= 9 and np.all(t["from_pairwise_deg"][unpowered] < 2.0)
+
+
 def test_fem_mesh_convergence():
     """The FEM reference converges: at 2°, 8° and 12° the pair torques on successively finer face meshes (2 mm,
     1.4 mm) change by less than 2 % of the peak pair torque between the last two sizes (data/iron_fem.csv,
