@@ -50,8 +50,8 @@ def main() -> None:
           f"{'dt 1 ms':>9}")
     models = (("potential", MotorPotential(design)), ("magnets' torque map", torque_map(design)),
               ("iron model", iron_model(design)))
-    for name, model in models:  # the iron model's stepper states are not wells (docs/magnetics.md): the map's step
-        tuning = tune(design, models[1][1] if name == "iron model" else model)
+    for name, model in models:  # each at its own tuning (the iron's wells measured at its rest poses)
+        tuning = tune(design, model)
         tuned = speed(model, tuning.rotor, tuning.dt, R0, c)
         plain = speed(model, tuning.rotor, tuning.dt, R0, c, duration=0.5, compiled=False)
         fast, fine = speed(model, tuning.rotor, 5e-3, R0, c), speed(model, tuning.rotor, 1e-3, R0, c)
