@@ -341,16 +341,24 @@ def magnet_wrenches(design, coil, centres, axes, pivot, level: int = IRON_LEVEL,
     return -Fd, -Td, -(Fi + Fw), -(Ti + Tw)
 
 
+def pole_poses(design, alpha, phi=0.0) -> tuple[np.ndarray, np.ndarray, tuple]:
+    """Rotor magnets at angles ``alpha`` (rad) from a coil's axis and azimuths ``phi`` (rad; broadcast) about it,
+    in the coil's frame (axis ``+z``, face at ``z = 0``): centres ``(K, 3)``, radial axes ``(K, 3)``, and the
+    sphere's centre ``(0, 0, −R_s − g)`` as the pivot."""
+    a, p = np.broadcast_arrays(np.atleast_1d(np.asarray(alpha, dtype=float)), np.asarray(phi, dtype=float))
+    face = design.radius + design.air_gap
+    w = np.stack([np.sin(a) * np.cos(p), np.sin(a) * np.sin(p), np.cos(a)], axis=-1).reshape(-1, 3)
+    centres = (magnet_face_radius(design) - 0.5 * design.magnet_length) * w - [0.0, 0.0, face]
+    return centres, w, (0.0, 0.0, -face)
+
+
 def pair_tables(design, coil, alpha, level: int = IRON_LEVEL, order: int = 3) -> tuple[np.ndarray, np.ndarray]:
     """``(detent, linear)`` torques ``τ(α)`` (N·m) on one ``+1`` pole at angles ``alpha`` (rad) from an iron-cored
     coil's axis, about the sphere's centre, positive away from the axis (the convention of ``pair_torque``);
     ``linear`` per nominal current. The torque at current ``c`` on a pole of polarity ``p`` is
     ``detent + p c linear``. The magnet's face is at :func:`magnet_face_radius`."""
-    a = np.atleast_1d(np.asarray(alpha, dtype=float))
-    face = design.radius + design.air_gap
-    w = np.stack([np.sin(a), np.zeros_like(a), np.cos(a)], axis=1)
-    centres = (magnet_face_radius(design) - 0.5 * design.magnet_length) * w - [0.0, 0.0, face]
-    _, Td, _, Tl = magnet_wrenches(design, coil, centres, w, (0.0, 0.0, -face), level, order)
+    centres, w, pivot = pole_poses(design, alpha)
+    _, Td, _, Tl = magnet_wrenches(design, coil, centres, w, pivot, level, order)
     return Td[:, 1], Tl[:, 1]
 
 
@@ -416,10 +424,7 @@ def saturated_pair_torque(design, coil, alpha: float, current: float, level: int
     a cell (T), iterations)``. Not linear in the current: each current is its own solve."""
     geom = CoreGeometry.of(design, coil)
     solver = core_solver(geom, level)
-    face = design.radius + design.air_gap
-    w = np.array([[math.sin(alpha), 0.0, math.cos(alpha)]])
-    centre = (magnet_face_radius(design) - 0.5 * design.magnet_length) * w - [0.0, 0.0, face]
-    pivot = (0.0, 0.0, -face)
+    centre, w, pivot = pole_poses(design, alpha)
     magnet = _magnet(design, centre, w)
     B = magpy.getB(magnet, solver.centroids)
     loops = solver.loops[0]
@@ -476,11 +481,9 @@ def cross_energy_table(design, coil, alpha, dphi, level: int = IRON_LEVEL) -> np
     ``alpha[b]`` (rad) from its axis and azimuths ``dphi[d]`` (rad) apart, ``−(1/μ0) ∫ J_p·B_q`` symmetrised in
     the two poles (the core's own mesh, coils off; :func:`coupling_energy` for one core)."""
     solver = core_solver(CoreGeometry.of(design, coil), level)
-    face = design.radius + design.air_gap
-    r_c = magnet_face_radius(design) - 0.5 * design.magnet_length
     a, p = np.meshgrid(np.asarray(alpha, dtype=float), np.asarray(dphi, dtype=float), indexing="ij")
-    w = np.stack([np.sin(a) * np.cos(p), np.sin(a) * np.sin(p), np.cos(a)], axis=-1).reshape(-1, 3)
-    magnets = [_magnet(design, r_c * wi[None] - [0.0, 0.0, face], wi[None]) for wi in w]
+    centres, w, _ = pole_poses(design, a, p)
+    magnets = [_magnet(design, c[None], wi[None]) for c, wi in zip(centres, w)]
     J, B = polarized_and_integrated(solver, magnets)
     J = J.reshape(a.shape + J.shape[1:])[:, 0]  # the first pole at azimuth 0
     B = B.reshape(a.shape + B.shape[1:])
