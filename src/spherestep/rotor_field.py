@@ -86,7 +86,7 @@ class RotorField:
         self.poles_t = np.ascontiguousarray(self.poles.T)  # (3, M): the compiled sums' layout
         self.polarity = np.ascontiguousarray(polarity, dtype=float)
         self.polarity_row = self.polarity[None]  # (1, M): one term's pole weights
-        self._workspace = None
+        self._single = None
         self.kernel = kernel
         self.compiled = None
         self.cut = None
@@ -110,13 +110,16 @@ class RotorField:
             self._build_harmonic(exact, rings)
 
     @property
-    def workspace(self) -> tuple[np.ndarray, np.ndarray]:
-        """Scratch of the compiled single-orientation call (:func:`spherestep._zonal_sums.workspace`), made once."""
-        if self._workspace is None:
-            from ._zonal_sums import workspace
+    def single(self) -> tuple:
+        """The compiled single-orientation call and its fixed arguments, ``(terms_evaluate, params, offsets,
+        poles (3, M), polarity (1, M), *scratch)`` (:func:`spherestep._zonal_sums.workspace`), gathered once: a
+        call's Python overhead is most of its cost."""
+        if self._single is None:
+            from ._zonal_sums import terms_evaluate, workspace
 
-            self._workspace = workspace(self.poles_t)
-        return self._workspace
+            self._single = (terms_evaluate, self.compiled, _OFFSETS[len(self.compiled)], self.poles_t,
+                            self.polarity_row, *workspace(self.poles_t))
+        return self._single
 
     def _build_harmonic(self, exact, rings) -> None:
         import ducc0
@@ -251,13 +254,11 @@ def fast_evaluate(field: RotorField, sign: float, coils: np.ndarray, R: np.ndarr
     when the field has a compiled kernel, else through :meth:`RotorField.fields`. ``value=False`` skips ``F``
     (the returned energy is then ``None``: for callers that need only the torque)."""
     if field.compiled is not None and R.ndim == 2 and c.ndim == 1:  # one orientation: one compiled call
-        from ._zonal_sums import terms_evaluate
-
+        evaluate, params, offsets, poles, polarity, work, near = field.single
         torque, H = np.empty(3), np.empty((3, 3))
-        e = terms_evaluate(field.compiled, _OFFSETS[len(field.compiled)], R if R.flags.c_contiguous else
-                           np.ascontiguousarray(R), coils, c[None] if c.flags.c_contiguous else
-                           np.ascontiguousarray(c)[None], field.poles_t, field.polarity_row, _SIGNS[sign], order,
-                           torque, H, *field.workspace)
+        e = evaluate(params, offsets, R if R.flags.c_contiguous else np.ascontiguousarray(R), coils,
+                     c[None] if c.flags.c_contiguous else np.ascontiguousarray(c)[None], poles, polarity,
+                     _SIGNS[sign], order, torque, H, work, near)
         return (np.float64(e + constant) if value else None,) + (torque, H)[:order]
     lead = np.broadcast_shapes(R.shape[:-2], c.shape[:-1])
     Rf = (R if R.shape[:-2] == lead else np.broadcast_to(R, lead + (3, 3))).reshape(-1, 3, 3)

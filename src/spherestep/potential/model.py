@@ -186,7 +186,7 @@ class MotorPotential(TorqueModelBase):
         norm2, gram = (self._rotor_norm2_pairwise, self._stator_gram_pairwise) if pairwise else \
             (self.rotor_norm2, self.stator_gram)
         if c.ndim == 1:
-            return norm2 + c @ gram @ c
+            return norm2 + gram.dot(c).dot(c)
         return norm2 + (c @ gram * c).sum(-1)
 
     # --- fast path: the rotor function at the coils ------------------------------------------------------
