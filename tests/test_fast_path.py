@@ -50,10 +50,17 @@ def test_fast_path_matches_exact_forms(model, count):
     torque reference, the Hessian within 1e-8 of its peak (the pairwise G'' table is good to ~1e-9)."""
     rng = np.random.default_rng(count)
     R = so3.random(count, rng)
+    # the first coil on the body frame's +z and −z axes, where the synthesis's frame (θ̂, φ̂) is a convention
+    v = model.coils[0]
+    R[0] = so3.rot(np.cross([0.0, 0.0, 1.0], v), np.arccos(v[2]))
+    R[1] = so3.rot(np.cross([0.0, 0.0, -1.0], v), np.arccos(-v[2]))
     c = rng.uniform(-1.0, 1.0, (count, model.coil_count))
     E, tau, H = model.evaluate(R, c, 2)
     E_pair, tau_pair, H_pair = model.evaluate_pairwise(R, c, 2)
     assert np.max(np.abs(E - E_pair) / np.abs(E_pair)) <= 1e-9
+    E1, tau1 = model.energy_and_torque(R, c)  # the batch of E and τ alone (large: ducc0 and compiled sums)
+    assert np.max(np.abs(E1 - E_pair) / np.abs(E_pair)) <= 1e-9
+    assert np.max(np.linalg.norm(tau1 - tau_pair, axis=-1) / model.torque_reference(c)) <= 1e-9
     assert np.max(np.abs(E - model.energy_harmonic(R, c)) / np.abs(E_pair)) <= 1e-9
     ref = model.torque_reference(c)
     assert np.max(np.linalg.norm(tau - tau_pair, axis=-1) / ref) <= 1e-9
@@ -112,8 +119,9 @@ def test_threads_give_identical_results(proto, model):
     rng = np.random.default_rng(5)
     R = so3.random(BIG, rng)
     c = rng.uniform(-1.0, 1.0, (BIG, model.coil_count))
-    for a, b in zip(model.evaluate(R, c, 2), two.evaluate(R, c, 2)):
-        np.testing.assert_allclose(a, b, rtol=1e-15, atol=1e-15 * np.max(np.abs(b)))
+    for order in (1, 2):
+        for a, b in zip(model.evaluate(R, c, order), two.evaluate(R, c, order)):
+            np.testing.assert_allclose(a, b, rtol=1e-15, atol=1e-15 * np.max(np.abs(b)))
     np.testing.assert_allclose(model.torque_matrix(R), two.torque_matrix(R), rtol=1e-15,
                                atol=1e-15 * np.max(np.abs(two.torque_matrix(R))))
     from threadpoolctl import threadpool_limits

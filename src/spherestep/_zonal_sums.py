@@ -335,6 +335,83 @@ def batch_evaluate(params, offsets, R, coils, C, poles, P, signs, order, E, torq
             H[b] = h
 
 
+# --- glue of ducc0's syntheses (spherestep.rotor_field's large batches): positions in, torques out ---------
+@njit(cache=True, inline="always")
+def _location(x0, x1, x2):
+    """``(θ, φ, ρ, cos φ, sin φ)`` of the unit vector ``x``: ``θ = atan2(ρ, z)`` (``ρ = sin θ`` from ``x, y``,
+    accurate near the axis), ``φ ∈ [0, 2π)``, ``φ = 0`` on the axis."""
+    rho = math.sqrt(x0 * x0 + x1 * x1)
+    phi = math.atan2(x1, x0)
+    if phi < 0.0:
+        phi += 2.0 * math.pi
+    if rho == 0.0:
+        return math.atan2(rho, x2), phi, rho, 1.0, 0.0
+    return math.atan2(rho, x2), phi, rho, x0 / rho, x1 / rho
+
+
+@njit(cache=True)
+def locations(x, loc, frame):
+    """``loc[p] = (θ, φ)`` of ``x[p]`` (ducc0's positions) and ``frame[p] = (ρ, cos φ, sin φ)``
+    (:func:`_location`)."""
+    for p in range(x.shape[0]):
+        theta, phi, rho, c, s = _location(x[p, 0], x[p, 1], x[p, 2])
+        loc[p, 0], loc[p, 1] = theta, phi
+        frame[p, 0], frame[p, 1], frame[p, 2] = rho, c, s
+
+
+@njit(cache=True)
+def pair_locations(R, coils, rows, cols, x, loc):
+    """``x[p] = R[rows[p]]ᵀ v[cols[p]]`` (coil ``cols[p]``'s direction in orientation ``rows[p]``'s body frame)
+    and its ``(θ, φ)`` into ``loc`` (:func:`_location`)."""
+    for p in range(rows.shape[0]):
+        q, k = rows[p], cols[p]
+        v0, v1, v2 = coils[k, 0], coils[k, 1], coils[k, 2]
+        x0 = R[q, 0, 0] * v0 + R[q, 1, 0] * v1 + R[q, 2, 0] * v2
+        x1 = R[q, 0, 1] * v0 + R[q, 1, 1] * v1 + R[q, 2, 1] * v2
+        x2 = R[q, 0, 2] * v0 + R[q, 1, 2] * v1 + R[q, 2, 2] * v2
+        x[p, 0], x[p, 1], x[p, 2] = x0, x1, x2
+        theta, phi, _, _, _ = _location(x0, x1, x2)
+        loc[p, 0], loc[p, 1] = theta, phi
+
+
+@njit(cache=True, inline="always")
+def _torque_density(x0, x1, x2, d_theta, d_phi):
+    """``x × g`` for ``g = g_θ θ̂ + g_φ φ̂`` (ducc0's spin-1 ``DERIV1`` pair, ``g_φ = ∂_φF / sin θ``):
+    ``x × θ̂ = φ̂``, ``x × φ̂ = −θ̂``, ``θ̂ = (z cos φ, z sin φ, −ρ)``, ``φ̂ = (−sin φ, cos φ, 0)``."""
+    _, _, rho, c, s = _location(x0, x1, x2)
+    return -d_theta * s - d_phi * x2 * c, d_theta * c - d_phi * x2 * s, d_phi * rho
+
+
+@njit(cache=True)
+def synthesis_sums(R, x, rows, w, F, d_theta, d_phi, sign, order, E, torque):
+    """Add ``sign Σ w_p F_p`` to ``E[q]`` over the pairs ``p`` of orientation ``q = rows[p]``, and for ``order ≥ 1``
+    set ``torque[q] = sign R_q Σ w_p x_p × g_p`` (:func:`_torque_density`); ``F`` unused when empty."""
+    body = np.zeros((R.shape[0], 3))
+    for p in range(rows.shape[0]):
+        q = rows[p]
+        if F.shape[0] > 0:
+            E[q] += sign * w[p] * F[p]
+        if order >= 1:
+            t0, t1, t2 = _torque_density(x[p, 0], x[p, 1], x[p, 2], d_theta[p], d_phi[p])
+            body[q, 0] += w[p] * t0
+            body[q, 1] += w[p] * t1
+            body[q, 2] += w[p] * t2
+    if order >= 1:
+        for q in range(R.shape[0]):
+            for a in range(3):
+                torque[q, a] = sign * (R[q, a, 0] * body[q, 0] + R[q, a, 1] * body[q, 1] + R[q, a, 2] * body[q, 2])
+
+
+@njit(cache=True)
+def synthesis_columns(R, x, rows, cols, d_theta, d_phi, sign, K):
+    """``K[q, :, k] = sign R_q (x × g)`` for each pair ``p`` (``q = rows[p]``, ``k = cols[p]``)."""
+    for p in range(rows.shape[0]):
+        q, k = rows[p], cols[p]
+        t0, t1, t2 = _torque_density(x[p, 0], x[p, 1], x[p, 2], d_theta[p], d_phi[p])
+        for a in range(3):
+            K[q, a, k] = sign * (R[q, a, 0] * t0 + R[q, a, 1] * t1 + R[q, a, 2] * t2)
+
+
 @njit(cache=True)
 def _norm(v):
     return math.sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2])

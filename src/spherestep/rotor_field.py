@@ -186,23 +186,27 @@ class RotorField:
         return (F if value else None), (g if order >= 1 else None), ((lap, hess) if order >= 2 else None)
 
     # --- spherical-harmonic synthesis (ducc0) -------------------------------------------------------------
-    def _harmonic(self, x: np.ndarray, order: int, value: bool):
+    def synthesis(self, loc: np.ndarray, spin: int = 0, alm: np.ndarray | None = None,
+                  mode: str = "STANDARD") -> np.ndarray:
+        """ducc0's synthesis of ``alm`` (default ``F``'s) at ``loc (P, 2)`` (``θ, φ``): ``(spin + 1 or 1, P)``;
+        ``spin = 1, mode = "DERIV1"`` gives the gradient's ``(g_θ, g_φ)``."""
         from ducc0.sht import synthesis_general
 
-        rho = np.sqrt(x[:, 0] * x[:, 0] + x[:, 1] * x[:, 1])  # sin θ, accurate near the poles (unlike √(1 − z²))
+        return synthesis_general(alm=self.alm if alm is None else alm, spin=spin, mode=mode, lmax=self.lmax,
+                                 loc=loc, epsilon=self.epsilon, nthreads=self.nthreads)
+
+    def _harmonic(self, x: np.ndarray, order: int, value: bool):
+        from ._zonal_sums import locations
+
+        x = np.ascontiguousarray(x, dtype=float)
+        loc, frame = np.empty((len(x), 2)), np.empty((len(x), 3))
+        locations(x, loc, frame)
+        rho, cos_p, sin_p = frame.T  # ρ = sin θ from x and y, accurate near the poles (unlike √(1 − z²))
         z = x[:, 2]
-        loc = np.empty((len(x), 2))
-        np.arctan2(rho, z, out=loc[:, 0])
-        phi = np.arctan2(x[:, 1], x[:, 0])
-        loc[:, 1] = np.where(phi < 0, phi + 2 * np.pi, phi)
-        common = dict(lmax=self.lmax, loc=loc, epsilon=self.epsilon, nthreads=self.nthreads)
-        F = synthesis_general(alm=self.alm, spin=0, **common)[0] if value else None
+        F = self.synthesis(loc, 0)[0] if value else None
         if order == 0:
             return F, None, None
-        on_axis = rho == 0.0  # there φ = 0 (arctan2(0, 0)), as in loc
-        safe = np.where(on_axis, 1.0, rho)
-        cos_p, sin_p = np.where(on_axis, 1.0, x[:, 0] / safe), x[:, 1] / safe
-        d_theta, d_phi = synthesis_general(alm=self.alm, spin=1, mode="DERIV1", **common)
+        d_theta, d_phi = self.synthesis(loc, 1, mode="DERIV1")
         # g = ∂_θF θ̂ + (∂_φF / sin θ) φ̂, θ̂ = (cos θ cos φ, cos θ sin φ, −sin θ), φ̂ = (−sin φ, cos φ, 0)
         a = d_theta * z
         g = np.empty_like(x)
@@ -211,8 +215,8 @@ class RotorField:
         np.multiply(d_theta, -rho, out=g[:, 2])
         if order == 1:
             return F, g, None
-        lap = synthesis_general(alm=self._laplacian_alm, spin=0, **common)[0]
-        q, u = synthesis_general(alm=self._spin2_alm, spin=2, mode="GRAD_ONLY", **common)
+        lap = self.synthesis(loc, 0, self._laplacian_alm)[0]
+        q, u = self.synthesis(loc, 2, self._spin2_alm, "GRAD_ONLY")
         e_theta = np.stack([z * cos_p, z * sin_p, -rho], axis=-1)
         e_phi = np.stack([-sin_p, cos_p, np.zeros_like(rho)], axis=-1)
         tt = e_theta[:, :, None] * e_theta[:, None, :]
@@ -263,7 +267,10 @@ def fast_evaluate(field: RotorField, sign: float, coils: np.ndarray, R: np.ndarr
     lead = np.broadcast_shapes(R.shape[:-2], c.shape[:-1])
     Rf = (R if R.shape[:-2] == lead else np.broadcast_to(R, lead + (3, 3))).reshape(-1, 3, 3)
     cf = (c if c.shape[:-1] == lead else np.broadcast_to(c, lead + c.shape[-1:])).reshape(-1, c.shape[-1])
-    if field.compiled is not None and (field.lmax is None or np.count_nonzero(cf) < field.direct_below):
+    pairs = np.count_nonzero(cf)
+    if field.lmax is not None and pairs >= field.direct_below and order <= 1:
+        return _synthesised(field, sign, coils, Rf, cf, order, constant, value, lead)
+    if field.compiled is not None and (field.lmax is None or pairs < field.direct_below):
         from ._zonal_sums import batch_evaluate
 
         n = len(Rf)
@@ -300,6 +307,27 @@ def fast_evaluate(field: RotorField, sign: float, coils: np.ndarray, R: np.ndarr
     return tuple(None if a is None else a.reshape(lead + a.shape[1:]) for a in out)
 
 
+def _synthesised(field: RotorField, sign: float, coils: np.ndarray, Rf: np.ndarray, cf: np.ndarray, order: int,
+                 constant, value: bool, lead: tuple) -> tuple[np.ndarray, ...]:
+    """:func:`fast_evaluate` (``order ≤ 1``) of a large batch ``Rf (B, 3, 3)``, ``cf (B, N)`` by ducc0's syntheses
+    at the energised pairs, their positions and sums in compiled loops
+    (:func:`spherestep._zonal_sums.pair_locations`, :func:`~spherestep._zonal_sums.synthesis_sums`)."""
+    from ._zonal_sums import pair_locations, synthesis_sums
+
+    rows, cols = np.nonzero(cf)
+    x, loc = np.empty((len(rows), 3)), np.empty((len(rows), 2))
+    pair_locations(np.ascontiguousarray(Rf), coils, rows, cols, x, loc)
+    F = field.synthesis(loc)[0] if value else _EMPTY
+    d_theta, d_phi = field.synthesis(loc, 1, mode="DERIV1") if order >= 1 else (_EMPTY, _EMPTY)
+    energy = np.array(np.broadcast_to(constant, lead), dtype=float).reshape(-1) if value else _EMPTY
+    torque = np.empty((len(Rf), 3) if order >= 1 else (0, 3))
+    synthesis_sums(Rf, x, rows, cf[rows, cols], F, d_theta, d_phi, float(sign), order, energy, torque)
+    return (energy.reshape(lead) if value else None,) + ((torque.reshape(lead + (3,)),) if order >= 1 else ())
+
+
+_EMPTY = np.empty(0)
+
+
 class _Cache(dict):
     """Small constant arrays of the compiled calls, built once per key (a fast path's call should not build
     them): ``make(key)``."""
@@ -323,6 +351,17 @@ def fast_torque_matrix(field: RotorField, sign: float, coils: np.ndarray, failed
     lead = R.shape[:-2]
     Rf = R.reshape(-1, 3, 3)
     live = np.setdiff1d(np.arange(len(coils)), failed)
+    if field.lmax is not None and len(Rf) * len(live) >= field.direct_below:  # ducc0, glued by compiled loops
+        from ._zonal_sums import pair_locations, synthesis_columns
+
+        rows, cols = np.repeat(np.arange(len(Rf)), len(live)), np.tile(live, len(Rf))
+        x, loc = np.empty((len(rows), 3)), np.empty((len(rows), 2))
+        Rc = np.ascontiguousarray(Rf)
+        pair_locations(Rc, coils, rows, cols, x, loc)
+        d_theta, d_phi = field.synthesis(loc, 1, mode="DERIV1")
+        out = np.zeros((len(Rf), 3, len(coils)))
+        synthesis_columns(Rc, x, rows, cols, d_theta, d_phi, float(sign), out)
+        return out.reshape(lead + (3, len(coils)))
     x = coils[live] @ Rf  # (K, n, 3)
     g = field.fields(x.reshape(-1, 3), 1, value=False)[1].reshape(x.shape)
     out = np.zeros((len(Rf), 3, len(coils)))
