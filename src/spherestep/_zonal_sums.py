@@ -26,7 +26,9 @@ by one pass of dot products, compacted without branches, then evaluated.
 The rest builds on :func:`zonal_fields`: :func:`terms_evaluate` gives the energy, fixed-frame torque and Hessian
 of a sum of zonal terms at one orientation (the formulas of :mod:`spherestep.rotor_field`),
 :func:`batch_evaluate` over a batch, :func:`integrate` the rotor's Yoshida–Verlet steps and :func:`descend` the
-safeguarded Newton descent of :func:`spherestep.statics.equilibrium`, step for step.
+safeguarded Newton descent of :func:`spherestep.statics.equilibrium`, step for step. For large batches, where
+ducc0's syntheses evaluate ``F`` and its gradient, :func:`pair_locations` and :func:`synthesis_sums` /
+:func:`synthesis_columns` are the loops around them (positions in, energies, torques and ``K(R)`` out).
 
 Why compiled: for the few points of one orientation (a simulation step, a Newton iteration) the NumPy form costs
 ~40 array operations whose fixed overhead (1–5 µs each) dominates; the compiled loops cost ~5–12 ns per

@@ -29,7 +29,9 @@ Two evaluators return the same fields (``F``, ``g``, ``Hess F`` at unit vectors 
   spin 0 for ``F``; spin 1 (``DERIV1``, the gradient ``(∂_θ F, ∂_φ F / sin θ)``) for ``g``; for the Hessian
   spin 0 with ``−l(l+1) f_lm`` (``ΔF``) and spin 2 with ``√((l−1)l(l+1)(l+2)) f_lm`` (the trace-free part,
   ``ð²F``, in the ``θ̂, φ̂`` basis). Each synthesis has a fixed cost (a Legendre transform and an FFT of about
-  ``(2 lmax)²`` points, ~0.7 ms for ``lmax = 68``) and then ~0.15 µs per point, so it wins for large batches.
+  ``(2 lmax)²`` points, ~0.7 ms for ``lmax = 68``) and then ~0.15 µs per point, so it wins for large batches;
+  there the points' positions and the sums over the coils run compiled (:func:`spherestep._zonal_sums.
+  pair_locations`, ``synthesis_sums``, ``synthesis_columns``; the torque density ``x × g = g_θ φ̂ − g_φ θ̂``).
 * ``"direct"``: the sum over the poles with the model's own kernel ``h, h', h''`` (``O(M)`` per point, no
   fixed cost) — compiled (:mod:`spherestep._zonal_sums`, numba) when the kernel comes in one of its compiled
   forms, NumPy otherwise: used below ``direct_below`` points, where it is faster, for fields given without ``lmax``
