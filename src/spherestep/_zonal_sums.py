@@ -385,23 +385,48 @@ def _torque_density(x0, x1, x2, d_theta, d_phi):
 
 
 @njit(cache=True)
-def synthesis_sums(R, x, rows, w, F, d_theta, d_phi, sign, order, E, torque):
-    """Add ``sign Σ w_p F_p`` to ``E[q]`` over the pairs ``p`` of orientation ``q = rows[p]``, and for ``order ≥ 1``
-    set ``torque[q] = sign R_q Σ w_p x_p × g_p`` (:func:`_torque_density`); ``F`` unused when empty."""
+def synthesis_sums(R, x, rows, w, F, d_theta, d_phi, lap, q, u, spin2_sign, sign, order, E, torque, H):
+    """Add ``sign Σ w_p F_p`` to ``E[q]`` over the pairs ``p`` of orientation ``r = rows[p]`` (``F`` unused when
+    empty); for ``order ≥ 1`` set ``torque[r] = sign R_r Σ w_p x_p × g_p`` (:func:`_torque_density`); for
+    ``order = 2`` ``H[r] = sign R_r (Σ w_p B_p) R_rᵀ`` with the bracket of :mod:`spherestep.rotor_field` in the
+    ``θ̂, φ̂`` basis: ``B = ½ΔF (θ̂θ̂ᵀ + φ̂φ̂ᵀ) − σ½Q (θ̂θ̂ᵀ − φ̂φ̂ᵀ) − σ½U (θ̂φ̂ᵀ + φ̂θ̂ᵀ) + ½(g xᵀ + x gᵀ)`` from
+    ducc0's ``ΔF`` and spin-2 ``(Q, U)`` (``σ = spin2_sign``)."""
     body = np.zeros((R.shape[0], 3))
+    Hb = np.zeros((R.shape[0] if order >= 2 else 0, 3, 3))
     for p in range(rows.shape[0]):
-        q = rows[p]
+        r = rows[p]
+        wp = w[p]
         if F.shape[0] > 0:
-            E[q] += sign * w[p] * F[p]
+            E[r] += sign * wp * F[p]
         if order >= 1:
-            t0, t1, t2 = _torque_density(x[p, 0], x[p, 1], x[p, 2], d_theta[p], d_phi[p])
-            body[q, 0] += w[p] * t0
-            body[q, 1] += w[p] * t1
-            body[q, 2] += w[p] * t2
+            x0, x1, x2 = x[p, 0], x[p, 1], x[p, 2]
+            dt, dp = d_theta[p], d_phi[p]
+            t0, t1, t2 = _torque_density(x0, x1, x2, dt, dp)
+            body[r, 0] += wp * t0
+            body[r, 1] += wp * t1
+            body[r, 2] += wp * t2
+            if order >= 2:
+                _, _, rho, c, s = _location(x0, x1, x2)
+                th = (x2 * c, x2 * s, -rho)
+                ph = (-s, c, 0.0)
+                xs = (x0, x1, x2)
+                g = (dt * th[0] + dp * ph[0], dt * th[1] + dp * ph[1], dt * th[2] + dp * ph[2])
+                half_lap, half_q, half_u = 0.5 * lap[p], 0.5 * spin2_sign * q[p], 0.5 * spin2_sign * u[p]
+                for a in range(3):
+                    for b in range(3):
+                        tt, pp = th[a] * th[b], ph[a] * ph[b]
+                        Hb[r, a, b] += wp * (half_lap * (tt + pp) - half_q * (tt - pp)
+                                             - half_u * (th[a] * ph[b] + ph[a] * th[b])
+                                             + 0.5 * (g[a] * xs[b] + xs[a] * g[b]))
     if order >= 1:
-        for q in range(R.shape[0]):
+        for r in range(R.shape[0]):
             for a in range(3):
-                torque[q, a] = sign * (R[q, a, 0] * body[q, 0] + R[q, a, 1] * body[q, 1] + R[q, a, 2] * body[q, 2])
+                torque[r, a] = sign * (R[r, a, 0] * body[r, 0] + R[r, a, 1] * body[r, 1] + R[r, a, 2] * body[r, 2])
+            if order >= 2:
+                _rotate(R[r], Hb[r], H[r])
+                for a in range(3):
+                    for b in range(3):
+                        H[r, a, b] *= sign
 
 
 @njit(cache=True)

@@ -270,7 +270,7 @@ def fast_evaluate(field: RotorField, sign: float, coils: np.ndarray, R: np.ndarr
     Rf = (R if R.shape[:-2] == lead else np.broadcast_to(R, lead + (3, 3))).reshape(-1, 3, 3)
     cf = (c if c.shape[:-1] == lead else np.broadcast_to(c, lead + c.shape[-1:])).reshape(-1, c.shape[-1])
     pairs = np.count_nonzero(cf)
-    if field.lmax is not None and pairs >= field.direct_below and order <= 1:
+    if field.lmax is not None and pairs >= field.direct_below:
         return _synthesised(field, sign, coils, Rf, cf, order, constant, value, lead)
     if field.compiled is not None and (field.lmax is None or pairs < field.direct_below):
         from ._zonal_sums import batch_evaluate
@@ -311,20 +311,26 @@ def fast_evaluate(field: RotorField, sign: float, coils: np.ndarray, R: np.ndarr
 
 def _synthesised(field: RotorField, sign: float, coils: np.ndarray, Rf: np.ndarray, cf: np.ndarray, order: int,
                  constant, value: bool, lead: tuple) -> tuple[np.ndarray, ...]:
-    """:func:`fast_evaluate` (``order ≤ 1``) of a large batch ``Rf (B, 3, 3)``, ``cf (B, N)`` by ducc0's syntheses
-    at the energised pairs, their positions and sums in compiled loops
-    (:func:`spherestep._zonal_sums.pair_locations`, :func:`~spherestep._zonal_sums.synthesis_sums`)."""
+    """:func:`fast_evaluate` of a large batch ``Rf (B, 3, 3)``, ``cf (B, N)`` by ducc0's syntheses at the energised
+    pairs, their positions and sums in compiled loops (:func:`spherestep._zonal_sums.pair_locations`,
+    :func:`~spherestep._zonal_sums.synthesis_sums`)."""
     from ._zonal_sums import pair_locations, synthesis_sums
 
     rows, cols = np.nonzero(cf)
     x, loc = np.empty((len(rows), 3)), np.empty((len(rows), 2))
-    pair_locations(np.ascontiguousarray(Rf), coils, rows, cols, x, loc)
+    Rc = np.ascontiguousarray(Rf)
+    pair_locations(Rc, coils, rows, cols, x, loc)
     F = field.synthesis(loc)[0] if value else _EMPTY
     d_theta, d_phi = field.synthesis(loc, 1, mode="DERIV1") if order >= 1 else (_EMPTY, _EMPTY)
+    lap = field.synthesis(loc, 0, field._laplacian_alm)[0] if order >= 2 else _EMPTY
+    q, u = field.synthesis(loc, 2, field._spin2_alm, "GRAD_ONLY") if order >= 2 else (_EMPTY, _EMPTY)
     energy = np.array(np.broadcast_to(constant, lead), dtype=float).reshape(-1) if value else _EMPTY
-    torque = np.empty((len(Rf), 3) if order >= 1 else (0, 3))
-    synthesis_sums(Rf, x, rows, cf[rows, cols], F, d_theta, d_phi, float(sign), order, energy, torque)
-    return (energy.reshape(lead) if value else None,) + ((torque.reshape(lead + (3,)),) if order >= 1 else ())
+    torque = np.empty((len(Rf) if order >= 1 else 0, 3))
+    H = np.empty((len(Rf) if order >= 2 else 0, 3, 3))
+    synthesis_sums(Rc, x, rows, cf[rows, cols], F, d_theta, d_phi, lap, q, u, SPIN2_SIGN, float(sign), order, energy,
+                   torque, H)
+    return (energy.reshape(lead) if value else None,) + tuple(a.reshape(lead + a.shape[1:])
+                                                               for a in (torque, H)[:order])
 
 
 _EMPTY = np.empty(0)
