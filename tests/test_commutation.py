@@ -176,6 +176,95 @@ def test_planner_activations_are_the_trimmed_state_activations(proto):
         got = _activations(states, proto, target, ids, max_coils)
         want = [coil_currents(proto, _trim(states.held(int(i)), proto, target, max_coils)) for i in ids]
         assert np.array_equal(got, np.array(want))
+    # no state holds more than max_coils pairs: the ranking is skipped, the currents the same
+    assert np.array_equal(_activations(states, proto, target, ids, 4, ranked=False), got)
+
+
+def test_planner_distinct_keeps_each_activation_at_its_last_offer():
+    from spherestep.commutation._potential_kernels import distinct
+
+    options = np.array([[1.0, 0], [0, 1], [1, 0], [0, -1], [0, 1], [1, 0]])
+    assert distinct(options).tolist() == [5, 4, 3]
+
+
+def test_planner_best_is_the_nearest_strict_minimum_within_reach():
+    from spherestep.commutation._potential_kernels import best
+
+    here, target = np.eye(3), so3.rot([0, 0, 1], 0.1)
+    R = np.array([so3.rot([0, 0, 1], a) for a in (0.09, 0.05, 0.5, 0.1, 0.05)])
+    H = np.array([np.diag([-1.0, 2, 3]), np.eye(3), np.eye(3), np.eye(3), np.eye(3)])  # 0 a saddle, 2 far, 3 unconverged
+    converged = np.array([True, True, True, False, True])
+    back = np.swapaxes(R, 1, 2)
+    assert best(back @ here, back @ target, H, converged, 0.3) == 1  # of 1 and 4 (equal), the first
+    assert best(back @ here, back @ target, np.eye(3)[None].repeat(5, 0), converged, 0.3) == 0  # no saddle: the nearest
+    assert best(back @ here, back @ target, H, converged, 0.01) == -1
+
+
+def _reference_plan(design, targets, model, max_coils=4, candidates=8, max_step=None):
+    """The potential planner's loop written plainly with the public statics (one equilibrium call per step, NumPy
+    Park distances): what plan_potential must reproduce step for step."""
+    from spherestep.commutation.geometric import BLOCKED, start_state
+    from spherestep.commutation.potential_planner import _activations, _trim
+    from spherestep.potential import coil_currents
+    from spherestep.statics import equilibrium
+
+    states, reach = design.states(), design.max_step if max_step is None else max_step
+    first = start_state(states, targets[0])
+    coils = _trim(states.held(first), design, states.rotations[first], max_coils)
+    current = coil_currents(design, coils)
+    here = equilibrium(model, states.rotations[first], current).rotation
+    _, near = states.nearest(targets, k=candidates)
+    out = [(coils, here, "ok")]
+    for i in range(1, len(targets)):
+        around = states.within(here, reach)
+        around = around[np.argsort(so3.distance(states.rotations[around], targets[i]))[:candidates]]
+        ids = np.concatenate([near[i], around])
+        options = np.vstack([current[None], _activations(states, design, targets[i], ids, max_coils)])
+        unique = list({row.tobytes(): n for n, row in enumerate(options)}.values())
+        eq = equilibrium(model, here, options[unique])
+        valid = eq.is_minimum & (so3.distance(eq.rotation, here) <= reach)
+        if not valid.any():
+            out.append((coils, here, BLOCKED))
+            continue
+        best = int(np.argmin(np.where(valid, so3.distance(eq.rotation, targets[i]), np.inf)))
+        if unique[best] != 0:
+            coils = _trim(states.held(int(ids[unique[best] - 1])), design, targets[i], max_coils)
+            current = options[unique[best]]
+        here = eq.rotation[best]
+        out.append((coils, here, "hold" if unique[best] == 0 else "ok"))
+    return out
+
+
+@pytest.mark.parametrize("case", ["turn", "two coils", "standing", "short reach", "failed coil"])
+def test_potential_planner_matches_its_plain_loop(proto, model, case):
+    """plan_potential (inputs checked once, the descent called directly, compiled bookkeeping) chooses, step by
+    step, the coils of the plain loop above, in the same order, with the same status, at the same equilibria."""
+    from spherestep.commutation import plan_potential
+    from spherestep.potential import MotorPotential
+
+    design, states, kwargs = proto, proto.states(), {}
+    T = about_axis([0.3, -1, 0.6], math.radians(120), 16, start=states.rotations[11])
+    if case == "two coils":
+        kwargs = {"max_coils": 2}  # states holding 3 or 4 pairs: ranked by closeness
+    elif case == "standing":  # targets repeated, the last on a state: ties between symmetric states
+        T = np.concatenate([T[:4], np.repeat(T[4:5], 4, axis=0), np.repeat(states.rotations[11][None], 4, axis=0)])
+    elif case == "short reach":  # hardly any equilibrium within reach: "hold" steps
+        kwargs = {"max_step": 0.03 * proto.max_step}
+    elif case == "failed coil":
+        design = proto.without_coils([4])
+        T = about_axis([1, 0, 0], math.radians(60), 8, start=design.states().rotations[0])
+    energy = model if design is proto else MotorPotential(design)
+    plan = plan_potential(design, T, energy, **kwargs)
+    want = _reference_plan(design, T, energy, **kwargs)
+    assert [list(s.coils.items()) for s in plan.steps] == [list(c.items()) for c, _, _ in want]
+    assert [s.status for s in plan.steps] == [status for _, _, status in want]
+    assert ("hold" in [s.status for s in plan.steps]) == (case == "short reach")
+    assert np.max(np.abs(np.array([s.achieved for s in plan.steps]) - np.array([h for _, h, _ in want]))) < 1e-12
+    u, v = design.rotor.centers, design.stator.centers  # held: the poles within tolerance of an energised coil
+    for s in plan.steps:
+        ks = list(s.coils)
+        near = (s.achieved @ u.T).T @ v[ks].T >= np.cos(design.state_tol)
+        assert s.held == [(int(j), ks[c]) for j, c in zip(*np.nonzero(near))]
 
 
 def test_potential_planner_beats_or_matches_geometric_on_a_turn(proto, model):

@@ -61,6 +61,7 @@ from ._threads import single_blas_thread
 
 HESSIAN_STEP = 1e-6  # rad, central differences of the torque
 CURRENT_STEP = 1e-3  # per unit current, central differences in the currents (exact for quadratic models)
+GTOL, MAX_ITER, MAX_STEP = 1e-10, 100, math.radians(5.0)  # equilibrium's defaults (gtol, max_iter, max_step)
 
 
 @runtime_checkable
@@ -236,8 +237,8 @@ def _prepare(model, R0, currents, name: str = "R0") -> tuple[np.ndarray, np.ndar
 
 
 @single_blas_thread
-def equilibrium(model: TorqueModel, R0, currents, *, gtol: float = 1e-10, max_iter: int = 100,
-                max_step: float = math.radians(5.0), compiled: bool = True) -> Equilibrium:
+def equilibrium(model: TorqueModel, R0, currents, *, gtol: float = GTOL, max_iter: int = MAX_ITER,
+                max_step: float = MAX_STEP, compiled: bool = True) -> Equilibrium:
     """Descend the energy from ``R0`` to a stationary point (normally the local minimum), batched.
 
     ``R0`` ``(..., 3, 3)`` and ``currents`` ``(..., N)`` broadcast. ``gtol``: torque tolerance relative to
@@ -257,10 +258,17 @@ def equilibrium(model: TorqueModel, R0, currents, *, gtol: float = 1e-10, max_it
     R, c, lead = _prepare(model, R0, currents)
     if isinstance(gtol, bool) or not isinstance(gtol, (int, float)) or not 0 < gtol < 1:
         raise bad_value("gtol", "a number in (0, 1)", gtol)
-    max_iter = _count(max_iter, "max_iter")
-    max_step = _positive(max_step, "max_step")
+    return _result(*_descend(model, R, c, gtol=gtol, max_iter=_count(max_iter, "max_iter"),
+                             max_step=_positive(max_step, "max_step"), compiled=compiled), lead)
+
+
+def _descend(model: TorqueModel, R: np.ndarray, c: np.ndarray, *, gtol: float = GTOL, max_iter: int = MAX_ITER,
+             max_step: float = MAX_STEP, compiled: bool = True) -> tuple[np.ndarray, ...]:
+    """:func:`equilibrium`'s descent of checked inputs — ``R (B, 3, 3)`` (overwritten) and ``c (B, N)`` as
+    :func:`_prepare` leaves them — with valid options: the end points' ``(R, E, τ, H, iterations, converged)``,
+    flat (:func:`_result` makes the :class:`Equilibrium`). For loops that check their inputs once."""
     scale = np.asarray(model.torque_reference(c), dtype=float)
-    if np.any(scale <= 0):  # nothing energised and no detent: every orientation is at rest
+    if (scale <= 0).any():  # nothing energised and no detent: every orientation is at rest
         scale = np.where(scale > 0, scale, np.finfo(float).tiny)
     tol = gtol * scale
     packed = _packed(model, c) if compiled else None
@@ -270,9 +278,8 @@ def equilibrium(model: TorqueModel, R0, currents, *, gtol: float = 1e-10, max_it
         n = len(R)
         out = (np.empty((n, 3, 3)), np.empty(n), np.empty((n, 3)), np.empty((n, 3, 3)), np.zeros(n, dtype=np.int64),
                np.zeros(n, dtype=bool))
-        descend(*packed[:2], R, *packed[2:], np.ascontiguousarray(np.broadcast_to(tol, n), dtype=float), max_iter,
-                max_step, *out)
-        return _result(*out, lead)
+        descend(*packed[:2], R, *packed[2:], _filled(tol, (n,)), max_iter, max_step, *out)
+        return out
     E, tau, H = model.evaluate(R, c, 2)
     iterations = np.zeros(len(R), dtype=int)
     converged = np.linalg.norm(tau, axis=-1) <= tol
@@ -309,7 +316,7 @@ def equilibrium(model: TorqueModel, R0, currents, *, gtol: float = 1e-10, max_it
         iterations[moved] += 1
         stalled[active[~accepted]] = True
         converged[moved] = np.linalg.norm(tau[moved], axis=-1) <= tol[moved]
-    return _result(R, E, tau, H, iterations, converged, lead)
+    return R, E, tau, H, iterations, converged
 
 
 def _packed(model, c: np.ndarray) -> tuple | None:
@@ -326,11 +333,16 @@ def _packed(model, c: np.ndarray) -> tuple | None:
     packed = pack_terms(terms)
     if packed is None:
         return None
-    C = np.ascontiguousarray(np.broadcast_to(packed[3], (len(c),) + packed[3].shape[-2:]))
+    C = _filled(packed[3], (len(c),) + packed[3].shape[-2:])
     zonal_constant = getattr(model, "zonal_constant", None)
-    constant = np.zeros(len(c)) if zonal_constant is None else \
-        np.ascontiguousarray(np.broadcast_to(zonal_constant(c), len(c)), dtype=float)
+    constant = np.zeros(len(c)) if zonal_constant is None else _filled(zonal_constant(c), (len(c),))
     return packed[:3] + (C,) + packed[4:] + (constant,)
+
+
+def _filled(x, shape: tuple) -> np.ndarray:
+    """``x`` broadcast to ``shape`` as a C-contiguous float array, without copying one that already is."""
+    x = np.asarray(x, dtype=float)
+    return np.ascontiguousarray(x if x.shape == shape else np.broadcast_to(x, shape))
 
 
 def _result(R, E, tau, H, iterations, converged, lead) -> Equilibrium:

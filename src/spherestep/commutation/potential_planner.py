@@ -9,7 +9,14 @@ states within one step of ``R̃_{i−1}`` nearest ``R_i`` (so a lagging rotor ca
 ``max_coils`` pairs whose poles sit closest to their coils at ``R_i``, plus the current one (staying). An equilibrium counts only if the descent converged to a strict minimum within ``max_step`` of
 ``R̃_{i−1}`` (one step's pull, as in the geometric planner). The plan's ``achieved`` orientations are these
 equilibria, not the geometric states, so a simulated rotor settles on them; ``held`` lists the pole–coil
-pairs within the design's tolerance at the equilibrium.
+pairs within the design's tolerance at the equilibrium. An activation offered twice stands for its last offer
+(so a step keeping the coils is ``"hold"`` only when no candidate state offers them too).
+
+Cost: the inputs are checked once per plan (the model's failed coils at every step); each step's candidates
+descend together in one call of :func:`spherestep.statics.equilibrium`'s own descent; the bookkeeping around
+it — candidate currents, distinct activations, the choice — runs compiled (:mod:`._potential_kernels`) on
+NumPy's products ``R1ᵀ R2``, so that Park distances, and their ties, come out bit for bit as
+:func:`spherestep.so3.distance`'s.
 """
 
 from __future__ import annotations
@@ -36,21 +43,19 @@ def _trim(held: list[tuple[int, int]], design, target, max_coils: int) -> dict[i
     return {k: int(design.polarity[j]) for j, k in held}
 
 
-def _activations(states, design, target, ids: np.ndarray, max_coils: int) -> np.ndarray:
+def _activations(states, design, target, ids: np.ndarray, max_coils: int, ranked: bool = True) -> np.ndarray:
     """The currents ``(len(ids), N)`` of :func:`_trim` applied to each of the states ``ids``, in one pass: every
-    held pair ranked within its state by closeness ``−(R u_j)·v_k`` at ``target``, the first ``max_coils`` kept."""
-    starts = states.offsets[ids]
-    counts = states.offsets[ids + 1] - starts
-    group = np.repeat(np.arange(len(ids)), counts)
-    first = np.repeat(np.cumsum(counts) - counts, counts)
-    rows = np.arange(counts.sum()) - first + np.repeat(starts, counts)
-    j, k = states.pairs[rows, 0], states.pairs[rows, 1]
-    closeness = -np.einsum("pa,pa->p", design.rotor.centers[j] @ target.T, design.stator.centers[k])
-    order = np.lexsort((closeness, group))
-    keep = order[np.arange(len(order)) - first < max_coils]
-    currents = np.zeros((len(ids), len(design.stator)))
-    currents[group[keep], k[keep]] = design.polarity[j[keep]]
-    return currents
+    held pair ranked within its state by closeness ``−(R u_j)·v_k`` at ``target``, the first ``max_coils`` kept.
+    ``ranked=False`` skips the ranking, for states none of which holds more than ``max_coils`` pairs."""
+    from ._potential_kernels import closest_pairs
+
+    closeness = np.zeros(0)
+    if ranked:
+        rows = np.concatenate([np.arange(states.offsets[s], states.offsets[s + 1]) for s in ids])
+        j, k = states.pairs[rows, 0], states.pairs[rows, 1]
+        closeness = -np.einsum("pa,pa->p", design.rotor.centers[j] @ target.T, design.stator.centers[k])
+    return closest_pairs(states.offsets, states.pairs, design.polarity, ids, closeness, max_coils,
+                         len(design.stator))
 
 
 @single_blas_thread
@@ -59,7 +64,8 @@ def plan_potential(design, targets, model, *, max_coils: int = DEFAULT_MAX_COILS
                    start: int | None = None) -> Plan:
     """Commutate ``targets (n+1, 3, 3)`` with the energy ``model`` (a
     :class:`~spherestep.potential.MotorPotential` of ``design``); see the module docstring."""
-    from ..statics import equilibrium
+    from ..statics import _descend, as_currents, equilibrium
+    from ._potential_kernels import angles, best, distinct
 
     targets = check_targets(targets)
     if isinstance(max_coils, bool) or not isinstance(max_coils, (int, np.integer)) or max_coils < 2:
@@ -72,42 +78,55 @@ def plan_potential(design, targets, model, *, max_coils: int = DEFAULT_MAX_COILS
     first = start_state(states, targets[0]) if start is None else int(start)
     coils = _trim(states.held(first), design, states.rotations[first], max_coils)
     current = coil_currents(coils, N)
-    here = equilibrium(model, states.rotations[first], current).rotation
+    here = equilibrium(model, states.rotations[first], current).rotation  # checks the model and N, once
     _, near = states.nearest(targets, k=candidates)
+    ranked = bool(states.counts.max() > max_coils)  # some state holds more pairs than may be energised
     rows = [(targets[0], here, coils, "ok")]
     for i in range(1, len(targets)):
         # the states nearest the target, and — so a lagging rotor catches up — the reachable ones nearest it
         around = states.within(here, reach)
-        around = around[np.argsort(so3.distance(states.rotations[around], targets[i], trusted=True))[:candidates]]
+        turns = np.swapaxes(states.rotations[around], 1, 2) @ targets[i]  # Park distance: angles of R_sᵀ R_i
+        around = around[np.argsort(angles(turns))[:candidates]]
         ids = np.concatenate([near[i], around])
-        options = np.vstack([current[None], _activations(states, design, targets[i], ids, max_coils)])
-        unique = list({row.tobytes(): n for n, row in enumerate(options)}.values())  # first of each activation
-        eq = equilibrium(model, here, options[unique])
-        valid = eq.converged & eq.is_minimum & (so3.distance(eq.rotation, here, trusted=True) <= reach)
-        if not valid.any():
+        options = np.concatenate([current[None], _activations(states, design, targets[i], ids, max_coils, ranked)])
+        unique = distinct(options)  # the last of each activation
+        c = options[unique]
+        if model.failed:  # the currents' one check left per step (their count was checked above)
+            as_currents(c, model.coil_count, model.failed)
+        R, _, _, H, _, converged = _descend(model, np.repeat(here[None], len(c), axis=0), c)
+        back = np.swapaxes(R, 1, 2)  # R_bᵀ: the equilibria's distances to here and to the target
+        b = best(back @ here, back @ targets[i], H, converged, reach)
+        if b < 0:
             rows.append((targets[i], here, coils, BLOCKED))
             continue
-        error = np.where(valid, so3.distance(eq.rotation, targets[i], trusted=True), np.inf)
-        best = int(np.argmin(error))
-        status = "hold" if unique[best] == 0 else "ok"
+        status = "hold" if unique[b] == 0 else "ok"
         if status == "ok":
-            coils = _trim(states.held(int(ids[unique[best] - 1])), design, targets[i], max_coils)
-            current = options[unique[best]]
-        here = eq.rotation[best]
+            coils = _trim(states.held(int(ids[unique[b] - 1])), design, targets[i], max_coils)
+            current = options[unique[b]]
+        here = R[b]
         rows.append((targets[i], here, coils, status))
     return _assemble(design, rows)
 
 
 def _assemble(design, rows) -> Plan:
-    """Build the :class:`Plan` from ``(target, achieved, coils, status)`` rows."""
-    u, v, tol = design.rotor.centers, design.stator.centers, design.state_tol
-    steps = []
-    for i, (target, achieved, coils, status) in enumerate(rows):
-        cos = (achieved @ u.T).T @ v[list(coils)].T if coils else np.zeros((len(u), 0))
-        ks = list(coils)
-        held = [(int(j), ks[c]) for j, c in zip(*np.nonzero(cos >= np.cos(tol)))]
-        steps.append(Step(index=i, target=target, achieved=achieved, error=float(so3.distance(achieved, target)),
-                          coils=dict(coils), held=held, status=status))
+    """Build the :class:`Plan` from ``(target, achieved, coils, status)`` rows; a step's ``held`` lists the pairs
+    of a pole within ``state_tol`` of an energised coil, by pole, then in the order of ``coils``."""
+    u, v = design.rotor.centers, design.stator.centers
+    targets, achieved = np.stack([row[0] for row in rows]), np.stack([row[1] for row in rows])
+    place = np.full((len(rows), len(v)), -1)  # place[i, k]: coil k's place in step i's coils, −1 if off
+    for i, row in enumerate(rows):
+        for n, k in enumerate(row[2]):
+            place[i, k] = n
+    step, coil = np.nonzero(place >= 0)  # the energised coils, step by step
+    cos = np.einsum("pam,pa->pm", (achieved @ u.T)[step], v[coil])  # theirs R_i u_j · v_k, (·, M)
+    p, j = np.nonzero(cos >= np.cos(design.state_tol))
+    order = np.lexsort((place[step[p], coil[p]], j, step[p]))  # by step, pole, place of the coil
+    p, j = p[order], j[order]
+    pairs, bounds = list(zip(j.tolist(), coil[p].tolist())), np.searchsorted(step[p], np.arange(len(rows) + 1))
+    errors = so3.distance(achieved, targets).tolist()
+    steps = [Step(index=n, target=target, achieved=here, error=errors[n], coils=dict(coils),
+                  held=pairs[bounds[n]:bounds[n + 1]], status=status)
+             for n, (target, here, coils, status) in enumerate(rows)]
     for a, b in zip(steps[:-1], steps[1:]):
         # the next pole: the pole nearest a newly energised coil at the next equilibrium, not held now
         mine = {j for j, _ in a.held}

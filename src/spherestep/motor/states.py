@@ -157,8 +157,11 @@ class StepperStates:
             found = [np.zeros(0, dtype=np.int64) for _ in range(int(np.prod(R.shape[:-2])))]
         else:
             tree, n = self._tree
-            hits = tree.query_ball_point(to_quaternion(R.reshape(-1, 3, 3)), chord_of_park(radius))
-            found = [np.unique(np.asarray(h, dtype=np.int64) % n) for h in hits]
+            q, chord = to_quaternion(R.reshape(-1, 3, 3)), chord_of_park(radius)
+            hits = [tree.query_ball_point(q[0], chord)] if R.ndim == 2 else tree.query_ball_point(q, chord)
+            # a state is +q and −q in the tree; both lie within a chord below 1 (Park distance 120°) of no point
+            distinct = np.sort if chord < 1.0 else np.unique
+            found = [distinct(np.asarray(h, dtype=np.int64) % n) for h in hits]
         if R.ndim == 2:
             return found[0]
         out = np.empty(len(found), dtype=object)
