@@ -352,13 +352,11 @@ def _location(x0, x1, x2):
 
 
 @njit(cache=True)
-def locations(x, loc, frame):
-    """``loc[p] = (θ, φ)`` of ``x[p]`` (ducc0's positions) and ``frame[p] = (ρ, cos φ, sin φ)``
-    (:func:`_location`)."""
+def locations(x, loc):
+    """``loc[p] = (θ, φ)`` of ``x[p]``: ducc0's positions (:func:`_location`)."""
     for p in range(x.shape[0]):
-        theta, phi, rho, c, s = _location(x[p, 0], x[p, 1], x[p, 2])
+        theta, phi, _, _, _ = _location(x[p, 0], x[p, 1], x[p, 2])
         loc[p, 0], loc[p, 1] = theta, phi
-        frame[p, 0], frame[p, 1], frame[p, 2] = rho, c, s
 
 
 @njit(cache=True)
@@ -376,23 +374,48 @@ def pair_locations(R, coils, rows, cols, x, loc):
         loc[p, 0], loc[p, 1] = theta, phi
 
 
-@njit(cache=True, inline="always")
-def _torque_density(x0, x1, x2, d_theta, d_phi):
-    """``x × g`` for ``g = g_θ θ̂ + g_φ φ̂`` (ducc0's spin-1 ``DERIV1`` pair, ``g_φ = ∂_φF / sin θ``):
-    ``x × θ̂ = φ̂``, ``x × φ̂ = −θ̂``, ``θ̂ = (z cos φ, z sin φ, −ρ)``, ``φ̂ = (−sin φ, cos φ, 0)``."""
+@njit(cache=True)
+def _spin_fields(x0, x1, x2, d_theta, d_phi, lap, q, u, spin2_sign, order, g, hess):
+    """``g = g_θ θ̂ + g_φ φ̂`` into ``g (3,)`` from ducc0's spin-1 ``DERIV1`` pair (``g_φ = ∂_φF / sin θ``), and for
+    ``order = 2`` ``Hess F = ½ΔF (θ̂θ̂ᵀ + φ̂φ̂ᵀ) + σ½Q (θ̂θ̂ᵀ − φ̂φ̂ᵀ) + σ½U (θ̂φ̂ᵀ + φ̂θ̂ᵀ)`` into ``hess (3, 3)`` from
+    the spin-0 ``ΔF`` and spin-2 ``(Q, U)`` (``σ = spin2_sign``, ducc0's sign: :mod:`spherestep.rotor_field`).
+    The tangent basis at ``x``: ``θ̂ = (z cos φ, z sin φ, −ρ)``, ``φ̂ = (−sin φ, cos φ, 0)`` (:func:`_location`)."""
     _, _, rho, c, s = _location(x0, x1, x2)
-    return -d_theta * s - d_phi * x2 * c, d_theta * c - d_phi * x2 * s, d_phi * rho
+    th = (x2 * c, x2 * s, -rho)
+    ph = (-s, c, 0.0)
+    for a in range(3):
+        g[a] = d_theta * th[a] + d_phi * ph[a]
+    if order >= 2:
+        half_lap, half_q, half_u = 0.5 * lap, 0.5 * spin2_sign * q, 0.5 * spin2_sign * u
+        for a in range(3):
+            for b in range(3):
+                tt, pp = th[a] * th[b], ph[a] * ph[b]
+                hess[a, b] = half_lap * (tt + pp) + half_q * (tt - pp) + half_u * (th[a] * ph[b] + ph[a] * th[b])
+
+
+@njit(cache=True)
+def synthesis_fields(x, d_theta, d_phi, lap, q, u, spin2_sign, order, g, hess):
+    """:func:`_spin_fields` at every ``x[p]``: ``g (P, 3)``, and for ``order = 2`` ``hess (P, 3, 3)`` (``lap, q,
+    u`` unused below)."""
+    scratch = np.empty((3, 3))
+    for p in range(x.shape[0]):
+        if order >= 2:
+            _spin_fields(x[p, 0], x[p, 1], x[p, 2], d_theta[p], d_phi[p], lap[p], q[p], u[p], spin2_sign, 2, g[p],
+                         hess[p])
+        else:
+            _spin_fields(x[p, 0], x[p, 1], x[p, 2], d_theta[p], d_phi[p], 0.0, 0.0, 0.0, spin2_sign, 1, g[p],
+                         scratch)
 
 
 @njit(cache=True)
 def synthesis_sums(R, x, rows, w, F, d_theta, d_phi, lap, q, u, spin2_sign, sign, order, E, torque, H):
-    """Add ``sign Σ w_p F_p`` to ``E[q]`` over the pairs ``p`` of orientation ``r = rows[p]`` (``F`` unused when
-    empty); for ``order ≥ 1`` set ``torque[r] = sign R_r Σ w_p x_p × g_p`` (:func:`_torque_density`); for
-    ``order = 2`` ``H[r] = sign R_r (Σ w_p B_p) R_rᵀ`` with the bracket of :mod:`spherestep.rotor_field` in the
-    ``θ̂, φ̂`` basis: ``B = ½ΔF (θ̂θ̂ᵀ + φ̂φ̂ᵀ) − σ½Q (θ̂θ̂ᵀ − φ̂φ̂ᵀ) − σ½U (θ̂φ̂ᵀ + φ̂θ̂ᵀ) + ½(g xᵀ + x gᵀ)`` from
-    ducc0's ``ΔF`` and spin-2 ``(Q, U)`` (``σ = spin2_sign``)."""
+    """Add ``sign Σ w_p F_p`` to ``E[r]`` over the pairs ``p`` of orientation ``r = rows[p]`` (``F`` unused when
+    empty); for ``order ≥ 1`` set ``torque[r] = sign R_r Σ w_p x_p × g_p``; for ``order = 2``
+    ``H[r] = sign R_r [Σ w_p (ΔF P − Hess F + ½(g xᵀ + x gᵀ))_p] R_rᵀ`` (:mod:`spherestep.rotor_field`), with
+    ``g`` and ``Hess F`` from ducc0's syntheses (:func:`_spin_fields`)."""
     body = np.zeros((R.shape[0], 3))
     Hb = np.zeros((R.shape[0] if order >= 2 else 0, 3, 3))
+    g, hess = np.empty(3), np.empty((3, 3))
     for p in range(rows.shape[0]):
         r = rows[p]
         wp = w[p]
@@ -400,24 +423,18 @@ def synthesis_sums(R, x, rows, w, F, d_theta, d_phi, lap, q, u, spin2_sign, sign
             E[r] += sign * wp * F[p]
         if order >= 1:
             x0, x1, x2 = x[p, 0], x[p, 1], x[p, 2]
-            dt, dp = d_theta[p], d_phi[p]
-            t0, t1, t2 = _torque_density(x0, x1, x2, dt, dp)
-            body[r, 0] += wp * t0
-            body[r, 1] += wp * t1
-            body[r, 2] += wp * t2
+            lap_p = lap[p] if order >= 2 else 0.0
+            _spin_fields(x0, x1, x2, d_theta[p], d_phi[p], lap_p, q[p] if order >= 2 else 0.0,
+                         u[p] if order >= 2 else 0.0, spin2_sign, order, g, hess)
+            body[r, 0] += wp * (x1 * g[2] - x2 * g[1])
+            body[r, 1] += wp * (x2 * g[0] - x0 * g[2])
+            body[r, 2] += wp * (x0 * g[1] - x1 * g[0])
             if order >= 2:
-                _, _, rho, c, s = _location(x0, x1, x2)
-                th = (x2 * c, x2 * s, -rho)
-                ph = (-s, c, 0.0)
                 xs = (x0, x1, x2)
-                g = (dt * th[0] + dp * ph[0], dt * th[1] + dp * ph[1], dt * th[2] + dp * ph[2])
-                half_lap, half_q, half_u = 0.5 * lap[p], 0.5 * spin2_sign * q[p], 0.5 * spin2_sign * u[p]
                 for a in range(3):
                     for b in range(3):
-                        tt, pp = th[a] * th[b], ph[a] * ph[b]
-                        Hb[r, a, b] += wp * (half_lap * (tt + pp) - half_q * (tt - pp)
-                                             - half_u * (th[a] * ph[b] + ph[a] * th[b])
-                                             + 0.5 * (g[a] * xs[b] + xs[a] * g[b]))
+                        P = (1.0 if a == b else 0.0) - xs[a] * xs[b]
+                        Hb[r, a, b] += wp * (lap_p * P - hess[a, b] + 0.5 * (g[a] * xs[b] + xs[a] * g[b]))
     if order >= 1:
         for r in range(R.shape[0]):
             for a in range(3):
@@ -431,12 +448,16 @@ def synthesis_sums(R, x, rows, w, F, d_theta, d_phi, lap, q, u, spin2_sign, sign
 
 @njit(cache=True)
 def synthesis_columns(R, x, rows, cols, d_theta, d_phi, sign, K):
-    """``K[q, :, k] = sign R_q (x × g)`` for each pair ``p`` (``q = rows[p]``, ``k = cols[p]``)."""
+    """``K[r, :, k] = sign R_r (x × g)`` for each pair ``p`` (``r = rows[p]``, ``k = cols[p]``; ``g`` by
+    :func:`_spin_fields`)."""
+    g, unused = np.empty(3), np.empty((3, 3))
     for p in range(rows.shape[0]):
-        q, k = rows[p], cols[p]
-        t0, t1, t2 = _torque_density(x[p, 0], x[p, 1], x[p, 2], d_theta[p], d_phi[p])
+        r, k = rows[p], cols[p]
+        x0, x1, x2 = x[p, 0], x[p, 1], x[p, 2]
+        _spin_fields(x0, x1, x2, d_theta[p], d_phi[p], 0.0, 0.0, 0.0, 1.0, 1, g, unused)
+        t0, t1, t2 = x1 * g[2] - x2 * g[1], x2 * g[0] - x0 * g[2], x0 * g[1] - x1 * g[0]
         for a in range(3):
-            K[q, a, k] = sign * (R[q, a, 0] * t0 + R[q, a, 1] * t1 + R[q, a, 2] * t2)
+            K[r, a, k] = sign * (R[r, a, 0] * t0 + R[r, a, 1] * t1 + R[r, a, 2] * t2)
 
 
 @njit(cache=True)

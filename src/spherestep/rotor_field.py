@@ -30,8 +30,8 @@ Two evaluators return the same fields (``F``, ``g``, ``Hess F`` at unit vectors 
   spin 0 with ``−l(l+1) f_lm`` (``ΔF``) and spin 2 with ``√((l−1)l(l+1)(l+2)) f_lm`` (the trace-free part,
   ``ð²F``, in the ``θ̂, φ̂`` basis). Each synthesis has a fixed cost (a Legendre transform and an FFT of about
   ``(2 lmax)²`` points, ~0.7 ms for ``lmax = 68``) and then ~0.15 µs per point, so it wins for large batches;
-  there the points' positions and the sums over the coils run compiled (:func:`spherestep._zonal_sums.
-  pair_locations`, ``synthesis_sums``, ``synthesis_columns``; the torque density ``x × g = g_θ φ̂ − g_φ θ̂``).
+  there the points' positions and the sums over the coils run compiled (:mod:`spherestep._zonal_sums`:
+  ``pair_locations``, ``synthesis_sums``, ``synthesis_columns``; ``synthesis_fields`` for :meth:`fields`).
 * ``"direct"``: the sum over the poles with the model's own kernel ``h, h', h''`` (``O(M)`` per point, no
   fixed cost) — compiled (:mod:`spherestep._zonal_sums`, numba) when the kernel comes in one of its compiled
   forms, NumPy otherwise: used below ``direct_below`` points, where it is faster, for fields given without ``lmax``
@@ -61,6 +61,7 @@ SPIN2_SIGN = -1.0  # ducc0's spin-2 (Q, U) are minus the trace-free Hessian's (�
 
 _NEXT, _PREV = np.array([1, 2, 0]), np.array([2, 0, 1])
 _FIRST = np.zeros(1, dtype=np.intp)
+_EMPTY = np.empty(0)  # an unused argument of the compiled loops
 
 
 def cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -198,35 +199,26 @@ class RotorField:
                                  loc=loc, epsilon=self.epsilon, nthreads=self.nthreads)
 
     def _harmonic(self, x: np.ndarray, order: int, value: bool):
-        from ._zonal_sums import locations
+        from ._zonal_sums import locations, synthesis_fields
 
         x = np.ascontiguousarray(x, dtype=float)
-        loc, frame = np.empty((len(x), 2)), np.empty((len(x), 3))
-        locations(x, loc, frame)
-        rho, cos_p, sin_p = frame.T  # ρ = sin θ from x and y, accurate near the poles (unlike √(1 − z²))
-        z = x[:, 2]
-        F = self.synthesis(loc, 0)[0] if value else None
+        loc = np.empty((len(x), 2))
+        locations(x, loc)
+        F, d_theta, d_phi, lap, q, u = self.spin_syntheses(loc, order, value)
         if order == 0:
-            return F, None, None
-        d_theta, d_phi = self.synthesis(loc, 1, mode="DERIV1")
-        # g = ∂_θF θ̂ + (∂_φF / sin θ) φ̂, θ̂ = (cos θ cos φ, cos θ sin φ, −sin θ), φ̂ = (−sin φ, cos φ, 0)
-        a = d_theta * z
-        g = np.empty_like(x)
-        g[:, 0] = a * cos_p - d_phi * sin_p
-        g[:, 1] = a * sin_p + d_phi * cos_p
-        np.multiply(d_theta, -rho, out=g[:, 2])
-        if order == 1:
-            return F, g, None
-        lap = self.synthesis(loc, 0, self._laplacian_alm)[0]
-        q, u = self.synthesis(loc, 2, self._spin2_alm, "GRAD_ONLY")
-        e_theta = np.stack([z * cos_p, z * sin_p, -rho], axis=-1)
-        e_phi = np.stack([-sin_p, cos_p, np.zeros_like(rho)], axis=-1)
-        tt = e_theta[:, :, None] * e_theta[:, None, :]
-        pp = e_phi[:, :, None] * e_phi[:, None, :]
-        tp = e_theta[:, :, None] * e_phi[:, None, :]
-        hess = (0.5 * lap[:, None, None] * (tt + pp) + SPIN2_SIGN * 0.5 * q[:, None, None] * (tt - pp)
-                + SPIN2_SIGN * 0.5 * u[:, None, None] * (tp + np.swapaxes(tp, 1, 2)))
-        return F, g, (lap, hess)
+            return (F if value else None), None, None
+        g, hess = np.empty_like(x), np.empty((len(x) if order >= 2 else 0, 3, 3))
+        synthesis_fields(x, d_theta, d_phi, lap, q, u, SPIN2_SIGN, order, g, hess)
+        return (F if value else None), g, ((lap, hess) if order >= 2 else None)
+
+    def spin_syntheses(self, loc: np.ndarray, order: int, value: bool = True) -> tuple[np.ndarray, ...]:
+        """``(F, g_θ, g_φ, ΔF, Q, U)`` at ``loc``: ``F`` if ``value``, the gradient for ``order ≥ 1``, the
+        Laplacian and spin-2 pair for ``order = 2``; the others empty arrays."""
+        F = self.synthesis(loc)[0] if value else _EMPTY
+        d_theta, d_phi = self.synthesis(loc, 1, mode="DERIV1") if order >= 1 else (_EMPTY, _EMPTY)
+        lap = self.synthesis(loc, 0, self._laplacian_alm)[0] if order >= 2 else _EMPTY
+        q, u = self.synthesis(loc, 2, self._spin2_alm, "GRAD_ONLY") if order >= 2 else (_EMPTY, _EMPTY)
+        return F, d_theta, d_phi, lap, q, u
 
 
 def cutoff(kernel, polarity, tails) -> float | None:
@@ -272,7 +264,7 @@ def fast_evaluate(field: RotorField, sign: float, coils: np.ndarray, R: np.ndarr
     pairs = np.count_nonzero(cf)
     if field.lmax is not None and pairs >= field.direct_below:
         return _synthesised(field, sign, coils, Rf, cf, order, constant, value, lead)
-    if field.compiled is not None and (field.lmax is None or pairs < field.direct_below):
+    if field.compiled is not None:  # fewer pairs, or no band limit: the compiled direct sum
         from ._zonal_sums import batch_evaluate
 
         n = len(Rf)
@@ -320,10 +312,7 @@ def _synthesised(field: RotorField, sign: float, coils: np.ndarray, Rf: np.ndarr
     x, loc = np.empty((len(rows), 3)), np.empty((len(rows), 2))
     Rc = np.ascontiguousarray(Rf)
     pair_locations(Rc, coils, rows, cols, x, loc)
-    F = field.synthesis(loc)[0] if value else _EMPTY
-    d_theta, d_phi = field.synthesis(loc, 1, mode="DERIV1") if order >= 1 else (_EMPTY, _EMPTY)
-    lap = field.synthesis(loc, 0, field._laplacian_alm)[0] if order >= 2 else _EMPTY
-    q, u = field.synthesis(loc, 2, field._spin2_alm, "GRAD_ONLY") if order >= 2 else (_EMPTY, _EMPTY)
+    F, d_theta, d_phi, lap, q, u = field.spin_syntheses(loc, order, value)
     energy = np.array(np.broadcast_to(constant, lead), dtype=float).reshape(-1) if value else _EMPTY
     torque = np.empty((len(Rf) if order >= 1 else 0, 3))
     H = np.empty((len(Rf) if order >= 2 else 0, 3, 3))
@@ -332,8 +321,6 @@ def _synthesised(field: RotorField, sign: float, coils: np.ndarray, Rf: np.ndarr
     return (energy.reshape(lead) if value else None,) + tuple(a.reshape(lead + a.shape[1:])
                                                                for a in (torque, H)[:order])
 
-
-_EMPTY = np.empty(0)
 
 
 class _Cache(dict):
