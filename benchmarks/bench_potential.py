@@ -13,7 +13,7 @@ the largest difference from the exact pairwise form (energy: relative; torque: r
 reference; ``K``: relative to its peak). Quadrature over the sphere (the brute-force baseline) runs on 5
 orientations and is scaled to 1000.
 
-Then single calls (the latency a simulation step sees), ducc0 with 1 and 2 threads and BLAS with 1 and 2
+Then single calls (the latency a simulation step sees; and the compiled call alone, without input checks), ducc0 with 1 and 2 threads and BLAS with 1 and 2
 threads, equilibria of 10⁴ starts, the potential planner (steps/s over one 360° turn) and the dynamics
 (multiples of real time at the tuned step), each with the fast path and the exact forms.
 """
@@ -116,7 +116,8 @@ def main() -> None:
               for what, func in (("energy + torque, fast", fast.energy_and_torque),
                                  ("energy + torque, pairwise", lambda r, cc: exact.evaluate_pairwise(r, cc, 1)),
                                  ("torque, fast", fast.torque),
-                                 ("E, τ, Hessian, fast", lambda r, cc: fast.evaluate(r, cc, 2)))]
+                                 ("E, τ, Hessian, fast", lambda r, cc: fast.evaluate(r, cc, 2)),
+                                 ("energy + torque, the compiled call alone", _compiled_call(fast)))]
 
     two = MotorPotential(design, nthreads=2)
     threads = [("ducc0 1 thread, energy + torque, 29 coils", median_seconds(3, fast.energy_and_torque, R, c29)),
@@ -165,6 +166,15 @@ def main() -> None:
     for name in ("fast", "exact"):
         dt, factor = dynamics[name]
         print(f"{'dynamics at the tuned step, ' + name:<52} {factor:>8.1f}x real time (dt {1e3 * dt:.2f} ms)")
+
+
+def _compiled_call(model: MotorPotential):
+    """One orientation's compiled call (``RotorField.single``) with checked inputs: what a single call costs
+    without its input contracts and Python frames."""
+    evaluate, params, offsets, poles, polarity, work, near = model.rotor_field.single
+    torque, H, sign = np.empty(3), np.empty((3, 3)), np.array([-2.0])
+    return lambda r, c: evaluate(params, offsets, r, model.coils, c[None], poles, polarity, sign, 1, torque, H, work,
+                                 near)
 
 
 def _unit(rng, count):

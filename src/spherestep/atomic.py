@@ -1,6 +1,6 @@
 """Write files whole or not at all: write a temporary file in the same folder, then rename it.
 
-Temporary files are hidden and carry the writer's process id, ``.NAME.PID.XXXX.tmp``; a run that is killed
+Temporary files are hidden and carry the writer's process id, ``.NAME.PID.<random>.tmp``; a run that is killed
 (SIGKILL, power loss) cannot remove its own, so :func:`remove_stale` (called by every write) deletes those in
 the folder whose process no longer exists.
 """
