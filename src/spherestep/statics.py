@@ -55,7 +55,7 @@ from typing import Protocol, runtime_checkable
 
 import numpy as np
 
-from . import so3
+from . import checks, so3
 from .errors import bad_value
 from ._threads import single_blas_thread
 
@@ -84,27 +84,11 @@ class TorqueModel(Protocol):
     def evaluate(self, R, currents, order: int) -> tuple[np.ndarray, ...]: ...
 
 
-SMALL_SUM = 64  # currents: below this many entries Python's sum beats NumPy's (1 µs against 2.7)
 
 
 def as_currents(currents, coil_count: int, failed: tuple[int, ...] = (), name: str = "currents") -> np.ndarray:
-    """The one input contract for coil currents: a float array ``(..., coil_count)``, finite, zero on the
-    ``failed`` coils; otherwise an :class:`~spherestep.errors.InputError` naming ``name``."""
-    try:
-        arr = currents if isinstance(currents, np.ndarray) and currents.dtype == float \
-            else np.asarray(currents, dtype=float)
-    except (TypeError, ValueError):
-        raise bad_value(name, "an array of real numbers", type(currents).__name__) from None
-    if arr.ndim < 1 or arr.shape[-1] != coil_count:
-        raise bad_value(name, f"one current per stator coil, shape (..., {coil_count})", f"shape {arr.shape}")
-    # the sum is finite unless an entry is not (or the sum overflows); a few currents sum fastest as floats
-    total = sum(arr.ravel().tolist()) if arr.size <= SMALL_SUM else arr.sum()
-    if not math.isfinite(total) and not np.isfinite(arr).all():
-        raise bad_value(name, "finite real numbers", "NaN or infinite entries")
-    if failed and np.any(arr[..., list(failed)] != 0):
-        raise bad_value(name, f"zero on the failed coils {list(failed)} (they cannot be energised)",
-                        "a non-zero current on a failed coil")
-    return arr
+    """The one input contract for coil currents (:func:`spherestep.checks.currents`)."""
+    return checks.currents(currents, coil_count, failed, name)
 
 
 class TorqueModelBase:
