@@ -27,13 +27,14 @@ from ._iron import coil_inductance
 from ._iron import fig6_forces as iron_force_curve
 from ._iron import pair_tables as iron_pair_torques
 from ._ironmap import IronTorqueMap, iron_model
+from .design_model import DesignModel, design_model
 from ._ironsummary import IronSummary, iron_summary
 from ._model import coil_polarization, model_summary, rotor_collection, rotor_magnets, stator_coils
 from ._statics import StateTorque, equilibrium, state_currents, state_torques
 from ._table import TABLE_MESHING, TorqueMap, pair_torque, table_nodes, torque_function, torque_map
 
 __all__ = [
-    "MESHING", "StateTorque", "TABLE_MESHING", "Calibration", "Comparison", "ForceCurve", "IronSummary", "IronTorqueMap",
+    "DesignModel", "MESHING", "StateTorque", "design_model", "TABLE_MESHING", "Calibration", "Comparison", "ForceCurve", "IronSummary", "IronTorqueMap",
     "coil_inductance", "iron_force_curve", "iron_model", "iron_pair_torques", "iron_summary",
     "TorqueMap", "calibrate", "coil_polarization", "coil_wrenches", "compare_models", "equilibrium",
     "figure_comparison", "figure_force_curve", "fit_limit", "force", "force_curve", "force_torque",

@@ -1,0 +1,75 @@
+"""The design's own torque model: what its coils are (``design.coil``), with the drive limits of the coil as built.
+
+:func:`design_model` is the default of every API and subcommand that takes a design. For ``core="iron"`` it is
+:func:`~spherestep.magnetics.iron_model` (pairwise pole–core tables: 3-D FEM below 21° for the prototype's coil,
+the method of moments elsewhere; linear iron; the detent ``b(R) = τ(R, 0)`` included); for ``core="air"`` the
+magnets' :class:`~spherestep.magnetics.TorqueMap` at the coil's own nominal ampere-turns. Currents are per unit of
+the coil's nominal current ``I_n`` in both, and the limits are :meth:`DriveLimits.from_spec` of the coil as built
+(its winding's resistance and nominal current, the supply; Wheeler's air-core inductance — the iron core's own
+inductance, :func:`~spherestep.magnetics.coil_inductance`, is about 4× larger for the prototype and costs 17 s to
+solve, so it is not the default).
+
+``core`` overrides the design's choice where a comparison is wanted (``--core air|iron``): the same winding
+either way, so the two differ only by the iron.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+from ..errors import bad_value
+
+CORES = ("air", "iron")
+
+
+@dataclass(frozen=True)
+class DesignModel:
+    """A design's torque ``model`` (a :class:`~spherestep.statics.TorqueModel`, currents per unit of
+    ``limits.nominal_current``), the ``limits`` of its coil as built (a :class:`~spherestep.control.DriveLimits`),
+    the ``core`` (``"air"`` or ``"iron"``) and ``label``, the one line that says which model it is."""
+
+    model: object
+    limits: object
+    core: str
+    label: str
+
+    def to_dict(self) -> dict:
+        return {"model": self.label, "core": self.core, "limits": self.limits.to_dict()}
+
+
+def design_model(design, core: str | None = None, *, coupling: bool = False) -> DesignModel:
+    """The torque model and drive limits of ``design`` as its file states them (module docstring); ``core``
+    ``"air"``/``"iron"`` overrides the design's core (same winding); ``coupling`` adds the iron's core-to-core
+    coupling term (:func:`~spherestep.magnetics.iron_model`)."""
+    from ..control import DriveLimits
+    from ._ironmap import iron_model
+
+    coil = design.coil
+    if core is not None:
+        if core not in CORES:
+            raise bad_value("core", "'air' or 'iron'", core)
+        if core != coil.core:
+            coil = replace(coil, core=core)
+    if coupling and coil.core != "iron":
+        raise bad_value("coupling", "False for an air-core coil (the coupling is through the iron)", coupling)
+    model = iron_model(design, coil, coupling=coupling)
+    limits = DriveLimits.from_spec(coil, design)
+    if coil.core == "iron":
+        source = "FEM table" if _has_fem_table(design, coil) else "method-of-moments table"
+        label = f"iron ({'pairwise + coupling' if coupling else 'pairwise'}, {source})"
+    else:
+        label = "air (magnets' torque map)"
+    return DesignModel(model, limits, coil.core, label)
+
+
+def _has_fem_table(design, coil) -> bool:
+    """Whether the iron model's pair table comes from the stored 3-D FEM (the prototype's coil)."""
+    from importlib import resources
+
+    from ..motor import prototype
+    from ..motor.coil import iron_coil
+    from ._iron import IRON_LEVEL
+    from ._ironmap import TABLE_FILE, _key
+
+    return _key(design, coil, IRON_LEVEL) == _key(prototype(), iron_coil(), IRON_LEVEL) and \
+        (resources.files("spherestep.data") / TABLE_FILE).is_file()
