@@ -5,7 +5,12 @@ BIN := $(VENV)/bin
 # the numerics are many small matrix products: one BLAS thread is faster than a pool on 2 cores
 export OPENBLAS_NUM_THREADS ?= 1
 
-.PHONY: demo test browser figures bench clean
+# tests run on both cores (pytest-xdist); the ones whose verdict depends on a real-time loop's wall clock run
+# after them, alone (marker `realtime`)
+WORKERS ?= 2
+RUFF := $(BIN)/ruff check src tests benchmarks docs scripts
+
+.PHONY: demo test check browser figures bench clean
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -22,9 +27,16 @@ $(VENV)/.installed-test: pyproject.toml | $(BIN)/python
 demo: $(VENV)/.installed
 	$(BIN)/spherestep demo
 
+# everything (CI): ruff, the suite on both cores, then the real-time tests alone
 test: $(VENV)/.installed-test browser
-	$(BIN)/ruff check src tests benchmarks docs
-	$(BIN)/python -m pytest -q
+	$(RUFF)
+	$(BIN)/python -m pytest -q -n $(WORKERS) -m "not realtime"
+	$(BIN)/python -m pytest -q -m realtime
+
+# the edit loop: ruff and every test not marked slow or realtime (a few minutes)
+check: $(VENV)/.installed-test
+	$(RUFF)
+	$(BIN)/python -m pytest -q -n $(WORKERS) -m "not slow and not realtime"
 
 # Debian's chromium and its driver for tests/test_report_browser.py; installed only as root (as in CI)
 browser:

@@ -24,6 +24,7 @@ def test_forces_json_and_files(tmp_path, capsys):
     x, F = load_force_curve(out / "force_curve.csv")
     assert len(x) == 121 and F.min() == pytest.approx(-info["curve"]["peak_lateral_force_N"], rel=1e-6)
     assert json.loads((out / "forces.json").read_text())["states"] == info["states"]
+    assert info["iron"]["states_sampled"] == 2  # the prototype's coils are iron-cored: reported by default
 
 
 def test_forces_table_for_people(tmp_path, capsys):

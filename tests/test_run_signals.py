@@ -28,14 +28,21 @@ def write_plan(path, n_steps, coil_count=4):
     return path
 
 
-@pytest.mark.parametrize("sig, code, name", [(signal.SIGTERM, 143, "SIGTERM"), (signal.SIGINT, 130, "SIGINT")])
-def test_a_signal_mid_run_switches_every_coil_off_and_keeps_the_log(tmp_path, sig, code, name):
+def _ignore_sigint():
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # as a background job of a non-interactive shell starts it
+
+
+@pytest.mark.parametrize("sig, code, name, ignored", [(signal.SIGTERM, 143, "SIGTERM", False),
+                                                      (signal.SIGINT, 130, "SIGINT", False),
+                                                      (signal.SIGINT, 130, "SIGINT", True)])
+def test_a_signal_mid_run_switches_every_coil_off_and_keeps_the_log(tmp_path, sig, code, name, ignored):
     plan = write_plan(tmp_path / "plan.json", 400)
     log = tmp_path / "run.log"
     with PtyDevice(channels=32, watchdog_ms=5000) as dev:  # a watchdog too slow to be what switches off
         proc = subprocess.Popen(
             [sys.executable, "-c", "from spherestep.cli import main; main()", "run", str(plan), "--port", dev.port,
-             "--rate", "20", "--log", str(log)], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+             "--rate", "20", "--log", str(log)], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+            preexec_fn=_ignore_sigint if ignored else None)
         try:
             deadline = time.monotonic() + 30
             while dev.frames < 6 and time.monotonic() < deadline and proc.poll() is None:

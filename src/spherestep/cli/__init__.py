@@ -2,7 +2,7 @@
 
 Exit status: 0 success; 2 a user mistake (bad option, bad file, unusable output location: one line on stderr,
 ``spherestep: error: …``); 1 a failure of the computation or of the machine (a full disk says "N of M files
-written"), ``spherestep: failed: …``; 130 interrupted (Ctrl-C or SIGTERM, after all coils are off).
+written"), ``spherestep: failed: …``; 130 interrupted by Ctrl-C, 143 by SIGTERM (after all coils are off).
 ``--debug`` shows the traceback instead of the line. ``spherestep`` alone prints the usage (exit 0).
 
 The command modules import only Typer and Rich at load time; the library loads inside the command that runs,
@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import errno
 import functools
+import signal
 import sys
 
 import typer
@@ -23,6 +24,7 @@ from . import design, explore, export, forces, motor, packings, report, run, sim
 from . import capability, move  # noqa: F401 (registers)
 from . import sense  # noqa: F401 (registers)
 from .app import app
+from .signals import Terminated, interrupt_of, sigterm_as_interrupt
 
 DISK_FULL = (errno.ENOSPC, errno.EDQUOT, errno.EFBIG)
 
@@ -41,12 +43,17 @@ def _error(kind: str, text: str) -> None:
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the console script; returns (and exits with) the status code."""
     args = list(sys.argv[1:] if argv is None else argv)
+    if argv is None and signal.getsignal(signal.SIGINT) is signal.SIG_IGN:
+        # started in the background by a non-interactive shell, SIGINT arrives ignored by inheritance: a user's
+        # Ctrl-C (or a test's SIGINT) must still stop the run and switch the coils off
+        signal.signal(signal.SIGINT, signal.default_int_handler)
     debug = "--debug" in args
     if debug:
         args.remove("--debug")
     command = _command()
     try:
-        result = command.main(args=args, prog_name="spherestep", standalone_mode=False)
+        with sigterm_as_interrupt():
+            result = command.main(args=args, prog_name="spherestep", standalone_mode=False)
         # outside standalone mode Typer returns the code of an Exit (130 for Ctrl-C) instead of exiting
         code = result if isinstance(result, int) else 0
     except NoArgsIsHelpError as exc:  # `spherestep` or `spherestep design` alone: the usage
@@ -69,9 +76,8 @@ def main(argv: list[str] | None = None) -> int:
             raise
         _error("error", exc)
         code = 2
-    except (KeyboardInterrupt, typer.Abort):
-        print("spherestep: interrupted", file=sys.stderr)
-        code = 130
+    except (KeyboardInterrupt, typer.Abort) as exc:
+        code = _interrupted(exc)
     except OSError as exc:  # a path the command did not check (it should have): still one line
         if debug:
             raise
@@ -85,11 +91,25 @@ def main(argv: list[str] | None = None) -> int:
         _error("failed", "out of memory; ask for a smaller computation")
         code = 1
     except Exception as exc:  # a bug: one line and exit 1; --debug shows where
+        if interrupt_of(exc) is not None:  # Ctrl-C inside a compiled call surfaces as SystemError
+            code = _interrupted(interrupt_of(exc))
+            return _exit(code, argv)
         if debug:
             raise
         _error("failed", f"internal error {type(exc).__name__}: {exc} (run again with --debug for the traceback, "
                          "and report it)")
         code = 1
+    return _exit(code, argv)
+
+
+def _interrupted(exc: BaseException) -> int:
+    """One line for Ctrl-C (exit 130) or SIGTERM (exit 143)."""
+    term = isinstance(exc, Terminated)
+    print(f"spherestep: interrupted ({'SIGTERM' if term else 'SIGINT'})", file=sys.stderr)
+    return 143 if term else 130
+
+
+def _exit(code: int, argv) -> int:
     if argv is None:
         sys.exit(code)
     return code

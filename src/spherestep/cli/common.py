@@ -64,6 +64,14 @@ def check_axis(ctx: typer.Context, param: typer.CallbackParam, value):
     return value
 
 
+def check_core(ctx: typer.Context, param: typer.CallbackParam, value):
+    """Option callback: ``--core air|iron`` (None: the design's own core)."""
+    if value is not None and value not in ("air", "iron") and not ctx.resilient_parsing:
+        raise typer.BadParameter(f"must be air or iron (default: the core the design file states); instead received "
+                                 f"{value!r}")
+    return value
+
+
 def input_file(path: Path, name: str) -> Path:
     """``path`` if it is an existing regular file (a FIFO would block the read, a folder or device cannot be
     parsed); InputError naming ``name`` otherwise."""

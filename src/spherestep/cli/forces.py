@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import json
-from contextlib import nullcontext
 from pathlib import Path
 
 import typer
@@ -11,6 +10,7 @@ import typer
 from ..errors import bad_value
 from .app import app
 from .common import console, design_from, print_json, usable
+from .progress import progress
 
 
 @app.command()
@@ -20,10 +20,11 @@ def forces(
     states: int = typer.Option(8, "--states", help="Number of stepper states to sample for the torque table."),
     seed: int = typer.Option(0, "--seed", help="Seed of the state sample."),
     as_json: bool = typer.Option(False, "--json", help="Print the results as JSON."),
-    core: str = typer.Option("air", "--core", help="Coil cores to report: air (today's model), or both: also the "
+    core: str = typer.Option(None, "--core", help="Coil cores to report: air (the winding alone), or both: also the "
                              "design's coils (its coil section; the prototype's: iron) on iron cores (detent, states, "
-                             "polarity, saturation, power; a few minutes; minutes more for a design or coil other "
-                             "than the prototype's)."),
+                             "polarity, saturation, power; about 20 s for the prototype, minutes for a design or "
+                             "coil other than the prototype's). Default: both when the design's coils are iron-cored, "
+                             "else air."),
 ) -> None:
     """Physical forces by magpylib: the Fig. 6 force curve (one magnet slid under one coil, simulated) with its
     4th-order fit (force_curve.csv, force_curve.png), and holding and stepping torques (N·m) of a sample of
@@ -46,18 +47,22 @@ def forces(
         raise bad_value("--states", "a number of states from 1 to 10000", states)
     if seed < 0:
         raise bad_value("--seed", "a whole number ≥ 0", seed)
-    if core not in ("air", "both"):
-        raise bad_value("--core", "air or both", core)
+    if core not in (None, "air", "both"):
+        raise bad_value("--core", "air or both (default: both for an iron-cored design, else air)", core)
     out = output_folder(out, "--out")
     design = usable(design_from(design_path), "--design", design_path)
-    st = design.states()
-    with console.status("simulating the Fig. 6 curve and calibrating", spinner="dots") if not as_json \
-            else nullcontext():
+    core = core or ("both" if design.coil.core == "iron" else "air")
+    with progress("enumerating stepper states", enabled=not as_json) as say:
+        st = design.states()
+        say("simulating the Fig. 6 curve and calibrating")
         cal = mg.calibrate(design)
         tmap = mg.torque_map(design)
-    idx = np.sort(np.random.default_rng(seed).choice(len(st), min(states, len(st)), replace=False))
-    with console.status("holding and step torques", spinner="dots") if not as_json else nullcontext():
+        idx = np.sort(np.random.default_rng(seed).choice(len(st), min(states, len(st)), replace=False))
+        say("holding and step torques")
         rows = [r.to_dict(degrees=True) for r in mg.state_torques(design, tmap, idx)]
+        if core != "air":
+            say("iron cores: detent, states, saturation")
+            iron = mg.iron_summary(design, states=min(states, 12), seed=seed)
     files = Outputs(out, ("force_curve.csv", "force_curve.png", "forces.json"))
     csv_path = out / "force_curve.csv"
     with files:
@@ -81,9 +86,6 @@ def forces(
         json_path = write_text(out / "forces.json", json.dumps(info, indent=1))
     info["files"] = [str(csv_path), str(png_path), str(json_path)]
     if core != "air":
-        with console.status("iron cores: detent, states, saturation", spinner="dots") if not as_json \
-                else nullcontext():
-            iron = mg.iron_summary(design, states=min(states, 12), seed=seed)
         info["iron"] = iron.to_dict(degrees=True)
         with Outputs(out, ("iron.json", "iron.png")):
             info["files"].append(str(write_text(out / "iron.json", json.dumps(info["iron"], indent=1))))

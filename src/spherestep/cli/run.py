@@ -9,10 +9,7 @@ always states the final coil state.
 from __future__ import annotations
 
 import re
-import signal
 import sys
-import threading
-from contextlib import contextmanager
 from pathlib import Path
 
 import typer
@@ -20,30 +17,9 @@ import typer
 from ..errors import InputError, bad_value
 from .app import app
 from .common import console, number, print_json
+from .signals import Terminated, sigterm_as_interrupt
 
 LOG_LINE = re.compile(r"^\s*-?\d+\.\d{6} (TX|RX|NOTE) ")  # a line of Transcript.lines()
-
-
-class Terminated(KeyboardInterrupt):
-    """SIGTERM, raised in the main thread so that it unwinds like Ctrl-C (every coil switched off)."""
-
-
-@contextmanager
-def sigterm_as_interrupt():
-    """While inside, SIGTERM raises :class:`Terminated` in the main thread (like Ctrl-C raises
-    KeyboardInterrupt); the previous handler is restored on leaving."""
-    if threading.current_thread() is not threading.main_thread():
-        yield
-        return
-
-    def handler(signum, frame):
-        raise Terminated()
-
-    previous = signal.signal(signal.SIGTERM, handler)
-    try:
-        yield
-    finally:
-        signal.signal(signal.SIGTERM, previous)
 
 
 def check_log(path: Path, force: bool) -> Path:

@@ -164,8 +164,9 @@ class Capability:
 def torque_capability(design, model: TorqueModel | None = None, limits: DriveLimits | None = None, *,
                       samples: int = 1000, seed: int = 0, directions: int = 400) -> Capability:
     """The torque available in every direction, and the conditioning of ``K(R)``, at ``samples`` orientations
-    drawn uniformly on SO(3) with ``seed`` (see the module). ``model`` defaults to the design's magnets' torque
-    map; ``limits`` to the paper's 24 V / 100 W supply.
+    drawn uniformly on SO(3) with ``seed`` (see the module). ``model`` and ``limits`` default to the design's own
+    (:func:`spherestep.magnetics.design_model`: the core its coil states, the limits of its winding); a ``model``
+    given without ``limits`` gets the paper's 24 V / 100 W supply at 1 A nominal.
 
     >>> from spherestep.motor import prototype
     >>> cap = torque_capability(prototype(), samples=20, seed=1)
@@ -173,9 +174,10 @@ def torque_capability(design, model: TorqueModel | None = None, limits: DriveLim
     ((20,), True)
     """
     if model is None:
-        from ..magnetics import torque_map
+        from ..magnetics import design_model
 
-        model = torque_map(design)
+        own = design_model(design)
+        model, limits = own.model, own.limits if limits is None else limits
     if not isinstance(model, TorqueModel):
         raise bad_value("model", "a torque model (spherestep.statics.TorqueModel)", type(model).__name__)
     if isinstance(samples, bool) or not isinstance(samples, (int, np.integer)) or samples < 1:

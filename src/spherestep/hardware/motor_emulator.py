@@ -27,6 +27,7 @@ from __future__ import annotations
 import math
 import os
 import select
+import signal
 import time
 from dataclasses import dataclass
 
@@ -393,7 +394,10 @@ class MotorPty:
     def _serve(self) -> None:
         """Step the device up to the wall clock, answering frames between steps, then wait for bytes at most one
         period. Frames are taken at the earliest time they can have arrived, so that a stall of this process
-        (not of the host) does not trip the watchdog."""
+        (not of the host) does not trip the watchdog. The host's Ctrl-C reaches this process too (one process
+        group): it is ignored here, and the host stops the device after switching the coils off."""
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
+        signal.signal(signal.SIGTERM, signal.SIG_DFL)
         m, f = self.motor, self.motor.faults
         t0 = self.started
         master = self._master
