@@ -2,12 +2,14 @@
 
 from __future__ import annotations
 
+import math
 import sys
 from pathlib import Path
 
 import typer
 
 from .app import app
+from .progress import progress
 from .common import check_axis, console, design_from, number, parse_vector, print_json, usable
 
 DEMO_AXIS = "1,0.5,2"
@@ -62,8 +64,6 @@ def demo(
 
     Example: [bold]spherestep demo --out spherestep-out[/bold]
     """
-    from rich.progress import Progress, SpinnerColumn, TextColumn, TimeElapsedColumn
-
     from ..demo import DEMO_FILES, iron_drives_lines, run_demo
     from ..motor import prototype
     from ..outputs import Outputs, output_folder
@@ -71,11 +71,8 @@ def demo(
     out = output_folder(out, "--out")
     axis_vec = parse_vector(axis, "--axis")
     files = Outputs(out, DEMO_FILES)
-    with files, Progress(SpinnerColumn(), TextColumn("{task.description}"), TimeElapsedColumn(), console=console,
-                         disable=quiet or as_json, transient=True) as progress:
-        task = progress.add_task("building the prototype", total=None)
-        info = run_demo(prototype(), out, axis_vec, angle,
-                        progress=lambda text: progress.update(task, description=text))
+    with files, progress("building the prototype", enabled=not (quiet or as_json)) as say:
+        info = run_demo(prototype(), out, axis_vec, angle, progress=say)
     for text in info["plan"].get("warnings", []):
         warn(text)
     states = info.pop("escape_violations") or []
@@ -137,7 +134,7 @@ def plan(
     out = output_folder(out, "--out")
     axis_vec = parse_vector(axis, "--axis")
     design = usable(design_from(design_path), "--design", design_path)
-    result = turn(design, axis_vec, angle, steps)
+    result = turn(design, axis_vec, math.radians(angle), steps)
     from ..demo import PLAN_FILES, write_plan_files
 
     files = Outputs(out, PLAN_FILES)

@@ -10,6 +10,7 @@ from rich.table import Table
 from ..outputs import output_folder
 from .app import app
 from .common import console, design_from, number, print_json, usable, write_json
+from .progress import progress
 
 
 @app.command()
@@ -39,10 +40,12 @@ def sense(
     design = usable(design_from(design_path))
     if marked:
         design = sensing.marked_design(design)
-    placement = sensing.greedy_placement(design, int(sensors))
-    array = placement.array()
-    acc = sensing.accuracy(design, array, samples=int(samples), seed=seed)
-    group = len(sensing.symmetry_group(design))
+    with progress(f"placing {sensors} magnetometers", enabled=not as_json) as say:
+        placement = sensing.greedy_placement(design, int(sensors))
+        array = placement.array()
+        say(f"estimating the orientation at {samples} orientations")
+        acc = sensing.accuracy(design, array, samples=int(samples), seed=seed)
+        group = len(sensing.symmetry_group(design))
     summary = {"design": design.name, "part": array.part.to_dict(), "sensors": len(array),
                "symmetry_group_order": group, "worst_case_bound_deg": float(placement.bound_deg()[-1]),
                "accuracy": acc.to_dict(), "positions_m": array.positions.tolist(),
