@@ -23,7 +23,7 @@ from spherestep.outputs import Outputs, output_file, output_folder
 
 def test_turn_targets_start_at_the_nearest_state_and_turn_the_angle_in_equal_steps(proto):
     axis = np.array([1.0, 0.5, 2.0])
-    targets = turn_targets(proto, axis, 90.0, steps=6)
+    targets = turn_targets(proto, axis, math.radians(90.0), steps=6)
     states = proto.states()
     start = states.rotations[int(states.nearest(np.eye(3))[1].ravel()[0])]
     assert targets.shape == (7, 3, 3) and np.allclose(targets[0], start, atol=1e-12)
@@ -31,18 +31,20 @@ def test_turn_targets_start_at_the_nearest_state_and_turn_the_angle_in_equal_ste
     assert so3.distance(targets[-1], expected_end) < 1e-9
     gaps = so3.distance(targets[:-1], targets[1:])
     assert np.allclose(gaps, math.radians(15), atol=1e-9)  # equal steps of 90°/6
-    default = turn_targets(proto, axis, 90.0)  # default: steps of at most 0.35 of a max step
+    default = turn_targets(proto, axis, math.radians(90.0))  # default: steps of at most 0.35 of a max step
     n = len(default) - 1
     assert math.radians(90) / n <= 0.35 * proto.max_step + 1e-12 < math.radians(90) / (n - 1)
 
 
 def test_turn_plans_with_either_planner_and_names_its_own_arguments(proto):
-    plan = turn(proto, (0, 0, 1), 30, steps=4)
+    plan = turn(proto, (0, 0, 1), math.radians(30), steps=4)  # radians, like every library function
     assert len(plan.steps) == 5 and plan.planner == "geometric"
-    for kwargs, name in (({"axis": (0, 0, 0)}, "axis"), ({"axis": (1, 2)}, "axis"), ({"angle_deg": 0}, "angle_deg"),
-                         ({"angle_deg": float("nan")}, "angle_deg"), ({"angle_deg": 4e4}, "angle_deg"),
+    assert so3.distance(plan.targets[-1], so3.rot([0, 0, 1], math.radians(30)) @ plan.targets[0]) < 1e-9
+    for kwargs, name in (({"axis": (0, 0, 0)}, "axis"), ({"axis": (1, 2)}, "axis"), ({"angle": 0}, "angle"),
+                         ({"axis": (1e-320, 0, 0)}, "axis"),
+                         ({"angle": float("nan")}, "angle"), ({"angle": 700.0}, "angle"),
                          ({"steps": 0}, "steps"), ({"steps": 2.5}, "steps"), ({"planner": "magic"}, "planner")):
-        args = {"axis": (0, 0, 1), "angle_deg": 30, "steps": 4} | kwargs
+        args = {"axis": (0, 0, 1), "angle": math.radians(30), "steps": 4} | kwargs
         with pytest.raises(InputError, match=f"^{name} must be") as info:
             turn(proto, **args)
         assert info.value.field == name
@@ -169,7 +171,7 @@ def test_the_trajectory_api_names_its_own_arguments(call, name):
 
 
 def test_turn_with_the_potential_planner_follows_the_same_targets(proto):
-    plan = turn(proto, (0, 0, 1), 20, steps=2, planner="potential")
+    plan = turn(proto, (0, 0, 1), math.radians(20), steps=2, planner="potential")
     assert plan.planner == "potential" and len(plan.steps) == 3
-    assert np.allclose(plan.targets, turn_targets(proto, (0, 0, 1), 20, steps=2), atol=1e-12)
+    assert np.allclose(plan.targets, turn_targets(proto, (0, 0, 1), math.radians(20), steps=2), atol=1e-12)
     assert plan.summary().error_max < proto.max_step  # every step lands within reach of its target

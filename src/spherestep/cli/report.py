@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 import typer
@@ -37,7 +38,7 @@ def report(
     with Progress(SpinnerColumn(), TextColumn("{task.description}"), TimeElapsedColumn(), console=console,
                   disable=quiet or as_json, transient=True) as progress:
         task = progress.add_task("enumerating stepper states", total=None)
-        plan = turn(design, axis_vec, angle)
+        plan = turn(design, axis_vec, math.radians(angle))
         with Outputs(out.parent, [out.name]):
             info = write_report(out, design, plan=plan, axis=axis_vec,
                                 progress=lambda text: progress.update(task, description=text))

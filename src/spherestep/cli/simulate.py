@@ -89,7 +89,7 @@ def simulate(
     if failed:
         design = design.without_coils(failed)
     design = usable(design, "--design" if not failed else "--design/--failed-coils", design_path)
-    targets = turn_targets(design, axis_vec, angle, steps)  # checked before the torque map is built
+    targets = turn_targets(design, axis_vec, math.radians(angle), steps)  # checked before the torque map is built
     from .. import plots  # matplotlib and magpylib load once the command line is known to be good
     from ..dynamics import run_closed_loop, tune
     from ..magnetics import torque_map
@@ -111,7 +111,7 @@ def simulate(
                         "steps_taken": len(run.missed), "missed_steps": int(run.missed.sum()),
                         "final_error_deg": math.degrees(run.final_error)}
         else:
-            plan = turn(design, axis_vec, angle, steps, planner)
+            plan = turn(design, axis_vec, math.radians(angle), steps, planner)
             with console.status("simulating"):
                 from ..demo import simulate_and_write
 

@@ -1,6 +1,6 @@
 """A turn about a fixed axis, planned: the targets from the stepper state nearest the identity, and the plan.
 
-``turn_targets(design, axis, angle_deg, steps)`` is ``about_axis(axis, radians(angle_deg), n, start=R̃₀)`` with
+``turn_targets(design, axis, angle, steps)`` is ``about_axis(axis, angle, n, start=R̃₀)`` (``angle`` in radians) with
 ``R̃₀`` the stepper state nearest the identity and, by default, ``n`` the fewest equal steps no longer than
 :data:`STEP_FRACTION` of the design's max step (finer steps land more reliably); :func:`turn` commutates them
 with the geometric (Sec. III-A) or the potential (Sec. III-B) planner. This is what ``spherestep plan``,
@@ -13,37 +13,34 @@ import math
 
 import numpy as np
 
+from .. import checks
 from ..errors import bad_value
 from .geometric import plan_geometric
 from .plan import Plan
 from .trajectory import about_axis, steps_for
 
 STEP_FRACTION = 0.35  # default desired step, as a fraction of the max step
-MAX_ANGLE_DEG = 36_000.0  # a hundred turns
+MAX_ANGLE = 200.0 * math.pi  # rad: a hundred turns
 MAX_STEPS = 100_000
 PLANNERS = ("geometric", "potential")
 
 
-def check_turn(axis, angle_deg, steps) -> np.ndarray:
-    """``axis`` as a unit 3-vector after checking ``axis``, ``angle_deg`` and ``steps``; InputError naming them."""
-    try:
-        vec = np.asarray(axis, dtype=float)
-    except (TypeError, ValueError):
-        raise bad_value("axis", "a non-zero 3-vector", axis) from None
-    if vec.shape != (3,) or not np.all(np.isfinite(vec)) or not np.any(vec):
-        raise bad_value("axis", "a finite non-zero 3-vector", axis)
-    if isinstance(angle_deg, bool) or not isinstance(angle_deg, (int, float, np.integer, np.floating)) \
-            or not math.isfinite(angle_deg) or angle_deg == 0 or abs(angle_deg) > MAX_ANGLE_DEG:
-        raise bad_value("angle_deg", f"a finite non-zero angle in degrees, at most {MAX_ANGLE_DEG:g} in size",
-                        angle_deg)
+def check_turn(axis, angle, steps) -> np.ndarray:
+    """``axis`` as a unit 3-vector (:func:`spherestep.checks.axis`) after checking ``axis``, ``angle`` (rad) and
+    ``steps``; InputError naming them."""
+    vec = checks.axis(axis, "axis")
+    if isinstance(angle, bool) or not isinstance(angle, (int, float, np.integer, np.floating)) \
+            or not math.isfinite(angle) or angle == 0 or abs(angle) > MAX_ANGLE:
+        raise bad_value("angle", f"a finite non-zero angle in radians, at most {MAX_ANGLE:.6g} (a hundred turns) in "
+                        "size", angle)
     if steps is not None and (isinstance(steps, bool) or not isinstance(steps, (int, np.integer))
                               or not 1 <= steps <= MAX_STEPS):
         raise bad_value("steps", f"a whole number of steps 1..{MAX_STEPS}, or None for the default", steps)
-    return vec / np.linalg.norm(vec)
+    return vec
 
 
-def turn_targets(design, axis, angle_deg: float, steps: int | None = None) -> np.ndarray:
-    """``(n+1, 3, 3)`` desired orientations turning ``angle_deg`` degrees about the fixed-frame ``axis`` from the
+def turn_targets(design, axis, angle: float, steps: int | None = None) -> np.ndarray:
+    """``(n+1, 3, 3)`` desired orientations turning ``angle`` rad about the fixed-frame ``axis`` from the
     stepper state nearest the identity (module docstring); ``steps`` equal steps, default ``STEP_FRACTION`` of
     a max step each."""
     from ..motor import MotorDesign
@@ -51,30 +48,31 @@ def turn_targets(design, axis, angle_deg: float, steps: int | None = None) -> np
     if not isinstance(design, MotorDesign):
         raise bad_value("design", "a MotorDesign (spherestep.motor.prototype() or MotorDesign.load(FILE))",
                         type(design).__name__)
-    vec = check_turn(axis, angle_deg, steps)
+    vec = check_turn(axis, angle, steps)
     states = design.states()
     if len(states) == 0:
         raise bad_value("design", "a design with stepper states (see `spherestep design validate`)", "none")
     start = states.rotations[int(states.nearest(np.eye(3))[1].ravel()[0])]
-    angle = math.radians(angle_deg)
+    angle = float(angle)
     n = steps if steps is not None else steps_for(abs(angle), STEP_FRACTION * design.max_step)
     return about_axis(vec, angle, int(n), start=start)
 
 
-def turn(design, axis, angle_deg: float, steps: int | None = None, planner: str = "geometric",
+def turn(design, axis, angle: float, steps: int | None = None, planner: str = "geometric",
          model=None) -> Plan:
-    """Plan a turn of ``angle_deg`` degrees about ``axis`` (see :func:`turn_targets`) with ``planner``:
+    """Plan a turn of ``angle`` rad about ``axis`` (see :func:`turn_targets`) with ``planner``:
     ``"geometric"`` (:func:`plan_geometric`) or ``"potential"`` (:func:`plan_potential` on ``model``, default
     the design's :class:`~spherestep.potential.MotorPotential`).
 
+    >>> import math
     >>> import spherestep as ss
-    >>> plan = ss.commutation.turn(ss.motor.prototype(), (0, 0, 1), 30, steps=4)
+    >>> plan = ss.commutation.turn(ss.motor.prototype(), (0, 0, 1), math.radians(30), steps=4)
     >>> len(plan.steps)
     5
     """
     if planner not in PLANNERS:
         raise bad_value("planner", f"one of {', '.join(PLANNERS)}", planner)
-    targets = turn_targets(design, axis, angle_deg, steps)
+    targets = turn_targets(design, axis, angle, steps)
     if planner == "potential":
         from ..potential import MotorPotential
         from .potential_planner import plan_potential
