@@ -6,8 +6,8 @@ One plan step (the coils of a stepper state energised, the rotor released 3° of
 (Yoshida 4th order: 3 torque evaluations per step) at the time step ``dynamics.tune`` chooses for the model
 (a quarter period of its stiffest well, as ``spherestep simulate`` and the demo use), under the potential
 model (``MotorPotential``), the magnets' torque map (``magnetics.TorqueMap``) and the iron model
-(``magnetics.iron_model``). Each runs the compiled integrator (the models' ``zonal_terms``,
-``spherestep._zonal_sums.integrate``); the baseline in the same run is the same model and step through
+(``magnetics.iron_model``). Each runs the compiled integrator (the models' ``packed_terms``,
+``spherestep._fast.integrate``); the baseline in the same run is the same model and step through
 ``Rotor.step`` in NumPy (``Integrator(..., compiled=False)``), and the compiled run at ``dt = 5 ms`` and
 ``dt = 1 ms`` (the step that keeps the energy drift below 1e-6 over 10 s).
 """
@@ -22,7 +22,8 @@ import time
 import numpy as np
 
 from spherestep import so3
-from spherestep.dynamics import Integrator, currents_of, tune
+from spherestep.dynamics import Integrator, tune
+from spherestep.motor import coil_currents
 from spherestep.magnetics import iron_model, torque_map
 from spherestep.motor import prototype
 from spherestep.potential import MotorPotential
@@ -44,7 +45,7 @@ def main() -> None:
           f"OPENBLAS_NUM_THREADS={os.environ.get('OPENBLAS_NUM_THREADS', 'unset')}")
     design = prototype()
     states = design.states()
-    c = currents_of(states.coils(0), len(design.stator))
+    c = coil_currents(states.coils(0), len(design.stator))
     R0 = so3.exp(np.radians([3.0, 0.0, 0.0])) @ states.rotations[0]
     print(f"{'model':>22} {'tuned dt':>9} {'x real time':>12} {'NumPy steps':>12} {'ratio':>7} {'dt 5 ms':>9} "
           f"{'dt 1 ms':>9}")

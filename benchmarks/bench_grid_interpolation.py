@@ -32,7 +32,7 @@ from numba import njit
 
 from _timing import median_seconds
 from spherestep import so3
-from spherestep._zonal_sums import locations
+from spherestep._fast.synthesis import locations
 from spherestep.motor import prototype
 from spherestep.potential import MotorPotential
 
@@ -154,7 +154,7 @@ def energy_and_torque(table, poly, scale, R, coils, c, E, torque):
 
 
 def positions(x):
-    """``(θ, φ)`` of unit vectors ``x`` as ducc0 takes them (:func:`spherestep._zonal_sums.locations`)."""
+    """``(θ, φ)`` of unit vectors ``x`` as ducc0 takes them (:func:`spherestep._fast.synthesis.locations`)."""
     loc = np.empty((len(x), 2))
     locations(np.ascontiguousarray(x), loc)
     return loc

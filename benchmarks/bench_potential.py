@@ -193,11 +193,12 @@ def _planner(design, model) -> float:
 
 
 def _dynamics(design, model) -> tuple[float, float]:
-    from spherestep.dynamics import Integrator, currents_of, tune
+    from spherestep.dynamics import Integrator, tune
+    from spherestep.motor import coil_currents
 
     states = design.states()
     tuning = tune(design, model)
-    c = currents_of(states.coils(0), len(design.stator))
+    c = coil_currents(states.coils(0), len(design.stator))
     R0 = so3.exp(np.radians([3.0, 0.0, 0.0])) @ states.rotations[0]
     duration = 5.0
     Integrator(model, tuning.rotor, tuning.dt).run(R0, np.zeros(3), c, tuning.dt)  # compile / warm up

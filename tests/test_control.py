@@ -249,13 +249,57 @@ def test_planned_turn_stays_within_the_guaranteed_torque_and_above_the_bound(tma
     assert damped.duration > tr.duration
 
 
-def test_rotation_error_is_the_log_map():
-    from spherestep.control.controller import rotation_error
-
+def test_log_single_is_the_log_map():
     R = so3.random(500, 3)
-    np.testing.assert_allclose(np.array([rotation_error(r) for r in R]), so3.log(R), atol=1e-13)
+    np.testing.assert_allclose(np.array([so3.log_single(r) for r in R]), so3.log(R), atol=1e-13)
     tiny = so3.exp(np.array([1e-10, -2e-10, 3e-10]))
-    np.testing.assert_allclose(rotation_error(tiny), [1e-10, -2e-10, 3e-10], rtol=1e-6)
+    np.testing.assert_allclose(so3.log_single(tiny), [1e-10, -2e-10, 3e-10], rtol=1e-6)
+
+
+def test_trajectory_hold_and_at():
+    R = so3.random(1, 5)[0]
+    hold = Trajectory.hold(R)
+    assert hold.duration == 0.0
+    for t in (0.0, 0.3, 7.0):
+        Rt, w, a = hold.at(t)
+        np.testing.assert_array_equal(Rt, R)
+        assert not w.any() and not a.any()
+    with pytest.raises(InputError, match="R"):
+        Trajectory.hold(np.eye(3)[None].repeat(2, 0))
+    turn = Trajectory.through(np.stack([R, so3.exp([0.3, 0.1, -0.2]) @ R, so3.exp([0.0, 0.9, 0.1]) @ R]), 4.0, 0.5)
+    times = np.linspace(-0.1, turn.duration + 0.1, 97)
+    Rs, ws, As = turn.sample(times)
+    for k, t in enumerate(times):
+        Rt, w, a = turn.at(t)
+        np.testing.assert_allclose(Rt, Rs[k], atol=1e-14)
+        np.testing.assert_allclose(w, ws[k], atol=1e-14)
+        np.testing.assert_allclose(a, As[k], atol=1e-14)
+
+
+def test_servo_law_units_cache_and_warm_start():
+    """The law's one unit convention (per unit c, amperes I_n c), its K(R) cache and the promised torque."""
+    from spherestep.control import GeometricPD, ModelCache, ServoLaw
+
+    design = prototype()
+    tmap = torque_map(design)
+    R0 = so3.random(1, 8)[0]
+    limits = DriveLimits(nominal_current=0.5, max_current=0.5)
+    law = ServoLaw(tmap, Trajectory.hold(R0), GeometricPD(0.0724), limits=limits)
+    off = so3.exp([0.01, 0.0, 0.0]) @ R0
+    cmd = law.step(0.0, off)
+    np.testing.assert_allclose(law.amperes(cmd.currents), 0.5 * cmd.currents)
+    K = tmap.torque_matrix(off)
+    np.testing.assert_allclose(cmd.torque, K @ cmd.currents, atol=1e-12)
+    np.testing.assert_allclose(cmd.torque, cmd.requested, atol=1e-9)  # reachable: the promise is the request
+    assert cmd.reachable and np.abs(cmd.currents).max() <= 1.0 + 1e-12
+    cache = ModelCache(tmap)
+    cache.at(R0)
+    cache.at(so3.exp([1e-3, 0.0, 0.0]) @ R0)
+    assert cache.evaluations == 1
+    cache.at(so3.exp([3e-3, 0.0, 0.0]) @ R0)
+    assert cache.evaluations == 2
+    with pytest.raises(InputError, match="trajectory"):
+        ServoLaw(tmap, "hold", GeometricPD(0.0724))
 
 
 def test_limits_from_a_coil_spec():

@@ -190,7 +190,7 @@ def _numpy_direct(field, x, order):
 
 @pytest.mark.parametrize("which", ["model", "torque_map"])
 def test_compiled_sum_matches_numpy_sum(request, proto, which):
-    """The compiled direct sum (spherestep._zonal_sums, numba) equals the NumPy one (every pole), orders 0–2,
+    """The compiled direct sum (spherestep._fast.kernels, numba) equals the NumPy one (every pole), orders 0–2,
     including points on a pole and opposite it (t = ±1): within 1e-12 of each quantity's peak plus the cut-off's
     stated tail for that derivative (CUTOFF_TAILS: 1e-13, 1e-12, 1e-10; the potential's kernel is cut at 78°, the
     magnets' map is not cut)."""
@@ -223,7 +223,7 @@ def test_one_orientation_call_matches_the_batch(request, proto, which):
 
 @pytest.mark.parametrize("which", ["model", "torque_map", "iron"])
 def test_compiled_integrator_matches_the_reference_steps(request, proto, which):
-    """The compiled integrator (a model with ``zonal_terms``) follows Rotor.step's trajectory (compiled=False) to rounding,
+    """The compiled integrator (a model with ``packed_terms``) follows Rotor.step's trajectory (compiled=False) to rounding,
     with damping and castor friction, for the potential, the magnets' map and the iron model (two terms)."""
     from spherestep.dynamics import Integrator, Rotor
     from spherestep.magnetics import iron_model
@@ -243,7 +243,7 @@ def test_compiled_integrator_matches_the_reference_steps(request, proto, which):
 
 @pytest.mark.parametrize("which", ["model", "torque_map", "iron"])
 def test_compiled_equilibrium_matches_the_reference_descent(request, proto, which):
-    """statics.equilibrium's compiled descent (a model with ``zonal_terms``) takes the NumPy reference's steps:
+    """statics.equilibrium's compiled descent (a model with ``packed_terms``) takes the NumPy reference's steps:
     the same iterations and verdicts, end points within 1e-9 rad, energies within 1e-12 relative, from perturbed
     stepper states with their own and with random 4-coil activations (batched, one R0 broadcast)."""
     from spherestep.magnetics import iron_model
@@ -266,3 +266,33 @@ def test_compiled_equilibrium_matches_the_reference_descent(request, proto, whic
         assert np.max(so3.distance(fast.rotation, slow.rotation)) <= 1e-9
         assert np.max(np.abs(fast.energy - slow.energy)) <= 1e-12 * np.max(np.abs(slow.energy))
         assert np.max(np.abs(fast.stiffness - slow.stiffness)) <= 1e-8 * np.max(np.abs(slow.stiffness))
+
+
+def test_models_declare_their_fast_path_and_bias(proto, model, torque_map):
+    """Each model states what it offers: ``packed_terms`` (compiled zonal terms, or ``None``) and ``has_bias``
+    (torque at zero current), and the declarations match what the model does."""
+    from spherestep._fast import Packed
+    from spherestep.magnetics import iron_model
+    from spherestep.statics import TorqueModelBase, is_torque_model
+
+    iron = iron_model(proto)
+    slow = MotorPotential(proto, fast=False)
+    R = so3.random(6, 3)
+    zero = np.zeros((6, len(proto.stator)))
+    c = proto.coil_currents(proto.states().coils(0))
+    for m, bias, packed in ((model, False, True), (torque_map, False, True), (iron, True, True),
+                            (slow, False, False)):
+        assert is_torque_model(m) and m.has_bias is bias
+        assert bool(np.any(m.torque(R, zero) != 0)) is bias
+        terms = m.packed_terms(c)
+        assert isinstance(terms, Packed) if packed else terms is None
+        if packed:  # the packed energy at one orientation is the model's
+            from spherestep._fast.terms import terms_evaluate, workspace
+
+            tau, H = np.empty(3), np.empty((3, 3))
+            C = np.ascontiguousarray(np.broadcast_to(terms.C, terms.C.shape[-2:]))
+            e = terms.constant + terms_evaluate(terms.params, terms.offsets, R[0], terms.coils, C, terms.poles,
+                                                terms.P, terms.signs, 1, tau, H, *workspace(terms.poles))
+            assert abs(e - m.energy(R[0], c)) <= 1e-12 * max(1.0, abs(m.energy(R[0], c)))
+            assert np.max(np.abs(tau - m.torque(R[0], c))) <= 1e-12 * m.torque_reference(c)
+    assert TorqueModelBase.has_bias is True and TorqueModelBase.packed_terms(model, c) is None

@@ -354,7 +354,7 @@ def test_coupled_model_is_a_torque_model(coupled, design):
                    for e in np.eye(3)], axis=1)
     tau = coupled.torque(R, c)
     assert np.max(np.abs(fd - tau)) <= 1e-6 * np.max(np.abs(tau))
-    assert coupled.zonal_terms(c[0]) is None
+    assert coupled.zonal_terms(c[0]) is None and coupled.packed_terms(c[0]) is None
     assert np.max(np.abs(coupled.coupling.torque(R))) > 0.05  # N·m: not negligible
     states = design.states()
     eq = equilibrium(coupled, states.rotations[0], design.coil_currents(states.coils(0)))

@@ -163,7 +163,7 @@ def test_global_initialiser(design, array, estimator):
     hall = sensing.HallSensor(marked, array=array, seed=5)
     for _ in range(3):
         R = so3.random(1, rng)[0]
-        assert so3.distance(hall.measure(R), R) < math.radians(0.05)
+        assert so3.distance(hall.estimate(R), R) < math.radians(0.05)
 
 
 def test_smallest_eigenvalue_and_greedy(design):
@@ -189,11 +189,33 @@ def test_tracking_loop_and_fusion(design, array):
     fused = sensing.FusedSensor(design, sensing.HallSensor(design, array=array, seed=7), dt, seed=8)
     R_est, err_h, err_f = R0, [], []
     for k, R in enumerate(path):
-        R_est = hall.measure(R, c, R_est)
+        R_est = hall.estimate(R, c, R_est)
         err_h.append(so3.distance(R_est, R))
-        err_f.append(so3.distance(fused.measure(R, c, R0 if k == 0 else None), R))
+        err_f.append(so3.distance(fused.estimate(R, c, R0 if k == 0 else None), R))
     assert max(err_h) < math.radians(0.03)
     assert max(err_f[50:]) < math.radians(0.03)
+
+
+def test_every_sensor_keeps_the_protocol_and_its_latency(design, array):
+    """One protocol (measure(t, R_true, currents), rate, latency): a sample every 1/rate s from t = 0, delivered
+    latency s later, so what arrives at t is the rotor at t − latency."""
+    turn = np.array([0.3, -0.2, 0.9])
+    truth = [so3.exp(turn * 1e-3 * k) for k in range(40)]
+    for sensor in (sensing.IdealSensor(rate=500.0, latency=0.003),
+                   sensing.NoisySensor(0.0, rate=500.0, latency=0.003, rng=1),
+                   sensing.HallSensor(design, array=array, noise_T=0.0, rate=500.0, latency=0.003,
+                                      start=truth[0])):
+        assert isinstance(sensor, sensing.OrientationSensor)
+        got = {k: sensor.measure(k * 1e-3, truth[k], None) for k in range(40)}
+        delivered = [k for k, m in got.items() if m is not None]
+        assert delivered == list(range(3, 40, 2))
+        for k in delivered:
+            assert so3.distance(got[k], truth[k - 3]) < math.radians(1e-3), type(sensor).__name__
+    imu = sensing.ImuSensor(design, 2e-3, seed=1, latency=0.004)
+    assert imu.rate == pytest.approx(500.0) and imu.latency == 0.004
+    assert [k for k in range(10) if imu.measure(k * 1e-3, truth[k]) is not None] == [4, 6, 8]
+    with pytest.raises(InputError, match="latency"):
+        sensing.IdealSensor(latency=-1.0)
 
 
 def test_imu_alone_sees_tilt_and_heading(design):
@@ -201,7 +223,7 @@ def test_imu_alone_sees_tilt_and_heading(design):
     imu = sensing.ImuSensor(design, 1e-3, seed=9)
     R = so3.random(1, 10)[0]
     for _ in range(200):
-        R_est = imu.measure(R)
+        R_est = imu.estimate(R)
     assert so3.distance(R_est, R) < math.radians(10.0)
 
 
@@ -215,7 +237,8 @@ def test_servo_runs_with_the_array_in_the_loop(design, array):
 
     R0 = so3.random(1, 4)[0]
     traj = Trajectory.turn(R0, [1.0, 0.5, 2.0], math.radians(20), acceleration=10.0)
-    hall = sensing.LoopSensor(sensing.HallSensor(design, array=array, current_error=0.01, seed=1), start=R0)
+    hall = sensing.HallSensor(design, array=array, current_error=0.01, seed=1, start=R0)
+    assert isinstance(hall, sensing.OrientationSensor) and hall.rate == 1000.0
     run = simulate_servo(design, traj, torque_map(design), sensor=hall, settle=0.15)
     assert run.tracking_error.max() < math.radians(0.03)
     est = so3.distance(run.estimates, run.orientations)

@@ -151,11 +151,16 @@ class SpringDetent:
     """A toy torque model with a bias: a torsion spring to the identity, ``τ(R, 0) = −k log R``, plus coils with a
     fixed torque per unit current ``K`` (linear), for the servo's bias path."""
 
+    has_bias = True  # the spring: torque at zero current
+
     def __init__(self, K, k=2.0, failed=()):
         self.K, self.k, self.failed, self.coil_count = np.asarray(K), k, tuple(failed), K.shape[1]
 
     def torque(self, R, currents):
         return -self.k * so3.log(R) + np.asarray(currents) @ self.K.T
+
+    def packed_terms(self, currents):
+        return None  # no compiled form
 
     def energy(self, R, currents):
         v = so3.log(R)

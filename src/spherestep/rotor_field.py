@@ -30,10 +30,10 @@ Two evaluators return the same fields (``F``, ``g``, ``Hess F`` at unit vectors 
   spin 0 with ``−l(l+1) f_lm`` (``ΔF``) and spin 2 with ``√((l−1)l(l+1)(l+2)) f_lm`` (the trace-free part,
   ``ð²F``, in the ``θ̂, φ̂`` basis). Each synthesis has a fixed cost (a Legendre transform and an FFT of about
   ``(2 lmax)²`` points, ~0.7 ms for ``lmax = 68``) and then ~0.15 µs per point, so it wins for large batches;
-  there the points' positions and the sums over the coils run compiled (:mod:`spherestep._zonal_sums`:
+  there the points' positions and the sums over the coils run compiled (:mod:`spherestep._fast.synthesis`:
   ``pair_locations``, ``synthesis_sums``, ``synthesis_columns``; ``synthesis_fields`` for :meth:`fields`).
 * ``"direct"``: the sum over the poles with the model's own kernel ``h, h', h''`` (``O(M)`` per point, no
-  fixed cost) — compiled (:mod:`spherestep._zonal_sums`, numba) when the kernel comes in one of its compiled
+  fixed cost) — compiled (:mod:`spherestep._fast.kernels`, numba) when the kernel comes in one of its compiled
   forms, NumPy otherwise: used below ``direct_below`` points, where it is faster, for fields given without ``lmax``
   (the torque map: its spline kernel is not band-limited, and its harmonic series converges slowly — with
   ``lmax = 384`` still 7e-5 of the peak torque off), and as the reference of the harmonic evaluator.
@@ -48,6 +48,7 @@ import math
 
 import numpy as np
 
+from ._fast import Packed
 from .errors import bad_value
 
 # the compiled sums leave out poles whose terms of h, h', h'' are all below these shares of their peaks (h'' is
@@ -74,7 +75,7 @@ class RotorField:
 
     ``poles (M, 3)`` unit vectors ``u_j`` and ``polarity (M,)`` ``p_j`` (body frame); ``kernel(t, orders)`` returns
     the derivatives of ``h`` of the given ``orders`` (a tuple from 0, 1, 2) at ``t`` (any shape), used by the
-    direct evaluator; ``compiled``: the same ``h`` as ``(kind, params)`` of :mod:`spherestep._zonal_sums`
+    direct evaluator; ``compiled``: the same ``h`` as ``(kind, params)`` of :mod:`spherestep._fast.kernels`
     (``"quintic"`` or ``"angle_spline"``), which makes the direct sum compiled.
     With ``lmax``: the ducc0 evaluator; ``exact(t)`` (default ``kernel(t, (0,))[0]``) the most accurate ``h``,
     used once to sample ``F`` for its spherical-harmonic coefficients up to degree ``lmax`` on a
@@ -94,7 +95,7 @@ class RotorField:
         self.compiled = None
         self.cut = None
         if compiled is not None:
-            from ._zonal_sums import kernel_params
+            from ._fast.kernels import kernel_params
 
             kind, arrays = compiled
             if kind not in ("quintic", "angle_spline"):
@@ -115,10 +116,10 @@ class RotorField:
     @property
     def single(self) -> tuple:
         """The compiled single-orientation call and its fixed arguments, ``(terms_evaluate, params, offsets,
-        poles (3, M), polarity (1, M), *scratch)`` (:func:`spherestep._zonal_sums.workspace`), gathered once: a
+        poles (3, M), polarity (1, M), *scratch)`` (:func:`spherestep._fast.terms.workspace`), gathered once: a
         call's Python overhead is most of its cost."""
         if self._single is None:
-            from ._zonal_sums import terms_evaluate, workspace
+            from ._fast.terms import terms_evaluate, workspace
 
             self._single = (terms_evaluate, self.compiled, _OFFSETS[len(self.compiled)], self.poles_t,
                             self.polarity_row, *workspace(self.poles_t))
@@ -179,13 +180,13 @@ class RotorField:
         return F, g, (np.trace(hess, axis1=1, axis2=2), hess)
 
     def _compiled(self, x: np.ndarray, order: int, value: bool):
-        from . import _zonal_sums
+        from ._fast.kernels import zonal_fields
 
         P = len(x)
         F, g = np.empty(P), np.empty((P if order >= 1 else 0, 3))
         lap, hess = np.empty(P if order >= 2 else 0), np.empty((P if order >= 2 else 0, 3, 3))
-        _zonal_sums.zonal_fields(self.compiled, np.ascontiguousarray(x, dtype=float), self.poles_t, self.polarity,
-                                 order, F, g, lap, hess)
+        zonal_fields(self.compiled, np.ascontiguousarray(x, dtype=float), self.poles_t, self.polarity, order, F, g,
+                     lap, hess)
         return (F if value else None), (g if order >= 1 else None), ((lap, hess) if order >= 2 else None)
 
     # --- spherical-harmonic synthesis (ducc0) -------------------------------------------------------------
@@ -199,7 +200,7 @@ class RotorField:
                                  loc=loc, epsilon=self.epsilon, nthreads=self.nthreads)
 
     def _harmonic(self, x: np.ndarray, order: int, value: bool):
-        from ._zonal_sums import locations, synthesis_fields
+        from ._fast.synthesis import locations, synthesis_fields
 
         x = np.ascontiguousarray(x, dtype=float)
         loc = np.empty((len(x), 2))
@@ -248,7 +249,7 @@ def fast_evaluate(field: RotorField, sign: float, coils: np.ndarray, R: np.ndarr
     """``(E,)``, ``(E, τ)`` or ``(E, τ, H)`` of ``E = constant + sign Σ_k c_k F(Rᵀ v_k)`` (module docstring) for
     validated ``R (..., 3, 3)`` and ``c (..., N)`` (leading axes broadcast), ``coils (N, 3)`` the ``v_k``.
     Only the (orientation, coil) pairs with a non-zero current are evaluated (a planner's batch of candidate
-    activations energises a few coils each): in one compiled call (:func:`spherestep._zonal_sums.batch_evaluate`)
+    activations energises a few coils each): in one compiled call (:func:`spherestep._fast.terms.batch_evaluate`)
     when the field has a compiled kernel, else through :meth:`RotorField.fields`. ``value=False`` skips ``F``
     (the returned energy is then ``None``: for callers that need only the torque)."""
     if field.compiled is not None and R.ndim == 2 and c.ndim == 1:  # one orientation: one compiled call
@@ -265,7 +266,7 @@ def fast_evaluate(field: RotorField, sign: float, coils: np.ndarray, R: np.ndarr
     if field.lmax is not None and pairs >= field.direct_below:
         return _synthesised(field, sign, coils, Rf, cf, order, constant, value, lead)
     if field.compiled is not None:  # fewer pairs, or no band limit: the compiled direct sum
-        from ._zonal_sums import batch_evaluate
+        from ._fast.terms import batch_evaluate
 
         n = len(Rf)
         E, torque, H = np.empty(n), np.empty((n if order >= 1 else 0, 3)), np.empty((n if order >= 2 else 0, 3, 3))
@@ -304,9 +305,9 @@ def fast_evaluate(field: RotorField, sign: float, coils: np.ndarray, R: np.ndarr
 def _synthesised(field: RotorField, sign: float, coils: np.ndarray, Rf: np.ndarray, cf: np.ndarray, order: int,
                  constant, value: bool, lead: tuple) -> tuple[np.ndarray, ...]:
     """:func:`fast_evaluate` of a large batch ``Rf (B, 3, 3)``, ``cf (B, N)`` by ducc0's syntheses at the energised
-    pairs, their positions and sums in compiled loops (:func:`spherestep._zonal_sums.pair_locations`,
-    :func:`~spherestep._zonal_sums.synthesis_sums`)."""
-    from ._zonal_sums import pair_locations, synthesis_sums
+    pairs, their positions and sums in compiled loops (:func:`spherestep._fast.synthesis.pair_locations`,
+    :func:`~spherestep._fast.synthesis.synthesis_sums`)."""
+    from ._fast.synthesis import pair_locations, synthesis_sums
 
     rows, cols = np.nonzero(cf)
     x, loc = np.empty((len(rows), 3)), np.empty((len(rows), 2))
@@ -347,7 +348,7 @@ def fast_torque_matrix(field: RotorField, sign: float, coils: np.ndarray, failed
     Rf = R.reshape(-1, 3, 3)
     live = np.setdiff1d(np.arange(len(coils)), failed)
     if field.lmax is not None and len(Rf) * len(live) >= field.direct_below:  # ducc0, glued by compiled loops
-        from ._zonal_sums import pair_locations, synthesis_columns
+        from ._fast.synthesis import pair_locations, synthesis_columns
 
         rows, cols = np.repeat(np.arange(len(Rf)), len(live)), np.tile(live, len(Rf))
         x, loc = np.empty((len(rows), 3)), np.empty((len(rows), 2))
@@ -364,18 +365,21 @@ def fast_torque_matrix(field: RotorField, sign: float, coils: np.ndarray, failed
     return out.reshape(lead + (3, len(coils)))
 
 
-def pack_terms(terms) -> tuple | None:
-    """A torque model's zonal terms ``[(field, sign, coils, c), ...]`` — its energy is ``Σ sign Σ_k c_k F(x_k)``
-    over the terms (plus a constant) — as the flat arrays ``(params, offsets, coils, C, poles (3, M), P, signs)``
-    (``C (..., T, N)``: the terms' currents ``(..., N)`` broadcast and stacked)
-    of :func:`spherestep._zonal_sums.terms_evaluate`, or ``None`` when a term has no compiled kernel or the terms
-    do not share their poles and coils."""
+def pack_terms(terms, constant=0.0) -> Packed | None:
+    """A torque model's zonal terms ``[(field, sign, coils, c), ...]`` — its energy is ``constant + Σ sign Σ_k c_k
+    F(x_k)`` over the terms — as the :class:`~spherestep._fast.Packed` arrays ``(params, offsets, coils, C, poles
+    (3, M), P, signs, constant)`` (``C (..., T, N)``: the terms' currents ``(..., N)`` broadcast and stacked) that
+    :func:`spherestep._fast.terms.terms_evaluate` and the compiled descent and integrator take, or ``None`` when
+    there are no terms, a term has no compiled kernel, or the terms do not share their poles and coils. The
+    models' :meth:`~spherestep.statics.TorqueModel.packed_terms` call it."""
+    if not terms:
+        return None
     fields = [t[0] for t in terms]
     if len(terms) == 1 and fields[0].compiled is not None:  # one term: the field's own arrays
         field, sign, coils, c = terms[0]
         c = np.asarray(c, dtype=float)
-        return (field.compiled, _OFFSETS[len(field.compiled)], np.ascontiguousarray(coils, dtype=float),
-                c[..., None, :], field.poles_t, field.polarity_row, _SIGNS[sign])
+        return Packed(field.compiled, _OFFSETS[len(field.compiled)], np.ascontiguousarray(coils, dtype=float),
+                      c[..., None, :], field.poles_t, field.polarity_row, _SIGNS[sign], constant)
     poles, coils = fields[0].poles, np.ascontiguousarray(terms[0][2], dtype=float)
     if any(f.compiled is None or f.poles is not poles and not np.array_equal(f.poles, poles) for f in fields) \
             or any(not np.array_equal(t[2], coils) for t in terms[1:]):
@@ -384,5 +388,5 @@ def pack_terms(terms) -> tuple | None:
     currents = [np.asarray(t[3], dtype=float) for t in terms]
     lead = np.broadcast_shapes(*(c.shape[:-1] for c in currents))
     C = np.stack([np.broadcast_to(c, lead + c.shape[-1:]) for c in currents], axis=-2)
-    return (np.concatenate([f.compiled for f in fields]), offsets, coils, C, fields[0].poles_t,
-            np.stack([f.polarity for f in fields]), np.array([float(t[1]) for t in terms]))
+    return Packed(np.concatenate([f.compiled for f in fields]), offsets, coils, C, fields[0].poles_t,
+                  np.stack([f.polarity for f in fields]), np.array([float(t[1]) for t in terms]), constant)

@@ -214,7 +214,7 @@ def _exp_one(x: float, y: float, z: float) -> np.ndarray:
 
 def exp_entries(x: float, y: float, z: float) -> tuple[float, ...]:
     """The 9 entries (row-major) of :func:`exp` of ``(x, y, z)`` in scalar arithmetic: the one formula for Python
-    floats and for the compiled integrator (:mod:`spherestep._zonal_sums` compiles this function)."""
+    floats and for the compiled integrator (:mod:`spherestep._fast.terms` compiles this function)."""
     t2 = x * x + y * y + z * z
     if t2 < 1e-8:
         a, b = 1.0 - t2 / 6.0 + t2 * t2 / 120.0, 0.5 - t2 / 24.0 + t2 * t2 / 720.0

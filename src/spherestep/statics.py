@@ -16,10 +16,19 @@ current, ``+1`` attracting a north-out pole; zero on failed coils):
 * ``hessian(R, c)`` ``(..., 3, 3)``: ``H = ∂²E/∂θ² = −∂τ/∂θ`` (symmetrised), N·m/rad, the stiffness at rest;
 * ``torque_reference(c)`` ``(...)``: a torque scale (N·m) for tolerances.
 
-plus ``coil_count`` and ``failed`` (indices of coils that carry no current). A detent or bias torque, as iron
-cores give, is simply ``torque(R, 0) ≠ 0``. :class:`TorqueModelBase` supplies what a model need not write
-itself: the combined ``evaluate`` (energy, torque and Hessian in one call), the Hessian by central
-differences of the torque, ``torque_matrix`` by central differences in the currents, and the current check.
+plus ``coil_count`` and ``failed`` (indices of coils that carry no current), and two declarations of what the
+model offers, so that no caller probes it:
+
+* ``has_bias``: ``True`` when the model has torque at zero current (a detent or bias, as iron cores give:
+  ``torque(R, 0) ≠ 0``), ``False`` when ``torque(R, 0) ≡ 0`` (the air-core map, the potential);
+* ``packed_terms(c)``: the model's energy as compiled zonal terms (a :class:`spherestep._fast.Packed`, built by
+  :func:`spherestep.rotor_field.pack_terms`) for currents ``c (..., N)``, or ``None``: the compiled descent and
+  integrator run on it, any model answering ``None`` takes the NumPy path.
+
+:class:`TorqueModelBase` supplies what a model need not write itself: the combined ``evaluate`` (energy, torque
+and Hessian in one call), the Hessian by central differences of the torque, ``torque_matrix`` by central
+differences in the currents, the current check, and the cautious declarations ``has_bias = True`` and
+``packed_terms(c) = None``.
 
 Equilibria
 ----------
@@ -29,8 +38,8 @@ eigenpairs ``(h_i, e_i)`` of ``H`` (Newton where ``H`` is positive definite; alo
 descends, so saddles repel rather than attract), shortened to at most ``max_step`` radians, then halved until the
 Armijo condition ``E(exp(sω̂) R) ≤ E − 10⁻⁴ s τ·ω`` holds (or, once the decrease is at rounding level, until the
 torque falls). It stops when ``|τ| ≤ gtol · torque_reference(c)``. For a model whose energy is a sum of compiled
-zonal terms (``zonal_terms``, plus ``zonal_constant``) the same iteration runs compiled, row by row
-(:func:`spherestep._zonal_sums.descend`).
+zonal terms (``packed_terms``) the same iteration runs compiled, row by row (:func:`spherestep._fast.descent.descend`).
+:func:`descend` is that descent on inputs already checked, for loops that check once (the potential planner).
 
 :func:`gradient_flow` follows the steepest-descent flow ``Ṙ = τ̂(R) R`` with an adaptive Runge–Kutta integrator
 until the torque is small. The basin of attraction of a minimum is the set of starts whose gradient flow ends
@@ -56,8 +65,9 @@ from typing import Protocol, runtime_checkable
 import numpy as np
 
 from . import checks, so3
-from .errors import bad_value
+from ._fast import Packed
 from ._threads import single_blas_thread
+from .errors import bad_value
 
 HESSIAN_STEP = 1e-6  # rad, central differences of the torque
 CURRENT_STEP = 1e-3  # per unit current, central differences in the currents (exact for quadratic models)
@@ -70,6 +80,7 @@ class TorqueModel(Protocol):
 
     coil_count: int
     failed: tuple[int, ...]
+    has_bias: bool
 
     def energy(self, R, currents) -> np.ndarray: ...
 
@@ -83,7 +94,7 @@ class TorqueModel(Protocol):
 
     def evaluate(self, R, currents, order: int) -> tuple[np.ndarray, ...]: ...
 
-
+    def packed_terms(self, currents) -> Packed | None: ...
 
 
 def as_currents(currents, coil_count: int, failed: tuple[int, ...] = (), name: str = "currents") -> np.ndarray:
@@ -94,10 +105,17 @@ def as_currents(currents, coil_count: int, failed: tuple[int, ...] = (), name: s
 class TorqueModelBase:
     """Defaults for a :class:`TorqueModel`: a subclass sets ``coil_count`` and ``failed`` and writes ``energy``,
     ``torque`` and ``torque_reference``; it overrides ``torque_matrix``, ``hessian`` or ``evaluate`` where it
-    has something better than the central differences below."""
+    has something better than the central differences below, ``has_bias`` (default ``True``: a model that does
+    not say otherwise may have torque at zero current) and ``packed_terms`` (default ``None``: no compiled
+    form)."""
 
     coil_count: int
     failed: tuple[int, ...]
+    has_bias: bool = True
+
+    def packed_terms(self, currents) -> Packed | None:
+        """The energy as compiled zonal terms for ``currents (..., N)``; ``None``: this model has none."""
+        return None
 
     def as_currents(self, currents, name: str = "currents") -> np.ndarray:
         """``currents`` checked against this model (:func:`as_currents`)."""
@@ -179,23 +197,12 @@ class Equilibrium:
         return self.converged & (self.stiffness[..., 0] > 0)
 
 
-def _positive(x, name: str) -> float:
-    if isinstance(x, bool) or not isinstance(x, (int, float, np.integer, np.floating)) or not math.isfinite(x) \
-            or x <= 0:
-        raise bad_value(name, "a finite positive number", x)
-    return float(x)
-
-
-def _count(n, name: str) -> int:
-    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
-        raise bad_value(name, "an integer >= 1", n)
-    return int(n)
-
-
 _MODEL_TYPES: set[type] = set()  # types that passed the protocol check (a runtime Protocol check costs ~0.1 ms)
 
 
-def _is_torque_model(model) -> bool:
+def is_torque_model(model) -> bool:
+    """Whether ``model`` is a :class:`TorqueModel` (answers the protocol and declares ``has_bias`` and
+    ``packed_terms``); the check, ~0.1 ms, runs once per type."""
     if type(model) in _MODEL_TYPES:
         return True
     if isinstance(model, TorqueModel):
@@ -205,7 +212,7 @@ def _is_torque_model(model) -> bool:
 
 
 def _prepare(model, R0, currents, name: str = "R0") -> tuple[np.ndarray, np.ndarray, tuple]:
-    if not _is_torque_model(model):
+    if not is_torque_model(model):
         raise bad_value("model", "a torque model (spherestep.statics.TorqueModel: MotorPotential, TorqueMap, …)",
                         type(model).__name__)
     R0 = so3.as_rotations(R0, name)
@@ -228,8 +235,8 @@ def equilibrium(model: TorqueModel, R0, currents, *, gtol: float = GTOL, max_ite
     ``R0`` ``(..., 3, 3)`` and ``currents`` ``(..., N)`` broadcast. ``gtol``: torque tolerance relative to
     ``model.torque_reference(currents)``; ``max_step``: longest step (radians), which keeps the descent near the
     steepest-descent path while far from the minimum. See the module docstring for the method. A model with
-    compiled ``zonal_terms`` (the potential, the magnets' map, the iron model) descends in one compiled call
-    (:func:`spherestep._zonal_sums.descend`, the same iteration row by row); ``compiled=False`` runs the NumPy
+    ``packed_terms`` (the potential, the magnets' map, the iron model) descends in one compiled call
+    (:func:`spherestep._fast.descent.descend`, the same iteration row by row); ``compiled=False`` runs the NumPy
     reference.
 
     >>> from spherestep.motor import prototype
@@ -240,29 +247,30 @@ def equilibrium(model: TorqueModel, R0, currents, *, gtol: float = GTOL, max_ite
     (True, True)
     """
     R, c, lead = _prepare(model, R0, currents)
-    if isinstance(gtol, bool) or not isinstance(gtol, (int, float)) or not 0 < gtol < 1:
-        raise bad_value("gtol", "a number in (0, 1)", gtol)
-    return _result(*_descend(model, R, c, gtol=gtol, max_iter=_count(max_iter, "max_iter"),
-                             max_step=_positive(max_step, "max_step"), compiled=compiled), lead)
+    gtol = checks.fraction(gtol, "gtol", expected="a number in (0, 1)")
+    return _result(*descend(model, R, c, gtol=gtol, max_iter=checks.count(max_iter, "max_iter"),
+                            max_step=checks.positive(max_step, "max_step"), compiled=compiled), lead)
 
 
-def _descend(model: TorqueModel, R: np.ndarray, c: np.ndarray, *, gtol: float = GTOL, max_iter: int = MAX_ITER,
-             max_step: float = MAX_STEP, compiled: bool = True) -> tuple[np.ndarray, ...]:
-    """:func:`equilibrium`'s descent of checked inputs — ``R (B, 3, 3)`` (overwritten) and ``c (B, N)`` as
-    :func:`_prepare` leaves them — with valid options: the end points' ``(R, E, τ, H, iterations, converged)``,
-    flat (:func:`_result` makes the :class:`Equilibrium`). For loops that check their inputs once."""
+def descend(model: TorqueModel, R: np.ndarray, c: np.ndarray, *, gtol: float = GTOL, max_iter: int = MAX_ITER,
+            max_step: float = MAX_STEP, compiled: bool = True) -> tuple[np.ndarray, ...]:
+    """:func:`equilibrium`'s descent without its checks, for loops that check their inputs once: ``model`` a
+    :class:`TorqueModel`, ``R (B, 3, 3)`` proper rotations (overwritten), ``c (B, N)`` currents that passed
+    :func:`as_currents`, valid options. Returns the end points' ``(R, E, τ, H, iterations, converged)``, flat
+    (``(B, 3, 3)``, ``(B,)``, ``(B, 3)``, ``(B, 3, 3)``, ``(B,)``, ``(B,)``). Unchecked input gives undefined
+    results: call :func:`equilibrium` otherwise."""
     scale = np.asarray(model.torque_reference(c), dtype=float)
     if (scale <= 0).any():  # nothing energised and no detent: every orientation is at rest
         scale = np.where(scale > 0, scale, np.finfo(float).tiny)
     tol = gtol * scale
     packed = _packed(model, c) if compiled else None
-    if packed is not None:  # the same descent compiled (spherestep._zonal_sums.descend)
-        from ._zonal_sums import descend
+    if packed is not None:  # the same descent compiled (spherestep._fast.descent)
+        from ._fast.descent import descend as compiled_descend
 
         n = len(R)
         out = (np.empty((n, 3, 3)), np.empty(n), np.empty((n, 3)), np.empty((n, 3, 3)), np.zeros(n, dtype=np.int64),
                np.zeros(n, dtype=bool))
-        descend(*packed[:2], R, *packed[2:], _filled(tol, (n,)), max_iter, max_step, *out)
+        compiled_descend(*packed[:2], R, *packed[2:], _filled(tol, (n,)), max_iter, max_step, *out)
         return out
     E, tau, H = model.evaluate(R, c, 2)
     iterations = np.zeros(len(R), dtype=int)
@@ -303,24 +311,14 @@ def _descend(model: TorqueModel, R: np.ndarray, c: np.ndarray, *, gtol: float = 
     return R, E, tau, H, iterations, converged
 
 
-def _packed(model, c: np.ndarray) -> tuple | None:
-    """``(params, offsets, coils, C (B, T, N), poles, P, signs, constant (B,))``: the model's zonal terms for the
-    currents ``c (B, N)`` as compiled arrays (:func:`spherestep.rotor_field.pack_terms`) and its energy's
-    constant part (``model.zonal_constant(c)``, zero for a model without one), or ``None`` for a model without
-    compiled zonal terms."""
-    zonal_terms = getattr(model, "zonal_terms", None)
-    terms = zonal_terms(c) if zonal_terms is not None else None
-    if not terms:
-        return None
-    from .rotor_field import pack_terms
-
-    packed = pack_terms(terms)
+def _packed(model: TorqueModel, c: np.ndarray) -> Packed | None:
+    """The model's :meth:`~TorqueModel.packed_terms` for the currents ``c (B, N)``, its currents ``C`` and constant
+    filled to ``(B, T, N)`` and ``(B,)`` as the compiled descent takes them, or ``None``."""
+    packed = model.packed_terms(c)
     if packed is None:
         return None
-    C = _filled(packed[3], (len(c),) + packed[3].shape[-2:])
-    zonal_constant = getattr(model, "zonal_constant", None)
-    constant = np.zeros(len(c)) if zonal_constant is None else _filled(zonal_constant(c), (len(c),))
-    return packed[:3] + (C,) + packed[4:] + (constant,)
+    return packed._replace(C=_filled(packed.C, (len(c),) + packed.C.shape[-2:]),
+                           constant=_filled(packed.constant, (len(c),)))
 
 
 def _filled(x, shape: tuple) -> np.ndarray:
@@ -358,10 +356,9 @@ def gradient_flow(model: TorqueModel, R0, currents, *, gtol: float = 1e-6, rtol:
     from scipy.integrate import solve_ivp
 
     R, c, lead = _prepare(model, R0, currents)
-    for value, label in ((gtol, "gtol"), (rtol, "rtol")):
-        if isinstance(value, bool) or not isinstance(value, (int, float)) or not 0 < value < 1:
-            raise bad_value(label, "a number in (0, 1)", value)
-    max_rounds = _count(max_rounds, "max_rounds")
+    gtol = checks.fraction(gtol, "gtol", expected="a number in (0, 1)")
+    rtol = checks.fraction(rtol, "rtol", expected="a number in (0, 1)")
+    max_rounds = checks.count(max_rounds, "max_rounds")
     tol = gtol * np.asarray(model.torque_reference(c), dtype=float)
     K = len(R)
 
@@ -392,7 +389,7 @@ def in_basin(model: TorqueModel, R0, currents, R_eq, *, tol: float = math.radian
     Starts on a basin boundary (the stable manifold of a saddle) flow to the saddle and are reported outside.
     Batched: ``R0``, ``currents`` and ``R_eq`` broadcast over leading axes.
     """
-    tol = _positive(tol, "tol")
+    tol = checks.positive(tol, "tol")
     R_eq = so3.as_rotations(R_eq, "R_eq")
     end, at_rest = gradient_flow(model, R0, currents, gtol=gtol)
     return at_rest & (so3.distance(end, R_eq) <= tol)

@@ -4,7 +4,7 @@ The step's arithmetic that decides which candidate comes first stays NumPy's —
 pairs and the products ``R1ᵀ R2`` behind Park's metric — so these loops order ties exactly as the NumPy form
 did; what they save is the NumPy form's dozens of small array operations per step. A module apart, loaded
 on the planner's first call, so that importing :mod:`spherestep.commutation` does not load numba (as
-:mod:`spherestep.statics` loads :mod:`spherestep._zonal_sums` only to descend).
+:mod:`spherestep.statics` loads :mod:`spherestep._fast.descent` only to descend).
 """
 
 from __future__ import annotations

@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .. import so3
+from .. import checks, so3
 from ..errors import bad_value
 from ..motor import coil_currents
 from .geometric import BLOCKED, DEFAULT_CANDIDATES, start_state
@@ -64,12 +64,12 @@ def plan_potential(design, targets, model, *, max_coils: int = DEFAULT_MAX_COILS
                    start: int | None = None) -> Plan:
     """Commutate ``targets (n+1, 3, 3)`` with the energy ``model`` (a
     :class:`~spherestep.potential.MotorPotential` of ``design``); see the module docstring."""
-    from ..statics import _descend, as_currents, equilibrium
+    from ..statics import as_currents, descend, equilibrium
     from ._potential_kernels import angles, best, distinct
 
     targets = check_targets(targets)
-    if isinstance(max_coils, bool) or not isinstance(max_coils, (int, np.integer)) or max_coils < 2:
-        raise bad_value("max_coils", "an integer of at least 2 (two poles fix the rotor)", max_coils)
+    max_coils = checks.count(max_coils, "max_coils", minimum=2,
+                             expected="an integer of at least 2 (two poles fix the rotor)")
     states = design.states()
     if len(states) == 0:
         raise bad_value("design", "a design with stepper states", "none")
@@ -93,7 +93,7 @@ def plan_potential(design, targets, model, *, max_coils: int = DEFAULT_MAX_COILS
         c = options[unique]
         if model.failed:  # the currents' one check left per step (their count was checked above)
             as_currents(c, model.coil_count, model.failed)
-        R, _, _, H, _, converged = _descend(model, np.repeat(here[None], len(c), axis=0), c)
+        R, _, _, H, _, converged = descend(model, np.repeat(here[None], len(c), axis=0), c)
         back = np.swapaxes(R, 1, 2)  # R_bᵀ: the equilibria's distances to here and to the target
         b = best(back @ here, back @ targets[i], H, converged, reach)
         if b < 0:

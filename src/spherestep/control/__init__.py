@@ -3,8 +3,11 @@
 * :mod:`.limits`: :class:`DriveLimits` (supply, coil electrics, per-unit bounds).
 * :mod:`.allocation`: :func:`allocate` — least-power coil currents for a torque (exact QP), relay mode.
 * :mod:`.capability`: :func:`torque_capability` — the torque available in every direction over SO(3).
-* :mod:`.trajectory`: :class:`Trajectory` — rest-to-rest turns on SO(3) with trapezoidal speed profiles.
+* :mod:`.trajectory`: :class:`Trajectory` — rest-to-rest turns on SO(3), trapezoidal or tabulated speed profiles.
+* :mod:`.time_optimal`: :func:`fastest_turn` — the time-optimal turn with the detent (phase plane, detours).
 * :mod:`.controller`: :class:`GeometricPD` and :class:`Observer` — feedback on the log-map error.
+* :mod:`.servo`: :class:`ServoLaw` — the one servo law (observer, feedback, cached ``K(R)``/bias, allocation) that
+  the simulation and the hardware loop call each period; :class:`ModelCache`, :class:`ServoCommand`.
 
 The closed-loop simulation (coil electrics, sensor, servo run, ramped relay stepping, the three-way comparison)
 is in :mod:`spherestep.dynamics`.
@@ -14,9 +17,14 @@ from .allocation import Allocation, allocate, allocate_matrix, allocate_relay, c
 from .capability import Capability, available_torque, feasible_support, figure_capability, torque_capability
 from .controller import GeometricPD, Observer
 from .limits import DriveLimits
-from .trajectory import Segment, Trajectory, bang_bang_time, path_capability, plan_through, plan_turn
+from .servo import ModelCache, ServoCommand, ServoLaw
+from .time_optimal import FastestTurn, fastest_time, fastest_turn
+from .trajectory import (Segment, TimeLaw, Trajectory, bang_bang_time, path_capability, plan_through, plan_trapezoid,
+                         plan_turn)
 
-__all__ = ["Allocation", "Capability", "DriveLimits", "GeometricPD", "Observer", "Segment", "Trajectory",
+__all__ = ["Allocation", "Capability", "DriveLimits", "GeometricPD", "ModelCache", "Observer", "Segment",
+           "ServoCommand", "ServoLaw", "Trajectory", "TimeLaw", "FastestTurn", "fastest_time", "fastest_turn",
+           "plan_trapezoid",
            "bang_bang_time", "path_capability", "plan_through", "plan_turn", "available_torque", "feasible_support", "figure_capability",
            "torque_capability", "allocate", "allocate_matrix", "allocate_relay", "closest_reachable",
            "least_power_box"]

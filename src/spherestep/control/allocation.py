@@ -37,7 +37,7 @@ from functools import lru_cache
 
 import numpy as np
 
-from .. import so3
+from .. import checks, so3
 from ..errors import bad_value
 from ..statics import TorqueModel
 from .limits import DriveLimits
@@ -281,10 +281,8 @@ def allocate_relay(K, torque, limits: DriveLimits | None = None, *, bias=None, f
                         limits.max_current)
     cap = min(RELAY_MAX_COILS, int(math.floor(limits.per_unit_power_radius ** 2 + 1e-9)))
     if max_coils is not None:
-        if isinstance(max_coils, bool) or not isinstance(max_coils, int) or not 0 <= max_coils <= cap:
-            raise bad_value("max_coils", f"an integer from 0 to {cap} (the supply's power and the exact search)",
-                            max_coils)
-        cap = max_coils
+        cap = checks.count(max_coils, "max_coils", 0, cap,
+                           f"an integer from 0 to {cap} (the supply's power and the exact search)")
     N = K.shape[1]
     if N > 62:
         raise bad_value("K", "at most 62 coils for the relay search", f"{N} coils")

@@ -26,7 +26,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .. import so3
+from .. import checks, so3
 from ..errors import bad_value
 from ..statics import TorqueModel
 from .limits import DriveLimits
@@ -180,10 +180,8 @@ def torque_capability(design, model: TorqueModel | None = None, limits: DriveLim
         model, limits = own.model, own.limits if limits is None else limits
     if not isinstance(model, TorqueModel):
         raise bad_value("model", "a torque model (spherestep.statics.TorqueModel)", type(model).__name__)
-    if isinstance(samples, bool) or not isinstance(samples, (int, np.integer)) or samples < 1:
-        raise bad_value("samples", "a positive number of orientations", samples)
-    if isinstance(directions, bool) or not isinstance(directions, (int, np.integer)) or directions < 20:
-        raise bad_value("directions", "an integer >= 20", directions)
+    samples = checks.count(samples, "samples", 1, expected="a positive number of orientations")
+    directions = checks.count(directions, "directions", 20)
     limits = DriveLimits() if limits is None else limits
     R = so3.random(int(samples), np.random.default_rng(seed))
     K = np.asarray(model.torque_matrix(R), dtype=float)

@@ -26,33 +26,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .. import so3
+from .. import checks, so3
 from ..errors import bad_value
 
 CONTROL_RATE = 1000.0  # Hz
 BANDWIDTH = 30.0  # rad/s, closed-loop natural frequency
 OBSERVER_BANDWIDTH = 120.0  # rad/s
-
-
-def rotation_error(M: np.ndarray) -> np.ndarray:
-    """``log(M)`` of one rotation ``M (3, 3)`` as a rotation vector: ``θ/sin θ · vect(M)`` with
-    ``θ = atan2(|vect M|, (tr M − 1)/2)`` in Python floats (the control loop's hot path; full precision for
-    ``θ < 2.5`` rad), :func:`spherestep.so3.log` beyond, where that quotient loses digits."""
-    (a, b, c), (d, e, f), (g, h, i) = M.tolist()
-    x, y, z = 0.5 * (h - f), 0.5 * (c - g), 0.5 * (d - b)
-    s = math.sqrt(x * x + y * y + z * z)
-    theta = math.atan2(s, 0.5 * (a + e + i - 1.0))
-    if theta >= 2.5:
-        return so3.log(M)
-    k = 1.0 + theta * theta / 6.0 if s < 1e-8 else theta / s
-    return np.array([k * x, k * y, k * z])
-
-
-def _positive(value, name: str) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float, np.floating)) or not math.isfinite(value) \
-            or value <= 0:
-        raise bad_value(name, "a finite positive number", value)
-    return float(value)
 
 
 @dataclass(frozen=True)
@@ -68,9 +47,8 @@ class GeometricPD:
 
     def __post_init__(self):
         for name in ("inertia", "bandwidth", "damping_ratio", "rate"):
-            _positive(getattr(self, name), name)
-        if not (math.isfinite(self.damping) and self.damping >= 0):
-            raise bad_value("damping", "a finite non-negative damping (N·m·s/rad)", self.damping)
+            checks.positive(getattr(self, name), name)
+        checks.non_negative(self.damping, "damping", "a finite non-negative damping (N·m·s/rad)")
         if self.bandwidth > 0.2 * 2 * math.pi * self.rate:
             raise bad_value("bandwidth", f"at most a fifth of the control rate ({0.4 * math.pi * self.rate:.0f} rad/s)",
                             self.bandwidth)
@@ -78,29 +56,32 @@ class GeometricPD:
     def torque(self, R_est, w_est, R_d, w_d, a_d) -> np.ndarray:
         """Commanded torque (N·m, fixed frame) for the estimate ``(R̂ (3, 3), ω̂ (3,))`` and the desired
         ``(R_d, ω_d, α_d)``."""
-        e = rotation_error(R_d @ R_est.T)
+        e = so3.log_single(R_d @ R_est.T)
         kp, kd = self.bandwidth ** 2, 2.0 * self.damping_ratio * self.bandwidth
         return self.inertia * (a_d + kp * e + kd * (w_d - w_est)) + self.damping * w_est
 
 
 class Observer:
-    """The orientation observer of the module (mutable state ``R``, ``w``)."""
+    """The orientation observer of the module (mutable state ``R``, ``w`` and the unmodelled torque ``d``, N·m,
+    fixed frame). ``d`` enters the prediction, ``ω̂ ← ω̂ + h (τ + d)/I``, and is corrected with gain ``l3``
+    (N·m per rad of residual): zero here, so ``d`` stays 0 — the place of the disturbance observer."""
 
     def __init__(self, R0, w0=None, *, inertia: float, bandwidth: float = OBSERVER_BANDWIDTH,
                  sensor_period: float = 1.0 / CONTROL_RATE, history: float = 0.05):
         self.R = so3.as_rotations(R0, "R0").copy()
         self.w = np.zeros(3) if w0 is None else np.array(w0, dtype=float)
-        self.inertia = _positive(inertia, "inertia")
-        h = _positive(sensor_period, "sensor_period")
-        wo = _positive(bandwidth, "bandwidth")
-        self.l1, self.l2 = min(2.0 * wo * h, 1.0), wo * wo * h
+        self.d = np.zeros(3)
+        self.inertia = checks.positive(inertia, "inertia")
+        h = checks.positive(sensor_period, "sensor_period")
+        wo = checks.positive(bandwidth, "bandwidth")
+        self.l1, self.l2, self.l3 = min(2.0 * wo * h, 1.0), wo * wo * h, 0.0
         self.t = 0.0
         self._past = deque(maxlen=max(2, int(math.ceil(history / h)) * 4))
         self._past.append((0.0, self.R.copy()))
 
     def predict(self, torque, h: float) -> None:
         """Advance by ``h`` s under ``torque`` (N·m, what the drive is believed to apply)."""
-        self.w = self.w + (h / self.inertia) * np.asarray(torque, dtype=float)
+        self.w = self.w + (h / self.inertia) * (np.asarray(torque, dtype=float) + self.d)
         self.R = so3.exp(h * self.w) @ self.R
         self.t += h
         self._past.append((self.t, self.R.copy()))
@@ -112,6 +93,8 @@ class Observer:
             times = [p[0] for p in self._past]
             k = int(np.clip(np.searchsorted(times, t_meas), 0, len(times) - 1))
             ref = self._past[k][1]
-        eps = rotation_error(R_meas @ ref.T)
+        eps = so3.log_single(R_meas @ ref.T)
         self.R = so3.exp(self.l1 * eps) @ self.R
         self.w = self.w + self.l2 * eps
+        if self.l3:
+            self.d = self.d + self.l3 * eps

@@ -23,7 +23,7 @@ from dataclasses import asdict, dataclass, replace
 
 import numpy as np
 
-from ..errors import bad_value
+from .. import checks
 
 SUPPLY_VOLTAGE = 24.0  # V, Sec. IV-B
 SUPPLY_POWER = 100.0  # W, Sec. IV-B
@@ -38,12 +38,6 @@ def wheeler_inductance(turns: float, outer_radius: float, length: float, inner_r
     mean = 0.5 * (inner_radius + outer_radius)
     depth = outer_radius - inner_radius
     return 31.6e-6 * turns ** 2 * mean ** 2 / (6.0 * mean + 9.0 * length + 10.0 * depth)
-
-
-def _positive(value, name: str) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value) or value <= 0:
-        raise bad_value(name, "a finite positive number", value)
-    return float(value)
 
 
 @dataclass(frozen=True)
@@ -65,7 +59,7 @@ class DriveLimits:
     def __post_init__(self):
         for name in ("nominal_current", "max_current", "supply_voltage", "supply_power", "resistance",
                      "inductance"):
-            _positive(getattr(self, name), name)
+            checks.positive(getattr(self, name), name)
 
     @classmethod
     def from_coil(cls, resistance: float, inductance: float, nominal_current: float, *,
@@ -74,11 +68,11 @@ class DriveLimits:
         """Limits for a coil of given ``resistance`` (Ω), ``inductance`` (H) and ``nominal_current`` (A) — the
         numbers a coil specification (``spherestep.motor.coil``) computes from its winding; ``max_current``
         defaults to what the supply voltage drives through the coil, ``V / R``."""
-        r = _positive(resistance, "resistance")
-        v = _positive(supply_voltage, "supply_voltage")
-        return cls(nominal_current=_positive(nominal_current, "nominal_current"),
+        r = checks.positive(resistance, "resistance")
+        v = checks.positive(supply_voltage, "supply_voltage")
+        return cls(nominal_current=checks.positive(nominal_current, "nominal_current"),
                    max_current=v / r if max_current is None else max_current, supply_voltage=v,
-                   supply_power=supply_power, resistance=r, inductance=_positive(inductance, "inductance"))
+                   supply_power=supply_power, resistance=r, inductance=checks.positive(inductance, "inductance"))
 
     @classmethod
     def from_spec(cls, spec, design, inductance: float | None = None) -> DriveLimits:

@@ -23,26 +23,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .. import so3
+from .. import checks, so3
 from ..errors import bad_value
 from .capability import available_torque, feasible_support
 from .limits import DriveLimits
 
 MARGIN = 0.7  # share of the guaranteed torque the trajectory may use; the rest is the feedback's
-
-
-def _positive(value, name: str) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float, np.floating)) or not math.isfinite(value) \
-            or value <= 0:
-        raise bad_value(name, "a finite positive number", value)
-    return float(value)
-
-
-def _axis(axis) -> np.ndarray:
-    n = np.asarray(axis, dtype=float)
-    if n.shape != (3,) or not np.all(np.isfinite(n)) or np.linalg.norm(n) == 0:
-        raise bad_value("axis", "a non-zero vector X,Y,Z", axis)
-    return n / np.linalg.norm(n)
 
 
 @dataclass(frozen=True)
@@ -80,16 +66,29 @@ class Segment:
         sdd = np.where(inside, np.where(up, a, np.where(coast, 0.0, -a)), 0.0)
         return s, sd, sdd
 
+    def profile_at(self, t: float) -> tuple[float, float, float]:
+        """:meth:`profile` at one time ``t`` (s) in Python floats (the control loop's path; same formulas)."""
+        a, v, ta, tc, T = self.acceleration, self.peak_speed, self.ramp, self.cruise, self.duration
+        tau = min(max(t - self.t0, 0.0), T)
+        if tau < ta:
+            s, sd, sdd = 0.5 * a * tau ** 2, a * tau, a
+        elif tau < ta + tc:
+            s, sd, sdd = 0.5 * a * ta ** 2 + v * (tau - ta), v, 0.0
+        else:
+            down = T - tau
+            s, sd, sdd = self.angle - 0.5 * a * down ** 2, a * down, -a
+        return s, sd, (sdd if 0.0 <= t - self.t0 < T else 0.0)
+
 
 def segment(start, axis, angle: float, acceleration: float, speed: float | None = None, t0: float = 0.0) -> Segment:
     """A trapezoidal turn (see the module); a negative ``angle`` turns about ``−axis``."""
-    n = _axis(axis)
+    n = checks.axis(axis)
     if not math.isfinite(angle):
         raise bad_value("angle", "a finite angle in radians", angle)
     if angle < 0:
         n, angle = -n, -angle
-    a = _positive(acceleration, "acceleration")
-    v = math.inf if speed is None else _positive(speed, "speed")
+    a = checks.positive(acceleration, "acceleration")
+    v = math.inf if speed is None else checks.positive(speed, "speed")
     if angle * a <= v * v:  # triangle
         ta = math.sqrt(angle / a)
         return Segment(so3.as_rotations(start, "start"), n, float(angle), float(t0), a, a * ta, ta, 0.0)
@@ -139,6 +138,25 @@ class Trajectory:
         """One trapezoidal turn of ``angle`` (rad) about the fixed ``axis`` from ``start``."""
         return cls((segment(start, axis, angle, acceleration, speed),))
 
+    def at(self, t: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """:meth:`sample` at one time ``t`` (s): ``(R (3, 3), ω (3,), α (3,))``, without the batch overhead."""
+        segs = self.segments
+        k = len(segs) - 1
+        while k > 0 and segs[k].t0 > t:
+            k -= 1
+        seg = segs[k]
+        s, sd, sdd = seg.profile_at(float(t))
+        n = seg.axis
+        return so3.exp(s * n) @ seg.start, sd * n, sdd * n
+
+    @classmethod
+    def hold(cls, R) -> Trajectory:
+        """The zero-length trajectory that rests at ``R (3, 3)``: ``(R, 0, 0)`` at every time."""
+        R = so3.as_rotations(R, "R")
+        if R.shape != (3, 3):
+            raise bad_value("R", "one rotation matrix of shape (3, 3)", f"shape {R.shape}")
+        return cls((segment(R, [0.0, 0.0, 1.0], 0.0, 1.0),))
+
     @classmethod
     def through(cls, waypoints, acceleration: float, speed: float | None = None) -> Trajectory:
         """Geodesic segments through ``waypoints (W, 3, 3)`` (``W ≥ 2``), at rest at each."""
@@ -164,7 +182,7 @@ def path_capability(model, start, axis, angle: float, limits: DriveLimits | None
     """Along the turn ``exp(s n) R₀``, ``s ∈ [0, θ]`` (``samples`` points): the torque available in every
     direction ``r`` (N·m) and the largest torques about ``+n`` and ``−n`` (the support ``h_S(±n)``, N·m)."""
     limits = DriveLimits() if limits is None else limits
-    n = _axis(axis)
+    n = checks.axis(axis)
     s = np.linspace(0.0, float(angle), samples)
     R = so3.exp(s[:, None] * n) @ so3.as_rotations(start, "start")
     K = np.asarray(model.torque_matrix(R), dtype=float)
@@ -190,7 +208,7 @@ def plan_turn(model, start, axis, angle: float, inertia: float, limits: DriveLim
         raise bad_value("margin", "a fraction in (0, 1]", margin)
     if not (math.isfinite(damping) and damping >= 0):
         raise bad_value("damping", "a non-negative viscous damping (N·m·s/rad)", damping)
-    I = _positive(inertia, "inertia")
+    I = checks.positive(inertia, "inertia")
     r = path_capability(model, start, axis, angle, limits, samples)[0]
     guaranteed = margin * float(r.min())
     if guaranteed <= 0:
@@ -226,7 +244,7 @@ def plan_through(model, waypoints, inertia: float, limits: DriveLimits | None = 
     if not least > 0:
         raise bad_value("waypoints", "a path along which the drive can give torque in every direction",
                         f"{least:.3g} N·m available")
-    return Trajectory.through(W, margin * least / _positive(inertia, "inertia"))
+    return Trajectory.through(W, margin * least / checks.positive(inertia, "inertia"))
 
 
 def bang_bang_time(model, start, axis, angle: float, inertia: float, limits: DriveLimits | None = None,

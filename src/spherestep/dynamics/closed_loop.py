@@ -19,8 +19,9 @@ import numpy as np
 from .. import so3
 from ..commutation.geometric import DEFAULT_CANDIDATES, next_state
 from ..errors import bad_value
+from ..motor import coil_currents
 from .rotor import Rotor
-from .simulate import Integrator, currents_of
+from .simulate import Integrator
 from ..commutation.trajectory import check_targets
 from .._threads import single_blas_thread
 
@@ -100,7 +101,7 @@ def run_closed_loop(design, targets, model, *, dwell: float = 0.5, noise: float 
         skip = rng.random() < missed
         if not skip:
             coils = states.coils(goal)
-        R, w, *_ = integrator.run(R, w, currents_of(coils, N), dwell, record_every=10**9)
+        R, w, *_ = integrator.run(R, w, coil_currents(coils, N), dwell, record_every=10**9)
         log_t.append(targets[i])
         log_true.append(R.copy())
         log_meas.append(R_meas)

@@ -28,10 +28,11 @@ import numpy as np
 from .. import so3
 from ..control.limits import DriveLimits
 from ..errors import bad_value
+from ..motor import coil_currents
 from .._threads import single_blas_thread
 from ..units import in_radians
 from .rotor import Rotor
-from .simulate import EXECUTED_TOL, Integrator, currents_of
+from .simulate import EXECUTED_TOL, Integrator
 
 RAMP_STEPS = 8
 START_RATE = 2.0  # steps/s
@@ -128,12 +129,12 @@ def run_ramped(design, plan, model, max_rate: float, *, rotor: Rotor, start_rate
     N = plan.coil_count
     R = plan.steps[0].achieved.copy()
     w = np.zeros(3)
-    times, Rs, cs, lag, step_times = [np.zeros(1)], [R[None]], [currents_of(plan.steps[0].coils, N)[None]], [], []
+    times, Rs, cs, lag, step_times = [np.zeros(1)], [R[None]], [coil_currents(plan.steps[0].coils, N)[None]], [], []
     t0 = 0.0
     for k, (step, span) in enumerate(zip(steps, intervals)):
         if k == len(steps) - 1:
             span = max(settle, span)
-        c = currents_of(step.coils, N)
+        c = coil_currents(step.coils, N)
         n_sub = max(1, int(math.ceil(span / min(dt, span / 8.0))))
         integ = Integrator(model, rotor, span / n_sub)
         step_times.append(t0)

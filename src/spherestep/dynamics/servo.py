@@ -1,82 +1,80 @@
-"""The servo loop in simulation: sensor → observer → controller → allocation → coil electrics → rigid rotor.
+"""The servo loop in simulation: sensor → the servo law → coil electrics → rigid rotor.
 
-Every control period ``h = 1/rate`` (1 kHz by default):
+Every control period ``h = 1/rate`` (1 kHz by default) at ``t = n h``:
 
-1. the sensor (:class:`OrientationSensor`) may deliver a measurement; the observer
-   (:class:`~spherestep.control.Observer`) corrects its estimate with it;
-2. the controller (:class:`~spherestep.control.GeometricPD`) turns the estimate and the trajectory's
-   ``(R_d, ω_d, α_d)`` into a torque command;
-3. the allocation (:func:`~spherestep.control.allocate_matrix`) turns it into coil current references at the
-   *estimated* orientation, using the model's ``K(R̂)`` and bias (out of reach: the closest reachable torque);
-4. the coils (:class:`~spherestep.dynamics.electrics.CoilDrive`) follow the references through their current
-   loops for the period, against the back-EMF ``K(R)·ω/I_n`` of the true motion;
-5. the rotor (:class:`~spherestep.dynamics.Rotor`, fourth-order Lie-group integrator, one step per period)
-   moves under the model's torque at the period's mean coil currents;
-6. the observer predicts the next period with the torque the allocation promised.
+1. the sensor (:class:`~spherestep.sensing.OrientationSensor`) may deliver a measurement, ``latency`` s old;
+2. the servo law (:class:`~spherestep.control.ServoLaw`: observer, geometric PD, the model's cached ``K(R̂)`` and
+   bias, warm-started least-power allocation) turns it and the trajectory into per-unit current references;
+3. the coils (:class:`~spherestep.dynamics.electrics.CoilDrive`) follow the references ``I_n c`` (A) through their
+   current loops for the period, against the back-EMF ``K(R)·ω/I_n`` of the true motion;
+4. the rotor (:class:`~spherestep.dynamics.Rotor`, fourth-order Lie-group integrator, one step per period)
+   moves under the plant model's torque at the period's mean coil currents.
 
 The torque model is any :class:`~spherestep.statics.TorqueModel` (the magnets' torque map, the iron model);
 the controller uses the same model as the plant (no model error) unless ``controller_model`` is given.
+A hold is this loop along :meth:`Trajectory.hold <spherestep.control.Trajectory.hold>`; :func:`hold` is that
+call, kept as the simulation's name for it.
 """
 
 from __future__ import annotations
 
 import math
-from collections import deque
 from dataclasses import dataclass
-from typing import Protocol, runtime_checkable
 
 import numpy as np
 
-from .. import so3
-from ..control import DriveLimits, GeometricPD, Observer, Trajectory, allocate_matrix
+from .. import checks, so3
+from ..control import DriveLimits, GeometricPD, ServoLaw, Trajectory
 from ..control.controller import CONTROL_RATE
 from ..errors import bad_value
+from ..sensing.sensor import NoisySensor, OrientationSensor
 from ..statics import TorqueModel
 from .._threads import single_blas_thread
-from ..units import in_radians
 from .electrics import CoilDrive
 from .rotor import Rotor
+
+__all__ = ["CONTROL_RATE", "HOLD_TOLERANCE", "NoisySensor", "OrientationSensor", "ServoRun", "ServoSummary", "hold",
+           "simulate_servo"]
 
 HOLD_TOLERANCE = math.radians(0.05)
 
 
-@runtime_checkable
-class OrientationSensor(Protocol):
-    """Anything that measures the rotor's orientation: ``measure(t, R_true, currents)`` returns a new estimate
-    ``(3, 3)`` when one is due at time ``t`` (s), else ``None``; ``latency`` (s) is how old a delivered
-    estimate is. ``currents`` (per unit) is what a magnetometer-based estimator needs to remove the coils'
-    own field."""
+@dataclass(frozen=True)
+class ServoSummary:
+    """What a :class:`ServoRun` achieved (radians and SI inside): ``arrival_time`` s, the first time after which
+    the rotor stays within ``tolerance`` rad of the trajectory's end, or ``None`` with ``arrival_reason`` when
+    it is not there at the end; ``motion_time`` (the trajectory's duration) and ``simulated`` s; ``final_error``
+    and ``max_tracking_error`` rad; ``peak_power``, ``mean_power`` (supply) and ``mean_copper_power`` W;
+    ``peak_current`` A; ``reachable_fraction`` the share of periods whose torque command was within reach."""
 
-    latency: float
+    arrival_time: float | None
+    arrival_reason: str | None
+    tolerance: float
+    motion_time: float
+    simulated: float
+    final_error: float
+    max_tracking_error: float
+    peak_power: float
+    mean_power: float
+    mean_copper_power: float
+    peak_current: float
+    reachable_fraction: float
 
-    def measure(self, t: float, R_true: np.ndarray, currents: np.ndarray) -> np.ndarray | None: ...
+    def to_dict(self, degrees: bool = True) -> dict:
+        """The summary with the keys of the JSON outputs (angles in degrees, ``degrees=False`` radians); an
+        arrival that never happened is ``None`` with its ``arrival_reason``; no infinities or NaNs."""
+        unit, f = ("deg", math.degrees) if degrees else ("rad", float)
+        return {"arrival_time_s": self.arrival_time, "arrival_reason": self.arrival_reason,
+                "motion_time_s": self.motion_time, "simulated_s": self.simulated,
+                f"final_error_{unit}": f(self.final_error), f"max_tracking_error_{unit}": f(self.max_tracking_error),
+                "peak_power_W": self.peak_power, "mean_power_W": self.mean_power,
+                "mean_copper_power_W": self.mean_copper_power, "peak_current_A": self.peak_current,
+                "reachable_fraction": self.reachable_fraction}
 
-
-class NoisySensor:
-    """An orientation sensor: samples the true orientation every ``1/rate`` s, turns it by a random rotation
-    vector with independent N(0, ``noise``²) components (rad), and delivers it ``latency`` s later."""
-
-    def __init__(self, noise: float = 0.0, *, rate: float = CONTROL_RATE, latency: float = 0.0,
-                 rng: np.random.Generator | int | None = None):
-        if not (isinstance(noise, (int, float)) and math.isfinite(noise) and noise >= 0):
-            raise bad_value("noise", "a non-negative angle in radians", noise)
-        if not (isinstance(rate, (int, float)) and math.isfinite(rate) and rate > 0):
-            raise bad_value("rate", "a positive sampling rate in Hz", rate)
-        if not (isinstance(latency, (int, float)) and math.isfinite(latency) and latency >= 0):
-            raise bad_value("latency", "a non-negative delay in seconds", latency)
-        self.noise, self.rate, self.latency = float(noise), float(rate), float(latency)
-        self.rng = np.random.default_rng(rng)
-        self._next = 0.0
-        self._queue: deque = deque()
-
-    def measure(self, t: float, R_true: np.ndarray, currents: np.ndarray) -> np.ndarray | None:
-        if t >= self._next - 1e-12:
-            self._queue.append((t + self.latency, so3.exp(self.rng.normal(0.0, self.noise, 3)) @ R_true))
-            self._next += 1.0 / self.rate
-        out = None
-        while self._queue and self._queue[0][0] <= t + 1e-12:
-            out = self._queue.popleft()[1]
-        return out
+    def __getitem__(self, key: str):
+        """TRANSITIONAL (issue 24): ``summary()[key]`` as the dict of :meth:`to_dict` for callers not yet moved
+        to the attributes."""
+        return self.to_dict()[key]
 
 
 @dataclass(frozen=True)
@@ -111,32 +109,33 @@ class ServoRun:
         """Tracking error (rad) at the end of the run."""
         return float(self.tracking_error[-1])
 
-    def arrival_time(self, tolerance: float = HOLD_TOLERANCE) -> float:
+    def arrival_time(self, tolerance: float = HOLD_TOLERANCE) -> float | None:
         """First time (s) after which the rotor stays within ``tolerance`` (rad) of the trajectory's end
-        (``inf`` if it is not there at the end)."""
+        (``None`` if it is not there at the end)."""
         err = so3.distance(self.orientations, self.targets[-1])
         outside = np.flatnonzero(err > tolerance)
         if len(outside) == 0:
             return float(self.times[0])
         if outside[-1] == len(err) - 1:
-            return math.inf
+            return None
         return float(self.times[outside[-1] + 1])
 
-    def summary(self, tolerance: float = HOLD_TOLERANCE) -> dict:
-        """Time to arrive within ``tolerance``, the motion's duration, final and maximum tracking errors
-        (degrees), peak and mean supply power and mean copper power (W), the share of periods whose torque
-        command was within reach."""
-        err = np.degrees(self.tracking_error)
-        return {"arrival_time_s": self.arrival_time(tolerance), "motion_time_s": self.motion_time,
-                "simulated_s": float(self.times[-1]), "final_error_deg": float(err[-1]),
-                "max_tracking_error_deg": float(err.max()), "peak_power_W": float(self.power.max()),
-                "mean_power_W": float(self.power.mean()), "mean_copper_power_W": float(self.copper_power.mean()),
-                "peak_current_A": float(np.abs(self.currents).max()),
-                "reachable_fraction": float(self.reachable.mean())}
+    def summary(self, tolerance: float = HOLD_TOLERANCE) -> ServoSummary:
+        """The :class:`ServoSummary` of the run, arrival judged within ``tolerance`` (rad)."""
+        tolerance = checks.positive(tolerance, "tolerance")
+        err = self.tracking_error
+        arrival = self.arrival_time(tolerance)
+        reason = None if arrival is not None else (
+            f"not within {math.degrees(tolerance):g}° of the end at {float(self.times[-1]):.3g} s "
+            f"(final error {math.degrees(float(err[-1])):.3g}°)")
+        return ServoSummary(arrival, reason, tolerance, self.motion_time, float(self.times[-1]), float(err[-1]),
+                            float(err.max()), float(self.power.max()), float(self.power.mean()),
+                            float(self.copper_power.mean()), float(np.abs(self.currents).max()),
+                            float(self.reachable.mean()))
 
     def to_dict(self, degrees: bool = True) -> dict:
-        """The :meth:`summary` (angles in degrees; ``degrees=False`` gives radians)."""
-        return self.summary() if degrees else in_radians(self.summary())
+        """The :meth:`summary` as a dict (angles in degrees; ``degrees=False`` gives radians)."""
+        return self.summary().to_dict(degrees)
 
 
 @single_blas_thread
@@ -163,10 +162,8 @@ def simulate_servo(design, trajectory: Trajectory, model: TorqueModel | None = N
         raise bad_value("model", "a torque model (spherestep.statics.TorqueModel)", type(model).__name__)
     if not isinstance(trajectory, Trajectory):
         raise bad_value("trajectory", "a spherestep.control.Trajectory", type(trajectory).__name__)
-    if not (isinstance(rate, (int, float)) and math.isfinite(rate) and rate > 0):
-        raise bad_value("rate", "a positive control rate in Hz", rate)
-    if not (isinstance(settle, (int, float)) and math.isfinite(settle) and settle >= 0):
-        raise bad_value("settle", "a non-negative time in seconds", settle)
+    rate = checks.positive(rate, "rate", "a positive control rate in Hz")
+    settle = checks.non_negative(settle, "settle", "a non-negative time in seconds")
     limits = DriveLimits() if limits is None else limits
     drive = CoilDrive(limits) if drive is None else drive
     if drive.limits != limits:
@@ -175,56 +172,42 @@ def simulate_servo(design, trajectory: Trajectory, model: TorqueModel | None = N
     controller = GeometricPD(rotor.inertia, rate=rate, damping=rotor.damping) if controller is None else controller
     sensor = NoisySensor(rate=rate) if sensor is None else sensor
     if not isinstance(sensor, OrientationSensor):
-        raise bad_value("sensor", "an object with measure(t, R_true, currents) and latency", type(sensor).__name__)
-    ctrl_model = model if controller_model is None else controller_model
+        raise bad_value("sensor", "a spherestep.sensing.OrientationSensor (measure(t, R_true, currents), rate, "
+                        "latency)", type(sensor).__name__)
+    law = ServoLaw(model if controller_model is None else controller_model, trajectory, controller, limits=limits,
+                   sensor_rate=sensor.rate, observer_bandwidth=observer_bandwidth)
     h = 1.0 / rate
-    sensor_rate = getattr(sensor, "rate", rate)
-    observer = Observer(trajectory.start, inertia=rotor.inertia, sensor_period=1.0 / sensor_rate,
-                        **({} if observer_bandwidth is None else {"bandwidth": observer_bandwidth}))
     N, In = model.coil_count, limits.nominal_current
     R = trajectory.start.copy() if start is None else so3.as_rotations(start, "start").copy()
     w = np.zeros(3)
     i = np.zeros(N)
     integral = np.zeros(N)
-    lam = None
-    zeros = np.zeros(N)
     steps = int(math.ceil((trajectory.duration + settle) * rate - 1e-9)) + 1
-    Rd_all, wd_all, ad_all = trajectory.sample(np.arange(steps) * h)
+    times = np.arange(steps) * h
+    Rd_all = trajectory.sample(times)[0]
     rec = {k: [] for k in ("R", "Rh", "w", "i", "iref", "v", "p", "pc", "tau", "ok")}
-    measured = False
-    probe = so3.random(8, 0)  # a model with no torque at zero current anywhere needs no bias per period
-    biased = bool(np.any(np.asarray(ctrl_model.torque(probe, np.zeros((8, N)))) != 0))
+    latency = sensor.latency
     for n in range(steps):
         t = n * h
-        c_now = i / In
-        meas = sensor.measure(t, R, c_now)
-        if meas is not None and not measured:  # the observer starts from the first measurement
-            observer.R, measured = so3.as_rotations(meas).copy(), True
-        elif meas is not None:
-            observer.correct(meas, t - sensor.latency)
-        rec["Rh"].append(observer.R)
-        tau_cmd = controller.torque(observer.R, observer.w, Rd_all[n], wd_all[n], ad_all[n])
-        K_hat = np.asarray(ctrl_model.torque_matrix(observer.R), dtype=float)
-        bias = np.asarray(ctrl_model.torque(observer.R, zeros), dtype=float) if biased else None
-        alloc, lam = allocate_matrix(K_hat, tau_cmd, limits, bias=bias, failed=ctrl_model.failed, lam0=lam)
-        i_ref = alloc.currents * In
+        meas = sensor.measure(t, R, i / In)
+        cmd = law.step(t, meas, t - latency)
+        i_ref = law.amperes(cmd.currents)
         K_true = np.asarray(model.torque_matrix(R), dtype=float)
         emf = (w @ K_true) / In
         i, integral, i_mean, v_mean, energy = drive.run(i, integral, i_ref, emf, h)
         c_mean = i_mean / In
+        rec["Rh"].append(cmd.estimate)
         rec["R"].append(R)
         rec["w"].append(w)
         R, w, _ = rotor.step(R[None], w[None], lambda Rb, c=c_mean[None]: model.torque(Rb, c), h)
         R, w = R[0], w[0]
-        observer.predict(alloc.torque - rotor.damping * observer.w, h)
         rec["i"].append(i_mean)
         rec["iref"].append(i_ref)
         rec["v"].append(v_mean)
         rec["p"].append(energy / h)
         rec["pc"].append(limits.resistance * float(i_mean @ i_mean))
-        rec["tau"].append(tau_cmd)
-        rec["ok"].append(alloc.reachable)
-    times = np.arange(steps) * h
+        rec["tau"].append(cmd.requested)
+        rec["ok"].append(cmd.reachable)
     return ServoRun(times, np.array(rec["R"]), np.array(rec["Rh"]), Rd_all, np.array(rec["w"]), np.array(rec["i"]),
                     np.array(rec["iref"]), np.array(rec["v"]), np.array(rec["p"]), np.array(rec["pc"]),
                     np.array(rec["tau"]), np.array(rec["ok"]), float(trajectory.duration))
@@ -233,7 +216,5 @@ def simulate_servo(design, trajectory: Trajectory, model: TorqueModel | None = N
 def hold(design, R_target, model: TorqueModel | None = None, *, duration: float = 1.0, start=None,
          **kwargs) -> ServoRun:
     """Hold the rotor at ``R_target`` for ``duration`` s (from ``start``, default the target itself):
-    :func:`simulate_servo` along a zero-length trajectory."""
-    R_target = so3.as_rotations(R_target, "R_target")
-    trajectory = Trajectory.turn(R_target, [0.0, 0.0, 1.0], 0.0, 1.0)
-    return simulate_servo(design, trajectory, model, settle=duration, start=start, **kwargs)
+    :func:`simulate_servo` along :meth:`Trajectory.hold <spherestep.control.Trajectory.hold>`."""
+    return simulate_servo(design, Trajectory.hold(R_target), model, settle=duration, start=start, **kwargs)

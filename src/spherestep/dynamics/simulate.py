@@ -16,16 +16,11 @@ import numpy as np
 from .. import so3
 from ..errors import bad_value
 from ..motor import coil_currents
-from ..rotor_field import pack_terms
+from ..statics import is_torque_model
 from .rotor import YOSHIDA, Rotor
 from .._threads import single_blas_thread
 
 EXECUTED_TOL = math.radians(0.5)
-
-
-def currents_of(coils: dict[int, int], coil_count: int) -> np.ndarray:
-    """The current vector ``(N,)`` of a coil → ±1 map (:func:`spherestep.motor.coil_currents`, the one helper)."""
-    return coil_currents(coils, coil_count)
 
 
 @dataclass
@@ -98,9 +93,10 @@ class Simulation:
 class Integrator:
     """Integrates one rotor under ``model`` (``torque``/``energy`` of ``(R, currents)``) with time step ``dt``.
 
-    A model with ``zonal_terms`` whose kernels are compiled (the potential, the magnets' map, the iron model) runs
-    the same scheme compiled (:func:`spherestep._zonal_sums.integrate`, equal to :meth:`Rotor.step` to rounding,
-    ``tests/test_fast_path.py``); any other model, or ``compiled=False`` (the reference), runs :meth:`Rotor.step`
+    A :class:`~spherestep.statics.TorqueModel` whose ``packed_terms`` are compiled (the potential, the magnets'
+    map, the iron model) runs the same scheme compiled (:func:`spherestep._fast.integrate.integrate`, equal to
+    :meth:`Rotor.step` to rounding, ``tests/test_fast_path.py``); any other model (one answering ``None``, or a
+    plain object with ``torque`` and ``energy``), or ``compiled=False`` (the reference), runs :meth:`Rotor.step`
     with batched ``(1, 3, 3)`` calls."""
 
     def __init__(self, model, rotor: Rotor, dt: float, compiled: bool = True):
@@ -112,16 +108,15 @@ class Integrator:
         """Integrate for ``duration`` s from ``(R, ω)``; returns ``(R, ω, times, Rs, ωs, energies)``, the
         trajectory sampled every ``record_every`` steps (times relative to the start)."""
         steps = max(1, int(round(duration / self.dt)))
-        zonal_terms = getattr(self.model, "zonal_terms", None) if self.compiled else None
-        terms = zonal_terms(currents) if zonal_terms else None
-        packed = pack_terms(terms) if terms else None
-        if packed is not None:  # the same scheme compiled (spherestep._zonal_sums.integrate)
-            from .._zonal_sums import integrate
+        compiled = self.compiled and is_torque_model(self.model)
+        packed = self.model.packed_terms(currents) if compiled else None
+        if packed is not None:  # the same scheme compiled (spherestep._fast.integrate)
+            from .._fast.integrate import integrate
 
             count = steps // record_every + (steps % record_every != 0)
             Rs, ws = np.empty((count, 3, 3)), np.empty((count, 3))
             rotor = self.rotor
-            R, w = integrate(*packed[:2], np.array(R, dtype=float), np.array(w, dtype=float), *packed[2:],
+            R, w = integrate(*packed[:2], np.array(R, dtype=float), np.array(w, dtype=float), *packed[2:7],
                              rotor.inertia, rotor.damping, rotor.friction, self.dt, steps, record_every,
                              np.array(YOSHIDA), Rs, ws)
             times = self.dt * np.r_[np.arange(record_every, steps + 1, record_every), steps][:count]
@@ -176,12 +171,12 @@ def simulate(design, plan, model, dwell: float | None = None, *, rotor: Rotor | 
     N = plan.coil_count
     R = plan.steps[0].achieved.copy()
     w = np.zeros(3)
-    times, Rs, ws, coils, energy = [np.zeros(1)], [R[None]], [w[None]], [currents_of(plan.steps[0].coils, N)[None]], []
+    times, Rs, ws, coils, energy = [np.zeros(1)], [R[None]], [w[None]], [coil_currents(plan.steps[0].coils, N)[None]], []
     energy.append(model.energy(R[None], coils[0]))
     settled = [R.copy()]
     t0 = 0.0
     for step in plan.steps[1:]:
-        c = currents_of(step.coils, N)
+        c = coil_currents(step.coils, N)
         R, w, t, r, v, e = integrator.run(R, w, c, dwell, record_every)
         times.append(t0 + t)
         Rs.append(r)

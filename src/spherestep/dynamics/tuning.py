@@ -21,10 +21,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..statics import equilibrium, finite_difference_hessian
 from ..errors import bad_value
+from ..motor import coil_currents
+from ..statics import equilibrium, finite_difference_hessian
 from .rotor import Rotor
-from .simulate import currents_of
 from .._threads import single_blas_thread
 
 FD_STEP = 1e-4  # rad, central differences of the torque
@@ -58,7 +58,7 @@ def tune(design, model, zeta: float = 1.0, samples: int = 40, seed: int = 0) -> 
     states = design.states()
     rng = np.random.default_rng(seed)
     picks = rng.choice(len(states), size=min(samples, len(states)), replace=False)
-    currents = np.array([currents_of(states.coils(int(i)), len(design.stator)) for i in picks])
+    currents = np.array([coil_currents(states.coils(int(i)), len(design.stator)) for i in picks])
     rest = equilibrium(model, states.rotations[picks], currents)
     eig = np.array([stiffness(model, rest.rotation[i], currents[i]) for i in np.flatnonzero(rest.is_minimum)])
     if len(eig) == 0:

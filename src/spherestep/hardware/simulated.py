@@ -14,8 +14,9 @@ from collections.abc import Mapping
 import numpy as np
 
 from .. import so3
-from ..dynamics import Integrator, Rotor, currents_of
+from ..dynamics import Integrator, Rotor
 from ..errors import bad_value
+from ..motor import coil_currents
 from .backend import Backend, DeviceInfo
 from .protocol import VERSION
 
@@ -47,7 +48,7 @@ class Simulated(Backend):
 
     def write(self, enable: int, polarity: int, coils: Mapping[int, int]) -> None:
         """Energise ``coils`` (the masks carry the same state by channel)."""
-        self.currents = currents_of(dict(coils), self.coil_count)
+        self.currents = coil_currents(dict(coils), self.coil_count)
 
     def hold(self, seconds: float) -> None:
         """Integrate the rotor for ``seconds`` under the current coils."""

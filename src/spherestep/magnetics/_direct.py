@@ -22,7 +22,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from ..errors import bad_value
-from ._model import (as_currents, as_meshing, as_rotations, rotor_collection, rotor_magnets, stator_coils,
+from ._model import (as_meshing, as_rotations, currents_for, rotor_collection, rotor_magnets, stator_coils,
                      unflatten, z_to)
 
 MESHING = 216  # default cells per magnet for direct evaluation (0.6 % of the peak pair torque)
@@ -79,7 +79,7 @@ def force_torque(design, R, currents, meshing: int = MESHING) -> tuple[np.ndarra
     evaluated; ``meshing`` is the number of cells per rotor magnet (see the module's convergence notes).
     """
     R, batch = as_rotations(R)
-    c = as_currents(currents, len(design.stator), design.failed_coils, batch)
+    c = currents_for(currents, len(design.stator), design.failed_coils, batch)
     active = np.nonzero(np.any(c != 0, axis=0))[0]
     Fk, Tk = coil_wrenches(design, R, active, meshing)
     F = np.einsum("kn,kni->ki", c[:, active], Fk)
@@ -113,7 +113,7 @@ def reaction(design, R, currents, loops: int = LOOPS, segments: int = SEGMENTS) 
     along target paths ``Rᵀ x`` (vectorised by magpylib); results are turned back with ``R``.
     """
     R, batch = as_rotations(R)
-    c = as_currents(currents, len(design.stator), design.failed_coils, batch)
+    c = currents_for(currents, len(design.stator), design.failed_coils, batch)
     loops = as_meshing(loops, "loops")
     segments = as_meshing(segments, "segments")
     if segments < 4:

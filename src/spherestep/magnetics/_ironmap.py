@@ -36,6 +36,8 @@ import numpy as np
 from .. import so3
 from ..errors import bad_value
 from ..motor.coil import CoilSpec, iron_coil
+from .._fast import Packed
+from ..rotor_field import pack_terms
 from ..statics import TorqueModelBase
 from . import _iron
 from ._coupling import COUPLING_ALPHA_DEG, COUPLING_DPHI_DEG, CoreCoupling
@@ -140,12 +142,19 @@ class IronTorqueMap(TorqueModelBase):
         """``D(R)`` (N·m, fixed frame): the torque with every coil off."""
         return self.detent.torque(R, self._ones(R))
 
+    has_bias = True  # the detent: torque with every coil off
+
     def zonal_terms(self, currents) -> list | None:
         """The detent's and the coils' zonal terms (:func:`spherestep.rotor_field.pack_terms`); ``None`` with the
         coupling, which is not a zonal sum (the compiled paths then step aside for the NumPy ones)."""
         if self.coupling is not None:
             return None
         return self.detent.zonal_terms(np.ones(self.coil_count)) + self.linear.zonal_terms(self.as_currents(currents))
+
+    def packed_terms(self, currents) -> Packed | None:
+        """The detent's and the coils' terms compiled (:func:`spherestep.rotor_field.pack_terms`), ``None`` with
+        the coupling."""
+        return pack_terms(self.zonal_terms(currents))
 
     def _coupled(self, R, method: str) -> np.ndarray | float:
         """The coupling's ``energy`` or ``torque`` at ``R (..., 3, 3)``, shaped like the pair terms' (0 without)."""

@@ -46,7 +46,7 @@ import magpylib as magpy
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from .. import so3
+from .. import checks, so3
 from ..errors import bad_value
 
 MU0 = float(magpy.mu_0)  # vacuum permeability, T·m/A (magpylib's value, 1.25663706127e-6)
@@ -128,23 +128,16 @@ def unflatten(x: np.ndarray, batch: tuple[int, ...]) -> np.ndarray:
     return x.reshape(batch + x.shape[1:])
 
 
-def as_currents(currents, N: int, failed, batch: tuple[int, ...]) -> np.ndarray:
-    """``currents`` as ``(K, N)`` floats for rotations of batch shape ``batch`` (``K`` their number; a single
-    ``(N,)`` row is repeated); InputError naming ``currents`` for a wrong shape, non-finite values, or current
-    in one of the ``failed`` coils."""
-    c = np.asarray(currents, dtype=float)
-    if c.shape == (N,):
-        c = np.broadcast_to(c, batch + (N,))
-    if c.shape != batch + (N,):
+def currents_for(currents, N: int, failed, batch: tuple[int, ...]) -> np.ndarray:
+    """``currents`` through the one currents contract (:func:`spherestep.checks.currents`), broadcast to the
+    rotations' batch shape ``batch`` and flattened to ``(K, N)`` (a single ``(N,)`` row serves every rotation);
+    InputError naming ``currents`` when they do not broadcast to ``batch + (N,)``."""
+    c = checks.currents(currents, N, tuple(failed))
+    try:
+        return np.broadcast_to(c, batch + (N,)).reshape(-1, N)
+    except ValueError:
         raise bad_value("currents", f"one current per coil, shape ({N},) or {batch + (N,)} (nominal ±1, 0 off)",
-                        f"shape {c.shape}")
-    c = c.reshape(-1, N)
-    if not np.all(np.isfinite(c)):
-        raise bad_value("currents", "finite numbers", "NaN or infinite entries")
-    live = [k for k in failed if np.any(c[:, k] != 0)]
-    if live:
-        raise bad_value("currents", f"zero in the failed coils {list(failed)}", f"current in coil {live[0]}")
-    return c
+                        f"shape {c.shape}") from None
 
 
 def as_meshing(meshing, name: str = "meshing") -> int:

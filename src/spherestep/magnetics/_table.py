@@ -49,10 +49,11 @@ import numpy as np
 from scipy.interpolate import CubicSpline
 from scipy.spatial.transform import Rotation
 
-from ..rotor_field import RotorField, fast_evaluate, fast_torque_matrix
+from .._fast import Packed
+from ..rotor_field import RotorField, fast_evaluate, fast_torque_matrix, pack_terms
 from ..statics import TorqueModelBase
 from ._direct import EPS
-from ._model import MU0, as_currents, as_meshing, as_rotations, unflatten
+from ._model import MU0, as_meshing, as_rotations, currents_for, unflatten
 
 TABLE_MESHING = 1000  # cells per magnet for the table (0.1 % of the peak pair torque)
 CHUNK = 256  # orientations per vectorised block (bounds the (K, M, N) arrays)
@@ -116,6 +117,8 @@ class TorqueMap(TorqueModelBase):
     tau: np.ndarray
     meshing: int
 
+    has_bias = False  # linear in the currents: no torque with every coil off
+
     def __post_init__(self):
         tau = CubicSpline(self.nodes, self.tau)
         slope = tau.derivative()
@@ -175,15 +178,18 @@ class TorqueMap(TorqueModelBase):
     def zonal_terms(self, currents) -> list:
         """``[(rotor_field, 1, coils, c)]`` for currents ``(..., N)``: the energy as a zonal sum
         (:func:`spherestep.rotor_field.pack_terms`)."""
-        batch = np.shape(currents)[:-1]
-        c = as_currents(currents, len(self.coils), self.failed, batch).reshape(batch + (len(self.coils),))
-        return [(self.rotor_field, 1.0, self.coils, c)]
+        return [(self.rotor_field, 1.0, self.coils, self.as_currents(currents))]
+
+    def packed_terms(self, currents) -> Packed:
+        """The energy ``Σ_k c_k F(x_k)`` as one compiled zonal term (:func:`spherestep.rotor_field.pack_terms`;
+        the compiled descent's and integrator's input)."""
+        return pack_terms(self.zonal_terms(currents))
 
     def evaluate(self, R, currents, order: int) -> tuple[np.ndarray, ...]:
         """``(E,)``, ``(E, τ)`` or ``(E, τ, H)`` through the rotor function (J, N·m, N·m/rad); ``R (K, 3, 3)`` or
         ``(3, 3)``, currents ``(K, N)`` or ``(N,)``."""
         R, batch = as_rotations(R)
-        c = as_currents(currents, len(self.coils), self.failed, batch)
+        c = currents_for(currents, len(self.coils), self.failed, batch)
         out = fast_evaluate(self.rotor_field, 1.0, self.coils, R, c, order, 0.0)
         return tuple(unflatten(a, batch) for a in out)
 
@@ -234,7 +240,7 @@ class TorqueMap(TorqueModelBase):
 
     def _drive(self, R, currents) -> tuple[np.ndarray, tuple[int, ...], np.ndarray, np.ndarray]:
         R, batch = as_rotations(R)
-        c = as_currents(currents, len(self.coils), self.failed, batch)
+        c = currents_for(currents, len(self.coils), self.failed, batch)
         active = np.nonzero(np.any(c != 0, axis=0))[0]
         return R, batch, c[:, active], active
 
@@ -243,7 +249,7 @@ class TorqueMap(TorqueModelBase):
         currents ``(K, N)`` or ``(N,)``: ``R Σ_k c_k x_k × S(x_k)`` through the rotor function; shape ``(K, 3)``
         or ``(3,)``."""
         R, batch = as_rotations(R)
-        c = as_currents(currents, len(self.coils), self.failed, batch)
+        c = currents_for(currents, len(self.coils), self.failed, batch)
         return unflatten(fast_evaluate(self.rotor_field, 1.0, self.coils, R, c, 1, None, value=False)[1], batch)
 
     def torque_pairwise(self, R, currents) -> np.ndarray:

@@ -53,7 +53,8 @@ import dataclasses
 
 from .. import so3
 from ..errors import bad_value
-from ..rotor_field import RotorField, fast_evaluate, fast_torque_matrix, threads
+from .._fast import Packed
+from ..rotor_field import RotorField, fast_evaluate, fast_torque_matrix, pack_terms, threads
 from ..rotor_field import cross as _cross
 from ..statics import TorqueModelBase
 from ..harmonics import SO3Grid, half_pi_matrix, s2_rotate, so3_grid, so3_inverse, sph_harm_u
@@ -221,6 +222,16 @@ class MotorPotential(TorqueModelBase):
     def zonal_constant(self, currents) -> np.ndarray:
         """``‖Â‖² + cᵀSc``: the energy's part besides its zonal terms (:func:`spherestep.statics.equilibrium`)."""
         return self._constant(_checks.currents(currents, len(self.coils), self.failed), pairwise=True)
+
+    has_bias = False  # no current, no stator field: V = ‖Â‖² for every R
+
+    def packed_terms(self, currents) -> Packed | None:
+        """The energy ``‖Â‖² + cᵀSc − 2 Σ_k c_k F(x_k)`` as one compiled zonal term and its constant
+        (:func:`spherestep.rotor_field.pack_terms`), ``None`` with ``fast=False``."""
+        if not self.fast:
+            return None
+        c = _checks.currents(currents, len(self.coils), self.failed)
+        return pack_terms([(self.rotor_field, -2.0, self.coils, c)], self._constant(c, pairwise=True))
 
     def energy(self, R, currents) -> np.ndarray:
         """``V(R, c)`` (eq. (4)): the fast path, or :meth:`energy_harmonic` with ``fast=False``."""

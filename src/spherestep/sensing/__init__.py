@@ -11,8 +11,9 @@
 * :mod:`.placement`: :func:`greedy_placement` (worst-case Fisher information), :func:`accuracy`.
 * :mod:`.imu`: :class:`Imu`, :class:`Mekf`, :class:`ImuSensor`, :class:`FusedSensor`.
 * :mod:`.figures`: :func:`figure_layout`.
-* :mod:`.sensor`: :class:`HallSensor`, :class:`IdealSensor` — ``measure(R_true, currents, R_prev) -> R``;
-  :class:`LoopSensor`, the servo's ``measure(t, R_true, currents)`` form.
+* :mod:`.sensor`: the one :class:`OrientationSensor` protocol of the servo loop (``measure(t, R_true, currents)``,
+  ``rate``, ``latency`` — honoured), :class:`SampledSensor`; :class:`NoisySensor`, :class:`HallSensor`,
+  :class:`IdealSensor` (and the IMU sensors above) implement it.
 """
 
 from .array import SensorArray, candidate_positions, coil_collisions, fibonacci_directions, radial_frames
@@ -24,12 +25,13 @@ from .imu import FusedSensor, Imu, ImuSensor, Mekf, triad
 from .parts import BMI270_BMM150, TMAG5273A2, ImuPart, MagnetometerPart
 from .placement import Accuracy, Placement, accuracy, default_array, greedy_placement, smallest_eigenvalue
 from .readings import actual_currents, sense, true_field
-from .sensor import HallSensor, IdealSensor, LoopSensor
+from .sensor import HallSensor, IdealSensor, NoisySensor, OrientationSensor, SampledSensor
 from .symmetry import MarkerEffect, marked_design, marker_effect, symmetry_group
 
 __all__ = [
     "Accuracy", "BMI270_BMM150", "Calibration", "CoilField", "Estimate", "Estimator", "FieldTable", "FusedSensor", "HallSensor",
-    "IdealSensor", "Imu", "LoopSensor", "ImuPart", "ImuSensor", "KnownField", "MagnetometerPart", "MarkerEffect", "Mekf", "Placement",
+    "IdealSensor", "Imu", "ImuPart", "ImuSensor", "KnownField", "MagnetometerPart", "MarkerEffect", "Mekf", "NoisySensor",
+    "OrientationSensor", "Placement", "SampledSensor",
     "SensorArray", "TMAG5273A2", "accuracy", "actual_currents", "axial_field_table", "calibrate", "field_gradient", "candidate_positions",
     "coil_collisions", "default_array", "fibonacci_directions", "figure_layout", "greedy_placement", "marked_design", "marker_effect",
     "radial_frames", "rotor_field", "sense", "smallest_eigenvalue", "super_fibonacci", "symmetry_group",

@@ -28,6 +28,7 @@ from .. import so3
 from ..errors import bad_value
 from .field import CoilField
 from .parts import BMI270_BMM150, ImuPart
+from .sensor import SampledSensor
 
 GRAVITY = 9.80665  # m/s²
 EARTH_FIELD_T = np.array([20e-6, 0.0, -45e-6])  # a mid-latitude field (north, 0, down-ish), fixed frame
@@ -120,11 +121,13 @@ def triad(accel, mag, gravity_ref, field_ref) -> np.ndarray:
                                                                                         np.asarray(mag, float)).T
 
 
-class _MotionSensor:
-    """Shared by the IMU sensors: the true body rate from consecutive true orientations ``dt`` apart."""
+class _MotionSensor(SampledSensor):
+    """Shared by the IMU sensors: an :class:`~spherestep.sensing.sensor.OrientationSensor` sampling every ``dt``
+    s (``rate = 1/dt``), ``latency`` s late; the true body rate from consecutive true orientations ``dt`` apart."""
 
-    def __init__(self, design, dt: float, part: ImuPart, seed):
+    def __init__(self, design, dt: float, part: ImuPart, seed, latency: float = 0.0, start=None):
         self.imu = Imu(part, dt, CoilField.build(design, np.zeros((1, 3))), seed)
+        super().__init__(1.0 / self.imu.dt, latency, start)
         self.dt = float(dt)
         self._R_last = None
         self.filter: Mekf | None = None
@@ -139,13 +142,14 @@ class _MotionSensor:
 class ImuSensor(_MotionSensor):
     """IMU alone (AHRS): gyro prediction, accelerometer (gravity) and magnetometer (Earth + known coil
     field) updates; starts by TRIAD from its first sample (``R_prev`` is not used). The accelerometer's and
-    magnetometer's offsets are not estimated: the filter treats them as extra white noise. ``measure`` is
-    called once per ``dt`` with the true orientation."""
+    magnetometer's offsets are not estimated: the filter treats them as extra white noise. ``estimate`` is
+    called once per ``dt`` with the true orientation (by :meth:`measure`, the sensor protocol)."""
 
-    def __init__(self, design, dt: float = 1e-3, part: ImuPart = BMI270_BMM150, seed=None):
-        super().__init__(design, dt, part, seed)
+    def __init__(self, design, dt: float = 1e-3, part: ImuPart = BMI270_BMM150, seed=None, *,
+                 latency: float = 0.0):
+        super().__init__(design, dt, part, seed, latency)
 
-    def measure(self, R_true, currents=None, R_prev=None) -> np.ndarray:
+    def estimate(self, R_true, currents=None, R_prev=None) -> np.ndarray:
         gyro, accel, mag = self._sample(R_true, currents)
         ref = self.imu.reference_field(currents)
         p = self.imu.part
@@ -162,25 +166,26 @@ class ImuSensor(_MotionSensor):
 class FusedSensor(_MotionSensor):
     """Gyro prediction + the magnetometer array's estimate as an orientation update (with its Cramér–Rao
     covariance) every ``hall_every`` samples. ``hall`` is a :class:`~spherestep.sensing.sensor.HallSensor`.
-    The first call starts from ``hall.measure(R_true, currents, R_prev)``: give the known start as ``R_prev``
-    for a symmetric rotor (a symmetric copy ``R g`` would contradict the gyro, which sees the body rate)."""
+    The first call starts from ``hall.estimate(R_true, currents, R_prev)``: give the known start as ``R_prev``
+    (or ``start``) for a symmetric rotor (a symmetric copy ``R g`` would contradict the gyro, which sees the
+    body rate)."""
 
     def __init__(self, design, hall, dt: float = 1e-3, part: ImuPart = BMI270_BMM150, hall_every: int = 1,
-                 seed=None):
-        super().__init__(design, dt, part, seed)
+                 seed=None, *, latency: float = 0.0, start=None):
+        super().__init__(design, dt, part, seed, latency, start)
         self.hall = hall
         self.hall_every = int(hall_every)
         self._count = 0
 
-    def measure(self, R_true, currents=None, R_prev=None) -> np.ndarray:
+    def estimate(self, R_true, currents=None, R_prev=None) -> np.ndarray:
         gyro, _, _ = self._sample(R_true, currents)
         if self.filter is None:
-            R0 = self.hall.measure(R_true, currents, R_prev)
+            R0 = self.hall.estimate(R_true, currents, R_prev)
             self.filter = Mekf(R0, self.imu.part, self.dt, attitude_std=1e-3)
             return self.filter.R.copy()
         self.filter.predict(gyro)
         self._count += 1
         if self._count % self.hall_every == 0:
-            R_hall = self.hall.measure(R_true, currents, self.filter.R)
+            R_hall = self.hall.estimate(R_true, currents, self.filter.R)
             self.filter.update_orientation(R_hall, self.hall.last.covariance)
         return self.filter.R.copy()

@@ -1,23 +1,34 @@
-"""Sensors for the servo loop: ``measure(R_true, currents, R_prev) -> R_estimate``.
+"""The one orientation-sensor protocol of the servo loop, and the sensors that implement it.
 
-* :class:`HallSensor`: the stator's magnetometer array and the SO(3) estimator (readings simulated from the
-  true orientation and the currents that flow; the estimate tracks from ``R_prev`` by one Gauss–Newton step,
-  or starts globally when there is no ``R_prev``).
-* :class:`IdealSensor`: returns the true orientation (the reference).
+:class:`OrientationSensor`: ``measure(t, R_true, currents) -> R | None`` is called once per control period at loop
+time ``t`` (s) with the true orientation (simulation) and the per-unit coil currents flowing; it returns an
+estimate ``(3, 3)`` when one is delivered at ``t``, else ``None``. A sensor samples every ``1/rate`` s and delivers
+each sample ``latency`` s later, so a delivered estimate describes the rotor at ``t − latency`` (the servo law
+corrects against its estimate of that time). :class:`SampledSensor` does this schedule and delay once; a sensor
+writes only ``estimate(R_true, currents, R_prev)``, the estimate from one sample:
 
-The IMU alternatives (:class:`~spherestep.sensing.imu.ImuSensor`, :class:`~spherestep.sensing.imu.FusedSensor`)
-have the same ``measure`` plus the time step they need for their gyro. :class:`LoopSensor` wraps any of them in
-the servo's ``measure(t, R_true, currents)`` form (:func:`spherestep.dynamics.simulate_servo`).
+* :class:`NoisySensor`: the true orientation turned by Gaussian noise (a generic sensor);
+* :class:`HallSensor`: the stator's magnetometer array and the SO(3) estimator (readings simulated from the true
+  orientation and the currents that flow; it tracks from its previous estimate by Gauss–Newton, or starts
+  globally);
+* :class:`IdealSensor`: the true orientation;
+* :class:`~spherestep.sensing.imu.ImuSensor` and :class:`~spherestep.sensing.imu.FusedSensor`: the IMU alone and
+  gyro + array (MEKF).
+
+On hardware the readings come from the device, not from a true orientation: there
+:class:`~spherestep.sensing.estimate.Estimator.track` is the same Hall estimate (the hardware's ``FieldTracker``
+wraps it), and the servo law takes its output as the measurement at the reading's device time.
 """
 
 from __future__ import annotations
 
-import math
+from collections import deque
 from dataclasses import replace
+from typing import Protocol, runtime_checkable
 
 import numpy as np
 
-from .. import so3
+from .. import checks, so3
 from ..errors import bad_value
 from .array import SensorArray
 from .estimate import Estimate, Estimator
@@ -26,16 +37,73 @@ from .placement import default_array
 from .readings import actual_currents, sense
 from .symmetry import symmetry_group
 
+SENSOR_RATE = 1000.0  # Hz, the servo's control rate
 
-class IdealSensor:
-    """The true orientation, as if measured perfectly."""
 
-    def measure(self, R_true, currents=None, R_prev=None) -> np.ndarray:
+@runtime_checkable
+class OrientationSensor(Protocol):
+    """Anything that measures the rotor's orientation for the servo loop (see the module): ``rate`` (Hz),
+    ``latency`` (s, how old a delivered estimate is), ``measure(t, R_true, currents) -> (3, 3) | None``."""
+
+    rate: float
+    latency: float
+
+    def measure(self, t: float, R_true: np.ndarray, currents: np.ndarray | None) -> np.ndarray | None: ...
+
+
+class SampledSensor:
+    """The :class:`OrientationSensor` schedule: a sample every ``1/rate`` s from ``t = 0``, each delivered
+    ``latency`` s later (several due at once: the newest). A subclass writes ``estimate(R_true, currents,
+    R_prev)``; ``R_prev`` is its own previous estimate (``start`` before the first; ``None``: none known)."""
+
+    def __init__(self, rate: float = SENSOR_RATE, latency: float = 0.0, start=None):
+        self.rate = checks.positive(rate, "rate", "a positive sampling rate in Hz")
+        self.latency = checks.non_negative(latency, "latency", "a non-negative delay in seconds")
+        self._last = None if start is None else so3.as_rotations(start, "start").reshape(3, 3).copy()
+        self._next = 0.0
+        self._queue: deque = deque()
+
+    def estimate(self, R_true, currents=None, R_prev=None) -> np.ndarray:
+        raise NotImplementedError
+
+    def measure(self, t: float, R_true, currents=None) -> np.ndarray | None:
+        if t >= self._next - 1e-12:
+            self._last = self.estimate(R_true, currents, self._last)
+            self._queue.append((t + self.latency, self._last))
+            self._next += 1.0 / self.rate
+        out = None
+        while self._queue and self._queue[0][0] <= t + 1e-12:
+            out = self._queue.popleft()[1]
+        return out
+
+
+class NoisySensor(SampledSensor):
+    """The true orientation turned by a random rotation vector with independent N(0, ``noise``²) components
+    (rad), sampled every ``1/rate`` s and delivered ``latency`` s later."""
+
+    def __init__(self, noise: float = 0.0, *, rate: float = SENSOR_RATE, latency: float = 0.0,
+                 rng: np.random.Generator | int | None = None):
+        self.noise = checks.non_negative(noise, "noise", "a non-negative angle in radians")
+        super().__init__(rate, latency)
+        self.rng = np.random.default_rng(rng)
+
+    def estimate(self, R_true, currents=None, R_prev=None) -> np.ndarray:
+        return so3.exp(self.rng.normal(0.0, self.noise, 3)) @ R_true
+
+
+class IdealSensor(SampledSensor):
+    """The true orientation, as if measured perfectly (``rate`` Hz, ``latency`` s)."""
+
+    def __init__(self, rate: float = SENSOR_RATE, latency: float = 0.0):
+        super().__init__(rate, latency)
+
+    def estimate(self, R_true, currents=None, R_prev=None) -> np.ndarray:
         return so3.as_rotations(R_true, "R_true").reshape(3, 3).copy()
 
 
-class HallSensor:
-    """Magnetometer array + estimator for ``design`` (module doc).
+class HallSensor(SampledSensor):
+    """Magnetometer array + estimator for ``design`` (module doc), an :class:`OrientationSensor` of ``rate`` Hz
+    and ``latency`` s that tracks from its previous estimate, from ``start`` at first (``None``: the global start).
 
     ``array``: a :class:`SensorArray` (default :func:`spherestep.sensing.default_array`); ``known``: extra known
     fields beside the coils (e.g. an iron model's); ``current_error``: RMS relative error of the currents the
@@ -49,7 +117,8 @@ class HallSensor:
 
     def __init__(self, design, array: SensorArray | None = None, known=(), current_error: float = 0.0,
                  truth: str = "table", iterations: int = 1, start_readings: int = 32, noise_T: float | None = None,
-                 seed=None):
+                 seed=None, *, rate: float = SENSOR_RATE, latency: float = 0.0, start=None):
+        super().__init__(rate, latency, start)
         if truth not in ("table", "magpylib"):
             raise bad_value("truth", "'table' or 'magpylib'", truth)
         self.design = design
@@ -85,8 +154,9 @@ class HallSensor:
                 B = B + source.field(currents)
         return sense(self.array, B, self.rng)
 
-    def measure(self, R_true, currents=None, R_prev=None) -> np.ndarray:
-        """The estimated orientation ``(3, 3)`` from one set of readings."""
+    def estimate(self, R_true, currents=None, R_prev=None) -> np.ndarray:
+        """The estimated orientation ``(3, 3)`` from one set of readings, tracked from ``R_prev`` (``None``: the
+        global start from ``start_readings`` averaged readings)."""
         if R_prev is None:
             m = np.mean([self.readings(R_true, currents) for _ in range(max(self.start_readings, 1))], axis=0)
             self.last = self.estimator.initialise(m, currents, near_symmetry=self.near_symmetry)
@@ -94,27 +164,3 @@ class HallSensor:
             m = self.readings(R_true, currents)
             self.last = self.estimator.track(m, R_prev, currents, self.iterations)
         return self.last.R
-
-
-class LoopSensor:
-    """A sensing sensor in the servo's :class:`~spherestep.dynamics.servo.OrientationSensor` form:
-    ``measure(t, R_true, currents)`` returns an estimate every ``1/rate`` s (else ``None``), ``latency`` s old.
-    The inner ``sensor`` (:class:`HallSensor`, :class:`IdealSensor`, an IMU sensor with ``dt = 1/rate``) tracks
-    from its own previous estimate, starting from ``start`` (``None``: the global start, up to the rotor's
-    symmetry)."""
-
-    def __init__(self, sensor, rate: float = 1000.0, latency: float = 0.0, start=None):
-        if not (isinstance(rate, (int, float)) and math.isfinite(rate) and rate > 0):
-            raise bad_value("rate", "a positive sampling rate in Hz", rate)
-        if not (isinstance(latency, (int, float)) and math.isfinite(latency) and latency >= 0):
-            raise bad_value("latency", "a non-negative delay in seconds", latency)
-        self.sensor, self.rate, self.latency = sensor, float(rate), float(latency)
-        self._last = None if start is None else so3.as_rotations(start, "start").reshape(3, 3).copy()
-        self._next = 0.0
-
-    def measure(self, t: float, R_true, currents=None):
-        if t < self._next - 1e-12:
-            return None
-        self._next += 1.0 / self.rate
-        self._last = self.sensor.measure(R_true, currents, self._last)
-        return self._last

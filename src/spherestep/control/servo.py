@@ -1,0 +1,150 @@
+"""The one servo law: observer → feedback → the model's ``K(R)`` and bias → warm-started allocation.
+
+Simulation (:func:`spherestep.dynamics.simulate_servo`) and hardware (:func:`spherestep.hardware.run_servo`) call
+:meth:`ServoLaw.step` once per control period; nothing of the law is written anywhere else.
+
+Units. The law works in currents *per unit of the coil's nominal current* ``c`` (the torque models' unit, see
+:mod:`.limits`); :meth:`ServoLaw.amperes` is the one conversion to the amperes ``i = I_n c`` of the drive, with
+``I_n`` = ``limits.nominal_current``. Torques are N·m in the fixed frame, angles radians, times seconds.
+
+One period, at loop time ``t`` (s):
+
+1. *predict*: the observer (:class:`~spherestep.control.controller.Observer`) advances from its last time to ``t``
+   under the torque the previous command promised, ``τ_p − b_d ω̂`` (``b_d`` the rotor's known damping);
+2. *correct*: a measurement ``R_m`` taken at ``t_m`` (default ``t``; a sensor of latency ``δ`` delivers
+   ``t_m = t − δ``) corrects it against the estimate of that time; the first measurement starts it;
+3. *feedback*: :class:`~spherestep.control.controller.GeometricPD` gives the torque ``τ*`` from ``(R̂, ω̂)`` and
+   the trajectory's ``(R_d, ω_d, α_d)(t)``;
+4. *model*: ``K(R̂)`` (3 × N, N·m per unit current) and the bias ``b(R̂) = τ(R̂, 0)`` from :class:`ModelCache`,
+   re-evaluated only when ``R̂`` has turned more than ``K_REUSE`` since they were last evaluated (the bias only
+   for a model that has one);
+5. *allocation*: :func:`~spherestep.control.allocation.allocate_matrix`, least copper power with
+   ``b + K c = τ*`` within the limits, warm-started from the last period's dual; the command is ``c``, the
+   torque it promises ``τ_p = b + K c`` (what step 1 uses next period) and whether ``τ*`` was reachable.
+
+The observer's state is ``(R̂, ω̂, d̂)``: ``d̂`` an unmodelled torque, carried in the prediction
+``ω̂ ← ω̂ + h (τ_p + d̂)/I``; its gain is zero here (the disturbance observer of the servo issue sets it).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .. import checks, so3
+from ..errors import bad_value
+from ..statics import TorqueModel
+from .allocation import allocate_matrix
+from .controller import GeometricPD, Observer
+from .limits import DriveLimits
+from .trajectory import Trajectory
+
+K_REUSE = 2e-3  # rad: K(R) and b(R) are re-evaluated when the orientation has turned further than this
+
+
+class ModelCache:
+    """``K(R)`` and the bias ``b(R) = τ(R, 0)`` of a torque ``model`` near the last orientation they were evaluated
+    at: :meth:`at` re-evaluates them only when ``R`` has turned more than ``reuse`` rad from there (a relative
+    error of about ``reuse`` over the pole spacing, 0.6 % at 2e-3 rad, which the feedback absorbs). Serves the
+    servo law (at the estimate) and the emulated motor (at the true orientation)."""
+
+    def __init__(self, model: TorqueModel, reuse: float = K_REUSE):
+        if not isinstance(model, TorqueModel):
+            raise bad_value("model", "a torque model (spherestep.statics.TorqueModel)", type(model).__name__)
+        self.model = model
+        self.reuse = checks.non_negative(reuse, "reuse")
+        # TEMPORARY shim until statics.TorqueModelBase.has_bias lands (issue 24 move 3): assume a bias if undeclared
+        self.has_bias = bool(getattr(model, "has_bias", True))
+        self.evaluations = 0
+        self._at: np.ndarray | None = None
+        self._K: np.ndarray | None = None
+        self._bias = np.zeros(3)
+        self._zeros = np.zeros(model.coil_count)
+
+    def at(self, R: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """``(K (3, N), b (3,))`` for one rotation ``R (3, 3)`` (trusted: the loop's own estimate)."""
+        if self._at is None or math.sqrt(sum(x * x for x in so3.log_single(R @ self._at.T).tolist())) > self.reuse:
+            self._K = np.asarray(self.model.torque_matrix(R), dtype=float)
+            if self.has_bias:
+                self._bias = np.asarray(self.model.torque(R, self._zeros), dtype=float)
+            self._at = np.array(R, dtype=float)
+            self.evaluations += 1
+        return self._K, self._bias
+
+
+@dataclass(frozen=True)
+class ServoCommand:
+    """One period's output of :meth:`ServoLaw.step`: ``currents (N,)`` per unit (:meth:`ServoLaw.amperes` for
+    A); ``torque (3,)`` N·m that they promise at the estimate, ``b + K c``; ``requested (3,)`` the feedback's
+    ``τ*``; ``reachable`` whether ``τ*`` was within the limits; ``estimate (3, 3)`` and ``velocity (3,)`` rad/s,
+    the observer's ``(R̂, ω̂)`` the command was computed from."""
+
+    currents: np.ndarray
+    torque: np.ndarray
+    requested: np.ndarray
+    reachable: bool
+    estimate: np.ndarray
+    velocity: np.ndarray
+
+
+class ServoLaw:
+    """The servo law of the module for ``model`` (the controller's belief, any
+    :class:`~spherestep.statics.TorqueModel`) following ``trajectory`` (a :class:`Trajectory`; see
+    :meth:`Trajectory.hold` for a fixed pose).
+
+    ``controller`` a :class:`GeometricPD` (its ``inertia`` and ``damping`` are also the observer's);
+    ``limits`` the :class:`DriveLimits` the allocation keeps within (default 24 V / 100 W);
+    ``sensor_rate`` (Hz) the rate measurements arrive at (the observer's gains; default the controller's rate);
+    ``observer_bandwidth`` (rad/s, default the observer's); ``reuse`` rad (see :class:`ModelCache`).
+    """
+
+    def __init__(self, model: TorqueModel, trajectory: Trajectory, controller: GeometricPD, *,
+                 limits: DriveLimits | None = None, sensor_rate: float | None = None,
+                 observer_bandwidth: float | None = None, reuse: float = K_REUSE):
+        if not isinstance(trajectory, Trajectory):
+            raise bad_value("trajectory", "a spherestep.control.Trajectory", type(trajectory).__name__)
+        if not isinstance(controller, GeometricPD):
+            raise bad_value("controller", "a spherestep.control.GeometricPD", type(controller).__name__)
+        if limits is not None and not isinstance(limits, DriveLimits):
+            raise bad_value("limits", "a spherestep.control.DriveLimits", type(limits).__name__)
+        self.cache = ModelCache(model, reuse)
+        self.model, self.trajectory, self.controller = model, trajectory, controller
+        self.limits = DriveLimits() if limits is None else limits
+        rate = controller.rate if sensor_rate is None else checks.positive(sensor_rate, "sensor_rate")
+        self.observer = Observer(trajectory.start, inertia=controller.inertia, sensor_period=1.0 / rate,
+                                 **({} if observer_bandwidth is None else {"bandwidth": observer_bandwidth}))
+        self.started = False  # the observer starts from the first measurement
+        self._failed = tuple(model.failed)
+        self._lam = None
+        self._promised = np.zeros(3)
+        # first calls (model set-up, imports, caches) here rather than in the first period
+        K, b = self.cache.at(self.observer.R)
+        allocate_matrix(K, b, self.limits, bias=b, failed=self._failed)
+
+    def amperes(self, currents) -> np.ndarray:
+        """Per-unit ``currents`` in amperes: ``I_n c`` (the drive's wire unit)."""
+        return np.asarray(currents, dtype=float) * self.limits.nominal_current
+
+    def step(self, t: float, measurement: np.ndarray | None = None, measured_at: float | None = None
+             ) -> ServoCommand:
+        """One control period at loop time ``t`` (s): predict to ``t``, correct with ``measurement`` (a rotation
+        ``(3, 3)`` taken at ``measured_at``, default ``t``, or ``None``), feedback, ``K``/bias, allocation (see the
+        module). Call with non-decreasing ``t``."""
+        obs = self.observer
+        h = t - obs.t
+        if h > 0:
+            obs.predict(self._promised - self.controller.damping * obs.w, h)
+        if measurement is not None:
+            if not self.started:
+                obs.R, self.started = np.array(measurement, dtype=float), True
+            else:
+                obs.correct(measurement, measured_at)
+        Rd, wd, ad = self.trajectory.at(t)
+        tau = self.controller.torque(obs.R, obs.w, Rd, wd, ad)
+        K, b = self.cache.at(obs.R)
+        alloc, self._lam = allocate_matrix(K, tau, self.limits, bias=b if self.cache.has_bias else None,
+                                           failed=self._failed, lam0=self._lam)
+        self._promised = alloc.torque
+        return ServoCommand(alloc.currents, alloc.torque, tau, alloc.reachable, obs.R, obs.w)
