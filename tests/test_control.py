@@ -10,8 +10,8 @@ from scipy.optimize import minimize
 
 from spherestep import so3
 from spherestep.control import (DriveLimits, Trajectory, allocate, allocate_matrix, allocate_relay,
-                                available_torque, bang_bang_time, feasible_support, plan_through, plan_turn,
-                                torque_capability)
+                                available_torque, bang_bang_time, feasible_support, plan_through, plan_trapezoid,
+                                plan_turn, torque_capability)
 from spherestep.errors import InputError
 from spherestep.magnetics import torque_map
 from spherestep.motor import prototype
@@ -239,10 +239,10 @@ def test_waypoints_chain_segments_at_rest():
 def test_planned_turn_stays_within_the_guaranteed_torque_and_above_the_bound(tmap):
     R0 = so3.random(1, 3)[0]
     inertia = 0.0724
-    tr = plan_turn(tmap, R0, [0, 1, 1], math.radians(60), inertia)
+    tr = plan_trapezoid(tmap, R0, [0, 1, 1], math.radians(60), inertia)
     bound = bang_bang_time(tmap, R0, [0, 1, 1], math.radians(60), inertia)
-    assert bound < tr.duration
-    damped = plan_turn(tmap, R0, [0, 1, 1], math.radians(60), inertia, damping=0.25)
+    assert bound < plan_turn(tmap, R0, [0, 1, 1], math.radians(60), inertia).duration < tr.duration
+    damped = plan_trapezoid(tmap, R0, [0, 1, 1], math.radians(60), inertia, damping=0.25)
     seg = damped.segments[0]
     r_min = tr.segments[0].acceleration * inertia / 0.7
     assert inertia * seg.acceleration + 0.25 * seg.peak_speed <= 0.7 * r_min * (1 + 1e-9)
@@ -326,7 +326,8 @@ def test_plan_through_waypoints_uses_the_least_guaranteed_torque(tmap):
     tr = plan_through(tmap, W, inertia, samples=8)
     a = tr.segments[0].acceleration
     assert all(seg.acceleration == a for seg in tr.segments)
-    each = [plan_turn(tmap, Ra, so3.log(Rb @ Ra.T), float(np.linalg.norm(so3.log(Rb @ Ra.T))), inertia, samples=8)
+    each = [plan_trapezoid(tmap, Ra, so3.log(Rb @ Ra.T), float(np.linalg.norm(so3.log(Rb @ Ra.T))), inertia,
+                           samples=8)
             for Ra, Rb in zip(W[:-1], W[1:])]
     assert a == pytest.approx(min(p.segments[0].acceleration for p in each), rel=1e-12)
     R, _, _ = tr.sample(np.array([tr.duration]))

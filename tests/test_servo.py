@@ -9,11 +9,11 @@ from scipy.integrate import quad
 
 from spherestep import so3
 from spherestep.control import DriveLimits, Trajectory
-from spherestep.dynamics import (CoilDrive, NoisySensor, OrientationSensor, Rotor, hold, rl_step, simulate_servo,
-                                 step_intervals)
+from spherestep.dynamics import CoilDrive, Rotor, hold, rl_step, simulate_servo, step_intervals
 from spherestep.errors import InputError
 from spherestep.magnetics import torque_map
 from spherestep.motor import prototype
+from spherestep.sensing import NoisySensor, OrientationSensor
 
 LIMITS = DriveLimits()
 HOLD = math.radians(0.05)
@@ -100,7 +100,16 @@ def test_servo_holds_an_arbitrary_orientation_under_noise(design, tmap):
     last = err[run.times >= 0.25]
     assert last.max() <= HOLD
     assert run.reachable.all()  # a 1° correction at 30 rad/s needs ~1 N·m: within reach
-    assert run.summary()["mean_power_W"] < 100.0
+    summary = run.summary()
+    assert summary.mean_power < 100.0 and 0.0 < summary.arrival_time <= 0.25  # 1° off at the start, held by 0.25 s
+    d = summary.to_dict()
+    assert d["arrival_time_s"] == summary.arrival_time and d["arrival_reason"] is None
+    assert d["final_error_deg"] == pytest.approx(math.degrees(run.final_error), rel=1e-12)
+    assert summary.to_dict(degrees=False)["max_tracking_error_rad"] == pytest.approx(math.radians(1.0), rel=1e-9)
+    # judged at a tolerance it never meets, the arrival is None with a reason (no infinity in the dict)
+    never = run.summary(tolerance=1e-12)
+    assert never.arrival_time is None and "not within" in never.arrival_reason
+    assert all(v is None or isinstance(v, str) or math.isfinite(v) for v in never.to_dict().values())
 
 
 @pytest.mark.slow
@@ -201,7 +210,7 @@ def test_ramped_relay_stepping_keeps_or_loses_steps_and_finds_a_pull_out_rate(de
     from spherestep.commutation import turn
     from spherestep.dynamics import pull_out_rate, run_ramped, tune
 
-    plan = turn(design, (1.0, 0.5, 2.0), 40.0)
+    plan = turn(design, (1.0, 0.5, 2.0), math.radians(40.0))
     tuning = tune(design, tmap)
     slow = run_ramped(design, plan, tmap, 3.0, rotor=tuning.rotor, dt=tuning.dt, settle=2.0)
     assert not slow.lost and math.isfinite(slow.arrival_time())
@@ -215,4 +224,4 @@ def test_ramped_relay_stepping_keeps_or_loses_steps_and_finds_a_pull_out_rate(de
                          settle=2.0)
     assert 3.0 <= pull.rate < 300.0 and not pull.run.lost
     assert [r for r, _ in pull.tried][:2] == [3.0, 300.0] and len(pull.tried) == 4
-    assert slow.summary()["peak_power_W"] == 24.0 * max(len(s.coils) for s in plan.steps)  # 24 W a coil
+    assert slow.summary().peak_power == 24.0 * max(len(s.coils) for s in plan.steps)  # 24 W a coil

@@ -133,11 +133,6 @@ class Trajectory:
             a[m] = sdd[..., None] * seg.axis
         return R, w, a
 
-    @classmethod
-    def turn(cls, start, axis, angle: float, acceleration: float, speed: float | None = None) -> Trajectory:
-        """One trapezoidal turn of ``angle`` (rad) about the fixed ``axis`` from ``start``."""
-        return cls((segment(start, axis, angle, acceleration, speed),))
-
     def at(self, t: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """:meth:`sample` at one time ``t`` (s): ``(R (3, 3), ω (3,), α (3,))``, without the batch overhead."""
         segs = self.segments
@@ -156,6 +151,11 @@ class Trajectory:
         if R.shape != (3, 3):
             raise bad_value("R", "one rotation matrix of shape (3, 3)", f"shape {R.shape}")
         return cls((segment(R, [0.0, 0.0, 1.0], 0.0, 1.0),))
+
+    @classmethod
+    def turn(cls, start, axis, angle: float, acceleration: float, speed: float | None = None) -> Trajectory:
+        """One trapezoidal turn of ``angle`` (rad) about the fixed ``axis`` from ``start``."""
+        return cls((segment(start, axis, angle, acceleration, speed),))
 
     @classmethod
     def through(cls, waypoints, acceleration: float, speed: float | None = None) -> Trajectory:
