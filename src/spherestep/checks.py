@@ -1,4 +1,4 @@
-"""The input contracts every room shares: positive numbers, counts, fractions, axes, coil currents.
+"""The input contracts every room shares: positive numbers, counts, fractions, axes, coil currents, real arrays.
 
 Each function takes the value and the ``name`` the user knows it by, returns the value in the form the code
 uses (a ``float``, an ``int``, a unit vector, a float array), and otherwise raises
@@ -101,4 +101,15 @@ def currents(value, coil_count: int, failed: tuple[int, ...] = (), name: str = "
     if failed and np.any(arr[..., list(failed)] != 0):
         raise bad_value(name, f"zero on the failed coils {list(failed)} (they cannot be energised)",
                         "a non-zero current on a failed coil")
+    return arr
+
+
+def real_array(value, name: str) -> np.ndarray:
+    """A float array of finite real numbers, any shape."""
+    try:
+        arr = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        raise bad_value(name, "real numbers", value) from None
+    if not np.all(np.isfinite(arr)):
+        raise bad_value(name, "finite real numbers", value)
     return arr

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..checks import real_array
 from ..errors import bad_value
 
 
@@ -97,17 +98,6 @@ def samples_so3(f, name: str = "f") -> tuple[np.ndarray, int]:
             or arr.shape[-3] != arr.shape[-1]):
         raise bad_value(name, "samples on the SO(3) grid, shape (..., 2L+1, L+1, 2L+1)", f"shape {arr.shape}")
     return arr, arr.shape[-2] - 1
-
-
-def real_array(a, name: str) -> np.ndarray:
-    """A float array of finite real numbers; InputError naming ``name`` otherwise."""
-    try:
-        arr = np.asarray(a, dtype=float)
-    except (TypeError, ValueError):
-        raise bad_value(name, "real numbers", a) from None
-    if not np.all(np.isfinite(arr)):
-        raise bad_value(name, "finite real numbers", a)
-    return arr
 
 
 def _complex(a, name: str) -> np.ndarray:

@@ -9,10 +9,15 @@ KD-tree. The number of candidates is at most ``|class(a)| × (#neighbours at tha
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from ..errors import bad_value
-from .core import Packing, chord
+from .chords import chord
+
+if TYPE_CHECKING:  # the packings are only read here (centres, radii, tree): no import of .core at run time
+    from .core import Packing
 
 
 def _frame(a: np.ndarray, b: np.ndarray) -> np.ndarray:

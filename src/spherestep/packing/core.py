@@ -15,18 +15,10 @@ from scipy.spatial import cKDTree
 
 from ..errors import InputError, bad_value
 from ..sphere import as_points, as_radii, cap_area
+from .chords import arc_from_chord, chord
+from .congruence import symmetry_rotations
 
 CONTACT_TOL = 1e-9
-
-
-def chord(angle) -> np.ndarray:
-    """Chord length ``2 sin(a/2)`` of an arc ``a`` on the unit sphere."""
-    return 2.0 * np.sin(0.5 * np.minimum(angle, np.pi))
-
-
-def arc_from_chord(c) -> np.ndarray:
-    """Arc ``2 asin(c/2)`` of a chord ``c``."""
-    return 2.0 * np.arcsin(np.clip(0.5 * c, 0.0, 1.0))
 
 
 @dataclass(frozen=True, eq=False)
@@ -151,8 +143,6 @@ class Packing:
 
     def symmetry_order(self, tol: float = 1e-7) -> int:
         """Number of rotations mapping the packing (centres and radii) onto itself: 12, 24 or 60 for T, O, I."""
-        from .congruence import symmetry_rotations
-
         return len(symmetry_rotations(self, tol=tol))
 
     def problems(self, tol: float = CONTACT_TOL) -> list[str]:

@@ -68,7 +68,7 @@ FAMILY_OF = {"tetrahedron": "T", "octahedron": "O", "cube": "O", "icosahedron": 
 
 def congruent_caps(centers: np.ndarray, name: str, family: str | None) -> Packing:
     """Caps of one radius, half the smallest centre-to-centre arc, at ``centers`` (so neighbours kiss)."""
-    from .core import arc_from_chord
+    from .chords import arc_from_chord
     from scipy.spatial import cKDTree
 
     dist, _ = cKDTree(centers).query(centers, k=2)

@@ -29,6 +29,7 @@ from numpy.polynomial import Polynomial
 from numpy.polynomial.legendre import legval
 from scipy.optimize import least_squares
 
+from .. import checks
 from ..atomic import write_text
 from ..errors import InputError, bad_value
 from . import _checks
@@ -51,7 +52,7 @@ def fit_force_curve(displacement, force, degree: int = 4) -> Polynomial:
     """
     x = _checks.samples(displacement, "displacement")
     F = _checks.samples(force, "force")
-    degree = _checks.count(degree, "degree")
+    degree = checks.count(degree, "degree", minimum=0)
     if len(F) != len(x):
         raise bad_value("force", f"one value per displacement ({len(x)})", f"{len(F)} values")
     if len(np.unique(x)) <= degree:
@@ -71,7 +72,7 @@ def pair_potential(rotor: ZonalProfile, stator: ZonalProfile, angle, tail: float
     """``ΔV(ψ) = 2 [G(1) − G(cos ψ)]``: one pole of polarity +1 at angle ``ψ`` (radians) from a coil at current +1,
     relative to alignment, with ``G`` the degree-``L`` Funk–Hecke series (``L`` from both profiles'
     :meth:`~ZonalProfile.bandwidth` at ``tail``), evaluated exactly by Clenshaw's recurrence."""
-    psi = _checks.real_array(angle, "angle")
+    psi = checks.real_array(angle, "angle")
     L = max(rotor.bandwidth(tail), stator.bandwidth(tail))
     g = rotor.legendre_coefficients(L) * stator.legendre_coefficients(L) * (2 * np.arange(L + 1) + 1) / (4 * np.pi)
     return 2.0 * (legval(1.0, g) - legval(np.cos(psi), g))
@@ -96,7 +97,7 @@ class ProfileFit:
 
     def potential(self, displacement) -> np.ndarray:
         """The fitted model's ``ΔV`` at displacements ``x`` (m): ``pair_potential(rotor, stator, x / r)``."""
-        return pair_potential(self.rotor, self.stator, _checks.real_array(displacement, "displacement") / self.radius)
+        return pair_potential(self.rotor, self.stator, checks.real_array(displacement, "displacement") / self.radius)
 
 
 def fit_profile(displacement, force, radius, rotor_profile: ZonalProfile, *, degree: int = 4,
@@ -111,10 +112,10 @@ def fit_profile(displacement, force, radius, rotor_profile: ZonalProfile, *, deg
     product of amplitudes is identifiable). The force must be attracting (``V_poly`` rising away from 0).
     """
     x = _checks.samples(displacement, "displacement")
-    radius = _checks.positive(radius, "radius")
+    radius = checks.positive(radius, "radius")
     if not isinstance(rotor_profile, ZonalProfile):
         raise bad_value("rotor_profile", "a ZonalProfile (e.g. VonMisesFisher)", rotor_profile)
-    lo, hi = (_checks.positive(k, "kappa_range") for k in kappa_range)
+    lo, hi = (checks.positive(k, "kappa_range") for k in kappa_range)
     if not lo < hi:
         raise bad_value("kappa_range", "an increasing pair (low, high)", kappa_range)
     poly = fit_force_curve(x, force, degree)
@@ -155,7 +156,7 @@ def synthetic_force_curve(displacement, rotor: VonMisesFisher, stator: VonMisesF
     (:meth:`VonMisesFisher.overlap`), plus Gaussian noise of standard deviation ``noise`` from
     ``numpy.random.default_rng(seed)``. GENERATED data for tests and examples, not a measurement."""
     x = _checks.samples(displacement, "displacement")
-    radius = _checks.positive(radius, "radius")
+    radius = checks.positive(radius, "radius")
     for label, profile in (("rotor", rotor), ("stator", stator)):
         if not isinstance(profile, VonMisesFisher):
             raise bad_value(label, "a VonMisesFisher profile", profile)

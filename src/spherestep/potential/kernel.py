@@ -22,8 +22,8 @@ from __future__ import annotations
 import numpy as np
 from numpy.polynomial import legendre as npleg
 
+from .. import checks
 from ..errors import ComputationError, bad_value
-from . import _checks
 from .profiles import ZonalProfile
 
 _MAX_INTERVALS = 1 << 20
@@ -54,12 +54,12 @@ class ZonalKernel:
     """
 
     def __init__(self, coefficients, rtol: float = 1e-12):
-        g = _checks.real_array(coefficients, "coefficients")
+        g = checks.real_array(coefficients, "coefficients")
         if g.ndim != 1 or len(g) == 0:
             raise bad_value("coefficients", "a non-empty 1-D array of Legendre coefficients", f"shape {g.shape}")
         self.coefficients = g.copy()
         self.coefficients.flags.writeable = False
-        self.rtol = _checks.fraction(rtol, "rtol")
+        self.rtol = checks.fraction(rtol, "rtol")
         self._d1 = npleg.legder(g, 1) if len(g) > 1 else np.zeros(1)
         self._d2 = npleg.legder(g, 2) if len(g) > 2 else np.zeros(1)
         self._build()
@@ -70,7 +70,7 @@ class ZonalKernel:
         for label, profile in (("first", first), ("second", second)):
             if not isinstance(profile, ZonalProfile):
                 raise bad_value(label, "a ZonalProfile", profile)
-        lmax = _checks.count(lmax, "lmax")
+        lmax = checks.count(lmax, "lmax", minimum=0)
         degrees = np.arange(lmax + 1)
         g = first.legendre_coefficients(lmax) * second.legendre_coefficients(lmax) * (2 * degrees + 1) / (4 * np.pi)
         return cls(g, rtol)

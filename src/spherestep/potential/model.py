@@ -51,14 +51,13 @@ import numpy as np
 
 import dataclasses
 
-from .. import so3
+from .. import checks, so3
 from ..errors import bad_value
 from .._fast import Packed
 from ..rotor_field import RotorField, fast_evaluate, fast_torque_matrix, pack_terms, threads
 from ..rotor_field import cross as _cross
 from ..statics import TorqueModelBase
 from ..harmonics import SO3Grid, half_pi_matrix, s2_rotate, so3_grid, so3_inverse, sph_harm_u
-from . import _checks
 from .kernel import ZonalKernel
 from .profiles import VonMisesFisher, ZonalProfile
 
@@ -114,7 +113,7 @@ class MotorPotential(TorqueModelBase):
         for label, profile in (("rotor_profile", self.rotor_profile), ("stator_profile", self.stator_profile)):
             if not isinstance(profile, ZonalProfile):
                 raise bad_value(label, "a ZonalProfile (e.g. VonMisesFisher)", profile)
-        self.scale = _checks.positive(scale, "scale")
+        self.scale = checks.positive(scale, "scale")
         self.fast = bool(fast)
         self.nthreads = threads(nthreads)
         self._field = None
@@ -124,9 +123,9 @@ class MotorPotential(TorqueModelBase):
                 dataclasses.replace(profile, amplitude=profile.amplitude * root)
                 for profile in (self.rotor_profile, self.stator_profile))
         if bandlimit is None:
-            tail = _checks.fraction(tail, "tail")
+            tail = checks.fraction(tail, "tail")
             bandlimit = max(self.rotor_profile.bandwidth(tail), self.stator_profile.bandwidth(tail))
-        L = self.bandlimit = _checks.count(bandlimit, "bandlimit")
+        L = self.bandlimit = checks.count(bandlimit, "bandlimit", minimum=0)
         self.poles = np.asarray(design.rotor.centers, dtype=float)
         self.polarity = np.asarray(design.polarity, dtype=float)
         self.coils = np.ascontiguousarray(design.stator.centers, dtype=float)
@@ -172,7 +171,7 @@ class MotorPotential(TorqueModelBase):
     # --- inputs ---------------------------------------------------------------------------------------
     def _inputs(self, R, currents) -> tuple[np.ndarray, np.ndarray]:
         R = so3.as_rotations(R)
-        c = _checks.currents(currents, len(self.coils), self.failed)
+        c = checks.currents(currents, len(self.coils), self.failed)
         if R.ndim == 2 and c.ndim == 1:
             return R, c
         try:
@@ -216,12 +215,12 @@ class MotorPotential(TorqueModelBase):
     def zonal_terms(self, currents) -> list | None:
         """``[(rotor_field, −2, coils, c)]``: the torque as a zonal sum (:func:`spherestep.rotor_field.pack_terms`;
         the compiled integrator's input), ``None`` with ``fast=False``."""
-        c = _checks.currents(currents, len(self.coils), self.failed)
+        c = checks.currents(currents, len(self.coils), self.failed)
         return [(self.rotor_field, -2.0, self.coils, c)] if self.fast else None
 
     def zonal_constant(self, currents) -> np.ndarray:
         """``‖Â‖² + cᵀSc``: the energy's part besides its zonal terms (:func:`spherestep.statics.equilibrium`)."""
-        return self._constant(_checks.currents(currents, len(self.coils), self.failed), pairwise=True)
+        return self._constant(checks.currents(currents, len(self.coils), self.failed), pairwise=True)
 
     has_bias = False  # no current, no stator field: V = ‖Â‖² for every R
 
@@ -230,7 +229,7 @@ class MotorPotential(TorqueModelBase):
         (:func:`spherestep.rotor_field.pack_terms`), ``None`` with ``fast=False``."""
         if not self.fast:
             return None
-        c = _checks.currents(currents, len(self.coils), self.failed)
+        c = checks.currents(currents, len(self.coils), self.failed)
         return pack_terms([(self.rotor_field, -2.0, self.coils, c)], self._constant(c, pairwise=True))
 
     def energy(self, R, currents) -> np.ndarray:
@@ -296,7 +295,7 @@ class MotorPotential(TorqueModelBase):
 
     def stator_coefficients(self, currents) -> np.ndarray:
         """Coefficients ``b̂ = Σ_k c_k λ_l(f_s) conj Y_l^m(v_k)`` of the stator field, ``(..., L+1, 2L+1)``."""
-        c = _checks.currents(currents, len(self.coils), self.failed)
+        c = checks.currents(currents, len(self.coils), self.failed)
         return np.einsum("...k,klm->...lm", c, self.stator_fields)
 
     # --- pairwise form -----------------------------------------------------------------------------------
@@ -417,7 +416,7 @@ class MotorPotential(TorqueModelBase):
         R, c = self._inputs(R, currents)
         if n is None:
             n = self.bandlimit + 1 if band_limited else 2 * self.bandlimit + 2
-        n = _checks.count(n, "n", minimum=1)
+        n = checks.count(n, "n", minimum=1)
         lead = np.broadcast_shapes(R.shape[:-2], c.shape[:-1])
         R_flat = np.broadcast_to(R, lead + (3, 3)).reshape(-1, 3, 3)
         c_flat = np.broadcast_to(c, lead + (c.shape[-1],)).reshape(-1, c.shape[-1])
@@ -452,10 +451,10 @@ class MotorPotential(TorqueModelBase):
         plus the constant in ``V̂^0``.
         """
         L = self.bandlimit
-        lmax = L if lmax is None else _checks.count(lmax, "lmax")
+        lmax = L if lmax is None else checks.count(lmax, "lmax", minimum=0)
         if lmax < L:
             raise bad_value("lmax", f"at least the model's band limit {L} (the energy has degree L on SO(3))", lmax)
-        c = _checks.currents(currents, len(self.coils), self.failed)
+        c = checks.currents(currents, len(self.coils), self.failed)
         b = np.einsum("...k,klm->...lm", c, self.stator_fields)  # (..., L+1, 2L+1)
         size = 2 * lmax + 1
         out = np.zeros(c.shape[:-1] + (lmax + 1, size, size), dtype=complex)

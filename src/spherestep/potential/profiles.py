@@ -28,8 +28,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .. import checks
 from ..errors import ComputationError, bad_value
-from . import _checks
 
 MAX_BANDLIMIT = 4096
 _MAX_NODES = 1 << 13
@@ -56,14 +56,14 @@ class ZonalProfile(ABC):
         nodes do not suffice. For the von Mises–Fisher bump of the prototype's magnets
         (``κ ≈ 200``) the result matches the Bessel closed form to ``1e-14 · λ_0`` up to ``l = 150``.
         """
-        lmax = _checks.count(lmax, "lmax")
+        lmax = checks.count(lmax, "lmax", minimum=0)
         out = _legendre_coefficients(self, lmax)
         return out.copy()
 
     def bandwidth(self, tail=1e-10) -> int:
         """Smallest ``L`` with ``Σ_{l>L} λ_l² (2l+1) ≤ tail · Σ_l λ_l² (2l+1)``: the degree beyond which the
         profile's squared L² norm has lost less than the fraction ``tail``."""
-        tail = _checks.fraction(tail, "tail")
+        tail = checks.fraction(tail, "tail")
         return _bandwidth(self, tail)
 
 
@@ -156,8 +156,8 @@ class VonMisesFisher(ZonalProfile):
     amplitude: float = 1.0
 
     def __post_init__(self):
-        object.__setattr__(self, "kappa", _checks.positive(self.kappa, "kappa"))
-        object.__setattr__(self, "amplitude", _checks.positive(self.amplitude, "amplitude"))
+        object.__setattr__(self, "kappa", checks.positive(self.kappa, "kappa"))
+        object.__setattr__(self, "amplitude", checks.positive(self.amplitude, "amplitude"))
 
     @classmethod
     def from_half_width(cls, angle, amplitude=1.0) -> VonMisesFisher:
@@ -180,7 +180,7 @@ class VonMisesFisher(ZonalProfile):
         """``λ_l`` in closed form, ``A (2π)^(3/2) κ^(−1/2) ive(l+½, κ)`` (SciPy's scaled Bessel ``I``), for checks."""
         from scipy.special import ive
 
-        lmax = _checks.count(lmax, "lmax")
+        lmax = checks.count(lmax, "lmax", minimum=0)
         return self.amplitude * (2 * np.pi) ** 1.5 / np.sqrt(self.kappa) * ive(np.arange(lmax + 1) + 0.5, self.kappa)
 
     def overlap(self, other: VonMisesFisher, t, derivative: int = 0) -> np.ndarray:
@@ -195,7 +195,7 @@ class VonMisesFisher(ZonalProfile):
             raise bad_value("other", "a VonMisesFisher profile", other)
         if derivative not in (0, 1) or isinstance(derivative, bool):
             raise bad_value("derivative", "0 or 1", derivative)
-        t = np.clip(_checks.real_array(t, "t"), -1.0, 1.0)
+        t = np.clip(checks.real_array(t, "t"), -1.0, 1.0)
         k1, k2 = self.kappa, other.kappa
         rho = np.maximum(np.sqrt(np.maximum(k1 * k1 + k2 * k2 + 2 * k1 * k2 * t, 0.0)), 1e-300)
         decay = np.exp(-2.0 * rho)
@@ -225,7 +225,7 @@ class RaisedCosine(ZonalProfile):
                 not 0 < self.radius <= math.pi:
             raise bad_value("radius", "an angular radius in (0, π] radians", self.radius)
         object.__setattr__(self, "radius", float(self.radius))
-        object.__setattr__(self, "amplitude", _checks.positive(self.amplitude, "amplitude"))
+        object.__setattr__(self, "amplitude", checks.positive(self.amplitude, "amplitude"))
 
     @property
     def support_min(self) -> float:  # type: ignore[override]
