@@ -26,6 +26,7 @@ from dataclasses import asdict, dataclass, field, replace
 
 import numpy as np
 
+from .. import checks
 from ..errors import bad_value
 
 RHO_COPPER = 1.72e-8  # Ω·m at 20 °C (annealed copper, IEC 60028)
@@ -58,16 +59,15 @@ class IronMaterial:
                    "rounded; μr = 1000 as in the issue's estimate")
 
     def __post_init__(self):
-        if not (isinstance(self.relative_permeability, (int, float)) and math.isfinite(self.relative_permeability)
-                and self.relative_permeability >= 1):
-            raise bad_value("material.relative_permeability", "a finite number >= 1", self.relative_permeability)
+        checks.number(self.relative_permeability, "material.relative_permeability", low=1.0,
+                      expected="a finite number >= 1")
         arr = np.asarray(self.bh, dtype=float)
         if arr.ndim != 2 or arr.shape[1] != 2 or len(arr) < 2 or np.any(np.diff(arr, axis=0) <= 0) \
                 or np.any(arr[0] != 0):
             raise bad_value("material.bh", "(H A/m, B T) pairs starting at (0, 0), both strictly increasing",
                             f"{len(arr)} points")
-        if not (isinstance(self.knee, (int, float)) and 0 < self.knee < arr[-1, 1]):
-            raise bad_value("material.knee", "a flux density (T) inside the B–H curve's range", self.knee)
+        checks.number(self.knee, "material.knee", low=0.0, high=float(arr[-1, 1]), low_open=True, high_open=True,
+                      expected="a flux density (T) inside the B–H curve's range")
         object.__setattr__(self, "bh", tuple(tuple(p) for p in arr.tolist()))  # hashable, whatever was given
 
     def flux_density(self, H) -> np.ndarray:
@@ -120,21 +120,16 @@ class CoilSpec:
         if not isinstance(self.material, IronMaterial):
             raise bad_value("material", "a spherestep.motor.coil.IronMaterial", type(self.material).__name__)
         for name in ("pole_diameter", "wire_diameter", "supply_voltage", "supply_power"):
-            v = getattr(self, name)
-            if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v <= 0:
-                raise bad_value(name, "a finite positive number (SI units)", v)
+            checks.positive(getattr(self, name), name, "a finite positive number (SI units)")
         for name in ("wall_thickness", "back_thickness"):
-            v = getattr(self, name)
-            if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v < 0:
-                raise bad_value(name, "a finite non-negative length in metres", v)
-        if not (isinstance(self.fill_factor, (int, float)) and 0 < self.fill_factor <= 0.9069):
-            raise bad_value("fill_factor", "a copper fraction in (0, 0.907] (0.907: hexagonal packing)",
-                            self.fill_factor)
-        if isinstance(self.coils_on, bool) or not isinstance(self.coils_on, int) or self.coils_on < 1:
-            raise bad_value("coils_on", "a whole number of coils >= 1", self.coils_on)
-        if self.ampere_turns is not None and not (isinstance(self.ampere_turns, (int, float))
-                                                  and math.isfinite(self.ampere_turns) and self.ampere_turns > 0):
-            raise bad_value("ampere_turns", "a finite positive number or None", self.ampere_turns)
+            checks.non_negative(getattr(self, name), name, "a finite non-negative length in metres")
+        checks.number(self.fill_factor, "fill_factor", low=0.0, high=0.9069, low_open=True,
+                      expected="a copper fraction in (0, 0.907] (0.907: hexagonal packing)")
+        object.__setattr__(self, "coils_on", checks.count(self.coils_on, "coils_on",
+                                                          expected="a whole number of coils >= 1"))
+        if self.ampere_turns is not None:
+            checks.positive(self.ampere_turns, "ampere_turns", "a finite positive number or None")
+
 
     # --- geometry (needs the outer size of the coil) ---
     def groove(self, coil_diameter: float, coil_length: float) -> tuple[float, float, float]:

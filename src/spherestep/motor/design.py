@@ -14,6 +14,7 @@ from functools import cached_property
 
 import numpy as np
 
+from .. import checks
 from .. import packing as pk
 from ..channels import MAX_COILS, as_channel_map, default_channel_map
 from ..errors import InputError, bad_value
@@ -52,23 +53,28 @@ def _check_dimensions(values: dict) -> None:
     """The one check of a motor's sizes (metres): finite and positive (the air gap may be 0), magnets and coils
     smaller than the sphere. Raises InputError whose ``field`` is the size at fault."""
     for label in DIMENSIONS:
-        value = values[label]
-        if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value) or value < 0 \
-                or (value == 0 and label != "air_gap"):
-            kind = "non-negative" if label == "air_gap" else "positive"
-            raise bad_value(label, f"a finite {kind} length in metres", value)
+        if label == "air_gap":
+            checks.non_negative(values[label], label, "a finite non-negative length in metres")
+        else:
+            checks.positive(values[label], label, "a finite positive length in metres")
     for label in ("magnet_diameter", "coil_diameter"):
         if values[label] >= values["sphere_diameter"]:
             raise bad_value(label, f"smaller than the sphere_diameter ({values['sphere_diameter']:.6g} m)",
                             values[label])
 
 
+def _open_angle(value, name: str, high: float, expected: str) -> None:
+    """:func:`checks.number` on ``(0, high)`` radians, the received value shown in degrees when it is a number."""
+    try:
+        checks.number(value, name, low=0.0, high=high, low_open=True, high_open=True, expected=expected)
+    except InputError:
+        real = isinstance(value, (int, float)) and not isinstance(value, bool)
+        raise bad_value(name, expected, f"{math.degrees(value):.6g}°" if real else value) from None
+
+
 def _check_cap(cap_half_angle, allow_hemisphere: bool) -> None:
     """The stator cap: an angle in (0, π) radians, under π/2 unless ``allow_hemisphere``."""
-    if isinstance(cap_half_angle, bool) or not isinstance(cap_half_angle, (int, float)) or \
-            not (math.isfinite(cap_half_angle) and 0 < cap_half_angle < math.pi):
-        shown = f"{math.degrees(cap_half_angle):.6g}°" if isinstance(cap_half_angle, (int, float)) else cap_half_angle
-        raise bad_value("cap_half_angle", "an angle between 0 and π radians (0° and 180°)", shown)
+    _open_angle(cap_half_angle, "cap_half_angle", math.pi, "an angle between 0 and π radians (0° and 180°)")
     if cap_half_angle >= math.pi / 2 and not allow_hemisphere:
         raise bad_value("cap_half_angle", "under 90° (a stator covering less than a hemisphere gives the wide "
                         "range of motion, Sec. IV); set allow_hemisphere (overrides.allow_hemisphere in a design "
@@ -77,9 +83,8 @@ def _check_cap(cap_half_angle, allow_hemisphere: bool) -> None:
 
 def _check_tol(tol) -> None:
     """How close a pole must sit to a coil: None (the default, 1°) or an angle in (0, 0.5) radians."""
-    if tol is not None and (isinstance(tol, bool) or not isinstance(tol, (int, float)) or not 0 < tol < 0.5):
-        shown = f"{math.degrees(tol):.6g}°" if isinstance(tol, (int, float)) and not isinstance(tol, bool) else tol
-        raise bad_value("tol", "an angle between 0 and 0.5 radians (0° and 28.65°), like 1°", shown)
+    if tol is not None:
+        _open_angle(tol, "tol", 0.5, "an angle between 0 and 0.5 radians (0° and 28.65°), like 1°")
 
 
 def _stator_axis(axis) -> np.ndarray:
@@ -123,9 +128,8 @@ def _packing(value: str | Packing, level: int, name: str) -> Packing:
         return value
     if not isinstance(value, str) or value not in pk.names():
         raise bad_value(name, "a Packing or a packing name listed by `spherestep packings --all`", value)
-    if isinstance(level, bool) or not isinstance(level, (int, np.integer)) or level < 0:
-        raise bad_value(f"{name}_refine", "a non-negative integer number of refinement levels", level)
-    return pk.named(value, int(level))
+    level = checks.count(level, f"{name}_refine", 0, expected="a non-negative integer number of refinement levels")
+    return pk.named(value, level)
 
 
 @dataclass(frozen=True, eq=False)
@@ -178,11 +182,10 @@ class MotorDesign:
         _check_cap(self.cap_half_angle, self.allow_hemisphere)
         _check_dimensions({label: getattr(self, label) for label in DIMENSIONS})
         for label in ("remanence", "coil_ampere_turns"):
-            value = getattr(self, label)
-            if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value) or value <= 0:
-                raise bad_value(label, "a finite positive number", value)
-        if isinstance(self.max_coils, bool) or not isinstance(self.max_coils, (int, np.integer)) or self.max_coils < 1:
-            raise bad_value("max_coils", "a positive integer", self.max_coils)
+            checks.positive(getattr(self, label), label)
+        object.__setattr__(self, "max_coils", checks.count(self.max_coils, "max_coils", expected="a positive integer"))
+
+
         if len(self.stator) > self.max_coils:
             raise bad_value("stator", f"at most {self.max_coils} coils (four 8-relay boards, Sec. IV-B); raise "
                             "max_coils (overrides.max_coils in a design file) to override", f"{len(self.stator)} coils")

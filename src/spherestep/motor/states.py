@@ -18,6 +18,7 @@ from functools import cached_property
 import numpy as np
 from scipy.spatial import cKDTree
 
+from .. import checks
 from ..errors import bad_value
 from ..so3 import as_rotations, to_quaternion
 from ..sphere import NearestPointGrid
@@ -77,10 +78,9 @@ def coil_currents(coils, coil_count: int, failed=(), name: str = "coils") -> np.
         raise bad_value(name, "a mapping from coil index to current", coils) from None
     out = np.zeros(coil_count)
     for k, value in items:
-        if isinstance(k, bool) or not isinstance(k, (int, np.integer)) or not 0 <= k < coil_count:
-            raise bad_value(name, f"coil indices 0..{coil_count - 1}", k)
+        k = checks.count(k, name, 0, coil_count - 1, expected=f"coil indices 0..{coil_count - 1}")
         try:
-            out[int(k)] = float(value)
+            out[k] = float(value)
         except (TypeError, ValueError):
             raise bad_value(f"{name}[{int(k)}]", "a real current", value) from None
     if not np.all(np.isfinite(out)):
@@ -126,8 +126,7 @@ class StepperStates:
     def nearest(self, R, k: int = 1) -> tuple[np.ndarray, np.ndarray]:
         """Park distances ``(..., k)`` and indices of the ``k`` states nearest to each rotation ``R (..., 3, 3)``."""
         R = as_rotations(R, "R")
-        if isinstance(k, bool) or not isinstance(k, (int, np.integer)) or k < 1:
-            raise bad_value("k", "a positive integer", k)
+        k = checks.count(k, "k", expected="a positive integer")
         if len(self) == 0:
             raise bad_value("design", "a design with at least one stepper state", "none")
         tree, n = self._tree
@@ -151,8 +150,8 @@ class StepperStates:
         ``(3, 3)``; for a batch ``(..., 3, 3)`` an object array of shape ``(...)`` holding one int array per
         rotation (as :meth:`scipy.spatial.cKDTree.query_ball_point`)."""
         R = as_rotations(R, "R")
-        if isinstance(radius, bool) or not isinstance(radius, (int, float, np.floating)) or not 0 <= radius <= np.pi:
-            raise bad_value("radius", "a Park distance in [0, π] radians", radius)
+        radius = checks.number(radius, "radius", low=0.0, high=np.pi, expected="a Park distance in [0, π] radians")
+
         if len(self) == 0:
             found = [np.zeros(0, dtype=np.int64) for _ in range(int(np.prod(R.shape[:-2])))]
         else:
