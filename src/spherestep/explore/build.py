@@ -33,7 +33,9 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from ..errors import InputError, SpherestepError, bad_value
+from .. import checks
+from ..errors import InputError, SpherestepError
+
 from ..motor import MotorDesign, PolarityRule, check_fits
 from ..motor.states import candidate_count
 from ..packing import named
@@ -56,9 +58,9 @@ class Limits:
 
     def __post_init__(self):
         for label in ("budget_coils", "max_rotor_poles", "max_candidates", "max_lookup_voxels"):
-            value = getattr(self, label)
-            if isinstance(value, bool) or not isinstance(value, int) or value < 2:
-                raise bad_value(label, "an integer of at least 2", value)
+            object.__setattr__(self, label, checks.count(getattr(self, label), label, 2,
+                                                         expected="an integer of at least 2"))
+
 
 
 class Unbuildable(Exception):

@@ -28,6 +28,7 @@ import json
 import math
 from dataclasses import asdict, dataclass, fields
 
+from .. import checks
 from .. import packing as pk
 from ..design_file import MAX_REFINE
 from ..errors import bad_value
@@ -102,39 +103,26 @@ class DesignPoint:
             if name not in pk.names():
                 raise bad_value(label, f"a packing name, one of {', '.join(pk.names())}", name)
         for label in ("rotor_level", "stator_level"):
-            level = getattr(self, label)
-            if isinstance(level, bool) or not isinstance(level, int) or not 0 <= level <= MAX_REFINE:
-                raise bad_value(label, f"a refinement level 0..{MAX_REFINE}", level)
-        if not (isinstance(self.cap_half_angle_deg, (int, float)) and 0 < self.cap_half_angle_deg < 90):
-            raise bad_value("cap_half_angle_deg", "an angle in (0, 90) degrees (less than a hemisphere)",
-                            self.cap_half_angle_deg)
-        if not (isinstance(self.tol_deg, (int, float)) and 0 < self.tol_deg < math.degrees(0.5)):
-            raise bad_value("tol_deg", f"an angle in (0, {math.degrees(0.5):.4g}) degrees", self.tol_deg)
-        if isinstance(self.samples, bool) or not isinstance(self.samples, int) or not 1 <= self.samples <= MAX_SAMPLES:
-            raise bad_value("samples", f"an integer in 1..{MAX_SAMPLES}", self.samples)
-        if isinstance(self.seed, bool) or not isinstance(self.seed, int) or self.seed < 0:
-            raise bad_value("seed", "a non-negative integer", self.seed)
-        if isinstance(self.torque_states, bool) or not isinstance(self.torque_states, int) or \
-                not 0 <= self.torque_states <= MAX_TORQUE_STATES:
-            raise bad_value("torque_states", f"an integer in 0..{MAX_TORQUE_STATES} (0: no holding torque)",
-                            self.torque_states)
-        if not (isinstance(self.fill, (int, float)) and 0 < self.fill <= 1):
-            raise bad_value("fill", "a fraction in (0, 1]", self.fill)
+            level = checks.count(getattr(self, label), label, 0, MAX_REFINE,
+                                 expected=f"a refinement level 0..{MAX_REFINE}")
+            object.__setattr__(self, label, level)
+        checks.number(self.cap_half_angle_deg, "cap_half_angle_deg", low=0.0, high=90.0, low_open=True,
+                      high_open=True, expected="an angle in (0, 90) degrees (less than a hemisphere)")
+        checks.number(self.tol_deg, "tol_deg", low=0.0, high=math.degrees(0.5), low_open=True, high_open=True,
+                      expected=f"an angle in (0, {math.degrees(0.5):.4g}) degrees")
+        for label, low, high, expected in (
+                ("samples", 1, MAX_SAMPLES, f"an integer in 1..{MAX_SAMPLES}"),
+                ("seed", 0, None, "a non-negative integer"),
+                ("torque_states", 0, MAX_TORQUE_STATES,
+                 f"an integer in 0..{MAX_TORQUE_STATES} (0: no holding torque)")):
+            object.__setattr__(self, label, checks.count(getattr(self, label), label, low, high, expected=expected))
+        checks.number(self.fill, "fill", low=0.0, high=1.0, low_open=True, expected="a fraction in (0, 1]")
         for label in ("sphere_diameter", "magnet_diameter_max", "magnet_diameter_min", "magnet_length",
                       "coil_diameter_max", "coil_diameter_min", "coil_length"):
-            value = getattr(self, label)
-            if isinstance(value, bool) or not isinstance(value, (int, float)) or not 0 < value < math.inf:
-                raise bad_value(label, "a finite positive length in metres", value)
-        gap = self.air_gap
-        if isinstance(gap, bool) or not isinstance(gap, (int, float)) or not 0 <= gap < math.inf:
-            raise bad_value("air_gap", "a finite non-negative length in metres", self.air_gap)
-        try:
-            axis = tuple(float(x) for x in self.stator_axis)
-        except (TypeError, ValueError):
-            raise bad_value("stator_axis", "three numbers (x, y, z), not all zero", self.stator_axis) from None
-        if len(axis) != 3 or not all(math.isfinite(x) for x in axis) or not any(axis):
-            raise bad_value("stator_axis", "three finite numbers (x, y, z), not all zero", self.stator_axis)
-        object.__setattr__(self, "stator_axis", axis)
+            checks.positive(getattr(self, label), label, "a finite positive length in metres")
+        checks.non_negative(self.air_gap, "air_gap", "a finite non-negative length in metres")
+        checks.axis(self.stator_axis, "stator_axis")  # the axis is kept as given (it is part of the point's key)
+        object.__setattr__(self, "stator_axis", tuple(float(x) for x in self.stator_axis))
         for f in fields(self):
             if f.type == "float":
                 object.__setattr__(self, f.name, float(getattr(self, f.name)))
@@ -237,10 +225,10 @@ class Grid:
             raise bad_value("tolerances_deg", f"angles in (0, {math.degrees(0.5):.4g}) degrees", list(tols))
         object.__setattr__(self, "cap_half_angles_deg", tuple(float(c) for c in caps))
         object.__setattr__(self, "tolerances_deg", tuple(float(t) for t in tols))
-        ratio = self.primary_ratio_max
-        if ratio is not None and (isinstance(ratio, bool) or not isinstance(ratio, (int, float))
-                                  or not math.isfinite(ratio) or ratio < 1):
-            raise bad_value("primary_ratio_max", "a ratio of at least 1, or None for no limit", ratio)
+        if self.primary_ratio_max is not None:
+            checks.number(self.primary_ratio_max, "primary_ratio_max", low=1.0,
+                          expected="a ratio of at least 1, or None for no limit")
+
         # samples, seed and torque_states are checked by DesignPoint; here too, so an empty grid refuses them
         DesignPoint(self.rotors[0], 0, self.stators[0], 0, self.cap_half_angles_deg[0], self.tolerances_deg[0],
                     samples=self.samples, seed=self.seed, torque_states=self.torque_states)

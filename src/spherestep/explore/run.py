@@ -21,6 +21,7 @@ from collections.abc import Callable
 
 import pandas as pd
 
+from .. import checks
 from ..errors import InputError, bad_value
 from ..packing import named
 from .build import Limits, evaluate
@@ -40,8 +41,8 @@ def dask_client(scheduler: str | None = None, *, threads: bool = False, workers:
     """
     from distributed import Client, LocalCluster
 
-    if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int) or not 1 <= workers <= 512):
-        raise bad_value("workers", "an integer in 1..512", workers)
+    if workers is not None:
+        workers = checks.count(workers, "workers", 1, 512, expected="an integer in 1..512")
     if scheduler is not None:
         if threads or workers is not None:
             error = InputError("scheduler: an existing cluster brings its own workers; give either scheduler or "
@@ -116,10 +117,9 @@ def run_sweep(points: list[DesignPoint], store: ResultStore, client, limits: Lim
     """
     from distributed import as_completed
 
-    if isinstance(batch_size, bool) or not isinstance(batch_size, int) or batch_size < 1:
-        raise bad_value("batch_size", "a positive integer", batch_size)
-    if isinstance(retries, bool) or not isinstance(retries, int) or retries < 0:
-        raise bad_value("retries", "a non-negative integer", retries)
+    batch_size = checks.count(batch_size, "batch_size", expected="a positive integer")
+    retries = checks.count(retries, "retries", 0, expected="a non-negative integer")
+
     unique = list({p.key: p for p in points}.values())
     done = finished_keys(store.read(), limits)
     todo = [p for p in unique if p.key not in done]
