@@ -66,7 +66,7 @@ import numpy as np
 
 from . import checks, so3
 from ._fast import Packed
-from ._threads import single_blas_thread
+from ._fast.threads import single_blas_thread
 from .errors import bad_value
 
 HESSIAN_STEP = 1e-6  # rad, central differences of the torque

@@ -1,10 +1,11 @@
 """The fast path: compiled (numba) kernels, sums, descent and integrator, and the glue around ducc0.
 
-The one private package that other rooms may import (docs/conventions.md). The public entry points are
-elsewhere: :func:`spherestep.statics.equilibrium` (and :func:`~spherestep.statics.descend`) for the descent,
-:class:`spherestep.dynamics.Integrator` for the integrator, :class:`spherestep.rotor_field.RotorField` and
-:func:`~spherestep.rotor_field.fast_evaluate` for the sums; a torque model hands its energy over as a
-:class:`Packed` (:meth:`spherestep.statics.TorqueModel.packed_terms`), nobody probes it.
+The one private package that other rooms may import (docs/conventions.md); no other private name crosses a
+room. The public entry points are elsewhere: :func:`spherestep.statics.equilibrium` (and
+:func:`~spherestep.statics.descend`) for the descent, :class:`spherestep.dynamics.Integrator` for the
+integrator, :class:`spherestep.rotor_field.RotorField` and :func:`~spherestep.rotor_field.fast_evaluate` for the
+sums; a torque model hands its energy over as a :class:`Packed` (:meth:`spherestep.statics.TorqueModel.packed_terms`),
+nobody probes it.
 
 What is where:
 
@@ -20,6 +21,8 @@ What is where:
   out);
 * :mod:`.descent` — :func:`spherestep.statics.equilibrium`'s safeguarded Newton descent, row by row;
 * :mod:`.integrate` — :meth:`spherestep.dynamics.Rotor.step` repeated under a packed model's torque.
+* :mod:`.threads` — :func:`~.threads.single_blas_thread`, the decorator that runs the package's long entry points
+  (equilibria, planners, tuning, simulation, calibration) on one BLAS thread.
 
 Why compiled: for the few points of one orientation (a simulation step, a Newton iteration) the NumPy form costs
 ~40 array operations whose fixed overhead (1–5 µs each) dominates; the compiled loops cost ~5–12 ns per

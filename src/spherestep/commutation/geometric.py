@@ -21,11 +21,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from .. import so3
+from .. import checks, so3
 from ..errors import bad_value
 from .plan import Plan, Step
 from .trajectory import check_targets
-from .._threads import single_blas_thread
+from .._fast.threads import single_blas_thread
 
 DEFAULT_CANDIDATES = 8
 DETOUR = "detour: the states nearest the target are out of reach; moved to the reachable state nearest it"
@@ -97,8 +97,8 @@ def plan_geometric(design, targets, *, candidates: int = DEFAULT_CANDIDATES, max
     ``R_0``). Returns a :class:`Plan` whose step 0 is the starting state.
     """
     targets = check_targets(targets)
-    if isinstance(candidates, bool) or not isinstance(candidates, (int, np.integer)) or candidates < 1:
-        raise bad_value("candidates", "a positive integer", candidates)
+    candidates = checks.count(candidates, "candidates", expected="a positive integer")
+
     states = design.states()
     if len(states) == 0:
         raise bad_value("design", "a design with stepper states (at least two poles can sit on coils)", "none")

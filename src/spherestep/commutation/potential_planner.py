@@ -29,7 +29,7 @@ from ..motor import coil_currents
 from .geometric import BLOCKED, DEFAULT_CANDIDATES, start_state
 from .plan import Plan, Step
 from .trajectory import check_targets
-from .._threads import single_blas_thread
+from .._fast.threads import single_blas_thread
 
 DEFAULT_MAX_COILS = 4
 

@@ -23,7 +23,7 @@ from ..motor import coil_currents
 from .rotor import Rotor
 from .simulate import Integrator
 from ..commutation.trajectory import check_targets
-from .._threads import single_blas_thread
+from .._fast.threads import single_blas_thread
 
 
 @dataclass

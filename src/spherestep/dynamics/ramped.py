@@ -29,7 +29,7 @@ from .. import so3
 from ..control.limits import DriveLimits
 from ..errors import bad_value
 from ..motor import coil_currents
-from .._threads import single_blas_thread
+from .._fast.threads import single_blas_thread
 from ..units import in_radians
 from .rotor import Rotor
 from .simulate import EXECUTED_TOL, Integrator

@@ -29,7 +29,7 @@ from ..control.controller import CONTROL_RATE
 from ..errors import bad_value
 from ..sensing.sensor import NoisySensor, OrientationSensor
 from ..statics import TorqueModel
-from .._threads import single_blas_thread
+from .._fast.threads import single_blas_thread
 from .electrics import CoilDrive
 from .rotor import Rotor
 

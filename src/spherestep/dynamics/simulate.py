@@ -18,7 +18,7 @@ from ..errors import bad_value
 from ..motor import coil_currents
 from ..statics import is_torque_model
 from .rotor import YOSHIDA, Rotor
-from .._threads import single_blas_thread
+from .._fast.threads import single_blas_thread
 
 EXECUTED_TOL = math.radians(0.5)
 

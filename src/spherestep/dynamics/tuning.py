@@ -25,7 +25,7 @@ from ..errors import bad_value
 from ..motor import coil_currents
 from ..statics import equilibrium, finite_difference_hessian
 from .rotor import Rotor
-from .._threads import single_blas_thread
+from .._fast.threads import single_blas_thread
 
 FD_STEP = 1e-4  # rad, central differences of the torque
 DECAY = 8.0  # dwell in units of the slowest decay time

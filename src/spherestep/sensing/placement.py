@@ -18,7 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .. import so3
-from .._threads import single_blas_thread
+from .._fast.threads import single_blas_thread
 from ..errors import bad_value
 from .array import SensorArray, candidate_positions
 from .estimate import Estimator, super_fibonacci

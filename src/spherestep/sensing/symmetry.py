@@ -17,7 +17,7 @@ import magpylib as magpy
 import numpy as np
 
 from .. import so3
-from .._threads import single_blas_thread
+from .._fast.threads import single_blas_thread
 from ..errors import bad_value
 from ..magnetics import equilibrium, state_currents, torque_map
 from ..statics import holding_torque
