@@ -20,7 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .. import so3
+from .. import checks, so3
 from ..atomic import write_text
 from ..channels import as_channel_map
 from ..errors import bad_value
@@ -228,9 +228,8 @@ class Plan:
             if key not in data:
                 raise bad_value(f"plan.{key}", "present (write plans with Plan.to_json or `spherestep plan`)",
                                 "nothing")
-        coil_count = data["coil_count"]
-        if isinstance(coil_count, bool) or not isinstance(coil_count, int) or not 1 <= coil_count <= 4096:
-            raise bad_value("plan.coil_count", "a whole number of coils 1..4096", coil_count)
+        coil_count = checks.count(data["coil_count"], "plan.coil_count", 1, 4096,
+                                  expected="a whole number of coils 1..4096")
         cmap = _channel_map(data["channel_map"], coil_count)
         raw = data["steps"]
         if not isinstance(raw, list) or not raw:
@@ -269,9 +268,7 @@ def _channel_map(entries, coil_count: int) -> np.ndarray:
         if not isinstance(entry, dict) or entry.get("coil", k) != k:
             raise bad_value(name, f'{{"coil": {k}, "enable": E, "polarity": P}}', entry)
         for role in ("enable", "polarity"):
-            value = entry.get(role)
-            if isinstance(value, bool) or not isinstance(value, int) or value < 0:
-                raise bad_value(f"{name}.{role}", "a relay channel number ≥ 0", value)
+            checks.count(entry.get(role), f"{name}.{role}", 0, expected="a relay channel number ≥ 0")
         rows.append((entry["enable"], entry["polarity"]))
     return as_channel_map(np.array(rows, dtype=int).reshape(-1, 2), coil_count, "plan.channel_map")
 
@@ -313,18 +310,16 @@ def _step(s, name: str, coil_count: int, cmap: np.ndarray) -> Step:
             if given != expected:
                 raise bad_value(f"{name}.{key}", f"{hex(expected)}, the mask of the step's coils under the "
                                 "plan's channel_map (the file disagrees with itself: re-plan it)", s[key])
-    index, error = s["index"], s["error_deg"]
-    if isinstance(index, bool) or not isinstance(index, int):
-        raise bad_value(f"{name}.index", "a whole number", index)
-    if isinstance(error, bool) or not isinstance(error, (int, float)) or not math.isfinite(error) or error < 0:
-        raise bad_value(f"{name}.error_deg", "a finite angle ≥ 0 in degrees", error)
+    index = checks.count(s["index"], f"{name}.index", 0, expected="a whole number ≥ 0")
+    error = checks.non_negative(s["error_deg"], f"{name}.error_deg", "a finite angle ≥ 0 in degrees")
     held = s.get("held", [])
     if not isinstance(held, list) or not all(isinstance(p, list) and len(p) == 2 and
                                              all(isinstance(x, int) for x in p) for p in held):
         raise bad_value(f"{name}.held", "a list of [pole, coil] pairs", held)
     next_pole = s.get("next_pole")
-    if next_pole is not None and (isinstance(next_pole, bool) or not isinstance(next_pole, int)):
-        raise bad_value(f"{name}.next_pole", "a pole number or null", next_pole)
+    if next_pole is not None:
+        next_pole = checks.count(next_pole, f"{name}.next_pole", 0, expected="a pole number or null")
+
     return Step(index=index, target=_matrix(s["target"], f"{name}.target"),
                 achieved=_matrix(s["achieved"], f"{name}.achieved"), error=math.radians(error), coils=coils,
                 held=[(a, b) for a, b in held], next_pole=next_pole, status=str(s.get("status", "ok")))

@@ -11,33 +11,26 @@ import math
 
 import numpy as np
 
-from .. import so3
+from .. import checks, so3
 from ..errors import bad_value
 
 KEY_SPACING = math.pi / 2  # keys of a long turn are at most 90° apart, well inside the geodesic's uniqueness
 
 
-def _check_steps(steps) -> int:
-    if isinstance(steps, bool) or not isinstance(steps, (int, np.integer)) or steps < 1:
-        raise bad_value("steps", "a positive whole number of steps", steps)
-    return int(steps)
-
-
 def steps_for(length: float, step: float) -> int:
     """Number of equal steps of at most ``step`` radians covering ``length`` radians (at least one)."""
-    if not (math.isfinite(step) and step > 0):
-        raise bad_value("step", "a positive angle", step)
-    if not (math.isfinite(length) and length >= 0):
-        raise bad_value("length", "a finite angle ≥ 0 in radians", length)
+    step = checks.positive(step, "step", "a positive angle")
+    length = checks.non_negative(length, "length", "a finite angle ≥ 0 in radians")
     return max(1, math.ceil(length / step - 1e-9))
 
 
 def about_axis(axis, angle: float, steps: int, start=None) -> np.ndarray:
     """``steps + 1`` orientations turning ``angle`` radians (any size, sign gives the sense) about the
     fixed-frame ``axis`` from ``start`` (default identity), equally spaced."""
-    if not math.isfinite(angle):
-        raise bad_value("angle", "a finite angle", angle)
-    steps = _check_steps(steps)
+    checks.axis(axis)  # refused here when zero or too short to normalise; so3.rot normalises it
+    angle = checks.number(angle, "angle", expected="a finite angle")
+    steps = checks.count(steps, "steps", expected="a positive whole number of steps")
+
     start = np.eye(3) if start is None else so3.as_rotations(start, "start")
     if start.shape != (3, 3):
         raise bad_value("start", "one rotation matrix (3, 3)", f"shape {start.shape}")
@@ -50,7 +43,9 @@ def about_axis(axis, angle: float, steps: int, start=None) -> np.ndarray:
 
 def through(keys, steps: int) -> np.ndarray:
     """``steps + 1`` orientations on the piecewise geodesic through ``keys (m, 3, 3)``, equally spaced."""
-    return so3.resample(so3.as_rotations(keys, "keys"), _check_steps(steps))
+    return so3.resample(so3.as_rotations(keys, "keys"),
+                        checks.count(steps, "steps", expected="a positive whole number of steps"))
+
 
 
 def check_targets(targets) -> np.ndarray:
