@@ -5,8 +5,9 @@ face towards the rotor at ``z = 0`` and the body in ``0 ≤ z ≤ l_c``: a centr
 the outer wall (``r_w ≤ r ≤ d_c/2``, down to the back plate) and the back plate (``r_p ≤ r ≤ d_c/2``, thickness
 ``t_b``). The winding fills the groove ``r_p ≤ r ≤ r_w``, ``0 ≤ z ≤ l_c − t_b`` and is a grid of
 :class:`magpylib.current.Circle` loops sharing the ampere-turns: the solver sees the solenoid's real field inside
-the groove, so the centre pole magnetises along the winding's ``H`` (a uniformly magnetised "coil" cylinder would
-magnetise it backwards; /work/shared/PHYSICS-NOTES.md).
+the groove, so the centre pole magnetises along the winding's ``H`` (a uniformly magnetised "coil" cylinder has the
+same ``B`` but, inside its body, ``H = B/μ0 − M`` pointing backwards, and would magnetise the pole backwards:
+docs/magnetics.md, "Why the winding is a current here, not a magnetised cylinder").
 
 Solve. The iron is cut into cells (:func:`magpylib_material_response.meshing.mesh_Cylinder` on slabs that thin
 geometrically towards the face, where the rotor magnet sits 0.127 mm away) and each cell's polarization ``J_i``
