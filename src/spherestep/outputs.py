@@ -9,7 +9,9 @@ other non-regular file, must not lie under a file, and its folder must be writab
 :class:`Outputs` names the files a command writes; an ``OSError`` while writing becomes one line: a full disk
 (``ENOSPC``, ``EDQUOT``, ``EFBIG``) a :class:`~spherestep.errors.ComputationError` (exit 1) that says
 "N of M files written", anything else an InputError. Files are written atomically (:mod:`spherestep.atomic`),
-so a failure never leaves a half-written file under its final name.
+so a failure never leaves a half-written file under its final name. A folder the set created is removed again when
+it holds nothing at the end; an interrupted set (Ctrl-C, SIGTERM) removes the files it wrote, so the folder is
+either complete or absent.
 """
 
 from __future__ import annotations
@@ -120,6 +122,7 @@ class Outputs:
     def __init__(self, where: str | os.PathLike, names, option: str = "--out"):
         self.where, self.names, self.option = Path(where), tuple(names), option
         self._start = 0
+        self._created = False
 
     @property
     def paths(self) -> list[Path]:
@@ -140,11 +143,29 @@ class Outputs:
     def __enter__(self) -> Outputs:
         if not self._start:  # the first block starts the set; later blocks add to it
             self._start = time.time_ns() - 10_000_000  # 10 ms: file-system clocks may lag time.time_ns
+            self._created = not self.where.exists()
         return self
 
+    def _remove_if_empty(self) -> None:
+        """Remove the folder when this set created it and nothing is in it."""
+        try:
+            if self._created and self.where.is_dir() and not any(self.where.iterdir()):
+                self.where.rmdir()
+        except OSError:
+            pass
+
     def __exit__(self, kind, exc, tb) -> bool:
+        if isinstance(exc, KeyboardInterrupt):  # Ctrl-C or SIGTERM: complete or absent
+            for path in self.written():
+                try:
+                    path.unlink()
+                except OSError:
+                    pass
+            self._remove_if_empty()
+            return False
         if not isinstance(exc, OSError):
             return False
+        self._remove_if_empty()
         done = f"{len(self.written())} of {len(self.names)} files written to {self.where}"
         where = f" ({exc.filename})" if exc.filename else ""
         if exc.errno in DISK_FULL:

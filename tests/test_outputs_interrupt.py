@@ -1,0 +1,40 @@
+"""An output set is complete or absent (issue 27 §3): Ctrl-C removes what it wrote, a full disk leaves no empty
+folder that the command created, and a folder that was there before stays."""
+
+import errno
+
+import pytest
+
+from spherestep.atomic import write_text
+from spherestep.errors import ComputationError
+from spherestep.outputs import Outputs
+
+
+def test_interrupt_removes_the_files_and_the_folder_it_created(tmp_path):
+    out = tmp_path / "new"
+    with pytest.raises(KeyboardInterrupt):
+        with Outputs(out, ["a.csv", "b.csv", "c.json"]):
+            write_text(out / "a.csv", "1\n")
+            write_text(out / "b.csv", "2\n")
+            raise KeyboardInterrupt
+    assert not out.exists()
+
+
+def test_interrupt_keeps_a_folder_that_existed_and_files_not_of_the_set(tmp_path):
+    out = tmp_path / "old"
+    out.mkdir()
+    (out / "mine.txt").write_text("keep")
+    with pytest.raises(KeyboardInterrupt):
+        with Outputs(out, ["a.csv"]):
+            write_text(out / "a.csv", "1\n")
+            raise KeyboardInterrupt
+    assert sorted(p.name for p in out.iterdir()) == ["mine.txt"]
+
+
+def test_full_disk_leaves_no_empty_folder_and_says_how_many(tmp_path):
+    out = tmp_path / "new"
+    with pytest.raises(ComputationError, match=r"the disk is full.*0 of 2 files written"):
+        with Outputs(out, ["a.csv", "b.csv"]):
+            out.mkdir()
+            raise OSError(errno.ENOSPC, "No space left on device")
+    assert not out.exists()
