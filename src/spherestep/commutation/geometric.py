@@ -98,7 +98,6 @@ def plan_geometric(design, targets, *, candidates: int = DEFAULT_CANDIDATES, max
     """
     targets = check_targets(targets)
     candidates = checks.count(candidates, "candidates", expected="a positive integer")
-
     states = design.states()
     if len(states) == 0:
         raise bad_value("design", "a design with stepper states (at least two poles can sit on coils)", "none")

@@ -319,7 +319,6 @@ def _step(s, name: str, coil_count: int, cmap: np.ndarray) -> Step:
     next_pole = s.get("next_pole")
     if next_pole is not None:
         next_pole = checks.count(next_pole, f"{name}.next_pole", 0, expected="a pole number or null")
-
     return Step(index=index, target=_matrix(s["target"], f"{name}.target"),
                 achieved=_matrix(s["achieved"], f"{name}.achieved"), error=math.radians(error), coils=coils,
                 held=[(a, b) for a, b in held], next_pole=next_pole, status=str(s.get("status", "ok")))

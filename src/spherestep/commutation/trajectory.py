@@ -30,7 +30,6 @@ def about_axis(axis, angle: float, steps: int, start=None) -> np.ndarray:
     checks.axis(axis)  # refused here when zero or too short to normalise; so3.rot normalises it
     angle = checks.number(angle, "angle", expected="a finite angle")
     steps = checks.count(steps, "steps", expected="a positive whole number of steps")
-
     start = np.eye(3) if start is None else so3.as_rotations(start, "start")
     if start.shape != (3, 3):
         raise bad_value("start", "one rotation matrix (3, 3)", f"shape {start.shape}")
@@ -45,7 +44,6 @@ def through(keys, steps: int) -> np.ndarray:
     """``steps + 1`` orientations on the piecewise geodesic through ``keys (m, 3, 3)``, equally spaced."""
     return so3.resample(so3.as_rotations(keys, "keys"),
                         checks.count(steps, "steps", expected="a positive whole number of steps"))
-
 
 
 def check_targets(targets) -> np.ndarray:

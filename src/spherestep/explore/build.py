@@ -35,7 +35,6 @@ import numpy as np
 
 from .. import checks
 from ..errors import InputError, SpherestepError
-
 from ..motor import MotorDesign, PolarityRule, check_fits
 from ..motor.states import candidate_count
 from ..packing import named
@@ -60,7 +59,6 @@ class Limits:
         for label in ("budget_coils", "max_rotor_poles", "max_candidates", "max_lookup_voxels"):
             object.__setattr__(self, label, checks.count(getattr(self, label), label, 2,
                                                          expected="an integer of at least 2"))
-
 
 
 class Unbuildable(Exception):

@@ -228,7 +228,6 @@ class Grid:
         if self.primary_ratio_max is not None:
             checks.number(self.primary_ratio_max, "primary_ratio_max", low=1.0,
                           expected="a ratio of at least 1, or None for no limit")
-
         # samples, seed and torque_states are checked by DesignPoint; here too, so an empty grid refuses them
         DesignPoint(self.rotors[0], 0, self.stators[0], 0, self.cap_half_angles_deg[0], self.tolerances_deg[0],
                     samples=self.samples, seed=self.seed, torque_states=self.torque_states)

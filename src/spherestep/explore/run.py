@@ -119,7 +119,6 @@ def run_sweep(points: list[DesignPoint], store: ResultStore, client, limits: Lim
 
     batch_size = checks.count(batch_size, "batch_size", expected="a positive integer")
     retries = checks.count(retries, "retries", 0, expected="a non-negative integer")
-
     unique = list({p.key: p for p in points}.values())
     done = finished_keys(store.read(), limits)
     todo = [p for p in unique if p.key not in done]

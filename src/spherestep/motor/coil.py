@@ -130,7 +130,6 @@ class CoilSpec:
         if self.ampere_turns is not None:
             checks.positive(self.ampere_turns, "ampere_turns", "a finite positive number or None")
 
-
     # --- geometry (needs the outer size of the coil) ---
     def groove(self, coil_diameter: float, coil_length: float) -> tuple[float, float, float]:
         """The winding's groove: inner radius ``r_p``, outer radius ``r_w`` and depth (m) from the face."""

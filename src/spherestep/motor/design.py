@@ -184,8 +184,6 @@ class MotorDesign:
         for label in ("remanence", "coil_ampere_turns"):
             checks.positive(getattr(self, label), label)
         object.__setattr__(self, "max_coils", checks.count(self.max_coils, "max_coils", expected="a positive integer"))
-
-
         if len(self.stator) > self.max_coils:
             raise bad_value("stator", f"at most {self.max_coils} coils (four 8-relay boards, Sec. IV-B); raise "
                             "max_coils (overrides.max_coils in a design file) to override", f"{len(self.stator)} coils")

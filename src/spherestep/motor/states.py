@@ -151,7 +151,6 @@ class StepperStates:
         rotation (as :meth:`scipy.spatial.cKDTree.query_ball_point`)."""
         R = as_rotations(R, "R")
         radius = checks.number(radius, "radius", low=0.0, high=np.pi, expected="a Park distance in [0, π] radians")
-
         if len(self) == 0:
             found = [np.zeros(0, dtype=np.int64) for _ in range(int(np.prod(R.shape[:-2])))]
         else:
