@@ -10,6 +10,7 @@ import dataclasses
 import math
 import re
 
+from . import checks
 from .errors import bad_value
 
 METRES_PER_UNIT: dict[str, float] = {
@@ -41,19 +42,16 @@ def length(value: float | str, name: str = "length", *, allow_zero: bool = False
 
 def length_and_unit(value: float | str, name: str = "length", *, allow_zero: bool = False) -> tuple[float, str]:
     """``(metres, unit)`` of ``value``; the unit is the one written (``"m"`` for a bare number)."""
-    if isinstance(value, bool):
-        raise bad_value(name, "a length such as 0.3 (metres) or \"12 in\"", value)
-    if isinstance(value, (int, float)):
-        metres, unit = float(value), "m"
-    elif isinstance(value, str):
-        quantity = split_quantity(value)
-        unit = quantity[1].lower() if quantity else ""
-        if quantity is None or (unit and unit not in METRES_PER_UNIT):
-            raise bad_value(name, f"a length like '12 in' with unit one of {_UNIT_NAMES}", value)
-        unit = {'"': "in", "inch": "in"}.get(unit, unit or "m")
-        metres = quantity[0] * METRES_PER_UNIT[unit]
-    else:
-        raise bad_value(name, "a length such as 0.3 (metres) or \"12 in\"", value)
+    if not isinstance(value, str):
+        kind = "non-negative" if allow_zero else "positive"
+        return checks.number(value, name, low=0.0, low_open=not allow_zero,
+                             expected=f"a finite {kind} length such as 0.3 (metres) or \"12 in\""), "m"
+    quantity = split_quantity(value)
+    unit = quantity[1].lower() if quantity else ""
+    if quantity is None or (unit and unit not in METRES_PER_UNIT):
+        raise bad_value(name, f"a length like '12 in' with unit one of {_UNIT_NAMES}", value)
+    unit = {'"': "in", "inch": "in"}.get(unit, unit or "m")
+    metres = quantity[0] * METRES_PER_UNIT[unit]
     if not math.isfinite(metres) or metres < 0 or (metres == 0 and not allow_zero):
         raise bad_value(name, "a finite positive length", value)
     return metres, unit
