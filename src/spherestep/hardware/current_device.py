@@ -29,6 +29,7 @@ from typing import Protocol
 
 import numpy as np
 
+from .. import checks
 from ..errors import bad_value
 from .limits import CurrentLimits
 from .protocol import FrameError, LineReader, decode, encode, format_mask, parse_decimal, parse_hex
@@ -67,14 +68,10 @@ class CurrentDevice:
                  period_us: int = 1000, limits: CurrentLimits | None = None, supply: float = 24.0,
                  inductance: float = 18.7e-3, bandwidth: float = 2 * math.pi * 100, nominal_ma: int = 1000,
                  field_lsb_nt: int = 8118, name: str = "spherestep-t41"):
-        if not isinstance(coils, int) or not 1 <= coils <= MAX_COILS:
-            raise bad_value("coils", f"an integer 1..{MAX_COILS}", coils)
-        if not isinstance(sensors, int) or not 0 <= sensors <= MAX_SENSORS:
-            raise bad_value("sensors", f"an integer 0..{MAX_SENSORS}", sensors)
-        if not isinstance(watchdog_ms, int) or not 1 <= watchdog_ms <= 65535:
-            raise bad_value("watchdog_ms", "an integer 1..65535 (milliseconds)", watchdog_ms)
-        if not isinstance(period_us, int) or not 50 <= period_us <= 100000:
-            raise bad_value("period_us", "an integer 50..100000 (microseconds)", period_us)
+        coils = checks.count(coils, "coils", 1, MAX_COILS, expected=f"an integer 1..{MAX_COILS}")
+        sensors = checks.count(sensors, "sensors", 0, MAX_SENSORS, expected=f"an integer 0..{MAX_SENSORS}")
+        watchdog_ms = checks.count(watchdog_ms, "watchdog_ms", 1, 65535, expected="an integer 1..65535 (milliseconds)")
+        period_us = checks.count(period_us, "period_us", 50, 100000, expected="an integer 50..100000 (microseconds)")
         if not 1 <= len(name) <= 16 or not set(name) <= _NAME_CHARS:
             raise bad_value("name", "1-16 characters from A-Z a-z 0-9 . _ -", name)
         self.bridges, self.coils, self.sensors = bridges, coils, sensors

@@ -5,7 +5,7 @@ from __future__ import annotations
 from collections.abc import Mapping
 from dataclasses import dataclass
 
-from ..errors import bad_value
+from .. import checks
 from .backend import Backend, DeviceInfo
 from .protocol import MAX_MASK_DIGITS, VERSION, encode, format_mask
 from .transcript import Transcript
@@ -29,9 +29,7 @@ class DryRun(Backend):
     """
 
     def __init__(self, channels: int = 32, transcript: Transcript | None = None):
-        if not isinstance(channels, int) or not 1 <= channels <= 4 * MAX_MASK_DIGITS:
-            raise bad_value("channels", "an integer 1..64", channels)
-        self.channels = channels
+        self.channels = checks.count(channels, "channels", 1, 4 * MAX_MASK_DIGITS, expected="an integer 1..64")
         self.transcript = transcript if transcript is not None else Transcript()
         self.sent: list[Sent] = []
         self._now = 0.0

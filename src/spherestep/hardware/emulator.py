@@ -22,6 +22,7 @@ import time
 from collections import deque
 from dataclasses import dataclass
 
+from .. import checks
 from ..errors import bad_value
 from .protocol import MAX_MASK_DIGITS, VERSION, FrameError, LineReader, decode, encode, format_mask, parse_decimal, \
     parse_hex
@@ -39,10 +40,8 @@ class Emulator:
     """
 
     def __init__(self, channels: int = 32, watchdog_ms: int = 500, name: str = "spherestep-emu"):
-        if not isinstance(channels, int) or not 1 <= channels <= 4 * MAX_MASK_DIGITS:
-            raise bad_value("channels", "an integer 1..64", channels)
-        if not isinstance(watchdog_ms, int) or not 1 <= watchdog_ms <= 65535:
-            raise bad_value("watchdog_ms", "an integer 1..65535 (milliseconds)", watchdog_ms)
+        channels = checks.count(channels, "channels", 1, 4 * MAX_MASK_DIGITS, expected="an integer 1..64")
+        watchdog_ms = checks.count(watchdog_ms, "watchdog_ms", 1, 65535, expected="an integer 1..65535 (milliseconds)")
         if not 1 <= len(name) <= 16 or not set(name) <= _NAME_CHARS:
             raise bad_value("name", "1-16 characters from A-Z a-z 0-9 . _ -", name)
         self.channels = channels

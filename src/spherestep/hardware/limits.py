@@ -14,7 +14,8 @@ from collections import deque
 from collections.abc import Iterable
 from dataclasses import dataclass
 
-from ..errors import InputError, bad_value
+from .. import checks
+from ..errors import InputError
 
 
 class ThermalLimitError(InputError):
@@ -34,18 +35,14 @@ class ThermalLimits:
     window: float = 30.0
 
     def __post_init__(self):
-        if not (isinstance(self.max_on, (int, float)) and math.isfinite(self.max_on) and self.max_on > 0):
-            raise bad_value("max_on", "a positive number of seconds", self.max_on)
-        if not (isinstance(self.max_duty, (int, float)) and 0 < self.max_duty <= 1):
-            raise bad_value("max_duty", "a fraction in (0, 1]", self.max_duty)
-        if not (isinstance(self.window, (int, float)) and math.isfinite(self.window) and self.window > 0):
-            raise bad_value("window", "a positive number of seconds", self.window)
+        checks.positive(self.max_on, "max_on", "a positive number of seconds")
+        checks.number(self.max_duty, "max_duty", low=0.0, high=1.0, low_open=True, expected="a fraction in (0, 1]")
+        checks.positive(self.window, "window", "a positive number of seconds")
 
     def check_plan(self, plan, rate: float) -> None:
         """Raise :class:`ThermalLimitError` naming the first step and coil that a run at ``rate`` Hz would
         overheat; step ``i`` is driven from ``i / rate`` to ``(i + 1) / rate`` and all coils are off after."""
-        if not (isinstance(rate, (int, float)) and math.isfinite(rate) and rate > 0):
-            raise bad_value("rate", "a positive step rate in Hz, such as 10", rate)
+        rate = checks.positive(rate, "rate", "a positive step rate in Hz, such as 10")
         guard = ThermalGuard(self)
         period = 1.0 / rate
         for i, step in enumerate(plan.steps):
@@ -137,13 +134,9 @@ class CurrentLimits:
 
     def __post_init__(self):
         for name in ("max_current", "max_power", "continuous_current", "thermal_time", "resistance"):
-            value = getattr(self, name)
-            if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
-                raise bad_value(name, "a positive finite number", value)
-        if not (isinstance(self.max_duty, (int, float)) and 0 < self.max_duty <= 1):
-            raise bad_value("max_duty", "a fraction in (0, 1]", self.max_duty)
-        if not (isinstance(self.trip_ratio, (int, float)) and math.isfinite(self.trip_ratio) and self.trip_ratio >= 1):
-            raise bad_value("trip_ratio", "a number >= 1", self.trip_ratio)
+            checks.positive(getattr(self, name), name, "a positive finite number")
+        checks.number(self.max_duty, "max_duty", low=0.0, high=1.0, low_open=True, expected="a fraction in (0, 1]")
+        checks.number(self.trip_ratio, "trip_ratio", low=1.0, expected="a number >= 1")
 
     def check_setpoints(self, currents) -> None:
         """Raise :class:`ThermalLimitError` if a setpoint (A) exceeds ``max_current`` or all of them together

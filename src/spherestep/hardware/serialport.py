@@ -17,6 +17,7 @@ from collections.abc import Mapping
 
 import serial as pyserial
 
+from .. import checks
 from ..errors import InputError, bad_value
 from .backend import Backend, DeviceInfo, LinkError
 from .protocol import BAUDRATE, NAK_CODES, RETRYABLE, VERSION, Frame, FrameError, LineReader, decode, encode, \
@@ -32,12 +33,9 @@ def check_link(port, baudrate, timeout, retries, open_timeout) -> None:
     if not isinstance(port, str) or not port.strip():
         raise bad_value("port", "a serial device name such as /dev/ttyUSB0, /dev/ttyACM0 or COM3", port)
     for name, value in (("timeout", timeout), ("open_timeout", open_timeout)):
-        if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
-            raise bad_value(name, "a positive number of seconds", value)
-    if not isinstance(retries, int) or retries < 0:
-        raise bad_value("retries", "a non-negative integer", retries)
-    if not isinstance(baudrate, int) or baudrate <= 0:
-        raise bad_value("baudrate", "a positive integer such as 115200", baudrate)
+        checks.positive(value, name, "a positive number of seconds")
+    checks.count(retries, "retries", 0, expected="a non-negative integer")
+    checks.count(baudrate, "baudrate", expected="a positive integer such as 115200")
 
 
 def open_port(port: str, baudrate: int, write_timeout: float, poll: float = _POLL) -> pyserial.Serial:
