@@ -12,10 +12,12 @@ import numpy as np
 import pytest
 
 from spherestep import so3
+from spherestep.control import Trajectory
 from spherestep.errors import InputError
 from spherestep.hardware.motor_emulator import MotorFaults
-from spherestep.hardware.servo_parts import hold
 from spherestep.hardware.session import servo_session, turn_reference
+
+hold = Trajectory.hold
 
 pytestmark = pytest.mark.slow
 
@@ -95,13 +97,16 @@ def test_in_lockstep_the_loop_meets_the_targets_at_200_hz(rig):
 
 def with_bias(reference_law_current: float = 0.3, coil: int = 0):
     """A status-free way to keep one coil at a sizeable current: the servo plus ``current`` A on ``coil``."""
-    from spherestep.hardware import servo_parts
+    from dataclasses import replace
 
-    class Biased(servo_parts.ServoLaw):
-        def __call__(self, t, R, w):
-            c = super().__call__(t, R, w)
-            c[coil] += reference_law_current
-            return c
+    from spherestep.control import ServoLaw
+
+    class Biased(ServoLaw):
+        def step(self, t, measurement=None, measured_at=None):
+            cmd = super().step(t, measurement, measured_at)
+            c = cmd.currents.copy()
+            c[coil] += reference_law_current / self.limits.nominal_current
+            return replace(cmd, currents=c)
 
     return Biased
 
@@ -140,11 +145,11 @@ def test_a_slow_host_is_stopped_by_the_device_watchdog(rig, monkeypatch):
     stalled = []
 
     class Slow(session.ServoLaw):
-        def __call__(self, t, R, w):
+        def step(self, t, measurement=None, measured_at=None):
             if t > 0.4 and not stalled:
                 stalled.append(time.monotonic())
                 time.sleep(0.4)  # the host misses 80 deadlines
-            return super().__call__(t, R, w)
+            return super().step(t, measurement, measured_at)
 
     monkeypatch.setattr(session, "ServoLaw", Slow)
     s = run(rig, hold(np.eye(3)), 1.5, max_late=1.0)

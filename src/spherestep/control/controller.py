@@ -64,7 +64,13 @@ class GeometricPD:
 class Observer:
     """The orientation observer of the module (mutable state ``R``, ``w`` and the unmodelled torque ``d``, N·m,
     fixed frame). ``d`` enters the prediction, ``ω̂ ← ω̂ + h (τ + d)/I``, and is corrected with gain ``l3``
-    (N·m per rad of residual): zero here, so ``d`` stays 0 — the place of the disturbance observer."""
+    (N·m per rad of residual): zero here, so ``d`` stays 0 — the place of the disturbance observer.
+
+    The gains are for the interval ``Δ`` since the previous measurement (``sensor_period`` while measurements
+    arrive on schedule, to 1 ppm): ``l₁ = min(2ω_oΔ, 1)``, ``l₂ = min(ω_o²Δ, 1/Δ)``. The caps keep the error
+    dynamics stable for any ``Δ`` (a loop that misses deadlines): with ``l₂Δ ≤ 1`` and ``l₁ ≤ 1`` the error
+    matrix ``[[1 − l₁, Δ(1 − l₁)], [−l₂, 1 − l₂Δ]]`` meets Jury's conditions (det ``1 − l₁``,
+    ``1 − tr + det = l₂Δ > 0``, ``1 + tr + det = 4 − 2l₁ − l₂Δ ≥ 1``); ``ω_o = 1/Δ`` is the deadbeat observer."""
 
     def __init__(self, R0, w0=None, *, inertia: float, bandwidth: float = OBSERVER_BANDWIDTH,
                  sensor_period: float = 1.0 / CONTROL_RATE, history: float = 0.05):
@@ -74,10 +80,17 @@ class Observer:
         self.inertia = checks.positive(inertia, "inertia")
         h = checks.positive(sensor_period, "sensor_period")
         wo = checks.positive(bandwidth, "bandwidth")
-        self.l1, self.l2, self.l3 = min(2.0 * wo * h, 1.0), wo * wo * h, 0.0
+        self.bandwidth, self.sensor_period = wo, h
+        (self.l1, self.l2), self.l3 = self.gains(h), 0.0
         self.t = 0.0
+        self._measured: float | None = None  # time of the last measurement
         self._past = deque(maxlen=max(2, int(math.ceil(history / h)) * 4))
         self._past.append((0.0, self.R.copy()))
+
+    def gains(self, interval: float) -> tuple[float, float]:
+        """``(l₁, l₂)`` for measurements ``interval`` s apart (see the class)."""
+        wo = self.bandwidth
+        return min(2.0 * wo * interval, 1.0), min(wo * wo * interval, 1.0 / interval)
 
     def predict(self, torque, h: float) -> None:
         """Advance by ``h`` s under ``torque`` (N·m, what the drive is believed to apply)."""
@@ -93,8 +106,14 @@ class Observer:
             times = [p[0] for p in self._past]
             k = int(np.clip(np.searchsorted(times, t_meas), 0, len(times) - 1))
             ref = self._past[k][1]
+        now = self.t if t_meas is None else t_meas
+        interval = self.sensor_period if self._measured is None else now - self._measured
+        self._measured = now
+        l1, l2 = self.l1, self.l2
+        if not abs(interval - self.sensor_period) <= 1e-6 * self.sensor_period and interval > 0:
+            l1, l2 = self.gains(interval)
         eps = so3.log_single(R_meas @ ref.T)
-        self.R = so3.exp(self.l1 * eps) @ self.R
-        self.w = self.w + self.l2 * eps
+        self.R = so3.exp(l1 * eps) @ self.R
+        self.w = self.w + l2 * eps
         if self.l3:
             self.d = self.d + self.l3 * eps

@@ -29,13 +29,14 @@ The observer's state is ``(R̂, ω̂, d̂)``: ``d̂`` an unmodelled torque, carr
 from __future__ import annotations
 
 import math
+from collections import deque
 from dataclasses import dataclass
 
 import numpy as np
 
 from .. import checks, so3
 from ..errors import bad_value
-from ..statics import TorqueModel
+from ..statics import TorqueModel, is_torque_model
 from .allocation import allocate_matrix
 from .controller import GeometricPD, Observer
 from .limits import DriveLimits
@@ -51,12 +52,11 @@ class ModelCache:
     servo law (at the estimate) and the emulated motor (at the true orientation)."""
 
     def __init__(self, model: TorqueModel, reuse: float = K_REUSE):
-        if not isinstance(model, TorqueModel):
+        if not is_torque_model(model):
             raise bad_value("model", "a torque model (spherestep.statics.TorqueModel)", type(model).__name__)
         self.model = model
         self.reuse = checks.non_negative(reuse, "reuse")
-        # TEMPORARY shim until statics.TorqueModelBase.has_bias lands (issue 24 move 3): assume a bias if undeclared
-        self.has_bias = bool(getattr(model, "has_bias", True))
+        self.has_bias = bool(model.has_bias)
         self.evaluations = 0
         self._at: np.ndarray | None = None
         self._K: np.ndarray | None = None
@@ -102,7 +102,7 @@ class ServoLaw:
 
     def __init__(self, model: TorqueModel, trajectory: Trajectory, controller: GeometricPD, *,
                  limits: DriveLimits | None = None, sensor_rate: float | None = None,
-                 observer_bandwidth: float | None = None, reuse: float = K_REUSE):
+                 observer_bandwidth: float | None = None, reuse: float = K_REUSE, delay: int = 0):
         if not isinstance(trajectory, Trajectory):
             raise bad_value("trajectory", "a spherestep.control.Trajectory", type(trajectory).__name__)
         if not isinstance(controller, GeometricPD):
@@ -118,7 +118,8 @@ class ServoLaw:
         self.started = False  # the observer starts from the first measurement
         self._failed = tuple(model.failed)
         self._lam = None
-        self._promised = np.zeros(3)
+        self.delay = checks.count(delay, "delay", 0, 8)
+        self._promised = deque([np.zeros(3)] * (self.delay + 1), maxlen=self.delay + 1)
         # first calls (model set-up, imports, caches) here rather than in the first period
         K, b = self.cache.at(self.observer.R)
         allocate_matrix(K, b, self.limits, bias=b, failed=self._failed)
@@ -126,6 +127,11 @@ class ServoLaw:
     def amperes(self, currents) -> np.ndarray:
         """Per-unit ``currents`` in amperes: ``I_n c`` (the drive's wire unit)."""
         return np.asarray(currents, dtype=float) * self.limits.nominal_current
+
+    def predicted(self, t: float) -> np.ndarray:
+        """The observer's orientation carried on to ``t`` at its rate of turn, ``exp((t − t̂) ω̂) R̂`` (a search's
+        start for a sensor that estimates from readings; the state is not changed)."""
+        return so3.exp((t - self.observer.t) * self.observer.w) @ self.observer.R
 
     def step(self, t: float, measurement: np.ndarray | None = None, measured_at: float | None = None
              ) -> ServoCommand:
@@ -135,7 +141,7 @@ class ServoLaw:
         obs = self.observer
         h = t - obs.t
         if h > 0:
-            obs.predict(self._promised - self.controller.damping * obs.w, h)
+            obs.predict(self._promised[0] - self.controller.damping * obs.w, h)
         if measurement is not None:
             if not self.started:
                 obs.R, self.started = np.array(measurement, dtype=float), True
@@ -146,5 +152,5 @@ class ServoLaw:
         K, b = self.cache.at(obs.R)
         alloc, self._lam = allocate_matrix(K, tau, self.limits, bias=b if self.cache.has_bias else None,
                                            failed=self._failed, lam0=self._lam)
-        self._promised = alloc.torque
+        self._promised.append(alloc.torque)
         return ServoCommand(alloc.currents, alloc.torque, tau, alloc.reachable, obs.R, obs.w)

@@ -28,7 +28,7 @@ from ..control import DriveLimits, GeometricPD, ServoLaw, Trajectory
 from ..control.controller import CONTROL_RATE
 from ..errors import bad_value
 from ..sensing.sensor import NoisySensor, OrientationSensor
-from ..statics import TorqueModel
+from ..statics import TorqueModel, is_torque_model
 from .._fast.threads import single_blas_thread
 from .electrics import CoilDrive
 from .rotor import Rotor
@@ -158,7 +158,7 @@ def simulate_servo(design, trajectory: Trajectory, model: TorqueModel | None = N
         from ..magnetics import torque_map
 
         model = torque_map(design)
-    if not isinstance(model, TorqueModel):
+    if not is_torque_model(model):
         raise bad_value("model", "a torque model (spherestep.statics.TorqueModel)", type(model).__name__)
     if not isinstance(trajectory, Trajectory):
         raise bad_value("trajectory", "a spherestep.control.Trajectory", type(trajectory).__name__)

@@ -25,7 +25,7 @@ from .limits import CurrentLimits, ThermalGuard, ThermalLimitError, ThermalLimit
 from .motor_emulator import EmulatedMotor, MotorFaults, MotorPty, Truth
 from .serialport import NakError, Serial
 from .servo import ServoFault, ServoReport, run_servo
-from .servo_parts import FieldTracker, ServoLaw, hold
+from .servo_parts import FieldTracker, wire_limits
 from .session import Session, servo_session, turn_reference
 from .simulated import Simulated
 from .stream import PlayReport, play
@@ -34,7 +34,7 @@ from .transcript import Transcript
 __all__ = [
     "Backend", "CoilDriver", "CurrentDevice", "CurrentLimits", "DeviceInfo", "DeviceTrip", "DriveInfo", "DriveLink",
     "DryRun", "EmulatedMotor", "Emulator", "Faults", "FieldTracker", "LinkError", "MotorFaults", "MotorPty",
-    "NakError", "PlayReport", "PtyDevice", "Sent", "Serial", "ServoFault", "ServoLaw", "ServoReport", "Session",
+    "NakError", "PlayReport", "PtyDevice", "Sent", "Serial", "ServoFault", "ServoReport", "Session",
     "Simulated", "ThermalGuard", "ThermalLimitError", "ThermalLimits", "Transcript", "Truth", "coil_masks",
-    "heating_step", "hold", "play", "protocol", "protocol2", "run_servo", "servo_session", "turn_reference",
+    "heating_step", "play", "protocol", "protocol2", "run_servo", "servo_session", "turn_reference", "wire_limits",
 ]

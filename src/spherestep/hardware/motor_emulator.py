@@ -8,9 +8,11 @@
   ``a = e^{−R h / L}``; the back-EMF of the turning rotor is neglected). Asleep (``enabled`` False) the bridges'
   diodes return the current to the supply, ``L di/dt = −V sign(i) − R i``, until it is zero. The sense reads
   ``round(1000 (i + noise))`` mA, ``current_noise`` A RMS.
-* Rotor: :class:`spherestep.dynamics.Rotor` under the torque model's ``K(R) ī`` (currents per unit of the
-  nominal current), one step per ``torque_refresh`` s (20 ms), with ``K`` at the orientation predicted for the
-  middle of the step and ``ī`` the coils' mean current over it; in between, the sensors see
+* Rotor: :class:`spherestep.dynamics.Rotor` under the torque model's ``b(R) + K(R) ī`` (currents per unit of
+  the nominal current; ``b`` the bias, zero for the air-core magnets), one step per ``torque_refresh`` s (20 ms),
+  with ``K`` and ``b`` at the orientation predicted for the middle of the step (the control room's
+  :class:`~spherestep.control.ModelCache`, the servo law's cache: re-evaluated when that orientation has turned
+  more than ``K_REUSE``) and ``ī`` the coils' mean current over it; in between, the sensors see
   :meth:`EmulatedMotor.orientation`, the last step continued to second order.
 * Magnetometers: the sensing room's :class:`~spherestep.sensing.field.FieldTable` (rotor) plus
   :class:`~spherestep.sensing.field.CoilField` (coils, at the measured currents), read in each sensor's own
@@ -42,9 +44,6 @@ from .protocol import decode, encode
 from .protocol2 import FULL_SCALE, MAX_FRAME2, TRIP_CODES, VERSION2, encode_block, parse_state
 from .serialport import NakError
 
-K_REUSE = 2e-3  # rad: the torque matrix is re-evaluated when the rotor has turned further than this
-
-
 @dataclass(frozen=True)
 class MotorFaults:
     """Faults by emulated time (s since the device started): each a ``(index, time)`` pair or None; a coil index
@@ -73,7 +72,7 @@ class EmulatedMotor:
     def __init__(self, design, model, sensors, *, rotor=None, drive=None, current_noise: float = 0.002,
                  R0=None, faults: MotorFaults | None = None, period: float = 2e-3, torque_refresh: float = 2e-2,
                  seed: int = 0):
-        from ..control import DriveLimits
+        from ..control import DriveLimits, ModelCache
         from ..dynamics import Rotor
         from ..sensing.field import CoilField, FieldTable
 
@@ -97,7 +96,7 @@ class EmulatedMotor:
         self._rotor_t = 0.0
         self._charge = np.zeros(n)
         self.alpha = np.zeros(3)
-        self._K = self._K_at = None
+        self.torque_cache = ModelCache(model)
         self._struck: dict[str, int] = {}
         self._last_ma = np.zeros(n, dtype=np.int64)
         self._last_counts = np.zeros((len(sensors), 3), dtype=np.int64)
@@ -174,16 +173,15 @@ class EmulatedMotor:
         self.t += h
 
     def sync(self) -> None:
-        """Bring the rotor up to the coils' time: one :meth:`Rotor.step` under ``K(R_mid) ī`` (``ī`` the mean
-        current since the last sync, ``R_mid`` the orientation predicted for the middle of the interval; ``K``
-        is reused while ``R_mid`` stays within ``K_REUSE`` rad of where it was evaluated)."""
+        """Bring the rotor up to the coils' time: one :meth:`Rotor.step` under ``b(R_mid) + K(R_mid) ī`` (``ī`` the
+        mean current since the last sync, ``R_mid`` the orientation predicted for the middle of the interval; ``K``
+        and ``b`` from :attr:`torque_cache`)."""
         h = self.t - self._rotor_t
         if h <= 0:
             return
         mid = so3.exp(0.5 * h * self.w) @ self.R
-        if self._K is None or np.linalg.norm(so3.vect(mid @ self._K_at.T)) > K_REUSE:
-            self._K, self._K_at = self.model.torque_matrix(mid), mid
-        tau = (self._K @ (self._charge / (h * self.nominal)))[None]
+        K, b = self.torque_cache.at(mid)
+        tau = (b + K @ (self._charge / (h * self.nominal)))[None]
         R, w, _ = self.rotor.step(self.R[None], self.w[None], lambda _R: tau, h, tau)
         self.alpha = (w[0] - self.w) / h
         self.R, self.w = R[0], w[0]

@@ -3,12 +3,14 @@
 :func:`run_servo` drives a :class:`~spherestep.hardware.drive_link.DriveLink` (a real board, or
 :class:`~spherestep.hardware.motor_emulator.MotorPty`) with two callables:
 
-* ``estimate(state) -> R``: the orientation (3×3) from a :class:`~spherestep.hardware.protocol2.State`
-  (magnetometers and measured coil currents); it raises :class:`ServoFault` on readings it cannot trust;
-* ``control(t, R, ω) -> currents``: coil currents in A ``(N,)`` at loop time ``t`` (s) from the estimate and
-  the angular velocity ``ω`` (rad/s, fixed frame) the loop derives from successive estimates,
-  ``ω_k = (1 − β) ω_{k−1} + β log(R_k R_{k−1}ᵀ) / Δt``, ``β = 1 − e^{−Δt / 10 ms}`` (a first-order filter in
-  time, so that a late cycle adds no lag of its own).
+* ``estimate(state, prior) -> R``: the measured orientation (3×3) from a
+  :class:`~spherestep.hardware.protocol2.State` (magnetometers and measured coil currents), searched from
+  ``prior``; it raises :class:`ServoFault` on readings it cannot trust
+  (:class:`~spherestep.hardware.servo_parts.FieldTracker`);
+* ``law``: the control room's :class:`~spherestep.control.ServoLaw`, the same law the simulation runs. Each cycle
+  ``law.step(t, R)`` takes the measurement at the reading's time ``t`` and returns per-unit currents, sent as
+  ``law.amperes(c)`` A; the estimate and the angular velocity ``ω̂`` (rad/s, fixed frame) logged and shown are
+  its observer's, and ``prior`` is the observer's prediction for ``t``, ``exp((t − t̂) ω̂) R̂``.
 
 A first ``READ`` primes the estimate and the currents; then cycle ``k`` starts at ``t_0 + k / rate``: ``DRIVE`` the currents computed in cycle ``k − 1`` and receive the
 state, check it (a stale magnetometer, a saturated one → ``SENSOR``), estimate, control, check the currents
@@ -25,7 +27,6 @@ place).
 
 from __future__ import annotations
 
-import math
 import os
 import time
 from dataclasses import dataclass, field
@@ -33,15 +34,13 @@ from pathlib import Path
 
 import numpy as np
 
-from .. import so3
-from ..control.controller import rotation_error
+from .. import checks, so3
 from ..errors import ComputationError, bad_value
 from .backend import LinkError
 from .drive_link import DriveLink
 from .limits import CurrentLimits, ThermalLimitError
 from .serialport import NakError
 
-OMEGA_FILTER = 0.01  # s, time constant of the angular-velocity filter
 LOG_HEADER = "t_s,late_s,rx,ry,rz,wx,wy,wz,power_W,max_abs_current_A,stale\n"
 
 
@@ -92,7 +91,7 @@ def _check_state(state) -> None:
         raise ServoFault(f"magnetometer {int(np.argmax(state.saturated))} reads full scale", "SENSOR")
 
 
-def run_servo(link: DriveLink, estimate, control, *, duration: float, rate: float = 200.0,
+def run_servo(link: DriveLink, estimate, law, *, duration: float, rate: float = 200.0,
               limits: CurrentLimits | None = None, log: str | Path | None = None, status=None,
               max_late: float | None = None, clock=time.monotonic, sleep=time.sleep,
               device_time: bool = True) -> ServoReport:
@@ -106,16 +105,14 @@ def run_servo(link: DriveLink, estimate, control, *, duration: float, rate: floa
     if link.info is None:
         raise bad_value("link", "an open DriveLink (call open() or use it in a with block)", link)
     max_late = 0.5 * link.info.watchdog if max_late is None else max_late
-    for name, value in (("duration", duration), ("rate", rate), ("max_late", max_late)):
-        if isinstance(value, bool) or not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
-            raise bad_value(name, "a positive finite number", value)
+    duration, rate = checks.positive(duration, "duration"), checks.positive(rate, "rate")
+    max_late = checks.positive(max_late, "max_late")
     limits = limits if limits is not None else CurrentLimits(max_current=link.info.max_current,
                                                              max_power=link.info.max_power)
     report = ServoReport(log=None if log is None else Path(log))
     period = 1.0 / rate
     n = link.info.coils
     currents = np.zeros(n)
-    R_prev, w = None, np.zeros(3)
     part = None if log is None else Path(str(log) + ".part")
     out = None
     if part is not None:
@@ -127,9 +124,9 @@ def run_servo(link: DriveLink, estimate, control, *, duration: float, rate: floa
     try:
         state = link.read()  # prime: the first estimate and currents come from a reading, before the clock starts
         _check_state(state)
-        R_prev = estimate(state)
         start_us = state.time_us
-        currents = np.asarray(control(0.0, R_prev, w), dtype=float)
+        cmd = law.step(0.0, estimate(state, law.predicted(0.0)))
+        currents = law.amperes(cmd.currents)
         limits.check_setpoints(currents)
         t0 = clock()
         while k * period < duration:
@@ -148,13 +145,9 @@ def run_servo(link: DriveLink, estimate, control, *, duration: float, rate: floa
             state = link.drive(currents)
             _check_state(state)
             t = (((state.time_us - start_us) & 0xFFFFFFFF) * 1e-6 if device_time else clock() - t0)
-            R = estimate(state)
-            if R_prev is not None:
-                dt = max(t - (report.times[-1] if report.times else 0.0), 1e-6)
-                beta = 1.0 - math.exp(-dt / OMEGA_FILTER)
-                w = (1 - beta) * w + beta * rotation_error(R @ R_prev.T) / dt
-            R_prev = R
-            currents = np.asarray(control(t, R, w), dtype=float)
+            cmd = law.step(t, estimate(state, law.predicted(t)))
+            R, w = cmd.estimate, cmd.velocity
+            currents = law.amperes(cmd.currents)
             limits.check_setpoints(currents)
             report.times.append(t)
             host.append(clock() - t0)

@@ -170,6 +170,19 @@ class Estimator:
             R = so3.exp(delta) @ R
         return self._estimate(R, H, cost, weight, iterations, float(delta @ delta) < 1e-12)
 
+    def track_until(self, readings, R_prev, currents=None, iterations: int = 1, max_iterations: int | None = None,
+                    residual_limit: float = math.inf) -> Estimate:
+        """:meth:`track` in rounds of ``iterations`` steps from ``R_prev`` while the RMS residual is over
+        ``residual_limit`` (T), at most ``max_iterations`` steps in all (default one round): the one tracking
+        update of :class:`~spherestep.sensing.HallSensor` (simulation) and the hardware's ``FieldTracker``."""
+        limit = iterations if max_iterations is None else max(iterations, max_iterations)
+        done, R = 0, R_prev
+        while True:
+            est = self.track(readings, R, currents, iterations)
+            R, done = est.R, done + iterations
+            if est.residual_T <= residual_limit or done >= limit:
+                return est
+
     def _estimate(self, R, H, cost, weight, iterations, converged) -> Estimate:
         channels = self.table.positions.size if weight is None else weight.sum()
         return Estimate(R, H / self.noise_T ** 2, math.sqrt(cost / max(channels, 1.0)), iterations, converged)

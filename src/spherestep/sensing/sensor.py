@@ -162,5 +162,5 @@ class HallSensor(SampledSensor):
             self.last = self.estimator.initialise(m, currents, near_symmetry=self.near_symmetry)
         else:
             m = self.readings(R_true, currents)
-            self.last = self.estimator.track(m, R_prev, currents, self.iterations)
+            self.last = self.estimator.track_until(m, R_prev, currents, self.iterations)
         return self.last.R
