@@ -12,7 +12,7 @@ import numpy as np
 import plotly.io as pio
 import plotly.offline
 
-from .. import __version__
+from .. import __version__, checks
 from ..atomic import write_text
 from ..errors import bad_value
 from ..fig10 import plane_basis
@@ -173,10 +173,7 @@ def build_report(design, metrics=None, plan=None, simulation=None, energy_map=No
         metrics = design.metrics(samples=samples, seed=seed)
     samples = metrics.samples
     if axis is not None:
-        axis = np.asarray(axis, dtype=float)
-        if axis.shape != (3,) or not np.all(np.isfinite(axis)) or not np.any(axis):
-            raise bad_value("axis", "a non-zero 3-vector", axis.tolist())
-        axis = axis / np.linalg.norm(axis)
+        axis = checks.axis(axis)
     elif plan is not None:
         axis = _infer_axis(plan.targets)
     elif simulation is not None:
