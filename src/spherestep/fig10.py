@@ -14,12 +14,15 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from . import checks
+
 OUTLINE_POINTS = 48  # points per outline
 POLARITY_COLOUR = {1: "#c0392b", -1: "#2c6fbb"}  # red: north out (+1), blue: south out (−1)
 
 
 def plane_basis(axis) -> np.ndarray:
     """Rows ``e1, e2, n``: an orthonormal frame with ``n`` along ``axis`` (the page is ``e1, e2``)."""
+    checks.axis(axis)  # a zero or underflowing axis refused; the frame below normalises it as before
     n = np.asarray(axis, dtype=float)
     n = n / np.linalg.norm(n)
     helper = np.array([1.0, 0.0, 0.0]) if abs(n[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
