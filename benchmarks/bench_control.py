@@ -29,7 +29,8 @@ import numpy as np
 from _timing import median_seconds
 from spherestep import so3
 from spherestep.control import DriveLimits, allocate_matrix, allocate_relay, torque_capability
-from spherestep.dynamics import NoisySensor, compare_drives, hold
+from spherestep.dynamics import compare_drives, hold
+from spherestep.sensing import NoisySensor
 from spherestep.magnetics import torque_map
 from spherestep.motor import prototype
 

@@ -156,7 +156,7 @@ def loop(design, array):
         t0 = time.perf_counter()
         for k, R in enumerate(path):
             prev = R0 if k == 0 else (None if not name.startswith("hall") else R_est)
-            R_est = s.measure(R, c, prev)
+            R_est = s.estimate(R, c, prev)
             err.append(so3.distance(R_est, R))
         t = (time.perf_counter() - t0) / len(path)
         e = np.degrees(np.array(err[100:]))
@@ -230,15 +230,15 @@ def servo(design, array):
     traj = Trajectory.turn(R0, [1.0, 0.5, 2.0], math.radians(20), acceleration=10.0)
     sensors = {"ideal": sensing.IdealSensor(),
                "hall (24 × TMAG5273A2, 1 % current error)": sensing.HallSensor(design, array=array,
-                                                                                current_error=0.01, seed=1),
+                                                                                current_error=0.01, seed=1, start=R0),
                "fused (gyro + array)": sensing.FusedSensor(design, sensing.HallSensor(
-                   design, array=array, current_error=0.01, seed=2), 1e-3, seed=3),
+                   design, array=array, current_error=0.01, seed=2), 1e-3, seed=3, start=R0),
                "imu alone": sensing.ImuSensor(design, 1e-3, seed=4)}
     print("| sensor | max tracking error (°) | final error (°) | estimate error RMS (°) | wall time (s) |")
     print("|---|---|---|---|---|")
     for name, inner in sensors.items():
         t0 = time.perf_counter()
-        run = simulate_servo(design, traj, tmap, sensor=sensing.LoopSensor(inner, start=R0), settle=0.15)
+        run = simulate_servo(design, traj, tmap, sensor=inner, settle=0.15)
         est = so3.distance(run.estimates, run.orientations)
         print(f"| {name} | {math.degrees(run.tracking_error.max()):.4f} | {math.degrees(run.final_error):.4f} | "
               f"{math.degrees(np.sqrt(np.mean(est ** 2))):.4f} | {time.perf_counter() - t0:.1f} |")

@@ -121,8 +121,8 @@ class ServoLaw:
         self.delay = checks.count(delay, "delay", 0, 8)
         self._promised = deque([np.zeros(3)] * (self.delay + 1), maxlen=self.delay + 1)
         # first calls (model set-up, imports, caches) here rather than in the first period
-        K, b = self.cache.at(self.observer.R)
-        allocate_matrix(K, b, self.limits, bias=b, failed=self._failed)
+        self._allocate(np.zeros(3), self.observer.R)
+        self._lam = None
 
     def amperes(self, currents) -> np.ndarray:
         """Per-unit ``currents`` in amperes: ``I_n c`` (the drive's wire unit)."""
@@ -149,8 +149,13 @@ class ServoLaw:
                 obs.correct(measurement, measured_at)
         Rd, wd, ad = self.trajectory.at(t)
         tau = self.controller.torque(obs.R, obs.w, Rd, wd, ad)
-        K, b = self.cache.at(obs.R)
-        alloc, self._lam = allocate_matrix(K, tau, self.limits, bias=b if self.cache.has_bias else None,
-                                           failed=self._failed, lam0=self._lam)
+        alloc = self._allocate(tau, obs.R)
         self._promised.append(alloc.torque)
         return ServoCommand(alloc.currents, alloc.torque, tau, alloc.reachable, obs.R, obs.w)
+
+    def _allocate(self, tau: np.ndarray, R: np.ndarray):
+        """Steps 4 and 5 of the module: ``K``/bias at ``R`` and the warm-started allocation of ``tau``."""
+        K, b = self.cache.at(R)
+        alloc, self._lam = allocate_matrix(K, tau, self.limits, bias=b if self.cache.has_bias else None,
+                                           failed=self._failed, lam0=self._lam)
+        return alloc
