@@ -19,6 +19,7 @@ import numpy as np
 from _timing import median_seconds
 from spherestep import so3
 from spherestep.magnetics import _iron as iron
+from spherestep.magnetics._ironforce import pair_tables
 from spherestep.magnetics import iron_model, torque_map
 from spherestep.magnetics._ironmap import read_table
 from spherestep.motor import prototype
@@ -35,7 +36,7 @@ def main() -> None:
     t1 = time.perf_counter()
     a = np.radians(np.arange(0.0, 40.0, 1.0))
     t2 = time.perf_counter()
-    iron.pair_tables(design, coil, a, level)
+    pair_tables(design, coil, a, level)
     t3 = time.perf_counter()
     per_angle = (t3 - t2) / len(a)
     rng = np.random.default_rng(0)

@@ -25,6 +25,8 @@ from pathlib import Path
 import numpy as np
 
 from spherestep.magnetics import _iron as iron
+from spherestep.magnetics import _ironcoupling as ironcoupling
+from spherestep.magnetics import _ironforce as ironforce
 from spherestep.magnetics._ironmap import TABLE_NODES_DEG, pair_table, read_table
 from spherestep.motor import prototype
 from spherestep.motor.coil import iron_coil
@@ -50,7 +52,7 @@ def table(level: int = iron.IRON_LEVEL) -> None:
     t2 = time.perf_counter()
     flux(level)
     _write(DATA / "iron_pair_table_mom.csv",
-           f"Iron-core pair torques of the prototype (spherestep.magnetics._iron.pair_tables), MoM level {level}: "
+           f"Iron-core pair torques of the prototype (spherestep.magnetics._ironforce.pair_tables), MoM level {level}: "
            f"{len(iron.core_solver(iron.CoreGeometry.of(design, coil), level).cells)} cells.\n"
            f"One +1 rotor magnet at angle alpha from one iron coil's axis; torque about the sphere's centre (N m), "
            f"positive away from the axis; linear per nominal current ({iron.CoreGeometry.of(design, coil).NI:.1f} "
@@ -100,7 +102,7 @@ def convergence(levels=(0, 1)) -> None:
         t0 = time.perf_counter()
         s = iron.core_solver(iron.CoreGeometry.of(design, coil), level)
         t1 = time.perf_counter()
-        det, lin = iron.pair_tables(design, coil, np.radians(a), level)
+        det, lin = ironforce.pair_tables(design, coil, np.radians(a), level)
         t2 = time.perf_counter()
         print(level, len(s.cells), t1 - t0, t2 - t1, flush=True)
         rows += [[level, len(s.cells), t1 - t0, (t2 - t1) / len(a), ai, d, li] for ai, d, li in zip(a, det, lin)]
@@ -138,7 +140,7 @@ def multibody(level: int = 0) -> None:
     rows = []
     for currents in ([0.0, 0.0], [1.0, 0.0], [1.0, -1.0]):
         t0 = time.perf_counter()
-        full = iron.rotor_iron_torque(design, coil, coils, R, currents, level)
+        full = ironforce.rotor_iron_torque(design, coil, coils, R, currents, level)
         t1 = time.perf_counter()
         c = np.zeros(len(design.stator))
         c[coils] = currents
@@ -167,13 +169,13 @@ def coupling(level: int = 0) -> None:
     rows = []
     for r in mb[(mb[:, 0] == 0) & (mb[:, 1] == 0)]:
         t0 = time.perf_counter()
-        cross = iron.coupling_torque(design, coil, coils, R[int(r[2])], level)
+        cross = ironcoupling.coupling_torque(design, coil, coils, R[int(r[2])], level)
         full, pair = r[3:6], r[6:9]
         rows.append([r[2], *full, *pair, *cross, time.perf_counter() - t0])
         print(int(r[2]), np.linalg.norm(full - pair) / np.linalg.norm(full),
               np.linalg.norm(full - pair - cross) / np.linalg.norm(full), flush=True)
     _write(DATA / "iron_coupling.csv",
-           f"The coupling the pair tables leave out (spherestep.magnetics._iron.coupling_torque, MoM level {level}, "
+           f"The coupling the pair tables leave out (spherestep.magnetics._ironcoupling.coupling_torque, MoM level {level}, "
            f"cores {coils} solved together, magnets within 40 deg), coils off, at the orientations of "
            f"data/iron_multibody.csv, beside that file's full solve and pair-table sum.\nProduced by: python "
            f"scripts/iron_tables.py coupling. Torques N m, fixed frame, about the centre.",
@@ -183,13 +185,13 @@ def coupling(level: int = 0) -> None:
 
 def coupling_table(level: int = iron.IRON_LEVEL) -> None:
     """``src/spherestep/data/iron_coupling_table.csv``: the coupling energy of two +1 poles over one core
-    (``_iron.cross_energy_table``) on the angles the model reads."""
+    (``_ironcoupling.cross_energy_table``) on the angles the model reads."""
     from spherestep.magnetics._coupling import COUPLING_ALPHA_DEG, COUPLING_DPHI_DEG
     from spherestep.magnetics._ironmap import COUPLING_FILE
 
     design, coil = prototype(), iron_coil()
     t0 = time.perf_counter()
-    X = iron.cross_energy_table(design, coil, np.radians(COUPLING_ALPHA_DEG), np.radians(COUPLING_DPHI_DEG), level)
+    X = ironcoupling.cross_energy_table(design, coil, np.radians(COUPLING_ALPHA_DEG), np.radians(COUPLING_DPHI_DEG), level)
     a, b, d = np.meshgrid(COUPLING_ALPHA_DEG, COUPLING_ALPHA_DEG, COUPLING_DPHI_DEG, indexing="ij")
     _write(Path(__file__).resolve().parents[1] / "src" / "spherestep" / "data" / COUPLING_FILE,
            f"Coupling energy (J) of two +1 rotor poles over one iron core of the prototype (MoM level {level}, coils "
@@ -241,17 +243,17 @@ def saturation(level: int = iron.IRON_LEVEL) -> None:
     saturating one (the linear line up to where it meets the B–H curve, the curve beyond)."""
     design, coil = prototype(), iron_coil()
     angles = np.array([2.0, 5.0, 8.0, 12.0, 20.0])
-    det, lin = iron.pair_tables(design, coil, np.radians(angles), level)
+    det, lin = ironforce.pair_tables(design, coil, np.radians(angles), level)
     rows = []
     for a, d, li in zip(angles, det, lin):
         for c in (0.0, 1.0, -1.0):
             t0 = time.perf_counter()
-            tau, peak, iterations = iron.saturated_pair_torque(design, coil, np.radians(a), c, level)
+            tau, peak, iterations = ironforce.saturated_pair_torque(design, coil, np.radians(a), c, level)
             rows.append([a, c, d + c * li, tau, peak, iterations, time.perf_counter() - t0])
             print(rows[-1], flush=True)
     _write(DATA / "iron_saturation.csv",
            f"One +1 pole and one iron coil (MoM level {level}): torque (N m, about the centre, positive away from the "
-           f"axis) of the linear solve and of the saturating one (spherestep.magnetics._iron.saturated_pair_torque: "
+           f"axis) of the linear solve and of the saturating one (spherestep.magnetics._ironforce.saturated_pair_torque: "
            f"mu_r = {coil.material.relative_permeability:g} up to "
            f"{iron.saturation_onset(coil.material, coil.material.relative_permeability):.0f} A/m, then the B-H curve "
            f"of {coil.material.name}), the largest |B| in a cell, iterations, seconds.\nProduced by: python "
@@ -262,7 +264,7 @@ def saturation(level: int = iron.IRON_LEVEL) -> None:
 def fig6(level: int = iron.IRON_LEVEL) -> None:
     design, coil = prototype(), iron_coil()
     x = np.arange(0.0, 0.0605, 0.0025)
-    Fd, Fl = iron.fig6_forces(design, coil, x, level=level)
+    Fd, Fl = ironforce.fig6_forces(design, coil, x, level=level)
     g = design.radius + design.air_gap - iron.magnet_face_radius(design)
     _write(DATA / "iron_fig6.csv",
            f"Fig. 6 with the iron core (MoM level {level}): one +1 magnet translated by x at a {1e3 * g:.3f} mm face "

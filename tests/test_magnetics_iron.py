@@ -14,6 +14,8 @@ from magpylib_material_response.demag import apply_demag
 from spherestep import so3
 from spherestep.errors import InputError
 from spherestep.magnetics import _iron as iron
+from spherestep.magnetics import _ironcoupling as ironcoupling
+from spherestep.magnetics import _ironforce as ironforce
 from spherestep.magnetics import TorqueMap, iron_model
 from spherestep.magnetics._coupling import COUPLING_ALPHA_DEG
 from spherestep.magnetics._ironmap import IronTorqueMap
@@ -101,12 +103,12 @@ def test_reaction_equals_direct_force_on_the_magnet(rod):
     the magnet's faces) against minus the magnet's force on the rod's cells (what magnet_wrenches uses)."""
     centre = np.array([[0.004, 0.0, -0.0045]])
     axis = np.array([[0.0, 0.0, 1.0]])
-    magnet = iron._magnet(type("D", (), {"magnet_diameter": 0.01, "magnet_length": 0.005, "remanence": 1.3})(),
+    magnet = iron.rotor_magnet(type("D", (), {"magnet_diameter": 0.01, "magnet_length": 0.005, "remanence": 1.3})(),
                           centre, axis)
     J = rod.polarization(magnet.getB(rod.centroids))
     pts, q = iron.magnet_faces(centre[0], axis[0], 0.01, 0.005, 1.3, n_r=8, n_phi=16)
     F_direct, T_direct = iron.charge_wrench(pts, q, rod.field(J, pts), pivot=(0, 0, -0.1))
-    F_react, T_react = iron._reaction(rod, J, magnet, (0, 0, -0.1), order=4)
+    F_react, T_react = ironforce._reaction(rod, J, magnet, (0, 0, -0.1), order=4)
     assert F_direct[2] > 1.0  # pulled towards the iron
     assert np.linalg.norm(F_direct + F_react[0]) < 0.02 * np.linalg.norm(F_direct)
     assert np.linalg.norm(T_direct + T_react[0]) < 0.02 * np.linalg.norm(T_direct)
@@ -256,7 +258,7 @@ def test_pairwise_against_full_multibody_solve():
 
 
 def test_coupling_energy_is_the_joint_solve_less_the_self_terms(design):
-    """``_iron.coupling_energy`` by an independent route: one solve with every near magnet's field at once, its
+    """``_ironcoupling.coupling_energy`` by an independent route: one solve with every near magnet's field at once, its
     energy ``−(1/2μ0) ∫ J·B``, less each magnet's energy alone, equals the cross terms (linearity), to 1e-9."""
     from spherestep.magnetics._model import MU0
 
@@ -264,14 +266,14 @@ def test_coupling_energy_is_the_joint_solve_less_the_self_terms(design):
     v = design.stator.centers
     k = int(np.argmin(v[:, 2]))
     R = np.load(DATA / "iron_multibody_R.npy")[3]
-    got = iron.coupling_energy(design, coil, [k], R)
-    solver = iron._placed_solver(iron.CoreGeometry.of(design, coil), 0, (tuple(v[k]),),
+    got = ironcoupling.coupling_energy(design, coil, [k], R)
+    solver = ironcoupling._placed_solver(iron.CoreGeometry.of(design, coil), 0, (tuple(v[k]),),
                                  design.radius + design.air_gap)
     w = R @ design.rotor.centers.T
-    near = np.flatnonzero(v[k] @ w > np.cos(iron.COUPLING_REACH))
+    near = np.flatnonzero(v[k] @ w > np.cos(ironcoupling.COUPLING_REACH))
     assert len(near) >= 2
     r_c = iron.magnet_face_radius(design) - 0.5 * design.magnet_length
-    rotor = [iron._magnet(design, r_c * w[:, j][None], w[:, j][None], float(design.polarity[j])) for j in near]
+    rotor = [iron.rotor_magnet(design, r_c * w[:, j][None], w[:, j][None], float(design.polarity[j])) for j in near]
     pts, wts, owner = iron.cell_quadrature(solver.cells, 3, near=solver.near)
 
     def energy(magnets):
@@ -311,8 +313,8 @@ def test_saturating_solve_without_saturation_is_the_linear_one(design):
     coil = iron_coil()
     line = IronMaterial(bh=((0.0, 0.0), (1e6, MU0 * 1000.0 * 1e6)), knee=1.5)
     straight = dataclasses.replace(coil, material=line)
-    tau, _, iterations = iron.saturated_pair_torque(design, straight, math.radians(8.0), 1.0)
-    det, lin = iron.pair_tables(design, coil, np.radians([8.0]))
+    tau, _, iterations = ironforce.saturated_pair_torque(design, straight, math.radians(8.0), 1.0)
+    det, lin = ironforce.pair_tables(design, coil, np.radians([8.0]))
     assert iterations == 1 and abs(tau - (det[0] + lin[0])) <= 1e-9 * abs(det[0] + lin[0])
 
 
@@ -363,13 +365,13 @@ def test_coupled_model_is_a_torque_model(coupled, design):
 
 def test_coupling_table_against_the_direct_energy(coupled, design):
     """The table's coupling energy for one core (``CoreCoupling``, splines in the two angles, a cosine series in the
-    azimuth) against the direct sum ``_iron.coupling_energy`` of the same core at the multibody orientations: within
+    azimuth) against the direct sum ``_ironcoupling.coupling_energy`` of the same core at the multibody orientations: within
     5 % of the direct value (the table's interpolation; 2° and 15° nodes)."""
     v = design.stator.centers
     k = int(np.argmin(v[:, 2]))
     one = coupled.subset([k]).coupling
     for R in np.load(DATA / "iron_multibody_R.npy")[2:4]:
-        want = iron.coupling_energy(design, iron_coil(), [k], R, reach=np.radians(COUPLING_ALPHA_DEG[-1]))
+        want = ironcoupling.coupling_energy(design, iron_coil(), [k], R, reach=np.radians(COUPLING_ALPHA_DEG[-1]))
         assert abs(one.energy(R[None])[0] - want) <= 0.05 * abs(want)
 
 

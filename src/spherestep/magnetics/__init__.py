@@ -8,9 +8,9 @@
   :func:`calibrate`, :func:`compare_models`.
 * Torque map (:mod:`._table`): :class:`TorqueMap` from one pole–coil table ``τ(α)``; :func:`torque_function`
   for the dynamics.
-* Iron cores (:mod:`._iron`, :mod:`._ironmap`, :mod:`._ironsummary`): pot-core coils solved by the method of
-  moments (magpylib-material-response), :func:`iron_pair_torques`, :func:`iron_force_curve`,
-  :func:`coil_inductance`; the torque model with detent :class:`IronTorqueMap` from :func:`iron_model`
+* Iron cores (:mod:`._iron` the solve, :mod:`._ironforce`, :mod:`._ironcoupling`, :mod:`._inductance`,
+  :mod:`._ironmap`, :mod:`._ironsummary`): pot-core coils solved by the method of moments
+  (magpylib-material-response), :func:`iron_pair_torques`, :func:`iron_force_curve`, :func:`coil_inductance`; the torque model with detent :class:`IronTorqueMap` from :func:`iron_model`
   (``coil=CoilSpec(core="air")`` gives today's map); :func:`iron_summary` (detent, states, polarity, saturation).
 * Statics (:mod:`._statics`): :func:`equilibrium` with the map's settings, :func:`state_torques`; holding and
   step torque on any torque model are in :mod:`spherestep.statics`.
@@ -23,9 +23,9 @@ from ._calibration import Calibration, Comparison, calibrate, compare_models, fi
 from ._curve import ForceCurve, force_curve
 from ._figures import figure_comparison, figure_force_curve
 from ._direct import MESHING, coil_wrenches, force, force_torque, reaction, torque
-from ._iron import coil_inductance
-from ._iron import fig6_forces as iron_force_curve
-from ._iron import pair_tables as iron_pair_torques
+from ._inductance import coil_inductance
+from ._ironforce import fig6_forces as iron_force_curve
+from ._ironforce import pair_tables as iron_pair_torques
 from ._ironmap import IronTorqueMap, iron_model
 from .design_model import DesignModel, design_model
 from ._ironsummary import IronSummary, iron_summary

@@ -8,7 +8,7 @@ core at a time, is
 
 with ``α_pk`` the angle of pole ``p`` from coil ``k``'s axis, ``Δφ_pqk = φ_qk − φ_pk`` the azimuth between the
 two poles about that axis, and ``X`` the coupling energy of two ``+1`` poles over one core
-(:func:`spherestep.magnetics._iron.cross_energy_table`): tabulated on ``α`` (cubic splines in both angles) and
+(:func:`spherestep.magnetics._ironcoupling.cross_energy_table`): tabulated on ``α`` (cubic splines in both angles) and
 as a cosine series in ``Δφ`` through the table's uniform azimuths (exact at them; ``cos mΔφ`` is the core's
 axisymmetry, and the ``m ≥ 1`` terms vanish on the axis). Pairs with a pole beyond the table's last angle (60°)
 are left out: there ``X`` is 0.15 % of its peak, but a pole near a core's axis magnetises it strongly and many far

@@ -1,4 +1,7 @@
-"""Soft-iron stator cores solved by the method of moments (magpylib-material-response).
+"""Soft-iron stator cores solved by the method of moments (magpylib-material-response): the core's geometry and
+mesh, the factorised (and the saturating) solve, and the quadratures that turn the solved polarizations into
+forces. What is computed with them lives beside: :mod:`._ironforce` (pair tables, Fig. 6, the full multi-body
+solve, saturated torques), :mod:`._ironcoupling` (the cores' coupling of magnets), :mod:`._inductance`.
 
 Geometry. A coil is a pot core (:class:`spherestep.motor.coil.CoilSpec`): in its own frame the axis is ``z``, the
 face towards the rotor at ``z = 0`` and the body in ``0 ≤ z ≤ l_c``: a centre pole (radius ``r_p``, full height),
@@ -22,12 +25,9 @@ Force on a magnet. An axially polarised magnet is two sheets of magnetic charge 
 faces; the force and torque (about the pivot, the sphere's centre) from an external field ``B_ext`` are
 ``F = ∮ σ B_ext dA`` and ``T = ∮ σ (x − x0) × B_ext dA`` (equal to ``getFT``'s ``∫ (M·∇)B + M × B`` for a
 curl-free ``B_ext`` such as the iron's and the winding's field in the magnet; checked against ``getFT``).
-Each face is integrated by Gauss–Legendre in the radius × the trapezoidal rule in the angle.
-
-Linearity. With a linear core every field is linear in its sources, so for one magnet of polarity ``p`` and one
-coil at current ``c`` (per nominal) the wrench on the magnet is ``W = W_detent + p c W_linear`` with
-``W_detent`` from the iron magnetised by the magnet itself (``p² = 1``: the same for both polarities) and
-``W_linear`` from the winding plus the iron it magnetises; a ``c²`` term acts only inside the stator.
+Each face is integrated by Gauss–Legendre in the radius × the trapezoidal rule in the angle. Conversely the
+force of a magnet on the solved cells treats each cell as point dipoles ``J ΔV/μ0`` at its Gauss points
+(:func:`cell_quadrature`, :func:`dipole_wrench`).
 """
 
 from __future__ import annotations
@@ -51,9 +51,9 @@ IRON_LEVEL = 0  # default mesh level of the tables (see the convergence study in
 FACE_RADIAL = 16  # Gauss–Legendre nodes over a magnet face's radius
 FACE_ANGULAR = 48  # trapezoidal nodes over its angle
 ROTOR_SHELL = 1.0 / 16.0 * 0.0254  # m: wall of the plastic ball in front of the magnets (the paper gives none)
-WINDING_GRID = (4, 8)
+WINDING_GRID = (4, 8)  # winding loops across the groove's width × along its depth
 NEAR_DEPTH = 4e-3  # m: cells starting this close to the face get the finer quadrature
-NEAR_ORDER = 6  # winding loops across the groove's width × along its depth
+NEAR_ORDER = 6  # Gauss points per direction in the cells within NEAR_DEPTH of the face
 
 
 @dataclass(frozen=True)
@@ -299,114 +299,11 @@ def magnet_face_radius(design, shell: float = None) -> float:
     return math.sqrt((design.radius - t) ** 2 - (0.5 * design.magnet_diameter) ** 2)
 
 
-def _magnet(design, centres, axes, polarity: float = 1.0):
+def rotor_magnet(design, centres, axes, polarity: float = 1.0):
     """A rotor magnet with a path of poses: centres ``(K, 3)``, axes ``(K, 3)``."""
     return magpy.magnet.Cylinder(dimension=(design.magnet_diameter, design.magnet_length),
                                  polarization=(0, 0, polarity * design.remanence),
                                  position=np.asarray(centres, dtype=float), orientation=z_to(axes))
-
-
-def _reaction(solver: CoreSolver, J: np.ndarray, source, pivot, order: int):
-    """Wrench (N, N·m about ``pivot``; ``(K, 3)`` each) of ``source``'s field on the cells polarised ``J``
-    (``(n, 3)`` or ``(K, n, 3)``), each cell a set of dipoles ``J ΔV_q / μ0`` at its Gauss points."""
-    pts, w, owner = cell_quadrature(solver.cells, order, near=solver.near)
-    n = len(solver.cells)
-    K = len(source.position) if np.ndim(source.position) == 2 else 1
-    if isinstance(source, magpy.Collection):
-        K = len(source.orientation.as_quat().reshape(-1, 4))
-    J = np.broadcast_to(np.asarray(J, dtype=float).reshape(-1, n, 3), (K, n, 3))
-    m = J[:, owner] * (w / MU0)[None, :, None]
-    return dipole_wrench(pts, m, source, pivot)
-
-
-def magnet_wrenches(design, coil, centres, axes, pivot, level: int = IRON_LEVEL, order: int = 3):
-    """Force (N) and torque (N·m about ``pivot``) on one ``+1`` rotor magnet at ``K`` poses (``centres``,
-    ``axes`` ``(K, 3)``, coil frame: axis ``+z``, face at ``z = 0``) from one iron-cored coil, split as
-    ``(F_detent, T_detent, F_linear, T_linear)``, each ``(K, 3)``; ``linear`` per nominal current.
-
-    Newton's third law: the wrench on the magnet is minus the wrench of the magnet's field on the core's cells
-    (dipoles ``J_i ΔV/μ0`` at ``order³`` Gauss points per cell) and on the winding (``getFT`` on its loops).
-    The magnet is the only field needed there, so every pose is one vectorised magpylib call.
-    """
-    solver = core_solver(CoreGeometry.of(design, coil), level)
-    loops = solver.loops[0]
-    J_coil = solver.polarization(magpy.getB(loops, solver.centroids, sumup=True))
-    magnet = _magnet(design, centres, axes)
-    K = len(magnet.position) if np.ndim(magnet.position) == 2 else 1
-    J_mag = solver.polarization(magpy.getB(magnet, solver.centroids, squeeze=False).reshape(K, -1, 3))
-    Fd, Td = _reaction(solver, J_mag, magnet, pivot, order)
-    Fi, Ti = _reaction(solver, J_coil, magnet, pivot, order)
-    Fw, Tw = magpy.getFT(magnet, loops, pivot=np.asarray(pivot, dtype=float), meshing=64, squeeze=False)[:2]
-    Fw = Fw[0].sum(axis=1)  # (1 source, K, n_loops, 3) → (K, 3)
-    Tw = Tw[0].sum(axis=1)
-    return -Fd, -Td, -(Fi + Fw), -(Ti + Tw)
-
-
-def pole_poses(design, alpha, phi=0.0) -> tuple[np.ndarray, np.ndarray, tuple]:
-    """Rotor magnets at angles ``alpha`` (rad) from a coil's axis and azimuths ``phi`` (rad; broadcast) about it,
-    in the coil's frame (axis ``+z``, face at ``z = 0``): centres ``(K, 3)``, radial axes ``(K, 3)``, and the
-    sphere's centre ``(0, 0, −R_s − g)`` as the pivot."""
-    a, p = np.broadcast_arrays(np.atleast_1d(np.asarray(alpha, dtype=float)), np.asarray(phi, dtype=float))
-    face = design.radius + design.air_gap
-    w = np.stack([np.sin(a) * np.cos(p), np.sin(a) * np.sin(p), np.cos(a)], axis=-1).reshape(-1, 3)
-    centres = (magnet_face_radius(design) - 0.5 * design.magnet_length) * w - [0.0, 0.0, face]
-    return centres, w, (0.0, 0.0, -face)
-
-
-def pair_tables(design, coil, alpha, level: int = IRON_LEVEL, order: int = 3) -> tuple[np.ndarray, np.ndarray]:
-    """``(detent, linear)`` torques ``τ(α)`` (N·m) on one ``+1`` pole at angles ``alpha`` (rad) from an iron-cored
-    coil's axis, about the sphere's centre, positive away from the axis (the convention of ``pair_torque``);
-    ``linear`` per nominal current. The torque at current ``c`` on a pole of polarity ``p`` is
-    ``detent + p c linear``. The magnet's face is at :func:`magnet_face_radius`."""
-    centres, w, pivot = pole_poses(design, alpha)
-    _, Td, _, Tl = magnet_wrenches(design, coil, centres, w, pivot, level, order)
-    return Td[:, 1], Tl[:, 1]
-
-
-def fig6_forces(design, coil, displacements, gap: float | None = None, level: int = IRON_LEVEL,
-                order: int = 3) -> tuple[np.ndarray, np.ndarray]:
-    """The Fig. 6 experiment with the iron core: force (N) on one ``+1`` magnet translated by ``displacements``
-    (m) along ``x`` at ``gap`` (m; default the on-axis face gap of the ball, ``R_s + g − √(R_s² − r_m²)``) below
-    the face, axis parallel to the coil's: ``(detent, linear)``, each ``(len(x), 3)``; the force at current ``c``
-    is ``detent + c linear``."""
-    g = design.radius + design.air_gap - magnet_face_radius(design) if gap is None else float(gap)
-    x = np.atleast_1d(np.asarray(displacements, dtype=float))
-    centres = np.stack([x, np.zeros_like(x), np.full_like(x, -g - 0.5 * design.magnet_length)], 1)
-    axes = np.tile([0.0, 0.0, 1.0], (len(x), 1))
-    Fd, _, Fl, _ = magnet_wrenches(design, coil, centres, axes, (0.0, 0.0, 0.0), level, order)
-    return Fd, Fl
-
-
-def rotor_iron_torque(design, coil, coils, R, currents, level: int = 0, order: int = 3) -> np.ndarray:
-    """Full multi-body solve: torque (N·m, fixed frame, about the centre) on the whole rotor at orientations
-    ``R (K, 3, 3)`` from the iron-cored coils ``coils`` (indices into ``design.stator``) solved together, with
-    currents ``currents (len(coils),)`` per nominal; every rotor magnet drives every core. The reference the
-    pairwise model is checked against."""
-    geom = CoreGeometry.of(design, coil)
-    face = design.radius + design.air_gap
-    v = design.stator.centers[np.asarray(coils, dtype=int)]
-    rots = z_to(v)
-    solver = CoreSolver(geom, level, [(rots[i], face * v[i]) for i in range(len(v))])
-    R = np.asarray(R, dtype=float).reshape(-1, 3, 3)
-    u = design.rotor.centers
-    r_c = magnet_face_radius(design) - 0.5 * design.magnet_length
-    rotor = magpy.Collection(*[_magnet(design, r_c * uj[None], uj[None], float(p))
-                               for uj, p in zip(u, design.polarity)])
-    rotor.orientation = Rotation.from_matrix(R)
-    c = np.asarray(currents, dtype=float)
-    loops = [lp for k, group in enumerate(solver.loops) for lp in group if c[k] != 0]
-    B_src = magpy.getB(rotor, solver.centroids, squeeze=False).reshape(len(R), -1, 3)
-    if loops:
-        for k, group in enumerate(solver.loops):
-            for lp in group:
-                lp.current = c[k] * geom.NI / len(group)
-        B_src = B_src + magpy.getB(loops, solver.centroids, sumup=True)[None]
-    J = solver.polarization(B_src)
-    _, T = _reaction(solver, J, rotor, (0.0, 0.0, 0.0), order)
-    if loops:
-        _, Tw = magpy.getFT(rotor, loops, pivot=(0.0, 0.0, 0.0), meshing=64, squeeze=False)[:2]
-        T = T + Tw[0].sum(axis=1)
-    return -T
 
 
 def saturation_onset(material, mu_r: float) -> float:
@@ -415,124 +312,3 @@ def saturation_onset(material, mu_r: float) -> float:
     H = np.geomspace(1.0, 1e7, 20001)
     below = MU0 * mu_r * H <= material.flux_density(H)
     return float(H[np.flatnonzero(below)[-1]]) if below.any() else 0.0
-
-
-def saturated_pair_torque(design, coil, alpha: float, current: float, level: int = IRON_LEVEL,
-                          order: int = 3) -> tuple[float, float, float]:
-    """Torque (N·m about the sphere's centre, positive away from the axis, as :func:`pair_tables`) on one ``+1``
-    pole at ``alpha`` (rad) from one iron-cored coil at ``current`` (per nominal), with the iron saturating
-    (:meth:`CoreSolver.saturated_polarization`, ``coil.material``'s B–H curve); returns ``(torque, largest |B| in
-    a cell (T), iterations)``. Not linear in the current: each current is its own solve."""
-    geom = CoreGeometry.of(design, coil)
-    solver = core_solver(geom, level)
-    centre, w, pivot = pole_poses(design, alpha)
-    magnet = _magnet(design, centre, w)
-    B = magpy.getB(magnet, solver.centroids)
-    loops = solver.loops[0]
-    if current:
-        B = B + current * magpy.getB(loops, solver.centroids, sumup=True)
-    J, flux, iterations = solver.saturated_polarization(B, coil.material)
-    _, T = _reaction(solver, J, magnet, pivot, order)
-    torque = -T[0]
-    if current:
-        Tw = magpy.getFT(magnet, loops, pivot=np.asarray(pivot, dtype=float), meshing=64, squeeze=False)[1]
-        torque = torque - current * Tw[0].sum(axis=1)[0]
-    return float(torque[1]), float(flux.max()), iterations
-
-
-COUPLING_REACH = math.radians(40.0)  # magnets farther than this from every core are left out of the coupling
-COUPLING_STEP = 1e-4  # rad: central differences of the coupling energy
-
-
-def coupling_energy(design, coil, coils, R, level: int = 0, reach: float = COUPLING_REACH, order: int = 3):
-    """The energy (J) the pair tables leave out, coils off: magnet ``q`` in the iron that magnet ``p ≠ q``
-    magnetises, with the cores ``coils`` solved together (so they also magnetise each other) at orientation
-    ``R (3, 3)``. For linear iron the energy of the polarised cores in the magnets' field is
-    ``W = −(1/2μ0) Σ_pq s_p s_q ∫ J_p · B_q dV`` (``J_p`` the polarization the solve gives for magnet ``p`` alone,
-    the integral by the cells' Gauss points); the pair tables hold the ``p = q`` terms, this returns the rest,
-    symmetrised (``∫ J_p·B_q`` and ``∫ J_q·B_p`` agree only to the discretisation), over the magnets within
-    ``reach`` of a core."""
-    geom = CoreGeometry.of(design, coil)
-    face = design.radius + design.air_gap
-    v = design.stator.centers[np.asarray(coils, dtype=int)]
-    solver = _placed_solver(geom, level, tuple(map(tuple, v)), face)
-    w = np.asarray(R, dtype=float) @ design.rotor.centers.T  # (3, M): the poles' directions
-    near = np.flatnonzero(np.max(v @ w, axis=0) > math.cos(reach))
-    r_c = magnet_face_radius(design) - 0.5 * design.magnet_length
-    magnets = [_magnet(design, r_c * w[:, j][None], w[:, j][None], float(design.polarity[j])) for j in near]
-    J, B = polarized_and_integrated(solver, magnets, order)
-    G = np.einsum("pic,qic->pq", J, B) / MU0
-    G = 0.5 * (G + G.T)
-    return float(-0.5 * (G.sum() - np.trace(G)))
-
-
-def polarized_and_integrated(solver: CoreSolver, magnets, order: int = 3) -> tuple[np.ndarray, np.ndarray]:
-    """For each magnet alone: the cells' polarization ``J (m, n, 3)`` (T) and the magnet's field integrated over
-    each cell ``(m, n, 3)`` (T·m³, the cells' Gauss points): ``−(1/μ0) Σ_i J_p,i · B_q,i`` is the energy of magnet
-    ``q`` in the iron magnet ``p`` polarises."""
-    pts, wts, owner = cell_quadrature(solver.cells, order, near=solver.near)
-    starts = np.flatnonzero(np.r_[True, owner[1:] != owner[:-1]])
-    J = solver.polarization(np.array([magpy.getB(m, solver.centroids) for m in magnets]))
-    B = np.array([np.add.reduceat(magpy.getB(m, pts) * wts[:, None], starts) for m in magnets])
-    return J, B
-
-
-def cross_energy_table(design, coil, alpha, dphi, level: int = IRON_LEVEL) -> np.ndarray:
-    """``X (A, A, D)`` (J): the coupling energy of two ``+1`` poles over one iron core, at angles ``alpha[a]``,
-    ``alpha[b]`` (rad) from its axis and azimuths ``dphi[d]`` (rad) apart, ``−(1/μ0) ∫ J_p·B_q`` symmetrised in
-    the two poles (the core's own mesh, coils off; :func:`coupling_energy` for one core)."""
-    solver = core_solver(CoreGeometry.of(design, coil), level)
-    a, p = np.meshgrid(np.asarray(alpha, dtype=float), np.asarray(dphi, dtype=float), indexing="ij")
-    centres, w, _ = pole_poses(design, a, p)
-    magnets = [_magnet(design, c[None], wi[None]) for c, wi in zip(centres, w)]
-    J, B = polarized_and_integrated(solver, magnets)
-    J = J.reshape(a.shape + J.shape[1:])[:, 0]  # the first pole at azimuth 0
-    B = B.reshape(a.shape + B.shape[1:])
-    X = -np.einsum("aic,bdic->abd", J, B) / MU0
-    return 0.5 * (X + X.transpose(1, 0, 2))
-
-
-@lru_cache(maxsize=4)
-def _placed_solver(geom: CoreGeometry, level: int, axes: tuple, face: float) -> CoreSolver:
-    """The cores along the unit vectors ``axes``, faces at ``face`` from the centre, solved together (cached)."""
-    v = np.array(axes)
-    rots = z_to(v)
-    return CoreSolver(geom, level, [(rots[i], face * v[i]) for i in range(len(v))])
-
-
-def coupling_torque(design, coil, coils, R, level: int = 0, step: float = COUPLING_STEP) -> np.ndarray:
-    """Torque (N·m, fixed frame, about the centre) of :func:`coupling_energy` at ``R (3, 3)``: ``−∂W/∂θ`` by
-    central differences of ``step`` rad about each fixed axis."""
-    out = np.empty(3)
-    for a in range(3):
-        turn = Rotation.from_rotvec(step * np.eye(3)[a]).as_matrix()
-        out[a] = -(coupling_energy(design, coil, coils, turn @ R, level)
-                   - coupling_energy(design, coil, coils, turn.T @ R, level)) / (2 * step)
-    return out
-
-
-def coil_inductance(design, coil, level: int = IRON_LEVEL, samples: int = 24) -> float:
-    """Self-inductance (H) of one coil, rotor absent: ``L = λ / I`` with the flux linkage
-    ``λ = Σ_loops (N / n_loops) Φ(r_loop, z_loop)`` of the winding's loops, ``Φ(r, z) = ∫_0^r B_z(ρ, z) 2πρ dρ``
-    (Gauss–Legendre, ``samples`` nodes along a radius; the solved core is axisymmetric to its mesh), ``B`` from
-    the winding and, for an iron core, the core it magnetises (linear iron, MoM)."""
-    geom = CoreGeometry.of(design, coil)
-    turns = coil.turns(design.coil_diameter, design.coil_length)
-    current = geom.NI / turns
-    nr, nz = WINDING_GRID
-    loops = winding_loops(geom, geom.NI)
-    radii = geom.r_p + (np.arange(nr) + 0.5) / nr * (geom.r_w - geom.r_p)
-    heights = (np.arange(nz) + 0.5) / nz * geom.depth
-    x, w = np.polynomial.legendre.leggauss(samples)
-    lam = 0.0
-    for r in radii:
-        rho = 0.5 * r * (x + 1.0)
-        pts = np.array([[p, 0.0, h] for h in heights for p in rho])
-        B = magpy.getB(loops, pts, sumup=True)
-        if coil.core == "iron":
-            solver = core_solver(geom, level)
-            B = B + solver.field(solver.polarization(magpy.getB(loops, solver.centroids, sumup=True)), pts)
-        Bz = B[:, 2].reshape(nz, samples)
-        phi = (Bz * (0.5 * r * w * 2 * math.pi * rho)[None]).sum(axis=1)
-        lam += (turns / (nr * nz)) * phi.sum()
-    return float(lam / current)

@@ -39,7 +39,7 @@ from ..motor.coil import CoilSpec, iron_coil
 from .._fast import Packed
 from ..rotor_field import pack_terms
 from ..statics import TorqueModelBase
-from . import _iron
+from . import _iron, _ironcoupling, _ironforce
 from ._coupling import COUPLING_ALPHA_DEG, COUPLING_DPHI_DEG, CoreCoupling
 from ._table import TorqueMap
 
@@ -51,7 +51,7 @@ COUPLING_FILE = "iron_coupling_table.csv"
 def pair_table(design, coil: CoilSpec, level: int = _iron.IRON_LEVEL, nodes_deg=TABLE_NODES_DEG):
     """``(τ_d, τ_1)`` (N·m) at ``nodes_deg`` by the method of moments, with the values at 0° and 180° set to
     their symmetric value 0 (the solve gives below 3e-3 N·m there)."""
-    det, lin = _iron.pair_tables(design, coil, np.radians(nodes_deg), level)
+    det, lin = _ironforce.pair_tables(design, coil, np.radians(nodes_deg), level)
     ends = np.isclose(nodes_deg, 0.0) | np.isclose(nodes_deg, 180.0)
     det[ends] = 0.0
     lin[ends] = 0.0
@@ -156,25 +156,27 @@ class IronTorqueMap(TorqueModelBase):
         the coupling."""
         return pack_terms(self.zonal_terms(currents))
 
-    def _coupled(self, R, method: str) -> np.ndarray | float:
-        """The coupling's ``energy`` or ``torque`` at ``R (..., 3, 3)``, shaped like the pair terms' (0 without)."""
+    def _coupled(self, R, torque: bool) -> np.ndarray | float:
+        """The coupling's torque (``torque``) or energy at ``R (..., 3, 3)``, shaped like the pair terms' (0
+        without)."""
         if self.coupling is None:
             return 0.0
         R = so3.as_rotations(R)
-        out = getattr(self.coupling, method)(R.reshape(-1, 3, 3))
+        Rf = R.reshape(-1, 3, 3)
+        out = self.coupling.torque(Rf) if torque else self.coupling.energy(Rf)
         return out.reshape(R.shape[:-2] + out.shape[1:])
 
     def torque(self, R, currents) -> np.ndarray:
         """``D(R) + L(R) c`` (+ the coupling's torque) (N·m, fixed frame, about the centre), ``(K, 3)`` or
         ``(3,)``."""
         c = self.as_currents(currents)
-        return self.detent.torque(R, self._ones(R)) + self.linear.torque(R, c) + self._coupled(R, "torque")
+        return self.detent.torque(R, self._ones(R)) + self.linear.torque(R, c) + self._coupled(R, torque=True)
 
     def energy(self, R, currents) -> np.ndarray:
         """``Σ e_d(α_jk) + Σ p_j c_k e_1(α_jk)`` (+ the coupling's energy) (J); the pair terms are zero with
         every pole opposite every coil."""
         c = self.as_currents(currents)
-        return self.detent.energy(R, self._ones(R)) + self.linear.energy(R, c) + self._coupled(R, "energy")
+        return self.detent.energy(R, self._ones(R)) + self.linear.energy(R, c) + self._coupled(R, torque=False)
 
     def torque_matrix(self, R, currents=None) -> np.ndarray:
         """``∂T/∂c = L(R)`` (N·m per nominal current), ``(3, N)`` or ``(K, 3, N)``; independent of ``currents``."""
@@ -213,7 +215,7 @@ def iron_model(design, coil: CoilSpec | None = None, level: int = _iron.IRON_LEV
 
 @lru_cache(maxsize=4)
 def _coupling_table(key: tuple, design, coil: CoilSpec, level: int):
-    """``(alpha, dphi, X)`` of :func:`._iron.cross_energy_table`: the prototype's stored table
+    """``(alpha, dphi, X)`` of :func:`._ironcoupling.cross_energy_table`: the prototype's stored table
     (``spherestep/data/iron_coupling_table.csv``, ``python scripts/iron_tables.py coupling-table``), else solved
     (about a minute) and cached."""
     from ..motor import prototype
@@ -222,4 +224,4 @@ def _coupling_table(key: tuple, design, coil: CoilSpec, level: int):
         path = resources.files("spherestep.data") / COUPLING_FILE
         if path.is_file():
             return alpha, dphi, read_table(path)[:, 3].reshape(len(alpha), len(alpha), len(dphi))
-    return alpha, dphi, _iron.cross_energy_table(design, coil, alpha, dphi, level)
+    return alpha, dphi, _ironcoupling.cross_energy_table(design, coil, alpha, dphi, level)

@@ -124,7 +124,7 @@ def core_flux_density(design, coil: CoilSpec, alpha, pc, level: int = _iron.IRON
     face = design.radius + design.air_gap
     w = np.stack([np.sin(a), np.zeros_like(a), np.cos(a)], axis=1)
     centres = (_iron.magnet_face_radius(design) - 0.5 * design.magnet_length) * w - [0.0, 0.0, face]
-    magnet = _iron._magnet(design, centres, w)
+    magnet = _iron.rotor_magnet(design, centres, w)
     B_src = magpy.getB(magnet, solver.centroids, squeeze=False).reshape(len(a), -1, 3)
     B_src = B_src + np.asarray(pc, dtype=float).reshape(-1, 1, 1) * magpy.getB(solver.loops[0], solver.centroids,
                                                                                   sumup=True)[None]
