@@ -186,3 +186,27 @@ def test_failed_coils_have_zero_columns_and_refuse_current(proto):
     assert np.all(m.torque_matrix(R)[..., 3] == 0) and np.any(m.torque_matrix(R)[..., 4] != 0)
     with pytest.raises(InputError, match="^currents must be zero"):
         m.torque(R, c)
+
+
+def test_descend_is_equilibrium_without_its_checks(proto, model):
+    """``statics.descend`` (the planner's loop entry) returns the flat arrays ``equilibrium`` wraps, bit for bit;
+    a model must declare ``has_bias`` and ``packed_terms`` to be a TorqueModel."""
+    from spherestep.statics import descend, is_torque_model
+
+    states = proto.states()
+    c = np.stack([coil_currents(proto, states.coils(i)) for i in range(3)])
+    R0 = so3.exp(np.radians([[2.0, 0.0, 1.0]])) @ states.rotations[:3]
+    eq = equilibrium(model, R0, c)
+    R, E, tau, H, iterations, converged = descend(model, R0.copy(), c)
+    assert np.array_equal(R, eq.rotation) and np.array_equal(E, eq.energy) and np.array_equal(tau, eq.torque)
+    assert np.array_equal(np.linalg.eigvalsh(H), eq.stiffness) and np.array_equal(iterations, eq.iterations)
+    assert np.array_equal(converged, eq.converged)
+
+    class Undeclared:  # the five questions answered, nothing declared
+        coil_count, failed = model.coil_count, ()
+        energy, torque, torque_matrix = model.energy, model.torque, model.torque_matrix
+        hessian, torque_reference, evaluate = model.hessian, model.torque_reference, model.evaluate
+
+    assert is_torque_model(model) and not is_torque_model(Undeclared())
+    with pytest.raises(InputError, match="^model must be"):
+        equilibrium(Undeclared(), R0, c)

@@ -13,7 +13,8 @@ pairs within the design's tolerance at the equilibrium. An activation offered tw
 (so a step keeping the coils is ``"hold"`` only when no candidate state offers them too).
 
 Cost: the inputs are checked once per plan (the model's failed coils at every step); each step's candidates
-descend together in one call of :func:`spherestep.statics.equilibrium`'s own descent; the bookkeeping around
+descend together in one call of :func:`spherestep.statics.equilibrium`'s own descent
+(:func:`spherestep.statics.descend`); the bookkeeping around
 it — candidate currents, distinct activations, the choice — runs compiled (:mod:`._potential_kernels`) on
 NumPy's products ``R1ᵀ R2``, so that Park distances, and their ties, come out bit for bit as
 :func:`spherestep.so3.distance`'s.

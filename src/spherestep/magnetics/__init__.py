@@ -10,7 +10,8 @@
   for the dynamics.
 * Iron cores (:mod:`._iron` the solve, :mod:`._ironforce`, :mod:`._ironcoupling`, :mod:`._inductance`,
   :mod:`._ironmap`, :mod:`._ironsummary`): pot-core coils solved by the method of moments
-  (magpylib-material-response), :func:`iron_pair_torques`, :func:`iron_force_curve`, :func:`coil_inductance`; the torque model with detent :class:`IronTorqueMap` from :func:`iron_model`
+  (magpylib-material-response), :func:`iron_pair_torques`, :func:`iron_force_curve`, :func:`coil_inductance`;
+  the torque model with detent :class:`IronTorqueMap` from :func:`iron_model`
   (``coil=CoilSpec(core="air")`` gives today's map); :func:`iron_summary` (detent, states, polarity, saturation).
 * Statics (:mod:`._statics`): :func:`equilibrium` with the map's settings, :func:`state_torques`; holding and
   step torque on any torque model are in :mod:`spherestep.statics`.
