@@ -69,6 +69,13 @@ def count(value, name: str, minimum: int = 1, maximum: int | None = None, expect
     return int(value)
 
 
+def sign(value, name: str, expected: str = "+1 or -1") -> int:
+    """A polarity: a real equal to ``+1`` or ``-1`` (not ``bool``) as ``int``."""
+    if not (_real(value) and value in (-1, 1)):
+        raise bad_value(name, expected, value)
+    return int(value)
+
+
 def axis(value, name: str = "axis") -> np.ndarray:
     """A rotation axis: a finite non-zero 3-vector, returned as a unit vector ``(3,)``. An axis too short to
     normalise (``|n| < 1e-150``, whose square underflows) is refused like zero, without a NumPy warning."""

@@ -296,10 +296,9 @@ def _step(s, name: str, coil_count: int, cmap: np.ndarray) -> Step:
     except (AttributeError, TypeError, ValueError):
         raise bad_value(f"{name}.coils", 'an object of coil number → polarity, like {"3": 1, "7": -1}',
                         coils) from None
-    if any(k < 0 or k >= coil_count for k in coils) or any(v not in (-1, 1) or isinstance(v, bool)
-                                                           for v in coils.values()):
-        raise bad_value(f"{name}.coils", f"coil numbers 0..{coil_count - 1} with polarity +1 or -1", s["coils"])
-    coils = {k: int(v) for k, v in coils.items()}
+    expected = f"coil numbers 0..{coil_count - 1} with polarity +1 or -1"
+    coils = {checks.count(k, f"{name}.coils", 0, coil_count - 1, expected=expected):
+             checks.sign(v, f"{name}.coils", expected) for k, v in coils.items()}
     enable, polarity = coil_masks(coils, cmap)
     for key, expected in (("enable_mask", enable), ("polarity_mask", polarity)):
         if key in s:

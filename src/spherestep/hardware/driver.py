@@ -14,8 +14,7 @@ import threading
 from collections.abc import Mapping
 from contextlib import contextmanager
 
-import numpy as np
-
+from .. import checks
 from ..channels import as_channel_map
 from ..commutation.plan import Step, coil_masks
 from ..errors import InputError, bad_value
@@ -101,11 +100,9 @@ class CoilDriver:
         Raises :class:`ThermalLimitError` (with every coil switched off) if that would break a limit.
         """
         state = dict(coils.coils if isinstance(coils, Step) else coils)
-        for coil, sign in state.items():
-            if not (isinstance(coil, (int, np.integer)) and 0 <= coil < len(self.channel_map) and sign in (-1, 1)):
-                raise bad_value("coils", f"a map from coil index 0..{len(self.channel_map) - 1} to polarity +1 or -1",
-                                state)
-        state = {int(k): int(v) for k, v in state.items()}
+        expected = f"a map from coil index 0..{len(self.channel_map) - 1} to polarity +1 or -1"
+        state = {checks.count(coil, "coils", 0, len(self.channel_map) - 1, expected=expected):
+                 checks.sign(sign, "coils", expected) for coil, sign in state.items()}
         self._check(state, duration)
         enable, polarity = coil_masks(state, self.channel_map)
         now = self.backend.clock()

@@ -40,8 +40,8 @@ class PolarityRule:
     def __post_init__(self):
         for label in ("primary", "filled"):
             value = getattr(self, label)
-            if not (value is None and label == "filled") and (isinstance(value, bool) or value not in (-1, 1)):
-                raise bad_value(f"polarity.{label}", "+1 or -1", value)
+            if not (value is None and label == "filled"):
+                object.__setattr__(self, label, checks.sign(value, f"polarity.{label}"))
 
     def signs(self, count: int, base: int) -> np.ndarray:
         """``±1`` for ``count`` poles whose first ``base`` belong to the base packing."""
@@ -64,12 +64,10 @@ def _check_dimensions(values: dict) -> None:
 
 
 def _open_angle(value, name: str, high: float, expected: str) -> None:
-    """:func:`checks.number` on ``(0, high)`` radians, the received value shown in degrees when it is a number."""
-    try:
-        checks.number(value, name, low=0.0, high=high, low_open=True, high_open=True, expected=expected)
-    except InputError:
-        real = isinstance(value, (int, float)) and not isinstance(value, bool)
-        raise bad_value(name, expected, f"{math.degrees(value):.6g}°" if real else value) from None
+    """:func:`checks.number`, then inside ``(0, high)`` radians: a number outside is shown in degrees."""
+    x = checks.number(value, name, expected=expected)
+    if not 0 < x < high:
+        raise bad_value(name, expected, f"{math.degrees(x):.6g}°")
 
 
 def _check_cap(cap_half_angle, allow_hemisphere: bool) -> None:
