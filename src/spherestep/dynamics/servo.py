@@ -71,11 +71,6 @@ class ServoSummary:
                 "mean_copper_power_W": self.mean_copper_power, "peak_current_A": self.peak_current,
                 "reachable_fraction": self.reachable_fraction}
 
-    def __getitem__(self, key: str):
-        """TRANSITIONAL (issue 24): ``summary()[key]`` as the dict of :meth:`to_dict` for callers not yet moved
-        to the attributes."""
-        return self.to_dict()[key]
-
 
 @dataclass(frozen=True)
 class ServoRun:
