@@ -167,7 +167,9 @@ class DesignPoint:
                 f"cap {self.cap_half_angle_deg:g}°, tol {self.tol_deg:g}°")
 
 
-def _tuple(value, label: str, kind) -> tuple:
+def _tuple(value, label: str, check) -> tuple:
+    """``value`` as a non-empty tuple of distinct items, each returned by ``check(item)`` (which raises an
+    InputError naming ``label``)."""
     try:
         items = tuple(value)
     except TypeError:
@@ -176,10 +178,16 @@ def _tuple(value, label: str, kind) -> tuple:
         raise bad_value(label, "at least one value", value)
     if len(set(items)) != len(items):
         raise bad_value(label, "distinct values", value)
-    for item in items:
-        if isinstance(item, bool) or not isinstance(item, kind):
-            raise bad_value(label, f"values of type {kind.__name__ if isinstance(kind, type) else 'number'}", item)
-    return items
+    return tuple(check(item) for item in items)
+
+
+def _name(label: str):
+    """The item check of a list of packing names."""
+    def check(item):
+        if not isinstance(item, str) or item not in pk.names():
+            raise bad_value(label, f"packing names, each one of {', '.join(pk.names())}", item)
+        return item
+    return check
 
 
 @dataclass(frozen=True)
@@ -207,24 +215,19 @@ class Grid:
     def __post_init__(self):
         for label in ("rotors", "stators"):
             value = getattr(self, label)
-            names = _tuple(distinct_names() if value is None else value, label, str)
-            unknown = [n for n in names if n not in pk.names()]
-            if unknown:
-                raise bad_value(label, f"packing names, each one of {', '.join(pk.names())}", unknown[0])
-            object.__setattr__(self, label, names)
+            object.__setattr__(self, label, _tuple(distinct_names() if value is None else value, label, _name(label)))
         for label in ("rotor_levels", "stator_levels"):
-            levels = _tuple(getattr(self, label), label, int)
-            if any(not 0 <= v <= MAX_REFINE for v in levels):
-                raise bad_value(label, f"refinement levels 0..{MAX_REFINE}", list(levels))
-            object.__setattr__(self, label, levels)
-        caps = _tuple(self.cap_half_angles_deg, "cap_half_angles_deg", (int, float))
-        if any(not 0 < c < 90 for c in caps):
-            raise bad_value("cap_half_angles_deg", "angles in (0, 90) degrees", list(caps))
-        tols = _tuple(self.tolerances_deg, "tolerances_deg", (int, float))
-        if any(not 0 < t < math.degrees(0.5) for t in tols):
-            raise bad_value("tolerances_deg", f"angles in (0, {math.degrees(0.5):.4g}) degrees", list(tols))
-        object.__setattr__(self, "cap_half_angles_deg", tuple(float(c) for c in caps))
-        object.__setattr__(self, "tolerances_deg", tuple(float(t) for t in tols))
+            level = functools.partial(checks.count, name=label, minimum=0, maximum=MAX_REFINE,
+                                      expected=f"refinement levels 0..{MAX_REFINE}")
+            object.__setattr__(self, label, _tuple(getattr(self, label), label, level))
+        caps = _tuple(self.cap_half_angles_deg, "cap_half_angles_deg", functools.partial(
+            checks.number, name="cap_half_angles_deg", low=0.0, high=90.0, low_open=True, high_open=True,
+            expected="angles in (0, 90) degrees"))
+        tols = _tuple(self.tolerances_deg, "tolerances_deg", functools.partial(
+            checks.number, name="tolerances_deg", low=0.0, high=math.degrees(0.5), low_open=True, high_open=True,
+            expected=f"angles in (0, {math.degrees(0.5):.4g}) degrees"))
+        object.__setattr__(self, "cap_half_angles_deg", caps)  # floats, from checks.number
+        object.__setattr__(self, "tolerances_deg", tols)
         if self.primary_ratio_max is not None:
             checks.number(self.primary_ratio_max, "primary_ratio_max", low=1.0,
                           expected="a ratio of at least 1, or None for no limit")
