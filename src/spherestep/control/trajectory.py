@@ -96,8 +96,59 @@ def segment(start, axis, angle: float, acceleration: float, speed: float | None 
 
 
 @dataclass(frozen=True)
+class TimeLaw:
+    """A rest-to-rest turn from ``start (3, 3)`` about ``axis (3,)`` by ``angle`` (rad, ≥ 0), beginning at ``t0``
+    (s), along a tabulated time law (:mod:`.time_optimal`): knots ``times (K+1,)`` (s, from ``t0``),
+    ``positions (K+1,)`` (rad, 0 … ``angle``), ``speeds (K+1,)`` (rad/s, 0 at both ends) and a constant
+    acceleration per piece ``accelerations (K,)`` (rad/s²), so that in piece ``i``
+    ``s = s_i + ṡ_i τ + ½ s̈_i τ²``, ``ṡ = ṡ_i + s̈_i τ`` (``τ = t − t0 − t_i``): ``s`` is C¹, ``s̈`` exact."""
+
+    start: np.ndarray
+    axis: np.ndarray
+    angle: float
+    t0: float
+    times: np.ndarray
+    positions: np.ndarray
+    speeds: np.ndarray
+    accelerations: np.ndarray
+
+    @property
+    def duration(self) -> float:
+        return float(self.times[-1])
+
+    @property
+    def end(self) -> np.ndarray:
+        return so3.exp(self.angle * self.axis) @ self.start
+
+    def profile(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``(s, ṡ, s̈)`` at times ``t`` (s, absolute), clamped to rest before and after the segment."""
+        rel = np.asarray(t, dtype=float) - self.t0
+        tau = np.clip(rel, 0.0, self.duration)
+        i = np.clip(np.searchsorted(self.times, tau, side="right") - 1, 0, len(self.accelerations) - 1)
+        d = tau - self.times[i]
+        a = self.accelerations[i]
+        s = np.minimum(self.positions[i] + self.speeds[i] * d + 0.5 * a * d * d, self.angle)
+        sd = np.maximum(self.speeds[i] + a * d, 0.0)
+        sdd = np.where((rel >= 0) & (rel < self.duration), a, 0.0)
+        return s, sd, sdd
+
+    def profile_at(self, t: float) -> tuple[float, float, float]:
+        """:meth:`profile` at one time ``t`` (s) in Python floats."""
+        s, sd, sdd = self.profile(np.array([float(t)]))
+        return float(s[0]), float(sd[0]), float(sdd[0])
+
+    def to_dict(self, degrees: bool = True) -> dict:
+        f = math.degrees if degrees else float
+        unit = "deg" if degrees else "rad"
+        return {"axis": self.axis.tolist(), f"angle_{unit}": f(self.angle), "t0_s": self.t0,
+                "duration_s": self.duration, f"peak_speed_{unit}_per_s": f(float(self.speeds.max())),
+                "pieces": len(self.accelerations)}
+
+
+@dataclass(frozen=True)
 class Trajectory:
-    """A chain of :class:`Segment` (each starting where the previous ends, at rest)."""
+    """A chain of :class:`Segment` (trapezoidal) or :class:`TimeLaw` (tabulated) turns about fixed axes, each
+    starting where the previous ends, at rest."""
 
     segments: tuple[Segment, ...]
 
@@ -200,8 +251,24 @@ def path_capability(model, start, axis, angle: float, limits: DriveLimits | None
 def plan_turn(model, start, axis, angle: float, inertia: float, limits: DriveLimits | None = None, *,
               margin: float = MARGIN, damping: float = 0.0, speed: float | None = None, samples: int = 48
               ) -> Trajectory:
+    """The fastest rest-to-rest turn whose feed-forward torque ``I α + b ω − b(R)`` the coils give within
+    ``margin`` of their limits all along the path, on any core (the iron's detent included): the turn about
+    ``axis`` itself, or a detour through waypoints where the coils cannot hold against the detent
+    (:func:`spherestep.control.time_optimal.fastest_turn`, whose :class:`FastestTurn` says which path and what
+    was tried; at least ``samples`` grid pieces, ``speed`` caps ``|ω|``). Raises an ``InputError`` naming
+    ``axis`` when no path tried is feasible."""
+    from .time_optimal import fastest_turn
+
+    return fastest_turn(model, start, axis, angle, inertia, limits, margin=margin, damping=damping, speed=speed,
+                        pieces=checks.count(samples, "samples", 2)).trajectory
+
+
+def plan_trapezoid(model, start, axis, angle: float, inertia: float, limits: DriveLimits | None = None, *,
+                   margin: float = MARGIN, damping: float = 0.0, speed: float | None = None, samples: int = 48
+                   ) -> Trajectory:
     """The fastest trapezoidal turn whose feed-forward torque ``I α + b ω`` stays within ``margin`` of the torque
-    guaranteed in every direction along the path, ``τ_g = margin · min r`` (see the module). Without damping
+    guaranteed in every direction along the path, ``τ_g = margin · min r`` (see the module; refuses a path where
+    the bias exceeds what the coils can cancel: :func:`plan_turn` handles it). Without damping
     ``a = τ_g/I`` and no speed limit (a triangle unless ``speed`` is given); with viscous damping ``b`` the
     cruise speed ``v`` and acceleration ``a = (τ_g − b v)/I`` minimise ``T = θ/v + v/a``."""
     if not 0 < margin <= 1:
@@ -248,15 +315,12 @@ def plan_through(model, waypoints, inertia: float, limits: DriveLimits | None = 
 
 
 def bang_bang_time(model, start, axis, angle: float, inertia: float, limits: DriveLimits | None = None,
-                   samples: int = 48) -> float:
-    """A lower bound (s) on the rest-to-rest time of the turn: accelerate with the largest torque about ``n``
-    anywhere on the path (``a₊ = max h_S(n)/I``), brake with the largest about ``−n`` (``a₋``):
-    ``v = √(2θ a₊a₋/(a₊ + a₋))``, ``T = v/a₊ + v/a₋`` (no damping; damping only lengthens it)."""
-    _, plus, minus = path_capability(model, start, axis, angle, limits, samples)
-    if angle < 0:
-        plus, minus = minus, plus
-    I = _positive(inertia, "inertia")
-    ap, am = float(plus.max()) / I, float(minus.max()) / I
-    theta = abs(float(angle))
-    v = math.sqrt(2.0 * theta * ap * am / (ap + am))
-    return v / ap + v / am
+                   samples: int = 48, *, damping: float = 0.0) -> float:
+    """The least rest-to-rest time (s) of the turn along its own path, ``exp(s n) R₀``, with the coils at their
+    full limits and the bias (detent) included: the time-optimal law of :mod:`.time_optimal` with margin 1
+    (:func:`~spherestep.control.time_optimal.fastest_time`, at least ``samples`` grid pieces); ``inf`` if the coils
+    cannot take the rotor along that path at all. :func:`plan_turn` at margin 1 on the same path takes this time."""
+    from .time_optimal import fastest_time
+
+    return fastest_time(model, start, axis, angle, inertia, limits, damping=damping,
+                        pieces=checks.count(samples, "samples", 2))
