@@ -24,7 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..control.limits import DriveLimits
-from ..errors import bad_value
+from .. import checks
 
 PWM_RATE = 10_000.0  # Hz, the PWM period is the current loop's period
 PWM_BITS = 10
@@ -54,11 +54,8 @@ class CoilDrive:
 
     def __post_init__(self):
         for name in ("pwm_rate", "bandwidth"):
-            value = getattr(self, name)
-            if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
-                raise bad_value(name, "a finite positive number", value)
-        if isinstance(self.pwm_bits, bool) or not isinstance(self.pwm_bits, int) or not 1 <= self.pwm_bits <= 24:
-            raise bad_value("pwm_bits", "an integer from 1 to 24", self.pwm_bits)
+            checks.positive(getattr(self, name), name)
+        checks.count(self.pwm_bits, "pwm_bits", 1, 24)
 
     def quantise(self, v: np.ndarray) -> np.ndarray:
         """Voltage limited to ``±V`` and rounded to the PWM's duty resolution."""

@@ -21,8 +21,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .. import so3
-from ..errors import bad_value
+from .. import checks, so3
 
 _W1 = 1.0 / (2.0 - 2.0 ** (1.0 / 3.0))
 YOSHIDA = (_W1, 1.0 - 2.0 * _W1, _W1)  # fourth-order symmetric composition of Verlet steps
@@ -39,10 +38,8 @@ class Rotor:
 
     def __post_init__(self):
         for name in ("inertia", "damping", "friction"):
-            value = getattr(self, name)
-            if not (isinstance(value, (int, float)) and math.isfinite(value) and value >= 0) or \
-                    (name == "inertia" and value == 0):
-                raise bad_value(name, "a finite non-negative number (inertia positive)", value)
+            check = checks.positive if name == "inertia" else checks.non_negative
+            check(getattr(self, name), name, "a finite non-negative number (inertia positive)")
 
     @classmethod
     def from_design(cls, design, damping: float = 0.0, friction: float = 0.0, shell_mass: float = SHELL_MASS):

@@ -19,6 +19,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .. import checks
 from ..errors import bad_value
 from .parts import TMAG5273A2, MagnetometerPart
 
@@ -28,8 +29,7 @@ CLEARANCE = 0.002  # m, from a coil's outer surface to the sensor's sensitive po
 
 def fibonacci_directions(n: int) -> np.ndarray:
     """``n`` nearly uniform unit vectors (the Fibonacci lattice on S²), ``(n, 3)``."""
-    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
-        raise bad_value("n", "a positive integer", n)
+    n = checks.count(n, "n", 1, expected="a positive integer")
     i = np.arange(n) + 0.5
     z = 1.0 - 2.0 * i / n
     phi = math.pi * (1.0 + math.sqrt(5.0)) * i
@@ -65,8 +65,8 @@ def candidate_positions(design, count: int = 2000, standoff: float = STANDOFF,
                         clearance: float = CLEARANCE) -> np.ndarray:
     """Collision-free sensor positions ``(S, 3)`` at radius ``R_s + standoff`` in the stator's cap, from a
     Fibonacci lattice of ``count`` directions over the whole sphere."""
-    if not (isinstance(standoff, (int, float)) and design.air_gap < standoff < design.coil_length):
-        raise bad_value("standoff", f"metres between the air gap {design.air_gap:g} and the coil length", standoff)
+    checks.number(standoff, "standoff", low=design.air_gap, high=design.coil_length, low_open=True, high_open=True,
+                  expected=f"metres between the air gap {design.air_gap:g} and the coil length")
     d = fibonacci_directions(count)
     in_cap = d @ design.stator_axis >= math.cos(design.cap_half_angle)
     p = d[in_cap] * (design.radius + standoff)

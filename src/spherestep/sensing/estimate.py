@@ -27,7 +27,7 @@ from functools import lru_cache
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from .. import so3
+from .. import checks, so3
 from ..errors import bad_value
 from .field import FieldTable
 
@@ -39,8 +39,7 @@ CHUNK = 250  # grid rotations per vectorised block
 @lru_cache(maxsize=8)
 def super_fibonacci(n: int) -> np.ndarray:
     """``n`` rotations spread nearly uniformly over SO(3) (Alexa 2022), ``(n, 3, 3)``."""
-    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
-        raise bad_value("n", "a positive integer", n)
+    n = checks.count(n, "n", 1, expected="a positive integer")
     s = np.arange(n) + 0.5
     r, R = np.sqrt(s / n), np.sqrt(1.0 - s / n)
     a, b = 2.0 * math.pi * s / math.sqrt(2.0), 2.0 * math.pi * s / PSI

@@ -35,7 +35,7 @@ import magpylib as magpy
 import numpy as np
 from scipy.interpolate import CubicSpline
 
-from .. import so3
+from .. import checks, so3
 from ..errors import bad_value
 from ..magnetics import model_summary, rotor_collection, stator_coils
 
@@ -82,8 +82,7 @@ class FieldTable:
         r = np.linalg.norm(p, axis=1)
         if np.any(r <= design.radius):
             raise bad_value("positions", f"outside the rotor (radius > {design.radius:.4g} m)", float(r.min()))
-        if isinstance(nodes, bool) or not isinstance(nodes, (int, np.integer)) or nodes < 5:
-            raise bad_value("nodes", "an integer ≥ 5 (table nodes in c = cos α)", nodes)
+        nodes = checks.count(nodes, "nodes", 5, expected="an integer ≥ 5 (table nodes in c = cos α)")
         radii, index = np.unique(np.round(r, 9), return_inverse=True)
         h = 2.0 / (nodes - 1)
         scale = np.array([h ** 3, h ** 2, h, 1.0])[:, None, None]  # powers of t = h·u

@@ -24,8 +24,7 @@ import math
 
 import numpy as np
 
-from .. import so3
-from ..errors import bad_value
+from .. import checks, so3
 from .field import CoilField
 from .parts import BMI270_BMM150, ImuPart
 from .sensor import SampledSensor
@@ -41,9 +40,8 @@ class Imu:
 
     def __init__(self, part: ImuPart = BMI270_BMM150, dt: float = 1e-3, coil_field: CoilField | None = None,
                  rng=None):
-        if not (isinstance(dt, (int, float)) and dt > 0):
-            raise bad_value("dt", "a positive time step in seconds", dt)
-        self.part, self.dt, self.coil_field = part, float(dt), coil_field
+        self.part, self.dt, self.coil_field = part, checks.positive(dt, "dt", "a positive time step in seconds"), \
+            coil_field
         self.rng = np.random.default_rng(rng)
         self.gyro_bias = self.rng.normal(0.0, part.gyro_bias, 3)
         self.accel_bias = self.rng.normal(0.0, part.accel_bias, 3)

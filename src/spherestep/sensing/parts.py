@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from dataclasses import asdict, dataclass
 
-from ..errors import bad_value
+from .. import checks
 
 
 @dataclass(frozen=True)
@@ -27,10 +27,8 @@ class MagnetometerPart:
     def __post_init__(self):
         for label in ("range_T", "lsb_T", "rate_Hz"):
             value = getattr(self, label)
-            if not (isinstance(value, (int, float)) and value > 0):
-                raise bad_value(label, "a positive number", value)
-        if not (isinstance(self.noise_T, (int, float)) and self.noise_T >= 0):
-            raise bad_value("noise_T", "a non-negative RMS noise in tesla", self.noise_T)
+            checks.positive(value, label, "a positive number")
+        checks.non_negative(self.noise_T, "noise_T", "a non-negative RMS noise in tesla")
 
     @property
     def effective_noise_T(self) -> float:

@@ -17,7 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .. import so3
+from .. import checks, so3
 from .._fast.threads import single_blas_thread
 from ..errors import bad_value
 from .array import SensorArray, candidate_positions
@@ -86,8 +86,7 @@ def greedy_placement(design, count: int = DEFAULT_COUNT, candidates=None, rotati
     """Greedy E-optimal placement of ``count`` sensors (module doc); ``candidates`` default
     :func:`~spherestep.sensing.array.candidate_positions`."""
     cand = candidate_positions(design) if candidates is None else np.asarray(candidates, dtype=float)
-    if isinstance(count, bool) or not isinstance(count, (int, np.integer)) or not 1 <= count <= len(cand):
-        raise bad_value("count", f"a sensor count in [1, {len(cand)}]", count)
+    count = checks.count(count, "count", 1, len(cand), f"a sensor count in [1, {len(cand)}]")
     F = information_per_sensor(design, cand, super_fibonacci(int(rotations)), part.effective_noise_T)
     total = np.zeros((F.shape[0], 3, 3))
     chosen, worst = [], []

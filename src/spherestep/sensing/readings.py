@@ -11,8 +11,7 @@ from __future__ import annotations
 import magpylib as magpy
 import numpy as np
 
-from .. import so3
-from ..errors import bad_value
+from .. import checks, so3
 from .field import CoilField, rotor_field
 
 
@@ -44,8 +43,8 @@ def sense(array, B, rng=None, noise: bool = True) -> np.ndarray:
 def actual_currents(currents, current_error: float, rng) -> np.ndarray:
     """Currents that flow when ``currents`` are commanded, with relative gain and offset errors of RMS
     ``current_error`` (per unit of nominal) per coil."""
-    if not (isinstance(current_error, (int, float)) and current_error >= 0):
-        raise bad_value("current_error", "a non-negative RMS fraction of the nominal current", current_error)
+    current_error = checks.non_negative(current_error, "current_error",
+                                        "a non-negative RMS fraction of the nominal current")
     c = np.asarray(currents, dtype=float)
     if current_error == 0:
         return c

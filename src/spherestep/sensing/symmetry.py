@@ -16,7 +16,7 @@ from dataclasses import dataclass, replace
 import magpylib as magpy
 import numpy as np
 
-from .. import so3
+from .. import checks, so3
 from .._fast.threads import single_blas_thread
 from ..errors import bad_value
 from ..magnetics import equilibrium, state_currents, torque_map
@@ -71,8 +71,7 @@ def marked_design(design, pole: int | None = None):
         if not len(free):
             raise bad_value("pole", "a pole to mark (this rotor has no pole with a trivial stabiliser)", None)
         pole = int(free[0])
-    if isinstance(pole, bool) or not isinstance(pole, (int, np.integer)) or not 0 <= pole < len(u):
-        raise bad_value("pole", f"a pole index in [0, {len(u) - 1}]", pole)
+    pole = checks.count(pole, "pole", 0, len(u) - 1, f"a pole index in [0, {len(u) - 1}]")
     polarity = np.array(design.polarity, copy=True)
     polarity[pole] = -polarity[pole]
     return replace(design, polarity=polarity, name=f"{design.name}-marked")
