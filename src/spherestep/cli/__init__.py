@@ -23,6 +23,7 @@ from ..errors import ComputationError, SpherestepError
 from . import design, explore, export, forces, motor, packings, report, run, simulate  # noqa: F401 (registers)
 from . import capability, move  # noqa: F401 (registers)
 from . import sense  # noqa: F401 (registers)
+from . import gallery  # noqa: F401 (registers)
 from .app import app
 from .signals import Terminated, interrupt_of, sigterm_as_interrupt
 
