@@ -27,14 +27,12 @@ from .. import checks, so3
 from ..control import DriveLimits, GeometricPD, ServoLaw, Trajectory
 from ..control.controller import CONTROL_RATE
 from ..errors import bad_value
-from ..sensing.sensor import NoisySensor, OrientationSensor
 from ..statics import TorqueModel, is_torque_model
 from .._fast.threads import single_blas_thread
 from .electrics import CoilDrive
 from .rotor import Rotor
 
-__all__ = ["CONTROL_RATE", "HOLD_TOLERANCE", "NoisySensor", "OrientationSensor", "ServoRun", "ServoSummary", "hold",
-           "simulate_servo"]
+__all__ = ["CONTROL_RATE", "HOLD_TOLERANCE", "ServoRun", "ServoSummary", "hold", "simulate_servo"]
 
 HOLD_TOLERANCE = math.radians(0.05)
 
@@ -136,7 +134,7 @@ class ServoRun:
 @single_blas_thread
 def simulate_servo(design, trajectory: Trajectory, model: TorqueModel | None = None, *,
                    limits: DriveLimits | None = None, rotor: Rotor | None = None,
-                   controller: GeometricPD | None = None, sensor: OrientationSensor | None = None,
+                   controller: GeometricPD | None = None, sensor=None,
                    drive: CoilDrive | None = None, observer_bandwidth: float | None = None,
                    rate: float = CONTROL_RATE, settle: float = 0.5, start=None,
                    controller_model: TorqueModel | None = None) -> ServoRun:
@@ -144,7 +142,8 @@ def simulate_servo(design, trajectory: Trajectory, model: TorqueModel | None = N
 
     ``model`` (default: the design's magnets' torque map) is the plant; ``limits`` the drive (default 24 V /
     100 W); ``rotor`` default :meth:`Rotor.from_design` (no damping); ``controller`` default
-    :class:`GeometricPD` at ``rate``; ``sensor`` default a noiseless sensor at ``rate``; ``drive`` default
+    :class:`GeometricPD` at ``rate``; ``sensor`` a :class:`~spherestep.sensing.OrientationSensor` (default a
+    noiseless :class:`~spherestep.sensing.NoisySensor` at ``rate``); ``drive`` default
     :class:`CoilDrive` on ``limits``; ``start`` the true initial orientation (default the trajectory's start),
     the rotor at rest; the observer starts from the sensor's first measurement (the trajectory's start until
     one arrives).
@@ -165,6 +164,8 @@ def simulate_servo(design, trajectory: Trajectory, model: TorqueModel | None = N
         raise bad_value("drive", "a CoilDrive on the same limits as `limits`", drive.limits)
     rotor = Rotor.from_design(design) if rotor is None else rotor
     controller = GeometricPD(rotor.inertia, rate=rate, damping=rotor.damping) if controller is None else controller
+    from ..sensing.sensor import NoisySensor, OrientationSensor  # here: the sensing room's import is heavy
+
     sensor = NoisySensor(rate=rate) if sensor is None else sensor
     if not isinstance(sensor, OrientationSensor):
         raise bad_value("sensor", "a spherestep.sensing.OrientationSensor (measure(t, R_true, currents), rate, "
