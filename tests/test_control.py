@@ -332,3 +332,38 @@ def test_plan_through_waypoints_uses_the_least_guaranteed_torque(tmap):
     assert a == pytest.approx(min(p.segments[0].acceleration for p in each), rel=1e-12)
     R, _, _ = tr.sample(np.array([tr.duration]))
     np.testing.assert_allclose(R[0], W[-1], atol=1e-10)
+
+
+def test_observer_gains_stay_stable_when_measurements_come_late():
+    """Deadbeat gains (ω_o = 1/h) with measurements 1, 2 and 5 periods apart (a loop missing deadlines): the
+    velocity error shrinks every correction (l₂Δ ≤ 1; the nominal l₂ = 1/h at Δ = 5h would multiply it by
+    1 − l₂Δ = −4)."""
+    from spherestep.control import Observer
+
+    h = 5e-3
+    obs = Observer(np.eye(3), inertia=0.07, bandwidth=1.0 / h, sensor_period=h)
+    assert (obs.l1, obs.l2) == pytest.approx((1.0, 1.0 / h))
+    true_w = np.array([0.0, 0.0, 2.0])
+    t, errors = 0.0, []
+    for gap in (1, 2, 5, 5, 2, 1, 5):
+        t += gap * h
+        obs.predict(np.zeros(3), gap * h)
+        obs.correct(so3.exp(true_w * t), t)
+        errors.append(float(np.linalg.norm(obs.w - true_w)))
+    assert all(b <= a + 1e-12 for a, b in zip(errors, errors[1:])) and errors[-1] < 1e-9
+    assert obs.gains(5 * h) == pytest.approx((1.0, 1.0 / (5 * h)))
+    assert obs.gains(1e-3) == pytest.approx((min(2e-3 / h, 1.0), 1e-3 / h ** 2))
+
+
+def test_one_allocation_call_for_the_servo():
+    """The servo's allocation is called in one place in the package: the law (issue 24)."""
+    from pathlib import Path
+
+    import spherestep
+
+    root = Path(spherestep.__file__).parent
+    calls = [(p.relative_to(root).as_posix(), line.strip()) for p in root.rglob("*.py")
+             for line in p.read_text(encoding="utf-8").splitlines()
+             if "allocate_matrix(" in line and "def allocate_matrix" not in line and p.name != "allocation.py"
+             and not line.strip().startswith(("#", ">>>", "``", ":func:"))]
+    assert [p for p, _ in calls] == ["control/servo.py"], calls

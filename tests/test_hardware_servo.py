@@ -159,6 +159,13 @@ def test_a_slow_host_is_stopped_by_the_device_watchdog(rig, monkeypatch):
     assert not s.final.enabled and np.abs(s.final.i).max() < 1e-3
 
 
+def test_the_hardware_loop_runs_the_control_rooms_law():
+    from spherestep import control
+    from spherestep.hardware import session
+
+    assert session.ServoLaw is control.ServoLaw  # one law: the simulation's (dynamics.simulate_servo) and this
+
+
 def test_session_needs_a_port_or_the_emulator(rig):
     with pytest.raises(InputError, match="port"):
         servo_session(rig["design"], hold(np.eye(3)), 1.0, sensors=rig["sensors"], model=rig["model"])

@@ -136,6 +136,18 @@ def test_servo_tracks_a_turn_with_a_failed_coil(design, tmap):
     assert np.abs(residual).max() < 0.05 * kinetic.max()
 
 
+def test_servo_holds_with_a_late_sensor(design, tmap):
+    """A sensor 4 ms late at 500 Hz: the law corrects against its estimate of 4 ms ago and holds within 0.05°."""
+    target = so3.random(1, 22)[0]
+    start = so3.exp(math.radians(0.5) * np.array([0.0, 0.6, -0.8])) @ target
+    run = hold(design, target, tmap, duration=0.3, start=start,
+               sensor=NoisySensor(math.radians(0.01), rate=500.0, latency=0.004, rng=7))
+    assert run.tracking_error[run.times >= 0.2].max() <= HOLD
+    # once measured, the estimate of each period follows the truth, not the 4 ms old measurement (measured 0.03°;
+    # comparing with the history without carrying the correction forward left it 0.13° off)
+    assert so3.distance(run.estimates[100:], run.orientations[100:]).max() < math.radians(0.05)
+
+
 def test_servo_rejects_bad_input(design, tmap):
     traj = Trajectory.turn(np.eye(3), [0, 0, 1], 0.1, 1.0)
     with pytest.raises(InputError, match="rate"):

@@ -100,8 +100,11 @@ class Observer:
         self._past.append((self.t, self.R.copy()))
 
     def correct(self, R_meas, t_meas: float | None = None) -> None:
-        """Blend in a measurement ``R_meas`` taken at ``t_meas`` (default now)."""
-        ref = self.R
+        """Blend in a measurement ``R_meas`` taken at ``t_meas`` (default now). A late measurement is compared with
+        the estimate of its time ``t_k`` (the history), the correction made there and carried to every later
+        estimate as the prediction would have: ``R̂(t) ← exp((l₁ + l₂ (t − t_k)) ε) R̂(t)`` for ``t ≥ t_k`` (the
+        velocity correction ``l₂ε`` acting since ``t_k``), so a known latency costs no stability."""
+        ref, k = self.R, None
         if t_meas is not None and t_meas < self.t - 1e-12:
             times = [p[0] for p in self._past]
             k = int(np.clip(np.searchsorted(times, t_meas), 0, len(times) - 1))
@@ -113,7 +116,14 @@ class Observer:
         if not abs(interval - self.sensor_period) <= 1e-6 * self.sensor_period and interval > 0:
             l1, l2 = self.gains(interval)
         eps = so3.log_single(R_meas @ ref.T)
-        self.R = so3.exp(l1 * eps) @ self.R
+        if k is not None:  # re-propagate the history from t_k
+            t_k = self._past[k][0]
+            for j in range(k, len(self._past)):
+                t_j, R_j = self._past[j]
+                self._past[j] = (t_j, so3.exp((l1 + l2 * (t_j - t_k)) * eps) @ R_j)
+            self.R = so3.exp((l1 + l2 * (self.t - t_k)) * eps) @ self.R
+        else:
+            self.R = so3.exp(l1 * eps) @ self.R
         self.w = self.w + l2 * eps
         if self.l3:
             self.d = self.d + self.l3 * eps
