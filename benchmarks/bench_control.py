@@ -11,7 +11,7 @@ Run: ``OPENBLAS_NUM_THREADS=1 .venv/bin/python benchmarks/bench_control.py`` (ab
 2. Closed-loop simulation at 1 kHz control (10 kHz PWM) holding an orientation: simulated seconds per wall
    second; and the hold's precision at five random orientations with 0.02° sensor noise.
 3. The capability map: 1000 orientations (400 directions each).
-4. The demo's 360° turn about (1, 0.5, 2) driven three ways (:func:`spherestep.dynamics.compare_drives`).
+4. The demo's 360° turn about (1, 0.5, 2) driven three ways (:func:`spherestep.drive.compare_drives`).
 """
 
 from __future__ import annotations
@@ -29,7 +29,8 @@ import numpy as np
 from _timing import median_seconds
 from spherestep import so3
 from spherestep.control import DriveLimits, allocate_matrix, allocate_relay, torque_capability
-from spherestep.dynamics import compare_drives, hold
+from spherestep.drive import compare_drives
+from spherestep.dynamics import hold
 from spherestep.sensing import NoisySensor
 from spherestep.magnetics import torque_map
 from spherestep.motor import prototype
@@ -137,11 +138,12 @@ def main() -> None:
     print(f"{'mode':>24} {'time s':>9} {'final °':>9} {'max track °':>12} {'peak W':>8} {'mean W':>8}")
     for r in comparison.results:
         d = r.to_dict()
-        print(f"{r.mode:>24} {r.time:>9.3f} {d['final_error_deg']:>9.4f} {d['max_tracking_error_deg']:>12.3f} "
+        mode = r.mode + (" (tuned damping)" if r.mode == "servo" and r.details.damping else "")
+        print(f"{mode:>24} {r.time:>9.3f} {d['final_error_deg']:>9.4f} {d['max_tracking_error_deg']:>12.3f} "
               f"{r.peak_power:>8.1f} {r.mean_power:>8.1f}")
     print(f"bang-bang bound {comparison.bound:.3f} s; servo / bound = {comparison.ratio:.2f}; ramped pull-out "
           f"{comparison.pull_out_rate:.1f} steps/s")
-    print(json.dumps(comparison.to_dict(), default=float))
+    print(json.dumps(comparison.to_dict(), allow_nan=False))
 
 
 if __name__ == "__main__":

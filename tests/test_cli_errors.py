@@ -229,7 +229,8 @@ NUMERIC_OPTIONS = {  # command line before the option, the option, values out of
     ("explore", "--primary-ratio"): (["explore", "--quick", "--out", "{base}/o", "--threads"], ["0.5", "x"]),
     ("move", "--time"): (["move", *AX, "--angle", "30", "--out", "{base}/o"], ["0", "-1"]),
     ("move", "--sensor-noise"): (["move", *AX, "--angle", "30", "--out", "{base}/o"], ["-1"]),
-    ("move", "--rate"): (["move", *AX, "--angle", "30", "--out", "{base}/o"], ["0", "-1"]),
+    ("move", "--rate"): (["move", *AX, "--angle", "30", "--emulate", "--out", "{base}/o"], ["0", "-1"]),
+    ("move", "--tolerance"): (["move", *AX, "--angle", "30", "--out", "{base}/o"], ["0", "-1", "181"]),
     ("capability", "--samples"): (["capability", "--out", "{base}/o"], ["0", "-1"]),
     ("capability", "--seed"): (["capability", "--out", "{base}/o"], ["-1"]),
     ("capability", "--threshold"): (["capability", "--out", "{base}/o"], ["-1"]),
@@ -243,6 +244,7 @@ AXIS_COMMANDS = {
     "plan": ["plan", "--angle", "30", "--out", "{base}/o"],
     "simulate": ["simulate", "--angle", "30", "--out", "{base}/o"],
     "report": ["report", "-o", "{base}/r.html"],
+    "move": ["move", "--angle", "30", "--out", "{base}/o"],
 }
 BAD_AXES = ["0,0,0", "1,2", "1,2,3,4", "a,b,c", "nan,0,1", "inf,0,0", ""]
 DESIGN_COMMANDS = {  # command line with {d} for a design file
@@ -321,6 +323,29 @@ MISC = [  # (id, argv): other mistakes, all exit 2
     ("explore-max-lookup-voxels", ["explore", "--quick", "--out", "{base}/o", "--threads", "--max-lookup-voxels",
                                    "0"]),
     ("explore-scheduler", ["explore", "--quick", "--out", "{base}/o", "--scheduler", "not-an-address"]),
+    # move (issue 27 §3): what cannot be done is refused before the work, naming the option and the fix
+    ("move-time-below-bound", ["move", "--axis", "1,0.5,2", "--angle", "90", "--time", "0.01", "--out", "{base}/o"]),
+    ("move-whole-turn-too-fast", ["move", "--axis", "1,0.5,2", "--angle", "360", "--time", "0.001", "--out",
+                                  "{base}/o"]),
+    ("move-rate-simulated", ["move", *AX, "--angle", "30", "--rate", "100", "--out", "{base}/o"]),
+    ("move-sensor-imu-emulate", ["move", *AX, "--angle", "30", "--sensor", "imu", "--emulate", "--out", "{base}/o"]),
+    ("move-sensor-hall-port", ["move", *AX, "--angle", "30", "--sensor", "hall", "--port", "/dev/null", "--out",
+                               "{base}/o"]),
+    ("move-sensor-noise-emulate", ["move", *AX, "--angle", "30", "--sensor-noise", "0.1", "--emulate", "--out",
+                                   "{base}/o"]),
+    ("move-sensor-noise-hall", ["move", *AX, "--angle", "30", "--sensor", "hall", "--sensor-noise", "0.1", "--out",
+                                "{base}/o"]),
+    ("move-sensor-noise-imu", ["move", *AX, "--angle", "30", "--sensor", "imu", "--sensor-noise", "0.1", "--out",
+                               "{base}/o"]),
+    ("move-sensor-noise-ramped", ["move", *AX, "--angle", "30", "--mode", "ramped", "--sensor-noise", "0.1", "--out",
+                                  "{base}/o"]),
+    ("move-time-settled", ["move", *AX, "--angle", "30", "--mode", "settled", "--time", "1", "--out", "{base}/o"]),
+    ("move-time-ramped", ["move", *AX, "--angle", "30", "--mode", "ramped", "--time", "1", "--out", "{base}/o"]),
+    ("move-relay-emulate", ["move", *AX, "--angle", "30", "--mode", "settled", "--emulate", "--out", "{base}/o"]),
+    ("move-port-and-emulate", ["move", *AX, "--angle", "30", "--port", "/dev/null", "--emulate", "--out",
+                               "{base}/o"]),
+    ("move-core", ["move", *AX, "--angle", "30", "--core", "copper", "--out", "{base}/o"]),
+    ("move-axis-underflow", ["move", "--axis", "1e-320,0,0", "--angle", "30", "--out", "{base}/o"]),
 ]
 
 

@@ -8,24 +8,26 @@ import math
 import pytest
 
 from spherestep.cli import main
-from spherestep.dynamics import drive_turn
+from spherestep.drive import drive_turn
 from spherestep.errors import InputError
+from spherestep.magnetics import design_model
 
 
 @pytest.mark.slow
 def test_servo_with_the_magnetometer_array_in_the_loop(proto):
-    move = drive_turn(proto, [1, 0.5, 2], math.radians(20), sensor="hall")
-    s = move.summary
+    move = drive_turn(proto, [1, 0.5, 2], math.radians(20), sensor="hall", model=design_model(proto, "air"))
+    s = move.to_dict()
     # the array's estimate stays within a few thousandths of a degree; the turn ends within the servo target
-    assert s["sensor"] == "hall" and s["sensor_error_max_deg"] < 0.02
+    assert s["details"]["sensor"] == "hall" and s["details"]["sensor_error_max_deg"] < 0.02
+    assert s["model"] == "air (magnets' torque map)" and move.ok
     assert s["final_error_deg"] < 0.05 and s["max_tracking_error_deg"] < 0.5
 
 
 @pytest.mark.slow
 def test_servo_with_an_imu_is_worse_than_with_the_array(proto):
-    imu = drive_turn(proto, [0, 0, 1], math.radians(10), sensor="imu").summary
+    imu = drive_turn(proto, [0, 0, 1], math.radians(10), sensor="imu", model=design_model(proto, "air")).to_dict()
     # an AHRS drifts and is noisy: degrees, not thousandths (docs/sensing.md)
-    assert imu["sensor_error_max_deg"] > 0.05
+    assert imu["details"]["sensor_error_max_deg"] > 0.05
 
 
 def test_sensor_choice_is_checked(proto, tmp_path, capsys):
@@ -43,6 +45,7 @@ def test_sensor_choice_is_checked(proto, tmp_path, capsys):
 
 @pytest.mark.slow
 def test_move_command_with_the_array(tmp_path, capsys):
-    assert main(["move", "--axis", "0,0,1", "--angle", "10", "--sensor", "hall", "--out", str(tmp_path), "--json"]) == 0
+    assert main(["move", "--axis", "0,0,1", "--angle", "10", "--sensor", "hall", "--core", "air", "--out",
+                 str(tmp_path), "--json"]) == 0
     info = json.loads(capsys.readouterr().out)
-    assert info["sensor"] == "hall" and info["final_error_deg"] < 0.05
+    assert info["details"]["sensor"] == "hall" and info["final_error_deg"] < 0.05

@@ -1,17 +1,17 @@
 """The main job on a design (``spherestep demo``): what a builder asks first, measured and written to a folder.
 
 1. the design's stepper states, resolution, range and escape directions (:meth:`MotorDesign.metrics`);
-2. its torque models and what they mean: the air-cored coils (the magnets' torque map) and the paper's
-   iron-cored coils (:func:`spherestep.magnetics.iron_model`): the torque capability of each over SO(3)
+2. its torque models and what they mean: the design's own (:func:`spherestep.magnetics.design_model`: the
+   paper's iron-cored coils for the prototype) and the other core (the air-cored coils: the magnets' torque map,
+   the same winding): the torque capability of each over SO(3)
    (:func:`spherestep.control.torque_capability`), and what the iron changes (detent, unpowered holding, where the
    stepper states come to rest, saturation, power: :func:`spherestep.magnetics.iron_summary`);
 3. a turn about a tilted axis commutated by the paper's geometric planner (:func:`spherestep.commutation.turn`):
    plan CSV/JSON and figures;
-4. the turn driven three ways (:func:`spherestep.dynamics.compare_drives`): the paper's settled relay steps, ramped
-   relay steps at the pull-out rate, and the current-controlled servo, with the bang-bang bound, on the air-core
-   model; then on the iron-cored model (:func:`iron_drives`): the same relay plan settled and ramped, the relay
-   steps as the potential planner finds them there (the detent holds the rotor: few or none move it) and the
-   servo, which does turn it;
+4. the turn driven three ways (:func:`spherestep.drive.compare_drives`): the paper's settled relay steps, ramped
+   relay steps at the pull-out rate, and the current-controlled servo, with the bang-bang bound, on the design's
+   own model and on the other core; and the relay steps as the potential planner finds them on the design's
+   model (on iron the detent holds the rotor: few or none of them move it);
 5. the HTML report with every section, and ``summary.json``.
 
 :data:`DEMO_FILES` names everything written, so a caller can check the folder before the work and count what was
@@ -32,11 +32,13 @@ from .atomic import write_text
 
 PLAN_FILES = ("plan.csv", "plan.json", "commutation_steps.png", "motor_3d.png", "plan_error.png")
 SIMULATION_FILES = ("trajectory.csv", "simulation.png")
-IRON_SERVO_TIME = 3.0  # s: the servo's time for the demo turn on the iron-cored model (see iron_drives)
 IRON_RELAY_RATES = (2.0, 5.0, 14.0)  # steps/s: the ramped relays tried on iron (a subset of dynamics.ramped.RATES)
+QUICK_RATES = (3.0, 10.0)  # steps/s: the ramped relays tried on air in the quick demo
+QUICK_IRON_RATES = (2.0,)  # steps/s: on iron in the quick demo
 DRIVE_FILES = ("drives.json", "servo.png", "capability.png", "iron.png")
 DEMO_FILES = PLAN_FILES + SIMULATION_FILES + DRIVE_FILES + ("report.html", "summary.json")
 CAPABILITY_SAMPLES = 400
+QUICK_CAPABILITY_SAMPLES = 60
 
 
 def write_plan_files(design, plan, axis, out: Path) -> None:
@@ -59,125 +61,121 @@ def simulate_and_write(design, plan, axis, out: Path, model=None, tuning=None):
     sim = simulate(design, plan, model, dwell=tuning.dwell, rotor=tuning.rotor, dt=tuning.dt, record_every=1)
     sim.to_csv(out / "trajectory.csv", axis)
     plots.save_figure(plots.figure_simulation(sim, plan, axis, tuning.dwell), out / "simulation.png")
-    summary = sim.summary() | {
+    summary = sim.summary().to_dict() | {
         "dwell_s": tuning.dwell, "damping_N_m_s": tuning.rotor.damping,
         "final_error_to_target_deg": math.degrees(float(so3.distance(sim.settled[-1], plan.targets[-1])))}
     return sim, summary
 
 
 def run_demo(design, out: Path, axis, angle_deg: float, *,
-             progress: Callable[[str], None] | None = None) -> dict:
+             progress: Callable[[str], None] | None = None, quick: bool = False) -> dict:
     """Do the main job (module docstring) on ``design`` for a turn of ``angle_deg`` degrees about ``axis`` (fixed
-    frame) and write :data:`DEMO_FILES` into the folder ``out`` (which must exist and be writable). Returns the
-    summary written to ``summary.json`` (angles in degrees, torque in N·m, power in W, time in s)."""
+    frame) and write :data:`DEMO_FILES` into the folder ``out`` (which must exist and be writable). ``quick``: the
+    same code path on a reduced case (:data:`QUICK_CAPABILITY_SAMPLES` capability samples, the ramped relays at
+    :data:`QUICK_RATES`, fewer iron samples) for tests. Returns the summary written to ``summary.json`` (angles in
+    degrees, torque in N·m, power in W, time in s)."""
     from .commutation import turn
-    from .control import DriveLimits, torque_capability
-    from .dynamics import compare_drives, figure_drive
-    from .magnetics import iron_model, iron_summary, torque_map
+    from .control import torque_capability
+    from .drive import compare_drives
+    from .magnetics import design_model, iron_summary
     from .report import Section, capability_figure, servo_figure, write_report
 
     say = progress or (lambda _: None)
     axis = np.asarray(axis, dtype=float)
+    samples = QUICK_CAPABILITY_SAMPLES if quick else CAPABILITY_SAMPLES
+    angle = math.radians(angle_deg)
     say("enumerating stepper states")
     design.states()
     say("measuring resolution, range and escape directions")
     metrics = design.metrics()
     info = design.summary() | metrics.to_dict(degrees=True)
-    say("building the torque models: air-cored and iron-cored coils")
-    model, iron = torque_map(design), iron_model(design)
-    limits = DriveLimits()
-    info["torque_model"] = "TorqueMap (air core)"
-    say("mapping the torque capability over SO(3)")
-    capability = torque_capability(design, model, limits, samples=CAPABILITY_SAMPLES, seed=0)
-    iron_limits = DriveLimits.from_spec(iron.coil, design)  # its winding: resistance, nominal current
-    iron_capability = torque_capability(design, iron, iron_limits, samples=CAPABILITY_SAMPLES, seed=0)
-    info["capability"] = capability.to_dict()
-    info["iron_capability"] = iron_capability.to_dict()
-    plots.save_figure(_matplotlib_capability({"air core": capability, "iron core": iron_capability}),
+    say("building the torque models: the design's own and the other core")
+    own = design_model(design)
+    other = design_model(design, "air" if own.core == "iron" else "iron")
+    info["torque_model"] = own.label
+    info["torque_model_other"] = other.label
+    say(f"mapping the torque capability over SO(3): {own.label}")
+    capability = torque_capability(design, own.model, own.limits, samples=samples, seed=0)
+    say(f"mapping the torque capability over SO(3): {other.label}")
+    other_capability = torque_capability(design, other.model, other.limits, samples=samples, seed=0)
+    info["capability"] = {"model": own.label} | capability.to_dict()
+    info["capability_other"] = {"model": other.label} | other_capability.to_dict()
+    plots.save_figure(_matplotlib_capability({own.label: capability, other.label: other_capability}),
                       out / "capability.png")
     say("measuring what the iron cores change")
-    iron_effects = iron_summary(design)
+    iron_effects = iron_summary(design, **({"states": 6, "starts": 6} if quick else {}))
     info["iron"] = iron_effects.to_dict()
+    iron_capability = capability if own.core == "iron" else other_capability
     plots.save_figure(iron_effects.figure(design), out / "iron.png")
     say("commutating")
-    plan = turn(design, axis, angle_deg)
+    plan = turn(design, axis, angle)
     write_plan_files(design, plan, axis, out)
     info["plan"] = plan.summary(max_step=design.max_step).to_dict() | {
         "axis": (axis / np.linalg.norm(axis)).tolist(), "angle_deg": angle_deg}
-    say("simulating the settled relay steps")
-    sim, info["simulation"] = simulate_and_write(design, plan, axis, out, model=model)
-    say("driving the turn three ways: settled relays, ramped relays, servo")
-    drives = compare_drives(design, axis, math.radians(angle_deg), model, limits=limits)
-    info["drives"] = drives.to_dict()
-    run = drives.servo_run
-    plots.save_figure(figure_drive(run.times, run.tracking_error, run.currents, run.power,
-                                   title="servo: the demo's turn"), out / "servo.png")
-    say("driving the turn on the iron-cored model: settled and ramped relays, relays planned on it, the servo")
-    info["iron_drives"] = iron_drives(design, axis, math.radians(angle_deg), iron, iron_limits)
-    write_text(out / "drives.json", json.dumps(info["drives"] | {"iron": info["iron_drives"]}, indent=1))
+    say("simulating the settled relay steps on the air-core map (the paper's stepping)")
+    air = own if own.core == "air" else other
+    sim, info["simulation"] = simulate_and_write(design, plan, axis, out, model=air.model)
+    info["simulation"]["model"] = air.label
+    drives = {}
+    for which, chosen in (("own", own), ("other", other)):
+        rates = (QUICK_RATES if quick else None) if chosen.core == "air" else \
+            (QUICK_IRON_RATES if quick else IRON_RELAY_RATES)
+        drives[which] = compare_drives(design, axis, angle, chosen, rates=rates,
+                                       progress=lambda text, m=chosen.label: say(f"{m}: {text}"))
+    info["drives"], info["drives_other"] = drives["own"].to_dict(), drives["other"].to_dict()
+    servo = drives["own"].result("servo")
+    plots.save_figure(servo.figure(), out / "servo.png")
+    say(f"relay steps planned by the potential planner on the {own.label} model")
+    planned = turn(design, axis, angle, planner="potential", model=own.model)
+    s = planned.summary(max_step=design.max_step).to_dict()
+    info["potential_plan"] = {"model": own.label, "steps": s["steps"], "moves": s["moves"],
+                              "final_error_deg": s["error_final_deg"]}
+    write_text(out / "drives.json", json.dumps({"drives": info["drives"], "drives_other": info["drives_other"],
+                                                "potential_plan": info["potential_plan"]}, indent=1,
+                                               allow_nan=False))
     say("writing the HTML report")
+    lim = own.limits
     sections = (
         Section("capability", "Torque capability over SO(3)",
-                note=f"Torque available in every direction with the coils within their limits (±{limits.max_current:g} A,"
-                     f" {limits.supply_power:g} W supply), at {capability.radius.size} orientations drawn uniformly on "
-                     f"SO(3) (seed 0), on the {type(model).__name__}. Median "
+                note=f"Torque available in every direction with the coils within their limits (±{lim.max_current:.3g} A,"
+                     f" {lim.supply_power:g} W supply), at {capability.radius.size} orientations drawn uniformly on "
+                     f"SO(3) (seed 0), on the design's own model, {own.label}. Median "
                      f"{np.median(capability.radius):.2f} N·m, 5th percentile "
-                     f"{np.percentile(capability.radius, 5):.2f} N·m.",
+                     f"{np.percentile(capability.radius, 5):.2f} N·m; on the {other.label} model median "
+                     f"{np.median(other_capability.radius):.2f} N·m.",
                 figure=capability_figure(capability), height=440),
         Section("iron", "Iron: detent and saturation", html=_iron_table(iron_effects, iron_capability)),
-        Section("drives", "The turn driven three ways", html=_drives_table(drives) + _iron_drives_note(
-            info["iron_drives"])),
-        Section("servo", "Servo run", note="The servo's run of the same turn: tracking error against the "
-                "trajectory and the sensor's error, every coil's current, and the power drawn from the supply.",
-                figure=servo_figure(run), height=640),
+        Section("drives", "The turn driven three ways", html=_drives_table(drives["own"]) + _drives_table(
+            drives["other"]) + '<p class="note">' + potential_plan_line(info["potential_plan"]) + ".</p>"),
+        Section("servo", "Servo run", note=f"The servo's run of the same turn on the {own.label} model: tracking "
+                "error against the trajectory and the sensor's error, every coil's current, and the power drawn "
+                "from the supply.", figure=servo_figure(servo), height=640),
     )
     write_report(out / "report.html", design, metrics, plan, simulation=sim, axis=axis, sections=sections)
-    write_text(out / "summary.json", json.dumps(info, indent=1, default=_jsonable))
+    write_text(out / "summary.json", json.dumps(info, indent=1, default=_jsonable, allow_nan=False))
     return info
 
 
-def iron_drives(design, axis, angle: float, model, limits, duration: float = IRON_SERVO_TIME) -> dict:
-    """The turn driven three ways on the iron-cored ``model`` (``limits`` of the iron coil's winding): the paper's
-    geometric plan as settled and as ramped relay steps (:func:`spherestep.dynamics.relay_drives`, damping, dwell
-    and time step tuned on the iron's wells; ramped at :data:`IRON_RELAY_RATES`), the relay steps as the potential
-    planner finds them on the iron model (how many of its steps move the rotor), and the servo over ``duration`` s
-    — a fixed time, because the fastest-turn planner needs torque in every direction all along the path, which the
-    detent denies (docs/magnetics.md)."""
-    from .commutation import turn
-    from .dynamics import drive_turn, relay_drives, tune
-
-    plan = turn(design, axis, math.degrees(angle))
-    settled, ramped, _ = relay_drives(design, plan, model, tune(design, model), limits, IRON_RELAY_RATES)
-    planned = turn(design, axis, math.degrees(angle), planner="potential", model=model)
-    s = planned.summary(max_step=design.max_step).to_dict()
-    servo = drive_turn(design, axis, angle, mode="servo", model=model, limits=limits, duration=duration).summary
-    keep = ("time_s", "final_error_deg", "max_tracking_error_deg", "peak_power_W", "mean_power_W",
-            "peak_current_A", "reachable_fraction")
-    return {"settled": settled.to_dict(), "ramped": ramped.to_dict(),
-            "potential_plan": {"steps": s["steps"], "moves": s["moves"], "final_error_deg": s["error_final_deg"]},
-            "servo": {k: servo[k] for k in keep}}
+def drive_lines(d: dict) -> list[str]:
+    """One line per mode of a :meth:`DriveComparison.to_dict <spherestep.drive.DriveComparison.to_dict>`, and the
+    bang-bang bound: for the console."""
+    lines = [f"on the {d['model']} model:"]
+    for m in d["modes"]:
+        time = f"{m['time_s']:7.2f} s" if m["time_s"] is not None else "never arrived"
+        lines.append(f"  {m['mode']:>8}: {time}, final error {m['final_error_deg']:.3f}°, max tracking error "
+                     f"{m['max_tracking_error_deg']:.2f}°, power peak {m['peak_power_W']:.0f} W mean "
+                     f"{m['mean_power_W']:.0f} W" + (f" ({m['arrival_note']})" if m["arrival_note"] else ""))
+    if d["bang_bang_bound_s"] is not None:
+        ratio = d["servo_over_bound"]
+        lines.append(f"  bang-bang bound {d['bang_bang_bound_s']:.2f} s"
+                     + (f" (servo {ratio:.2f}× it)" if ratio is not None else ""))
+    return lines
 
 
-def iron_drives_lines(d: dict) -> list[str]:
-    """The iron-cored turn (:func:`iron_drives`) in three sentences, for the report and the console."""
-    st, rp, pp, sv = d["settled"], d["ramped"], d["potential_plan"], d["servo"]
-    rates = ", ".join(f"{r:g}" for r, _ in rp["details"]["tried"])
-    ramped = (f"ramped relay steps lose a step at every rate tried ({rates} steps/s)" if rp["time_s"] is None else
-              f"ramped relay steps arrive in {rp['time_s']:.2f} s at {rp['details']['pull_out_rate_steps_per_s']:.1f}"
-              f" steps/s")
-    return [f"the paper's relay plan, settled ({st['details']['dwell_s']:.2f} s dwell, damping "
-            f"{st['details']['damping_N_m_s_per_rad']:.2f} N·m·s/rad tuned on the iron's wells): "
-            f"{st['details']['steps_settled_on_plan']} of {st['details']['steps']} steps settle on the plan, the "
-            f"rotor ends {st['final_error_deg']:.1f}° from the turn's end; {ramped}",
-            f"relay steps planned on the iron model move the rotor in {pp['moves']} of {pp['steps']} steps (final "
-            f"error {pp['final_error_deg']:.1f}°: the detent holds it)",
-            f"the servo turns it in {sv['time_s']:.2f} s, final error {sv['final_error_deg']:.4f}°, max tracking "
-            f"error {sv['max_tracking_error_deg']:.2f}°, peak power {sv['peak_power_W']:.0f} W, mean "
-            f"{sv['mean_power_W']:.1f} W"]
-
-
-def _iron_drives_note(d: dict) -> str:
-    return '<p class="note">On the iron-cored model: ' + "; ".join(iron_drives_lines(d)) + ".</p>"
+def potential_plan_line(p: dict) -> str:
+    """The relay steps the potential planner finds on the design's model, in one sentence."""
+    return (f"relay steps planned by the potential planner on the {p['model']} model move the rotor in "
+            f"{p['moves']} of {p['steps']} steps (final error {p['final_error_deg']:.1f}°)")
 
 
 def _jsonable(value):
@@ -189,15 +187,22 @@ def _jsonable(value):
 
 
 def _drives_table(drives) -> str:
+    def time(r):
+        return f"{r.time:.2f}" if r.arrived else "never"
+
     rows = "".join(
-        f"<tr><td>{r.mode}</td><td class=num>{r.time:.2f}</td><td class=num>{math.degrees(r.final_error):.3f}</td>"
+        f"<tr><td>{r.mode}</td><td class=num>{time(r)}</td><td class=num>{math.degrees(r.final_error):.3f}</td>"
         f"<td class=num>{math.degrees(r.max_tracking_error):.2f}</td><td class=num>{r.peak_power:.1f}</td>"
         f"<td class=num>{r.mean_power:.1f}</td></tr>" for r in drives.results)
-    return ("<table><tr><th>mode</th><th>time (s)</th><th>final error (°)</th><th>max tracking error (°)</th>"
-            "<th>peak power (W)</th><th>mean power (W)</th></tr>" + rows + "</table>"
-            f'<p class="note">Bang-bang lower bound for the turn on the capability along its path: '
-            f"{drives.bound:.2f} s; the servo took {drives.ratio:.2f}× that. Ramped relays at the pull-out rate "
-            f"{drives.pull_out_rate:.1f} steps/s.</p>")
+    bound = (f"Bang-bang lower bound for the turn on the capability along its path: {drives.bound:.2f} s"
+             + (f"; the servo took {drives.ratio:.2f}× that" if math.isfinite(drives.ratio) else "") + "."
+             if math.isfinite(drives.bound) else "No bang-bang bound: somewhere on the path the coils cannot turn "
+             "the rotor about the axis against the detent.")
+    pull = (f" Ramped relays at the pull-out rate {drives.pull_out_rate:.1f} steps/s." if drives.pull_out_rate else
+            " Ramped relays lost a step at every rate tried.")
+    return (f"<p><b>{drives.model}</b></p><table><tr><th>mode</th><th>time (s)</th><th>final error (°)</th>"
+            "<th>max tracking error (°)</th><th>peak power (W)</th><th>mean power (W)</th></tr>" + rows + "</table>"
+            f'<p class="note">{bound}{pull}</p>')
 
 
 def _iron_table(effects, capability) -> str:

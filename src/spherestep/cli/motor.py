@@ -51,7 +51,10 @@ def warn(text: str) -> None:
 def demo(
     out: Path = typer.Option(Path("spherestep-out"), "--out", help="Output folder."),
     axis: str = typer.Option(DEMO_AXIS, "--axis", callback=check_axis, help="Rotation axis X,Y,Z (fixed frame)."),
-    angle: float = typer.Option(360.0, "--angle", callback=ANGLE, help="Rotation angle in degrees."),
+    angle: float = typer.Option(None, "--angle", callback=ANGLE, help="Rotation angle in degrees (default 360; "
+                                                                     "90 with --quick)."),
+    quick: bool = typer.Option(False, "--quick", help="A reduced run of the same job (a 90° turn, fewer capability "
+                                                      "samples and relay rates): about a minute."),
     as_json: bool = typer.Option(False, "--json", help="Print the summary as JSON (the escape-violating states "
                                                        f"cut to the first {SHOWN_ESCAPE_STATES}, as it says; all "
                                                        "in summary.json)."),
@@ -59,12 +62,13 @@ def demo(
 ) -> None:
     """The main job on the built-in prototype (iron-cored coils, as the paper's): states, resolution, range,
     torque capability over SO(3), a commutated 360° turn about a tilted axis driven three ways (the paper's settled
-    relay steps, ramped relay steps, the current-controlled servo) on the rotor's dynamics, and the plan, figures,
-    drives.json and the HTML report (report.html) in the output folder.
+    relay steps, ramped relay steps, the current-controlled servo) on the rotor's dynamics — on the design's own
+    model (iron) and on air-cored coils for comparison — and the plan, figures, drives.json and the HTML report
+    (report.html) in the output folder.
 
     Example: [bold]spherestep demo --out spherestep-out[/bold]
     """
-    from ..demo import DEMO_FILES, iron_drives_lines, run_demo
+    from ..demo import DEMO_FILES, drive_lines, potential_plan_line, run_demo
     from ..motor import prototype
     from ..outputs import Outputs, output_folder
 
@@ -72,7 +76,8 @@ def demo(
     axis_vec = parse_vector(axis, "--axis")
     files = Outputs(out, DEMO_FILES)
     with files, progress("building the prototype", enabled=not (quiet or as_json)) as say:
-        info = run_demo(prototype(), out, axis_vec, angle, progress=say)
+        angle = (90.0 if quick else 360.0) if angle is None else angle
+        info = run_demo(prototype(), out, axis_vec, angle, progress=say, quick=quick)
     for text in info["plan"].get("warnings", []):
         warn(text)
     states = info.pop("escape_violations") or []
@@ -90,22 +95,17 @@ def demo(
         axis_text = ", ".join(f"{a:.3f}" for a in p["axis"])
         console.print(f"commutated {angle:g}° about ({axis_text}): {p['steps']} steps, final error "
                       f"{p['error_final_deg']:.2f}°")
-        cap = info["capability"]["available_torque_N_m"]
-        console.print(f"torque model {info['torque_model']}: torque available in every direction median "
-                      f"{cap[50]:.2f} N·m, 5th percentile {cap[5]:.2f} N·m")
-        d = info["drives"]
-        for m in d["modes"]:
-            console.print(f"  {m['mode']:>8}: {m['time_s']:7.2f} s, final error {m['final_error_deg']:.3f}°, max "
-                          f"tracking error {m['max_tracking_error_deg']:.2f}°, power peak {m['peak_power_W']:.0f} W "
-                          f"mean {m['mean_power_W']:.0f} W")
-        console.print(f"  bang-bang bound {d['bang_bang_bound_s']:.2f} s (servo {d['servo_over_bound']:.2f}× it)")
-        icap, iron, idr = info["iron_capability"]["available_torque_N_m"], info["iron"], info["iron_drives"]
+        for cap in (info["capability"], info["capability_other"]):
+            r = cap["available_torque_N_m"]
+            console.print(f"torque model {cap['model']}: torque available in every direction median "
+                          f"{r[50]:.2f} N·m, 5th percentile {r[5]:.2f} N·m")
+        iron = info["iron"]
         console.print(f"iron-cored coils: detent peak {-iron['detent_peak_Nm']:.2f} N·m at "
                       f"{iron['detent_peak_angle_deg']:.1f}°; unpowered the rotor holds {iron['unpowered_minima']} of "
-                      f"{iron['unpowered_starts']} random poses; torque available in every direction median "
-                      f"{icap[50]:.2f} N·m, 5th percentile {icap[5]:.2f} N·m")
-        for line in iron_drives_lines(idr):
-            console.print(f"  {line}")
+                      f"{iron['unpowered_starts']} random poses")
+        for line in drive_lines(info["drives"]) + drive_lines(info["drives_other"]):
+            console.print(line)
+        console.print(potential_plan_line(info["potential_plan"]))
         console.print(f"wrote {len(files.paths)} files to {out}/")
 
 

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import json
 import math
 from pathlib import Path
 
@@ -12,7 +11,7 @@ import typer
 from ..errors import bad_value
 from ..outputs import output_folder
 from .app import app
-from .common import check_axis, console, design_from, number, parse_vector, print_json, usable
+from .common import check_axis, check_core, console, design_from, number, parse_vector, print_json, usable
 from .motor import ANGLE
 
 MODES = ("servo", "ramped", "settled")
@@ -36,101 +35,116 @@ def move(
                                                                       "frame."),
     angle: float = typer.Option(..., "--angle", callback=ANGLE, help="Rotation angle in degrees."),
     time: float = typer.Option(None, "--time", callback=number("s", 0, 3600, low_open=True, what="the turn's time"),
-                               help="Servo only: the turn's time in seconds (default --fastest)."),
+                               help="Servo only: the turn's time in seconds, at least the bang-bang bound (default "
+                                    "--fastest)."),
     fastest: bool = typer.Option(False, "--fastest", help="The fastest turn the drive guarantees (the default)."),
     mode: str = typer.Option("servo", "--mode", callback=_check_mode,
                              help="servo (continuous currents), ramped (relay steps at the pull-out rate) or "
                                   "settled (relay steps, each settled)."),
     design_path: Path = typer.Option(None, "--design", help="Design file; default the built-in prototype."),
+    core: str = typer.Option(None, "--core", callback=check_core,
+                             help="air or iron: the coils' core (default the one the design states: iron for the "
+                                  "prototype), the same winding either way."),
     sensor: str = typer.Option("ideal", "--sensor", callback=_check_sensor,
-                               help="Servo: where the orientation comes from: ideal (the true one, plus "
+                               help="Simulated servo: where the orientation comes from: ideal (the true one, plus "
                                     "--sensor-noise), hall (the stator's magnetometer array and its estimator) or "
                                     "imu (gyro, accelerometer and magnetometer in the rotor)."),
-    sensor_noise: float = typer.Option(0.0, "--sensor-noise", callback=number("degrees", 0, 10,
-                                                                              what="sensor noise σ"),
-                                       help="Servo: orientation sensor noise σ in degrees."),
+    sensor_noise: float = typer.Option(None, "--sensor-noise", callback=number("degrees", 0, 10,
+                                                                               what="sensor noise σ"),
+                                       help="Simulated servo with --sensor ideal: orientation noise σ in degrees "
+                                            "(default 0)."),
+    tolerance: float = typer.Option(0.05, "--tolerance", callback=number("degrees", 0, 180, low_open=True,
+                                                                         what="the tolerance"),
+                                    help="A run ending farther than this from the turn's end (degrees) exits 1."),
     out: Path = typer.Option(Path("spherestep-move"), "--out", help="Output folder."),
     as_json: bool = typer.Option(False, "--json", help="Print the summary as JSON."),
     port: str = typer.Option(None, "--port", help="Servo on hardware: the coil controller's serial device "
                                                   "(protocol 2, docs/protocol.md), e.g. /dev/ttyACM0."),
     emulate: bool = typer.Option(False, "--emulate", help="Servo on the emulated motor behind a pseudo-terminal."),
-    rate: float = typer.Option(200.0, "--rate", callback=number("Hz", 1, 2000, what="the loop rate"),
-                               help="With --port/--emulate: the loop rate in Hz."),
+    rate: float = typer.Option(None, "--rate", callback=number("Hz", 1, 2000, what="the loop rate"),
+                               help="With --port/--emulate: the loop rate in Hz (default 200)."),
 ) -> None:
-    """Drive a turn about an axis on the simulated motor (magnets' torque map, 24 V / 100 W supply) and write the
-    trajectory (trajectory.csv), coil currents (currents.csv), power (power.csv), a plot (move.png) and a summary
-    (move.json).
+    """Drive a turn about an axis on the simulated motor (the design's own model: the iron-cored coils of the
+    prototype, their winding's limits, 24 V / 100 W supply) and write the trajectory (trajectory.csv), coil currents
+    (currents.csv), power (power.csv), a plot (move.png) and a summary (move.json), which say the model used.
+    Exit status 1 (after writing the files) when the run did not arrive within --tolerance of the turn's end.
 
     Example: [bold]spherestep move --axis 1,0.5,2 --angle 360 --fastest --mode servo --sensor-noise 0.02[/bold]
 
     With --port DEV (or --emulate) the servo runs on the coil controller over its serial link (or on the emulated
-    motor behind a pseudo-terminal) with live status, its log streamed to OUT/servo-log.csv and a summary in
-    OUT/servo.json; exit status 1 when a fault ended the run (every coil is off either way).
+    motor behind a pseudo-terminal) with live status, its log streamed to OUT/servo-log.csv; exit status 1 when a
+    fault ended the run (every coil is off either way) or it missed the tolerance.
     Example: [bold]spherestep move --axis 1,0.5,2 --angle 360 --time 2.4 --emulate[/bold]
     """
-    from ..dynamics import drive_turn as drive
+    import numpy as np
 
+    from .. import checks
+    from ..drive import DriveResult, check_options, choose_model, drive_turn
+    from ..drive.turn import check_duration
+    from ..errors import ComputationError, InputError
+    from ..outputs import Outputs
+    from .progress import progress
+
+    backend = "port" if port is not None else "emulated" if emulate else "simulated"
     if time is not None and fastest:
         raise bad_value("--time", "left out with --fastest (one or the other)", time)
     if time is not None and mode != "servo":
         raise bad_value("--time", "given only with --mode servo (relay modes run at their own pace)", time)
-    if port is not None or emulate:
-        if mode != "servo":
-            raise bad_value("--mode", "servo with --port/--emulate (relay plans run with spherestep run)", mode)
-        if port is not None and emulate:
-            raise bad_value("--port", "left out with --emulate (one or the other)", port)
-    out = output_folder(out, "--out")  # before the work: a bad location costs nothing
-    design = usable(design_from(design_path))
-    if port is not None or emulate:
-        return _on_hardware(design, axis, angle, time, port, emulate, rate, out, as_json)
+    if port is not None and emulate:
+        raise bad_value("--port", "left out with --emulate (one or the other)", port)
+    if backend != "simulated" and mode != "servo":
+        raise bad_value("--mode", "servo with --port/--emulate (relay plans run with spherestep run)", mode)
+    if rate is not None and backend == "simulated":
+        raise bad_value("--rate", "given only with --emulate or --port (the simulated servo runs at 1 kHz); drop "
+                        "--rate", rate)
+    if sensor != "ideal" and backend != "simulated":
+        raise bad_value("--sensor", "ideal (left out) with --emulate/--port (the loop reads the stator's "
+                        "magnetometer array)", sensor)
+    if sensor_noise is not None and backend != "simulated":
+        raise bad_value("--sensor-noise", "left out with --emulate/--port (the noise is the magnetometers' own)",
+                        sensor_noise)
     if sensor != "ideal" and mode != "servo":
         raise bad_value("--sensor", "ideal unless --mode servo (relay modes run open loop)", sensor)
-    if sensor != "ideal" and sensor_noise:
+    if sensor_noise is not None and mode != "servo":
+        raise bad_value("--sensor-noise", "given only with --mode servo (relay modes run open loop)", sensor_noise)
+    if sensor != "ideal" and sensor_noise is not None:
         raise bad_value("--sensor-noise", "left out with --sensor hall or imu (their noise is the part's own)",
                         sensor_noise)
-    result = drive(design, parse_vector(axis, "--axis"), math.radians(angle), mode=mode, duration=time,
-                   sensor_noise=math.radians(sensor_noise), sensor=sensor)
-    written = result.write(out)
-    s = result.summary
+    try:
+        axis_vec = checks.axis(parse_vector(axis, "--axis"), "--axis")
+    except InputError:  # say it with the text the user typed
+        raise bad_value("--axis", "a non-zero 3-vector X,Y,Z (not all components zero or below 1e-150)", axis) \
+            from None
+    noise = math.radians(sensor_noise or 0.0)
+    check_options(mode, backend, duration=time, sensor=sensor, sensor_noise=noise, port=port, rate=rate)
+    out = output_folder(out, "--out")  # before the work: a bad location costs nothing
+    design = usable(design_from(design_path))
+    from ..magnetics import design_model
+
+    own = design_model(design, core)
+    if time is not None:  # before the progress starts: a refusal is one line
+        check_duration(design, axis_vec, math.radians(angle), choose_model(design, own), time, "--time",
+                       start=None if backend == "simulated" else np.eye(3))
+    with progress("driving the turn", enabled=not as_json) as say:
+        names = DriveResult.FILES + (("servo-log.csv",) if backend != "simulated" else ())
+        files = Outputs(out, names)
+        with files:
+            out.mkdir(parents=True, exist_ok=True)
+            result = drive_turn(design, axis_vec, math.radians(angle), mode=mode, backend=backend,
+                                model=own, duration=time, sensor=sensor, sensor_noise=noise,
+                                port=port, rate=rate, tolerance=math.radians(tolerance),
+                                log=out / "servo-log.csv" if backend != "simulated" else None, progress=say)
+            written = result.write(out)
+    if backend != "simulated":
+        written.append(out / "servo-log.csv")
     if as_json:
-        print_json(s | {"files": [str(p) for p in written]})
-        return
-    console.print(f"{mode}: {angle:g}° about ({', '.join(f'{a:.3f}' for a in s['axis'])}) in {s['time_s']:.3g} s; "
-                  f"final error {s['final_error_deg']:.3g}°, max tracking error {s['max_tracking_error_deg']:.3g}°; "
-                  f"power peak {s['peak_power_W']:.3g} W, mean {s['mean_power_W']:.3g} W; "
-                  f"wrote {len(written)} files to {out}/")
-
-
-def _on_hardware(design, axis, angle, time, port, emulate, rate, out, as_json) -> None:
-    """The servo on a controller or the emulated motor: live status, streamed log, summary (docs/protocol.md)."""
-    import numpy as np
-
-    from .. import so3
-    from ..atomic import write_text
-    from ..hardware.session import move_on_hardware
-
-    out.mkdir(parents=True, exist_ok=True)
-    shown = [-1.0]
-
-    def status(t, R, w, currents):
-        if t - shown[0] >= 0.25 and not as_json:
-            shown[0] = t
-            console.print(f"  t {t:6.2f} s   turned {math.degrees(float(np.linalg.norm(so3.log(R)))):7.2f}°   "
-                          f"|ω| {float(np.linalg.norm(w)):5.2f} rad/s   max |i| {float(np.abs(currents).max()):.3f} A")
-
-    session = move_on_hardware(design, parse_vector(axis, "--axis"), math.radians(angle), duration=time, port=port,
-                               emulate=emulate, rate=rate, log=out / "servo-log.csv", status=status)
-    summary = session.report.to_dict()
-    if session.final is not None:
-        summary["emulated_final_error_deg"] = math.degrees(session.final_error())
-    write_text(out / "servo.json", json.dumps(summary, indent=2) + "\n")
-    if as_json:
-        print_json(summary)
+        print_json(result.to_dict() | {"files": [str(p) for p in written]})
     else:
-        console.print(f"servo on {'the emulated motor' if emulate else port}: {summary['outcome']} after "
-                      f"{summary['cycles']} cycles at {summary['rate_Hz']:.0f} Hz ({summary['missed']} deadlines "
-                      f"missed); all off {'acknowledged' if summary['off_acknowledged'] else 'NOT acknowledged'}"
-                      + (f"; final error {summary['emulated_final_error_deg']:.3g}°" if session.final is not None
-                         else "") + (f"; {summary['message']}" if summary["message"] else ""))
-    if session.report.outcome != "done":
-        raise typer.Exit(1)
+        console.print(result.summary_line() + f"; wrote {len(written)} files to {out}/")
+        if backend != "simulated":
+            d = result.details
+            console.print(f"loop: {d.outcome} after {d.cycles} cycles at {d.rate:.0f} Hz ({d.missed} deadlines "
+                          f"missed); all off {'acknowledged' if d.off_acknowledged else 'NOT acknowledged'}"
+                          + (f"; {d.message}" if d.message else ""))
+    if not result.ok:
+        raise ComputationError(result.verdict())

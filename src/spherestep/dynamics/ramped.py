@@ -30,7 +30,6 @@ from ..control.limits import DriveLimits
 from ..errors import bad_value
 from ..motor import coil_currents
 from .._fast.threads import single_blas_thread
-from ..units import in_radians
 from .rotor import Rotor
 from .simulate import EXECUTED_TOL, Integrator
 
@@ -52,6 +51,32 @@ def step_intervals(n: int, max_rate: float, start_rate: float = START_RATE, ramp
     rate = np.minimum.reduce([np.sqrt(f0 ** 2 + 2 * A * p), np.full(n, max_rate),
                               np.sqrt(f0 ** 2 + 2 * A * np.maximum(n - 1 - p, 0.0))])
     return 1.0 / rate
+
+
+@dataclass(frozen=True)
+class RampedSummary:
+    """What a ramped run did (:meth:`RampedRun.summary`): ``arrival_time`` (s; ``inf`` when the rotor is not
+    within the tolerance of the plan's last state at the end), ``last_step`` (s, when it was energised),
+    ``lost_steps``, ``final_error`` to the turn's target and ``max_tracking_error`` to the energised step's state
+    (rad), ``peak_power`` and ``mean_power`` (W)."""
+
+    arrival_time: float
+    last_step: float
+    lost_steps: bool
+    final_error: float
+    max_tracking_error: float
+    peak_power: float
+    mean_power: float
+
+    def to_dict(self, degrees: bool = True) -> dict:
+        """JSON-ready; angles in degrees (``*_deg``) or radians (``*_rad``); an arrival that never happened is
+        ``null``."""
+        unit, conv = ("deg", math.degrees) if degrees else ("rad", float)
+        return {"arrival_time_s": self.arrival_time if math.isfinite(self.arrival_time) else None,
+                "last_step_s": self.last_step, "lost_steps": self.lost_steps,
+                f"final_error_{unit}": conv(self.final_error),
+                f"max_tracking_error_{unit}": conv(self.max_tracking_error),
+                "peak_power_W": self.peak_power, "mean_power_W": self.mean_power}
 
 
 @dataclass(frozen=True)
@@ -98,19 +123,22 @@ class RampedRun:
         """Electrical power (W) per sample: ``coil_power`` × the number of energised coils."""
         return self.coil_power * np.count_nonzero(self.currents, axis=1)
 
-    def to_dict(self, degrees: bool = True) -> dict:
-        """The :meth:`summary` (angles in degrees; ``degrees=False`` gives radians)."""
-        return self.summary() if degrees else in_radians(self.summary())
+    @property
+    def step_targets(self) -> np.ndarray:
+        """``(T, 3, 3)``: per sample, the planned state of the step energised then."""
+        return self.planned[np.clip(np.searchsorted(self.step_times, self.times, side="right"), 0,
+                                    len(self.planned) - 1)]
 
-    def summary(self) -> dict:
+    def to_dict(self, degrees: bool = True) -> dict:
+        """The :meth:`summary`, JSON-ready (angles in degrees; ``degrees=False`` gives radians)."""
+        return self.summary().to_dict(degrees)
+
+    def summary(self) -> RampedSummary:
         """Arrival time and last step (s), lost steps, final error to the turn's target and largest distance to
-        the energised step's state (degrees), peak and mean power (W)."""
-        track = so3.distance(self.orientations, self.planned[np.clip(
-            np.searchsorted(self.step_times, self.times, side="right"), 0, len(self.planned) - 1)])
-        return {"arrival_time_s": self.arrival_time(), "last_step_s": float(self.step_times[-1]),
-                "lost_steps": self.lost, "final_error_deg": math.degrees(self.final_error),
-                "max_tracking_error_deg": math.degrees(float(track.max())),
-                "peak_power_W": float(self.power.max()), "mean_power_W": float(self.power.mean())}
+        the energised step's state (rad), peak and mean power (W)."""
+        track = so3.distance(self.orientations, self.step_targets)
+        return RampedSummary(self.arrival_time(), float(self.step_times[-1]), self.lost, self.final_error,
+                             float(track.max()), float(self.power.max()), float(self.power.mean()))
 
 
 @single_blas_thread
@@ -168,11 +196,13 @@ RATES = (1.0, 2.0, 3.0, 5.0, 7.0, 10.0, 14.0, 20.0, 28.0, 40.0)  # steps/s, the 
 @dataclass(frozen=True)
 class PullOut:
     """Result of :func:`pull_out_rate`: ``rate`` the highest cruise rate without a lost step (steps/s, ``0`` if
-    none), its ``run``, and every rate tried with whether it lost a step (``tried``, in the order run)."""
+    none), its ``run``, every rate tried with whether it lost a step (``tried``, in the order run) and the run at
+    the slowest rate tried (``slowest``: what happened when every rate loses a step)."""
 
     rate: float
     run: RampedRun | None
     tried: tuple[tuple[float, bool], ...]
+    slowest: RampedRun | None = None
 
 
 def pull_out_rate(design, plan, model, *, rotor: Rotor, rates=RATES, iterations: int = 3, **kwargs) -> PullOut:
@@ -190,7 +220,7 @@ def pull_out_rate(design, plan, model, *, rotor: Rotor, rates=RATES, iterations:
         runs[rate] = run
     good = [r for r, lost in tried if not lost]
     if not good:
-        return PullOut(0.0, None, tuple(tried))
+        return PullOut(0.0, None, tuple(tried), runs[rates[0]])
     best = max(good)
     above = [r for r in rates if r > best]
     if above:
@@ -204,4 +234,4 @@ def pull_out_rate(design, plan, model, *, rotor: Rotor, rates=RATES, iterations:
                 bad = mid
             else:
                 best = mid
-    return PullOut(best, runs[best], tuple(tried))
+    return PullOut(best, runs[best], tuple(tried), runs[rates[0]])

@@ -23,6 +23,29 @@ from .._fast.threads import single_blas_thread
 EXECUTED_TOL = math.radians(0.5)
 
 
+@dataclass(frozen=True)
+class SimulationSummary:
+    """What a settled run did (:meth:`Simulation.summary`): ``steps``, whether every step was ``executed``, the
+    settling errors ``settled_error_median`` and ``settled_error_max`` against the ``tolerance`` (rad), the
+    ``missed_steps`` (indices) and the ``simulated`` time (s)."""
+
+    steps: int
+    executed: bool
+    settled_error_median: float
+    settled_error_max: float
+    tolerance: float
+    missed_steps: tuple[int, ...]
+    simulated: float
+
+    def to_dict(self, degrees: bool = True) -> dict:
+        """JSON-ready; angles in degrees (``*_deg``), or radians (``*_rad``) with ``degrees=False``."""
+        unit, conv = ("deg", math.degrees) if degrees else ("rad", float)
+        return {"steps": self.steps, "executed": self.executed,
+                f"settled_error_median_{unit}": conv(self.settled_error_median),
+                f"settled_error_max_{unit}": conv(self.settled_error_max), f"tolerance_{unit}": conv(self.tolerance),
+                "missed_steps": list(self.missed_steps), "simulated_s": self.simulated}
+
+
 @dataclass
 class Simulation:
     """A simulated run: ``times (T,)`` s, ``orientations (T, 3, 3)``, ``angular_velocity (T, 3)`` rad/s,
@@ -53,14 +76,13 @@ class Simulation:
         """Indices of the steps that did not settle within ``tolerance``."""
         return np.flatnonzero(self.step_errors > self.tolerance)
 
-    def summary(self) -> dict:
-        """Steps, execution, settling errors (degrees), the steps that missed the tolerance and the simulated
-        time, JSON-ready."""
-        err = np.degrees(self.step_errors)
-        return {"steps": len(self.planned) - 1, "executed": self.executed,
-                "settled_error_median_deg": float(np.median(err)), "settled_error_max_deg": float(err.max()),
-                "tolerance_deg": math.degrees(self.tolerance), "missed_steps": self.missed_steps.tolist(),
-                "simulated_s": float(self.times[-1])}
+    def summary(self) -> SimulationSummary:
+        """Steps, execution, settling errors (rad), the steps that missed the tolerance and the simulated time
+        (:class:`SimulationSummary`; ``.to_dict()`` for people)."""
+        err = self.step_errors
+        return SimulationSummary(len(self.planned) - 1, self.executed, float(np.median(err)), float(err.max()),
+                                 float(self.tolerance), tuple(int(k) for k in self.missed_steps),
+                                 float(self.times[-1]))
 
     def to_csv(self, path=None, axis=None) -> str:
         """One row per recorded sample: ``t_s``, unit quaternion ``qw, qx, qy, qz`` (scalar first), angular

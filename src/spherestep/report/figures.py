@@ -421,14 +421,14 @@ def capability_figure(capability) -> go.Figure:
 
 
 def servo_figure(run) -> go.Figure:
-    """A servo run (a :class:`~spherestep.dynamics.ServoRun`): tracking error (°) and coil currents (A) over time,
-    and the electrical power drawn from the supply (W)."""
+    """A driven servo run (a :class:`~spherestep.drive.DriveResult`): tracking error and the loop's sensor error
+    (°), coil currents (A) over time, and the electrical power drawn from the supply (W)."""
     keep = np.unique(np.linspace(0, len(run.times) - 1, min(len(run.times), MAX_TRACE_POINTS)).round().astype(int))
     t = _f32(run.times[keep])
     fig = make_subplots(rows=3, cols=1, shared_xaxes=True, row_heights=[0.36, 0.4, 0.24], vertical_spacing=0.05)
     fig.add_trace(go.Scatter(x=t, y=_f32(np.degrees(run.tracking_error[keep])), mode="lines", name="rotor − trajectory",
                              line={"color": "#c0392b", "width": 1.2}), row=1, col=1)
-    fig.add_trace(go.Scatter(x=t, y=_f32(np.degrees(so3.distance(run.estimates[keep], run.orientations[keep]))),
+    fig.add_trace(go.Scatter(x=t, y=_f32(np.degrees(run.sensor_error[keep])),
                              mode="lines", name="sensor − rotor", line={"color": "#888", "width": 1}), row=1, col=1)
     for k in range(run.currents.shape[1]):
         fig.add_trace(go.Scatter(x=t, y=_f32(run.currents[keep, k]), mode="lines", name=f"coil {k}",

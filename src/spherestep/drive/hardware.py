@@ -1,0 +1,85 @@
+"""The servo on a coil controller (a serial ``port``) or the emulated motor, as a
+:class:`~spherestep.drive.result.DriveResult`.
+
+The loop itself — estimator, control law, the link with protocol version 2, all off at the end — is
+:func:`spherestep.hardware.session.move_on_hardware` (its application assembly moves here once the servo law's
+rewrite lands). The turn starts where the rotor is taken to be (the identity); its trajectory is the fastest
+turn, the given ``duration`` or the fixed time where the planner refuses the model, as in simulation
+(:meth:`~spherestep.drive.turn.Turn.servo_trajectory`). Errors are measured against the emulated rotor (its
+published truth, every 50 ms, and 0.15 s after the end) or, on a real port, against the loop's own estimate.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .. import so3
+from .result import HardwareDetails
+
+STATUS_EVERY = 0.25  # s between progress lines from the loop
+
+
+def drive_on_hardware(design, axis, angle: float, chosen, *, duration: float | None, port: str | None,
+                      emulate: bool, rate: float, log=None, tolerance: float, progress=None):
+    """Run the servo turn on ``port`` or the emulated motor (module docstring) on ``chosen``'s model and limits."""
+    from ..dynamics import Rotor
+    from ..hardware.session import move_on_hardware
+    from .turn import Turn, check_duration
+
+    job = Turn(design, axis, angle, chosen, tolerance, progress)
+    if duration is not None:
+        check_duration(design, job.axis, job.angle, chosen, duration, start=np.eye(3))
+    rotor = Rotor.from_design(design)
+    traj, kind, note = job.servo_trajectory(np.eye(3), duration, rotor)
+    shown = [-math.inf]
+
+    def status(t, R, w, currents):
+        if progress is not None and t - shown[0] >= STATUS_EVERY:
+            shown[0] = t
+            progress(f"t {t:6.2f} s   turned {math.degrees(float(np.linalg.norm(so3.log(R)))):7.2f}°   "
+                     f"|ω| {float(np.linalg.norm(w)):5.2f} rad/s   max |i| {float(np.abs(currents).max()):.3f} A")
+
+    job.say(f"servo on {'the emulated motor' if emulate else port} at {rate:g} Hz")
+    session = move_on_hardware(design, job.axis, job.angle, duration=None if kind == "fastest" else traj.duration,
+                               port=port, emulate=emulate, rate=rate, log=log, status=status, model=chosen.model,
+                               drive=chosen.limits)
+    report = session.report
+    end = np.asarray(session.reference(1e9)[0])
+    if report.cycles:
+        times = np.asarray(report.times, dtype=float)
+        estimates = np.asarray(report.orientations, dtype=float)
+        currents = np.asarray(report.currents, dtype=float)
+    else:  # the loop ended before its first cycle
+        times, estimates, currents = np.zeros(1), np.eye(3)[None], np.zeros((1, chosen.model.coil_count))
+    targets = np.array([np.asarray(session.reference(t)[0]) for t in times])
+    if emulate and session.truth:
+        truth_t = np.array([t for t, _ in session.truth])
+        truth_R = np.array([s.R for _, s in session.truth])
+        truth_targets = np.array([np.asarray(session.reference(t)[0]) for t in truth_t])
+        max_tracking = float(so3.distance(truth_R, truth_targets).max())
+    else:
+        max_tracking = float(so3.distance(estimates, targets).max())
+    final = session.final_error() if emulate and session.final is not None else \
+        float(so3.distance(estimates[-1], end))
+    if report.outcome != "done":
+        time, arrival = math.inf, f"the loop ended with {report.outcome}: {report.message}".rstrip(": ")
+    else:
+        time, arrival = _arrival(times, so3.distance(estimates, end), tolerance)
+    details = HardwareDetails(report.outcome, report.message, report.cycles, report.rate, rate, report.missed,
+                              report.off_acknowledged, kind, note, float(traj.duration),
+                              "" if report.log is None else str(report.log), bool(emulate))
+    power = np.einsum("tn,tn->t", currents, currents) * chosen.limits.resistance
+    return job.result("servo", "emulated" if emulate else "port", times, estimates, targets, np.zeros(len(times)),
+                      currents, power, time, arrival, final, max_tracking, details)
+
+
+def _arrival(times, errors, tolerance: float) -> tuple[float, str]:
+    """First time after which ``errors`` stay within ``tolerance``, or ``inf`` and why."""
+    outside = np.flatnonzero(errors > tolerance)
+    if len(outside) == 0:
+        return float(times[0]), ""
+    if outside[-1] == len(errors) - 1:
+        return math.inf, f"not within {math.degrees(tolerance):.3g}° of the turn's end at the end of the loop"
+    return float(times[outside[-1] + 1]), ""

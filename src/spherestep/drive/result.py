@@ -1,0 +1,269 @@
+"""One driven turn's result, whatever drove it: :class:`DriveResult` (arrays, numbers, per-mode details).
+
+Angles are radians inside; :meth:`DriveResult.to_dict` gives degrees for people (``degrees=True``) and is
+JSON-ready with no ``inf``/``NaN``: an arrival that never happened is ``null`` beside the reason
+(``arrival_note``). :meth:`DriveResult.write` writes the files of ``spherestep move``: ``trajectory.csv`` (time,
+rotor and target quaternions, error in degrees), ``currents.csv`` (A per coil), ``power.csv`` (W), ``move.png``
+(:func:`figure_drive`) and ``move.json`` (the :meth:`~DriveResult.to_dict`).
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from .. import so3
+
+
+def _angle(degrees: bool):
+    return ("deg", math.degrees) if degrees else ("rad", float)
+
+
+@dataclass(frozen=True)
+class SettledDetails:
+    """The paper's relay steps, each settled: ``steps``, ``dwell`` (s), the rotor's tuned ``damping``
+    (N·m·s/rad), whether every step settled within ``plan_tolerance`` (rad) of the plan (``executed``) and how many
+    did (``steps_settled_on_plan``, of ``steps``)."""
+
+    steps: int
+    dwell: float
+    damping: float
+    executed: bool
+    steps_settled_on_plan: int
+    plan_tolerance: float
+
+    def to_dict(self, degrees: bool = True) -> dict:
+        unit, conv = _angle(degrees)
+        return {"steps": self.steps, "dwell_s": self.dwell, "damping_N_m_s_per_rad": self.damping,
+                "executed": self.executed, "steps_settled_on_plan": self.steps_settled_on_plan,
+                f"plan_tolerance_{unit}": conv(self.plan_tolerance)}
+
+
+@dataclass(frozen=True)
+class RampedDetails:
+    """The relay steps ramped: the ``pull_out_rate`` (steps/s; 0 when every rate lost a step, the run shown is then
+    the slowest rate's), when the ``last_step`` was energised (s), and every cruise rate ``tried`` with whether it
+    lost a step."""
+
+    pull_out_rate: float
+    last_step: float
+    tried: tuple[tuple[float, bool], ...]
+
+    def to_dict(self, degrees: bool = True) -> dict:
+        return {"pull_out_rate_steps_per_s": self.pull_out_rate, "last_step_s": self.last_step,
+                "tried": [{"rate_steps_per_s": r, "lost_a_step": lost} for r, lost in self.tried]}
+
+
+@dataclass(frozen=True)
+class ServoDetails:
+    """The simulated servo: ``trajectory`` how its time was chosen (``"fastest"``: :func:`~spherestep.control.
+    plan_turn`; ``"given"``: the caller's ``duration``; ``"fixed"``: ``plan_turn`` refused this model, the turn
+    takes the fixed time, ``note`` says why), ``motion_time`` (s), the ``sensor`` and its ``sensor_noise`` and
+    largest ``sensor_error`` (rad), the rotor's ``damping`` (N·m·s/rad), ``mean_copper_power`` (W),
+    ``peak_current`` (A) and the ``reachable_fraction`` of periods whose torque command was met."""
+
+    trajectory: str
+    note: str
+    motion_time: float
+    sensor: str
+    sensor_noise: float
+    sensor_error: float
+    damping: float
+    mean_copper_power: float
+    peak_current: float
+    reachable_fraction: float
+
+    def to_dict(self, degrees: bool = True) -> dict:
+        unit, conv = _angle(degrees)
+        return {"trajectory": self.trajectory, "trajectory_note": self.note, "motion_time_s": self.motion_time,
+                "sensor": self.sensor, f"sensor_noise_{unit}": conv(self.sensor_noise),
+                f"sensor_error_max_{unit}": conv(self.sensor_error), "damping_N_m_s_per_rad": self.damping,
+                "mean_copper_power_W": self.mean_copper_power, "peak_current_A": self.peak_current,
+                "reachable_fraction": self.reachable_fraction}
+
+
+@dataclass(frozen=True)
+class HardwareDetails:
+    """The servo on a coil controller (``port``) or the emulated motor: the loop's ``outcome`` (``"done"`` or the
+    fault code) and ``message``, ``cycles``, achieved ``rate`` and requested ``loop_rate`` (Hz), ``missed``
+    deadlines, whether the device acknowledged all off (``off_acknowledged``), ``trajectory``/``note``/
+    ``motion_time`` as for the simulated servo, the ``log`` file, and ``truth``: whether the errors are measured
+    against the emulated rotor (``True``) or the loop's own estimate (``False``, a real port). Power on hardware
+    is the copper power ``R Σ i²`` of the commanded currents (nothing measures the supply)."""
+
+    outcome: str
+    message: str
+    cycles: int
+    rate: float
+    loop_rate: float
+    missed: int
+    off_acknowledged: bool
+    trajectory: str
+    note: str
+    motion_time: float
+    log: str
+    truth: bool
+
+    def to_dict(self, degrees: bool = True) -> dict:
+        return {"outcome": self.outcome, "message": self.message, "cycles": self.cycles, "rate_Hz": self.rate,
+                "loop_rate_Hz": self.loop_rate, "missed": self.missed, "off_acknowledged": self.off_acknowledged,
+                "trajectory": self.trajectory, "trajectory_note": self.note, "motion_time_s": self.motion_time,
+                "log": self.log, "errors_against": "emulated rotor" if self.truth else "the loop's estimate"}
+
+
+Details = SettledDetails | RampedDetails | ServoDetails | HardwareDetails
+
+
+@dataclass(frozen=True)
+class DriveResult:
+    """A turn of ``angle`` rad about ``axis`` (unit, fixed frame) driven in ``mode`` (servo, ramped, settled) on
+    ``backend`` (simulated, emulated, port) with the torque model labelled ``model``.
+
+    Per sample: ``times (T,)`` s, ``orientations`` and ``targets`` ``(T, 3, 3)`` (the target of the energised step
+    for relays, the trajectory for the servo), ``sensor_error (T,)`` rad (the loop's estimate against the rotor;
+    zero for the open-loop relays), coil ``currents (T, N)`` A and electrical ``power (T,)`` W. Numbers: ``time``
+    (s) to arrive for good (``inf`` if it never did, ``arrival_note`` says why), ``final_error`` to the turn's end
+    and ``max_tracking_error`` to the target (rad), ``peak_power``/``mean_power`` (W), the ``tolerance`` (rad) the
+    run is judged by, and the mode's ``details``."""
+
+    mode: str
+    backend: str
+    model: str
+    axis: np.ndarray
+    angle: float
+    times: np.ndarray
+    orientations: np.ndarray
+    targets: np.ndarray
+    sensor_error: np.ndarray
+    currents: np.ndarray
+    power: np.ndarray
+    time: float
+    arrival_note: str
+    final_error: float
+    max_tracking_error: float
+    peak_power: float
+    mean_power: float
+    tolerance: float
+    details: Details
+
+    @property
+    def tracking_error(self) -> np.ndarray:
+        """Park distance (rad) from the rotor to its target, per sample."""
+        return so3.distance(self.orientations, self.targets)
+
+    @property
+    def arrived(self) -> bool:
+        """The rotor arrived at the turn's end for good (``time`` is finite)."""
+        return math.isfinite(self.time)
+
+    @property
+    def ok(self) -> bool:
+        """Arrived, and the final error is within the tolerance: the only result that may be reported as done."""
+        return self.arrived and self.final_error <= self.tolerance
+
+    def verdict(self) -> str:
+        """One line: why the run is not :attr:`ok` (empty when it is)."""
+        if self.ok:
+            return ""
+        if not self.arrived:
+            return (f"{self.mode} on the {self.backend} motor did not arrive: {self.arrival_note} (final error "
+                    f"{math.degrees(self.final_error):.3g}°)")
+        return (f"{self.mode} on the {self.backend} motor ended {math.degrees(self.final_error):.3g}° from the turn's "
+                f"end, more than the tolerance {math.degrees(self.tolerance):.3g}° (--tolerance to judge it "
+                f"otherwise)")
+
+    def to_dict(self, degrees: bool = True) -> dict:
+        """JSON-ready (no ``inf``/``NaN``): angles in degrees, or radians with ``degrees=False``."""
+        unit, conv = _angle(degrees)
+        return {"mode": self.mode, "backend": self.backend, "model": self.model, "axis": self.axis.tolist(),
+                f"angle_{unit}": conv(self.angle), "time_s": self.time if self.arrived else None,
+                "arrival_note": self.arrival_note, f"final_error_{unit}": conv(self.final_error),
+                f"max_tracking_error_{unit}": conv(self.max_tracking_error), "peak_power_W": self.peak_power,
+                "mean_power_W": self.mean_power, f"tolerance_{unit}": conv(self.tolerance),
+                "within_tolerance": self.ok, "details": self.details.to_dict(degrees)}
+
+    def summary_line(self) -> str:
+        """The console line: mode, backend, model, turn, time, errors, power."""
+        time = f"in {self.time:.3g} s" if self.arrived else "never arrived"
+        return (f"{self.mode} ({self.backend}, model {self.model}): {math.degrees(self.angle):g}° about "
+                f"({', '.join(f'{a:.3f}' for a in self.axis)}) {time}; final error "
+                f"{math.degrees(self.final_error):.3g}°, max tracking error {math.degrees(self.max_tracking_error):.3g}°;"
+                f" power peak {self.peak_power:.3g} W, mean {self.mean_power:.3g} W")
+
+    def trajectory_csv(self) -> str:
+        """``t_s``, rotor quaternion ``qw…qz`` (scalar first), target quaternion, error (degrees)."""
+        from scipy.spatial.transform import Rotation
+
+        q = Rotation.from_matrix(self.orientations).as_quat(scalar_first=True)
+        qt = Rotation.from_matrix(self.targets).as_quat(scalar_first=True)
+        buf = io.StringIO()
+        w = csv.writer(buf, lineterminator="\n")
+        w.writerow(["t_s", "qw", "qx", "qy", "qz", "target_qw", "target_qx", "target_qy", "target_qz", "error_deg"])
+        for row in zip(self.times, q, qt, np.degrees(self.tracking_error)):
+            w.writerow([f"{row[0]:.6f}", *(f"{x:.12f}" for x in row[1]), *(f"{x:.12f}" for x in row[2]),
+                        f"{row[3]:.6f}"])
+        return buf.getvalue()
+
+    def currents_csv(self) -> str:
+        """``t_s`` and one column per coil, ``coil_k_A``."""
+        buf = io.StringIO()
+        w = csv.writer(buf, lineterminator="\n")
+        w.writerow(["t_s"] + [f"coil_{k}_A" for k in range(self.currents.shape[1])])
+        for t, c in zip(self.times, self.currents):
+            w.writerow([f"{t:.6f}", *(f"{x:.6f}" for x in c)])
+        return buf.getvalue()
+
+    def power_csv(self) -> str:
+        """``t_s, power_W``."""
+        return "t_s,power_W\n" + "".join(f"{t:.6f},{p:.6f}\n" for t, p in zip(self.times, self.power))
+
+    def figure(self):
+        """:func:`figure_drive` of this run."""
+        time = f"{self.time:.3g} s" if self.arrived else "never arrived"
+        return figure_drive(self.times, self.tracking_error, self.currents, self.power,
+                            f"{self.mode} ({self.model}): {math.degrees(self.angle):g}° turn, time {time}, final "
+                            f"error {math.degrees(self.final_error):.3g}°")
+
+    FILES = ("trajectory.csv", "currents.csv", "power.csv", "move.png", "move.json")
+
+    def write(self, out: str | Path) -> list[Path]:
+        """:attr:`FILES` into ``out`` (created), each written atomically; returns the paths."""
+        from ..atomic import atomic_path, write_text
+
+        out = Path(out)
+        out.mkdir(parents=True, exist_ok=True)
+        paths = [write_text(out / "trajectory.csv", self.trajectory_csv()),
+                 write_text(out / "currents.csv", self.currents_csv()),
+                 write_text(out / "power.csv", self.power_csv())]
+        with atomic_path(out / "move.png") as tmp:
+            self.figure().savefig(tmp, dpi=120, format="png")
+        paths.append(out / "move.png")
+        paths.append(write_text(out / "move.json", json.dumps(self.to_dict(), indent=1, allow_nan=False)))
+        return paths
+
+
+def figure_drive(times, errors, currents, power, title: str = ""):
+    """Error to the target (degrees, log scale; ``errors`` in rad), coil currents (A) and electrical power (W)
+    against time (s): the figure of a driven run (``spherestep move``, the demo's servo run)."""
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(9, 7.5), layout="constrained")
+    ax1, ax2, ax3 = fig.subplots(3, 1, sharex=True)
+    ax1.semilogy(times, np.maximum(np.degrees(errors), 1e-5), color="C0")
+    ax1.set_ylabel("error to target (°)")
+    ax1.set_title(title)
+    ax1.grid(alpha=0.3, which="both")
+    ax2.plot(times, currents, lw=0.7)
+    ax2.set_ylabel("coil currents (A)")
+    ax2.grid(alpha=0.3)
+    ax3.plot(times, power, color="C3", lw=0.8)
+    ax3.set_ylabel("electrical power (W)")
+    ax3.set_xlabel("time (s)")
+    ax3.grid(alpha=0.3)
+    return fig
