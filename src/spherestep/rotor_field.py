@@ -48,6 +48,7 @@ import math
 
 import numpy as np
 
+from . import checks
 from ._fast import Packed
 from .errors import bad_value
 
@@ -239,9 +240,7 @@ def cutoff(kernel, polarity, tails) -> float | None:
 
 def threads(n) -> int:
     """A thread count for ducc0: an integer ≥ 1."""
-    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
-        raise bad_value("nthreads", "an integer >= 1 (ducc0's threads)", n)
-    return int(n)
+    return checks.count(n, "nthreads", expected="an integer >= 1 (ducc0's threads)")
 
 
 def fast_evaluate(field: RotorField, sign: float, coils: np.ndarray, R: np.ndarray, c: np.ndarray, order: int,

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .. import so3
+from .. import checks, so3
 from ..errors import bad_value
 from ..motor import coil_currents
 from ..statics import is_torque_model
@@ -122,9 +122,8 @@ class Integrator:
     with batched ``(1, 3, 3)`` calls."""
 
     def __init__(self, model, rotor: Rotor, dt: float, compiled: bool = True):
-        if not (math.isfinite(dt) and dt > 0):
-            raise bad_value("dt", "a positive time step in seconds", dt)
-        self.model, self.rotor, self.dt, self.compiled = model, rotor, float(dt), bool(compiled)
+        dt = checks.positive(dt, "dt", "a positive time step in seconds")
+        self.model, self.rotor, self.dt, self.compiled = model, rotor, dt, bool(compiled)
 
     def run(self, R: np.ndarray, w: np.ndarray, currents: np.ndarray, duration: float, record_every: int = 1):
         """Integrate for ``duration`` s from ``(R, ω)``; returns ``(R, ω, times, Rs, ωs, energies)``, the
@@ -187,8 +186,7 @@ def simulate(design, plan, model, dwell: float | None = None, *, rotor: Rotor | 
         dwell = tuning.dwell if dwell is None else dwell
         rotor = tuning.rotor if rotor is None else rotor
         dt = tuning.dt if dt is None else dt
-    if isinstance(dwell, bool) or not (isinstance(dwell, (int, float)) and math.isfinite(dwell) and dwell > 0):
-        raise bad_value("dwell", "a positive time in seconds", dwell)
+    dwell = checks.positive(dwell, "dwell", "a positive time in seconds")
     integrator = Integrator(model, rotor, dt)
     N = plan.coil_count
     R = plan.steps[0].achieved.copy()

@@ -21,6 +21,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .. import checks
 from ..errors import bad_value
 from ..motor import coil_currents
 from ..statics import equilibrium, finite_difference_hessian
@@ -53,8 +54,7 @@ def stiffness(model, R: np.ndarray, currents: np.ndarray) -> np.ndarray:
 @single_blas_thread
 def tune(design, model, zeta: float = 1.0, samples: int = 40, seed: int = 0) -> Tuning:
     """Damping and dwell for ``design`` under the torque ``model`` (see the module docstring)."""
-    if not (math.isfinite(zeta) and zeta > 0):
-        raise bad_value("zeta", "a positive damping ratio", zeta)
+    zeta = checks.positive(zeta, "zeta", "a positive damping ratio")
     states = design.states()
     rng = np.random.default_rng(seed)
     picks = rng.choice(len(states), size=min(samples, len(states)), replace=False)

@@ -24,7 +24,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .. import so3
+from .. import checks, so3
 from ..errors import bad_value
 from ..potential import MotorPotential, ProfileFit, VonMisesFisher, coil_currents, fit_profile
 from ..statics import equilibrium as potential_equilibrium
@@ -135,9 +135,7 @@ class Comparison:
 def compare_models(design, calibration: Calibration, tmap: TorqueMap, *, samples: int = 1000, states: int = 300,
                    meshing: int = COMPARE_MESHING, seed: int = 0) -> Comparison:
     """Torque and stepper-state agreement of the calibrated potential model with magpylib (see the module)."""
-    for label, value, low in (("samples", samples, 1), ("states", states, 1)):
-        if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < low:
-            raise bad_value(label, f"an integer >= {low}", value)
+    samples, states = checks.count(samples, "samples"), checks.count(states, "states")
     rng = np.random.default_rng(seed)
     R = so3.random(samples, rng)
     c = random_drives(len(design.stator), samples, rng, design.failed_coils)

@@ -17,6 +17,7 @@ from dataclasses import dataclass
 import magpylib as magpy
 import numpy as np
 
+from .. import checks
 from ..errors import bad_value
 from ..potential import save_force_curve
 from ._direct import EPS
@@ -63,8 +64,7 @@ def force_curve(design, displacements, meshing: int = CURVE_MESHING, gap: float 
                         f"shape {x.shape}" if x.ndim != 1 or len(x) == 0 else "NaN or infinite entries")
     meshing = as_meshing(meshing)
     g = design.air_gap if gap is None else gap
-    if isinstance(g, bool) or not isinstance(g, (int, float)) or not np.isfinite(g) or g < 0:
-        raise bad_value("gap", "a finite non-negative length in metres", g)
+    g = checks.non_negative(g, "gap", "a finite non-negative length in metres")
     coil = magpy.magnet.Cylinder(dimension=(design.coil_diameter, design.coil_length),
                                  polarization=(0.0, 0.0, coil_polarization(design)),
                                  position=(0.0, 0.0, 0.5 * design.coil_length))

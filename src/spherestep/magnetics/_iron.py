@@ -43,7 +43,7 @@ from magpylib_material_response.demag import demag_tensor
 from magpylib_material_response.meshing import mesh_Cylinder
 from scipy.spatial.transform import Rotation
 
-from ..errors import bad_value
+from .. import checks
 from ._direct import EPS
 from ._model import MU0, z_to
 
@@ -96,8 +96,7 @@ def _layers(z0: float, z1: float, first: float, growth: float, largest: float) -
 
 def mesh_parameters(level: int) -> dict:
     """Mesh of level ``level`` (0 coarse … 6 fine; each level divides the sizes by 2^(1/4)): first slab (m), growth, largest slab (m), lateral cell size (m)."""
-    if isinstance(level, bool) or not isinstance(level, (int, np.integer)) or not 0 <= level <= 6:
-        raise bad_value("level", "a mesh level from 0 (coarse) to 6 (fine)", level)
+    level = checks.count(level, "level", minimum=0, maximum=6, expected="a mesh level from 0 (coarse) to 6 (fine)")
     s = 2.0 ** (-level / 4)
     return {"first": 0.57e-3 * s, "growth": 1.6, "largest": 11.3e-3 * s, "lateral": 7.1e-3 * s}
 

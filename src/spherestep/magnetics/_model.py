@@ -142,9 +142,7 @@ def currents_for(currents, N: int, failed, batch: tuple[int, ...]) -> np.ndarray
 
 def as_meshing(meshing, name: str = "meshing") -> int:
     """A positive integer number of force-mesh cells per magnet."""
-    if isinstance(meshing, bool) or not isinstance(meshing, (int, np.integer)) or meshing < 1:
-        raise bad_value(name, "a positive integer (cells per magnet for magpylib.getFT)", meshing)
-    return int(meshing)
+    return checks.count(meshing, name, expected="a positive integer (cells per magnet for magpylib.getFT)")
 
 
 def model_summary(design) -> dict:

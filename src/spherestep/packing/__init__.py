@@ -2,8 +2,7 @@
 
 import functools
 
-import numpy as np
-
+from .. import checks
 from ..errors import bad_value
 from .congruence import aligning_rotations, congruent, distinct, symmetry_rotations
 from .core import Packing
@@ -36,9 +35,8 @@ def named(name: str, level: int = 0) -> Packing:
     per process (packings are immutable, so every caller shares the same object)."""
     if not isinstance(name, str) or name not in names():
         raise bad_value("packing name", f"one of {', '.join(names())}", name)
-    if isinstance(level, bool) or not isinstance(level, (int, np.integer)) or level < 0:
-        raise bad_value("level", "a non-negative integer number of refinement levels", level)
-    return _named(name, int(level))
+    level = checks.count(level, "level", minimum=0, expected="a non-negative integer number of refinement levels")
+    return _named(name, level)
 
 
 @functools.cache

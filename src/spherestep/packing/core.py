@@ -13,6 +13,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.spatial import cKDTree
 
+from .. import checks
 from ..errors import InputError, bad_value
 from ..sphere import as_points, as_radii, cap_area
 from .chords import arc_from_chord, chord
@@ -88,8 +89,7 @@ class Packing:
         if axis.shape != (3,):
             raise bad_value("axis", "one unit 3-vector", f"shape {axis.shape}")
         axis = axis / np.linalg.norm(axis)
-        if isinstance(half_angle, bool) or not isinstance(half_angle, (int, float)) or not 0 <= half_angle <= np.pi:
-            raise bad_value("half_angle", "an angle in [0, π] radians", half_angle)
+        half_angle = checks.number(half_angle, "half_angle", low=0.0, high=np.pi, expected="an angle in [0, π] radians")
         inside = (self.centers @ axis >= np.cos(half_angle) - 1e-12) & (self.radii >= min_radius)
         return Packing(self.centers[inside], self.radii[inside], name=self.name, family=self.family,
                        level=self.level)

@@ -18,6 +18,7 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 from scipy.spatial import ConvexHull
 
+from .. import checks
 from ..errors import bad_value
 from ..sphere import circle_in_gap, circle_in_ring
 from .core import Packing
@@ -84,9 +85,8 @@ def refine(packing: Packing, levels: int | None = None, target: int | None = Non
     """Fill holes level by level: stop after ``levels`` levels, or at the first level with ``>= target``
     caps (whichever is given; default one level). New caps are appended after the old ones, so the
     indices of existing caps never change."""
-    for value, label in ((levels, "levels"), (target, "target")):
-        if value is not None and (isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 0):
-            raise bad_value(label, "a non-negative integer", value)
+    levels = None if levels is None else checks.count(levels, "levels", minimum=0, expected="a non-negative integer")
+    target = None if target is None else checks.count(target, "target", minimum=0, expected="a non-negative integer")
     if levels is None and target is None:
         levels = 1
     if target is not None and target > 5_000_000:

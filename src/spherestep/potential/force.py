@@ -160,8 +160,7 @@ def synthetic_force_curve(displacement, rotor: VonMisesFisher, stator: VonMisesF
     for label, profile in (("rotor", rotor), ("stator", stator)):
         if not isinstance(profile, VonMisesFisher):
             raise bad_value(label, "a VonMisesFisher profile", profile)
-    if isinstance(noise, bool) or not isinstance(noise, (int, float)) or not math.isfinite(noise) or noise < 0:
-        raise bad_value("noise", "a non-negative standard deviation (N)", noise)
+    noise = checks.non_negative(noise, "noise", "a non-negative standard deviation (N)")
     psi = x / radius
     force = -(2.0 / radius) * np.sin(psi) * rotor.overlap(stator, np.cos(psi), derivative=1)
     if noise:

@@ -163,9 +163,8 @@ class VonMisesFisher(ZonalProfile):
     def from_half_width(cls, angle, amplitude=1.0) -> VonMisesFisher:
         """The bump falling to half its peak at the angular radius ``angle`` (radians, in (0, π/2]):
         ``κ = ln 2 / (1 − cos angle)``."""
-        if isinstance(angle, bool) or not isinstance(angle, (int, float, np.floating)) or \
-                not 0 < angle <= math.pi / 2:
-            raise bad_value("angle", "an angular radius in (0, π/2] radians", angle)
+        angle = checks.number(angle, "angle", low=0.0, high=math.pi / 2, low_open=True,
+                              expected="an angular radius in (0, π/2] radians")
         return cls(math.log(2.0) / (1.0 - math.cos(angle)), amplitude)
 
     @property
