@@ -87,6 +87,13 @@ class Observer:
         self._past = deque(maxlen=max(2, int(math.ceil(history / h)) * 4))
         self._past.append((0.0, self.R.copy()))
 
+    def restart(self, R) -> None:
+        """Start again from the orientation ``R (3, 3)`` now (the velocity kept), forgetting the history."""
+        self.R = np.array(R, dtype=float)
+        self._past.clear()
+        self._past.append((self.t, self.R.copy()))
+        self._measured = None
+
     def gains(self, interval: float) -> tuple[float, float]:
         """``(l₁, l₂)`` for measurements ``interval`` s apart (see the class)."""
         wo = self.bandwidth

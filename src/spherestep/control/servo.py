@@ -97,7 +97,10 @@ class ServoLaw:
     ``controller`` a :class:`GeometricPD` (its ``inertia`` and ``damping`` are also the observer's);
     ``limits`` the :class:`DriveLimits` the allocation keeps within (default 24 V / 100 W);
     ``sensor_rate`` (Hz) the rate measurements arrive at (the observer's gains; default the controller's rate);
-    ``observer_bandwidth`` (rad/s, default the observer's); ``reuse`` rad (see :class:`ModelCache`).
+    ``observer_bandwidth`` (rad/s, default the observer's); ``reuse`` rad (see :class:`ModelCache`);
+    ``delay`` the control periods between a command and the drive applying it (0 in simulation; 1 on hardware,
+    where the currents computed in a cycle are sent at the next cycle's start): the observer predicts with the
+    torque promised ``delay`` periods before.
     """
 
     def __init__(self, model: TorqueModel, trajectory: Trajectory, controller: GeometricPD, *,
@@ -144,7 +147,8 @@ class ServoLaw:
             obs.predict(self._promised[0] - self.controller.damping * obs.w, h)
         if measurement is not None:
             if not self.started:
-                obs.R, self.started = np.array(measurement, dtype=float), True
+                obs.restart(measurement)
+                self.started = True
             else:
                 obs.correct(measurement, measured_at)
         Rd, wd, ad = self.trajectory.at(t)
