@@ -6,10 +6,9 @@ from .closed_loop import ClosedLoopRun, run_closed_loop
 from .simulate import Integrator, Simulation, SimulationSummary, simulate
 from .tuning import Tuning, stiffness, tune
 from .electrics import CoilDrive, rl_step
-from .servo import NoisySensor, OrientationSensor, ServoRun, hold, simulate_servo
+from .servo import ServoRun, ServoSummary, hold, simulate_servo
 from .ramped import PullOut, RampedRun, RampedSummary, pull_out_rate, run_ramped, step_intervals
 
 __all__ = ["ClosedLoopRun", "Integrator", "Rotor", "Simulation", "Tuning", "run_closed_loop", "simulate",
-           "stiffness", "tune", "CoilDrive", "rl_step", "NoisySensor", "OrientationSensor", "ServoRun", "hold",
-           "simulate_servo", "PullOut", "RampedRun", "RampedSummary", "SimulationSummary", "pull_out_rate", "run_ramped",
-           "step_intervals"]
+           "stiffness", "tune", "CoilDrive", "rl_step", "ServoRun", "ServoSummary", "hold",
+           "simulate_servo", "PullOut", "RampedRun", "RampedSummary", "SimulationSummary", "pull_out_rate", "run_ramped", "step_intervals"]
