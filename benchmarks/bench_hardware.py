@@ -88,14 +88,16 @@ def servo() -> None:
     from _timing import median_seconds
 
     from spherestep import so3
-    from spherestep.control import DriveLimits
-    from spherestep.hardware import CurrentDevice, DriveLink, EmulatedMotor, MotorFaults, MotorPty, hold, \
-        servo_session, turn_reference
+    from spherestep.control import DriveLimits, Trajectory
+    from spherestep.drive import servo_session, turn_reference
+    from spherestep.hardware import CurrentDevice, DriveLink, EmulatedMotor, MotorFaults, MotorPty
     from spherestep.hardware.protocol import _shift8
     from spherestep.hardware.protocol2 import MAX_FRAME2, encode_block, frame_bytes, parse_state
     from spherestep.magnetics import torque_map
     from spherestep.motor import prototype
     from spherestep.sensing import default_array
+
+    hold = Trajectory.hold
 
     def crc_bitwise(data: bytes) -> int:
         crc = 0xFFFF

@@ -15,7 +15,7 @@ from spherestep import so3
 from spherestep.control import Trajectory
 from spherestep.errors import InputError
 from spherestep.hardware.motor_emulator import MotorFaults
-from spherestep.hardware.session import servo_session, turn_reference
+from spherestep.drive import servo_session, turn_reference
 
 hold = Trajectory.hold
 
@@ -115,7 +115,7 @@ def with_bias(reference_law_current: float = 0.3, coil: int = 0):
 def biased(monkeypatch):
     """The session's control law with 0.3 A added on coil 0 (the servo holds against its torque), so that the
     coil faults meet a coil that carries current."""
-    from spherestep.hardware import session
+    from spherestep.drive import session
 
     monkeypatch.setattr(session, "ServoLaw", with_bias())
 
@@ -140,7 +140,7 @@ def test_every_fault_ends_with_all_coils_off_within_the_watchdog(rig, biased, fa
 
 
 def test_a_slow_host_is_stopped_by_the_device_watchdog(rig, monkeypatch):
-    from spherestep.hardware import session
+    from spherestep.drive import session
 
     stalled = []
 
@@ -161,7 +161,7 @@ def test_a_slow_host_is_stopped_by_the_device_watchdog(rig, monkeypatch):
 
 def test_the_hardware_loop_runs_the_control_rooms_law():
     from spherestep import control
-    from spherestep.hardware import session
+    from spherestep.drive import session
 
     assert session.ServoLaw is control.ServoLaw  # one law: the simulation's (dynamics.simulate_servo) and this
 

@@ -4,7 +4,9 @@ one result type.
 * :func:`drive_turn` (:mod:`.turn`): one turn one way → :class:`DriveResult` (:mod:`.result`: arrays, numbers,
   per-mode details, ``to_dict(degrees=True)``, ``write(out)`` — what ``spherestep move`` writes);
 * :func:`compare_drives` (:mod:`.compare`): the same turn every mode → :class:`DriveComparison` (the demo's table);
-* :mod:`.hardware`: the servo on a coil controller or the emulated motor, judged like a simulation.
+* :mod:`.hardware`: the servo on a coil controller or the emulated motor, judged like a simulation;
+  :mod:`.session` assembles that session for a design (:func:`servo_session`, :func:`move_on_hardware`,
+  :func:`turn_reference`) from the hardware room's links, devices and emulators.
 
 The model is the design's own (:func:`spherestep.magnetics.design_model`) unless one is given; every result
 names it. The simulation itself (rotor, integrator, coil electrics, the servo and ramped loops) is
@@ -12,10 +14,12 @@ names it. The simulation itself (rotor, integrator, coil electrics, the servo an
 """
 
 from .compare import DEMO_AXIS, SENSOR_NOISE, DriveComparison, compare_drives
+from .session import Session, move_on_hardware, servo_session, turn_reference
 from .result import DriveResult, HardwareDetails, RampedDetails, ServoDetails, SettledDetails, figure_drive
 from .turn import BACKENDS, FIXED_SERVO_TIME, MODES, SENSORS, TOLERANCE, check_options, choose_model, drive_turn, \
     fixed_servo_time
 
 __all__ = ["BACKENDS", "DEMO_AXIS", "FIXED_SERVO_TIME", "MODES", "SENSORS", "SENSOR_NOISE", "TOLERANCE",
-           "DriveComparison", "DriveResult", "HardwareDetails", "RampedDetails", "ServoDetails", "SettledDetails",
-           "check_options", "choose_model", "compare_drives", "drive_turn", "figure_drive", "fixed_servo_time"]
+           "DriveComparison", "DriveResult", "HardwareDetails", "RampedDetails", "ServoDetails", "Session",
+           "SettledDetails", "check_options", "choose_model", "compare_drives", "drive_turn", "figure_drive", "fixed_servo_time",
+           "move_on_hardware", "servo_session", "turn_reference"]

@@ -2,8 +2,7 @@
 :class:`~spherestep.drive.result.DriveResult`.
 
 The loop itself — estimator, control law, the link with protocol version 2, all off at the end — is
-:func:`spherestep.hardware.session.move_on_hardware` (its application assembly moves here once the servo law's
-rewrite lands). The turn starts where the rotor is taken to be (the identity); its trajectory is the fastest
+:func:`~spherestep.drive.session.move_on_hardware` (the session assembled for the design, :mod:`.session`). The turn starts where the rotor is taken to be (the identity); its trajectory is the fastest
 turn, the given ``duration`` or the fixed time where the planner refuses the model, as in simulation
 (:meth:`~spherestep.drive.turn.Turn.servo_trajectory`). Errors are measured against the emulated rotor (its
 published truth, every 50 ms, and 0.15 s after the end) or, on a real port, against the loop's own estimate.
@@ -25,7 +24,7 @@ def drive_on_hardware(design, axis, angle: float, chosen, *, duration: float | N
                       emulate: bool, rate: float, log=None, tolerance: float, progress=None):
     """Run the servo turn on ``port`` or the emulated motor (module docstring) on ``chosen``'s model and limits."""
     from ..dynamics import Rotor
-    from ..hardware.session import move_on_hardware
+    from .session import move_on_hardware
     from .turn import Turn, check_duration
 
     job = Turn(design, axis, angle, chosen, tolerance, progress)

@@ -1,12 +1,13 @@
 """One servo session on a coil controller — a real board on a serial port, or the emulated motor on a
-pseudo-terminal — with the field tracker of :mod:`.servo_parts` and the control room's servo law assembled for a
-design.
+pseudo-terminal — the application assembled for a design from the rooms above: the hardware room's field tracker,
+link, loop and emulator, the sensing room's estimator and the control room's servo law.
 
-:func:`servo_session` is what ``spherestep move ... --port DEV`` (or ``--emulate``) calls: it builds the
-sensing room's :class:`~spherestep.sensing.Estimator` for the design's magnetometer array and the control room's
-:class:`~spherestep.control.ServoLaw` (the simulation's law, allocating within :func:`.servo_parts.wire_limits`),
-opens the link with protocol version 2, runs
-:func:`~spherestep.hardware.servo.run_servo` and always ends with every coil off. With ``emulate`` it also
+:func:`servo_session` is what ``spherestep move ... --port DEV`` (or ``--emulate``) runs, through
+:func:`move_on_hardware` and :func:`spherestep.drive.drive_turn`: it builds the sensing room's
+:class:`~spherestep.sensing.Estimator` for the design's magnetometer array and the control room's
+:class:`~spherestep.control.ServoLaw` (the simulation's law, allocating within
+:func:`spherestep.hardware.wire_limits`), opens the link with protocol version 2, runs
+:func:`spherestep.hardware.run_servo` and always ends with every coil off. With ``emulate`` it also
 serves :class:`~spherestep.hardware.motor_emulator.MotorPty` and returns the emulated motor's
 :class:`~spherestep.hardware.motor_emulator.Truth` at the end, so the result can be judged against the truth.
 """
@@ -22,9 +23,7 @@ import numpy as np
 from .. import checks, so3
 from ..control import GeometricPD, ServoLaw, Trajectory
 from ..errors import bad_value
-from .drive_link import DriveLink
-from .servo import ServoReport, run_servo
-from .servo_parts import FieldTracker, wire_limits
+from ..hardware import DriveLink, FieldTracker, ServoReport, run_servo, wire_limits
 
 DELAY = 1  # control periods: the currents computed in a cycle are driven at the next cycle's start
 # The observer's bandwidth on hardware is the loop's rate in rad/s, ω_o = 1/h: its gains are then l₁ = 1, l₂ h = 1
@@ -82,15 +81,15 @@ def servo_session(design, trajectory: Trajectory, duration: float, *, port: str 
     :meth:`~spherestep.control.Trajectory.hold` for a pose) on the controller at
     ``port``, or with ``emulate`` on the emulated motor (``faults`` a
     :class:`~spherestep.hardware.motor_emulator.MotorFaults`, ``watchdog_ms`` its watchdog). ``sensors``
-    defaults to the sensing room's :func:`~spherestep.sensing.default_array` of 8, ``model`` to the design's
-    torque map, ``drive`` to :class:`~spherestep.control.DriveLimits`, ``R0`` (the start, for the estimate and
+    defaults to the sensing room's :func:`~spherestep.sensing.default_array` of 8, ``model`` and ``drive`` to the
+    design's own (:func:`spherestep.magnetics.design_model`: the iron model and the iron coil's limits for the
+    prototype), ``R0`` (the start, for the estimate and
     the emulated rotor) to the trajectory's start. ``log``, ``status``, ``rate``, ``max_late``: see
     :func:`~spherestep.hardware.servo.run_servo`. With ``lockstep`` (and ``emulate``) the frames go straight to
     the device in this process on a simulated clock (:class:`~spherestep.hardware.motor_emulator.LockstepLink`):
     the same loop, protocol and motor with the rate kept exactly, whatever the machine's load."""
-    from ..control import DriveLimits
     from ..dynamics import Rotor
-    from ..magnetics import torque_map
+    from ..magnetics import design_model
     from ..sensing import CoilField, Estimator, FieldTable, default_array
 
     if not isinstance(trajectory, Trajectory):
@@ -101,8 +100,10 @@ def servo_session(design, trajectory: Trajectory, duration: float, *, port: str 
     if lockstep and not emulate:
         raise bad_value("lockstep", "used only with emulate=True", lockstep)
     sensors = default_array(design, 8) if sensors is None else sensors
-    model = torque_map(design) if model is None else model
-    drive = DriveLimits() if drive is None else drive
+    if model is None or drive is None:
+        own = design_model(design)
+        model = own.model if model is None else model
+        drive = own.limits if drive is None else drive
     R0 = trajectory.start if R0 is None else so3.as_rotations(R0).reshape(3, 3)
     rotor = Rotor.from_design(design, damping=0.01)
     table = FieldTable.build(design, sensors.positions)
@@ -118,7 +119,7 @@ def servo_session(design, trajectory: Trajectory, duration: float, *, port: str 
                                **options)
         return Session(report, trajectory, [], None)
 
-    from .motor_emulator import EmulatedMotor, LockstepLink, MotorPty
+    from ..hardware import EmulatedMotor, LockstepLink, MotorPty
 
     motor = EmulatedMotor(design, model, sensors, rotor=rotor, drive=drive, R0=R0, faults=faults)
     truth: list = []
@@ -157,16 +158,19 @@ def move_on_hardware(design, axis, angle: float, *, duration: float | None = Non
     """Turn the rotor by ``angle`` rad about ``axis`` from where it is taken to be (the identity) on a controller
     (``port``) or the emulated motor (``emulate``): in ``duration`` s (:func:`turn_reference`), or by default
     the fastest trapezoidal turn the drive guarantees along the path
-    (:func:`spherestep.control.trajectory.plan_turn`); the loop runs ``settle`` s longer. What
-    ``spherestep move ... --port DEV`` / ``--emulate`` calls; ``options`` go to :func:`servo_session`."""
-    from ..control import DriveLimits
-    from ..control.trajectory import plan_turn
+    (:func:`spherestep.control.plan_turn`); the loop runs ``settle`` s longer. ``model`` and ``drive`` (in
+    ``options``) default to the design's own; the other ``options`` go to :func:`servo_session`. What
+    :func:`spherestep.drive.drive_turn` runs for ``backend="emulated"``/``"port"``."""
+    from ..control import plan_turn
     from ..dynamics import Rotor
-    from ..magnetics import torque_map
+    from ..magnetics import design_model
 
     a = checks.axis(axis)
-    model = options.pop("model", None) or torque_map(design)
-    drive = options.pop("drive", None) or DriveLimits()
+    model, drive = options.pop("model", None), options.pop("drive", None)
+    if model is None or drive is None:
+        own = design_model(design)
+        model = own.model if model is None else model
+        drive = own.limits if drive is None else drive
     if duration is None:
         trajectory = plan_turn(model, np.eye(3), a, angle, Rotor.from_design(design).inertia, drive)
     else:
