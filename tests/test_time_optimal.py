@@ -154,7 +154,8 @@ def test_iron_turn_is_found_and_its_feed_forward_is_within_the_margin(iron_turn)
     n = np.array([1.0, 0.5, 2.0]) / np.linalg.norm([1.0, 0.5, 2.0])
     R_end, w_end, _ = tr.sample(np.array([tr.duration]))
     np.testing.assert_allclose(R_end[0], so3.exp(2 * math.pi * n) @ R0, atol=1e-9)
-    assert np.linalg.norm(w_end) == 0
+    assert np.linalg.norm(w_end) <= 1e-12
+    assert tr.duration < 3.0  # beats the demo's fixed 3.0 s
     model, limits = dm.model, dm.limits
     scaled = limits.replace(max_current=MARGIN * limits.max_current, supply_power=MARGIN ** 2 * limits.supply_power)
     knots = np.concatenate([seg.t0 + seg.times for seg in tr.segments])
@@ -165,3 +166,36 @@ def test_iron_turn_is_found_and_its_feed_forward_is_within_the_margin(iron_turn)
         b = np.asarray(model.torque(R, np.zeros((len(R), model.coil_count))))
         for k in range(len(t)):  # the feed-forward I α within the margin at the grid points, within the limits between
             assert allocate_matrix(K[k], inertia * a[k], lim, bias=b[k])[0].reachable, t[k]
+
+
+@pytest.mark.slow
+def test_servo_tracks_the_iron_turn(iron_turn):
+    from spherestep.dynamics.servo import simulate_servo
+    from spherestep.sensing.sensor import NoisySensor
+
+    design, dm, inertia, R0, ft = iron_turn
+    run = simulate_servo(design, ft.trajectory, dm.model, limits=dm.limits,
+                         sensor=NoisySensor(math.radians(0.02), rng=0), settle=0.3)
+    assert run.reachable.all()
+    assert math.degrees(run.tracking_error.max()) <= 0.5
+    # the end: within 0.3° (the servo law reuses K(R) and the detent within 2e-3 rad: a hold on iron hovers at
+    # 0.1-0.2°; with the model evaluated every period the same run ends 0.009° off — issue 25 §2 business)
+    assert math.degrees(run.final_error) <= 0.3
+
+
+@pytest.mark.slow
+def test_air_core_time_optimal_beats_the_trapezoid_and_respects_the_bound():
+    from spherestep.commutation import turn
+    from spherestep.control import bang_bang_time, plan_trapezoid, plan_turn
+    from spherestep.dynamics import Rotor
+    from spherestep.magnetics import design_model
+    from spherestep.motor import prototype
+
+    design = prototype()
+    dm = design_model(design, "air")
+    inertia = Rotor.from_design(design).inertia
+    R0 = turn(design, (1.0, 0.5, 2.0), 90.0).targets[0]
+    args = (dm.model, R0, (1.0, 0.5, 2.0), math.radians(90), inertia, dm.limits)
+    fast = plan_turn(*args)
+    assert isinstance(fast.segments[0], TimeLaw)
+    assert bang_bang_time(*args) < fast.duration < plan_trapezoid(*args).duration
