@@ -76,7 +76,7 @@ def turn_reference(start, axis, angle: float, duration: float, delay: float = 0.
 def servo_session(design, trajectory: Trajectory, duration: float, *, port: str | None = None, emulate: bool = False,
                   lockstep: bool = False, rate: float = 200.0, log=None, status=None, faults=None, sensors=None, model=None, drive=None,
                   R0=None, watchdog_ms: int | None = None, max_late: float | None = None,
-                  truth_every: float = 0.05) -> Session:
+                  truth_every: float = 0.05, plant=None) -> Session:
     """Run the servo for ``duration`` s following ``trajectory`` (a :class:`~spherestep.control.Trajectory`;
     :meth:`~spherestep.control.Trajectory.hold` for a pose) on the controller at
     ``port``, or with ``emulate`` on the emulated motor (``faults`` a
@@ -87,7 +87,8 @@ def servo_session(design, trajectory: Trajectory, duration: float, *, port: str 
     the emulated rotor) to the trajectory's start. ``log``, ``status``, ``rate``, ``max_late``: see
     :func:`~spherestep.hardware.servo.run_servo`. With ``lockstep`` (and ``emulate``) the frames go straight to
     the device in this process on a simulated clock (:class:`~spherestep.hardware.motor_emulator.LockstepLink`):
-    the same loop, protocol and motor with the rate kept exactly, whatever the machine's load."""
+    the same loop, protocol and motor with the rate kept exactly, whatever the machine's load. ``plant`` (with
+    ``emulate``) the torque model the emulated rotor obeys, default ``model`` (a mismatched motor: calibration)."""
     from ..dynamics import Rotor
     from ..magnetics import design_model
     from ..sensing import CoilField, Estimator, FieldTable, default_array
@@ -121,7 +122,8 @@ def servo_session(design, trajectory: Trajectory, duration: float, *, port: str 
 
     from ..hardware import EmulatedMotor, LockstepLink, MotorPty
 
-    motor = EmulatedMotor(design, model, sensors, rotor=rotor, drive=drive, R0=R0, faults=faults)
+    motor = EmulatedMotor(design, model if plant is None else plant, sensors, rotor=rotor, drive=drive, R0=R0,
+                          faults=faults)
     truth: list = []
     device = {} if watchdog_ms is None else {"watchdog_ms": watchdog_ms}
     if lockstep:
