@@ -17,7 +17,8 @@ beyond), whose maximiser gives the primal solution ``c_k = clip(K_kᵀλ, −u_k
 piecewise linear, so a (semismooth) Newton iteration ``λ ← λ + (K_F K_Fᵀ)⁻¹ (t − K c(λ))`` over the free coils
 ``F = {k : |K_kᵀλ| < u_k}``, with backtracking on ``g``, ends at an exact KKT point in a few steps (the first step
 from ``λ = (KKᵀ)⁻¹ t`` is the minimum-norm right inverse, which is already optimal when no coil saturates).
-Accepted when ``‖K c − t‖`` is at rounding level and ``‖c‖ ≤ ρ``.
+Accepted when ``‖K c − t‖`` is at rounding level and ``‖c‖ ≤ ρ``. :func:`least_power_box` is the NumPy form
+(the reference); the loop runs it compiled, :func:`least_power_box_compiled` (numba, equal to rounding, a few µs).
 
 General path (the request is out of reach, or Newton fails). The closest reachable torque: minimise
 ``‖K c − t‖²`` over the box and the power ball — a second-order cone program solved by Clarabel (an interior point
@@ -157,6 +158,23 @@ def least_power_box(K: np.ndarray, t: np.ndarray, u: np.ndarray, lam0: np.ndarra
     return c, lam, bool(float(r @ r) <= tol2)
 
 
+def least_power_box_compiled(K: np.ndarray, t: np.ndarray, u: np.ndarray, lam0: np.ndarray | None = None,
+                             max_iter: int = 40) -> tuple[np.ndarray, np.ndarray, bool]:
+    """:func:`least_power_box` compiled (:func:`spherestep._fast.allocation.least_power_box`, the same iteration;
+    equal to it to rounding): what :func:`allocate_matrix` runs. ``K (3, N)``, ``t (3,)``, ``u (N,)`` float
+    arrays (trusted)."""
+    from .._fast.allocation import least_power_box as compiled
+
+    c, lam = np.empty(K.shape[1]), np.empty(3)
+    warm = lam0 is not None
+    ok = compiled(K if K.flags.c_contiguous else np.ascontiguousarray(K), t, u, lam0 if warm else _NO_LAM, warm,
+                  max_iter, c, lam)
+    return c, lam, bool(ok)
+
+
+_NO_LAM = np.zeros(3)
+
+
 def closest_reachable(K: np.ndarray, t: np.ndarray, u: np.ndarray, rho: float) -> np.ndarray:
     """``argmin ‖K c − t‖²`` over ``|c| ≤ u``, ``‖c‖ ≤ ρ`` (a second-order cone program, Clarabel); coils with
     ``u_k = 0`` are left out of the program and get ``c_k = 0``."""
@@ -202,13 +220,13 @@ def allocate_matrix(K, torque, limits: DriveLimits | None = None, *, bias=None, 
     t = target - b
     u = _bounds(K.shape[1], failed, limits)
     rho = limits.per_unit_power_radius
-    c, lam, ok = least_power_box(K, t, u, lam0)
+    c, lam, ok = least_power_box_compiled(K, t, u, None if lam0 is None else np.asarray(lam0, dtype=float))
     method, reachable = "newton", True
     if not ok or float(c @ c) > rho * rho * (1 + 1e-12):
         c_far = closest_reachable(K, t, u, rho)
         t_r = K @ c_far
         reachable = bool(np.linalg.norm(t_r - t) <= 1e-7 * (np.linalg.norm(K) * rho + np.linalg.norm(t)))
-        c2, lam2, ok2 = least_power_box(K, t_r, u)
+        c2, lam2, ok2 = least_power_box_compiled(K, t_r, u)
         if ok2 and c2 @ c2 <= c_far @ c_far * (1 + 1e-12):
             c, lam = c2, lam2
         else:

@@ -48,30 +48,75 @@ K_REUSE = 2e-3  # rad: K(R) and b(R) are re-evaluated when the orientation has t
 class ModelCache:
     """``K(R)`` and the bias ``b(R) = τ(R, 0)`` of a torque ``model`` near the last orientation they were evaluated
     at: :meth:`at` re-evaluates them only when ``R`` has turned more than ``reuse`` rad from there (a relative
-    error of about ``reuse`` over the pole spacing, 0.6 % at 2e-3 rad, which the feedback absorbs). Serves the
-    servo law (at the estimate) and the emulated motor (at the true orientation)."""
+    error in ``K`` up to ~1 % for the air-core map and ~5 % for the iron model at 2e-3 rad, which the feedback
+    absorbs; the angle is
+    judged from ``tr(R Aᵀ)``, to about 1e-7 rad). Serves the servo law (at the estimate) and the emulated motor
+    (at the true orientation).
+
+    A model whose energy packs into compiled zonal terms with currents affine in each coil's own current
+    (:meth:`~spherestep.statics.TorqueModel.packed_terms`: the torque map, the iron model without the
+    coupling) is evaluated by one compiled call, ``K`` and ``b`` together (:mod:`spherestep._fast.linear`,
+    equal to ``model.torque_matrix``/``model.torque`` to rounding; ``compiled`` tells); any other through the
+    model's own methods."""
 
     def __init__(self, model: TorqueModel, reuse: float = K_REUSE):
         if not is_torque_model(model):
             raise bad_value("model", "a torque model (spherestep.statics.TorqueModel)", type(model).__name__)
         self.model = model
         self.reuse = checks.non_negative(reuse, "reuse")
+        self._cos = 1.0 + 2.0 * math.cos(self.reuse)  # tr(R Aᵀ) at the reuse angle
         self.has_bias = bool(model.has_bias)
         self.evaluations = 0
         self._at: np.ndarray | None = None
-        self._K: np.ndarray | None = None
+        self._K = np.zeros((3, model.coil_count))
         self._bias = np.zeros(3)
         self._zeros = np.zeros(model.coil_count)
+        self._affine = _affine_terms(model)
+        self.compiled = self._affine is not None
 
     def at(self, R: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """``(K (3, N), b (3,))`` for one rotation ``R (3, 3)`` (trusted: the loop's own estimate)."""
-        if self._at is None or math.sqrt(sum(x * x for x in so3.log_single(R @ self._at.T).tolist())) > self.reuse:
-            self._K = np.asarray(self.model.torque_matrix(R), dtype=float)
-            if self.has_bias:
-                self._bias = np.asarray(self.model.torque(R, self._zeros), dtype=float)
+        """``(K (3, N), b (3,))`` for one rotation ``R (3, 3)`` (trusted: the loop's own estimate). The arrays are
+        the cache's own, overwritten at the next re-evaluation: copy them to keep them."""
+        A = self._at
+        if A is None or self._moved(R, A):
+            if self._affine is not None:
+                self._affine(R if R.flags.c_contiguous else np.ascontiguousarray(R), self._K, self._bias)
+                if not self.has_bias:
+                    self._bias[:] = 0.0
+            else:
+                self._K = np.asarray(self.model.torque_matrix(R), dtype=float)
+                if self.has_bias:
+                    self._bias = np.asarray(self.model.torque(R, self._zeros), dtype=float)
             self._at = np.array(R, dtype=float)
             self.evaluations += 1
         return self._K, self._bias
+
+    def _moved(self, R: np.ndarray, A: np.ndarray) -> bool:
+        """Whether ``R`` is more than ``reuse`` rad from ``A``: ``tr(R Aᵀ) < 1 + 2 cos(reuse)``."""
+        (a, b, c), (d, e, f), (g, h, i) = R.tolist()
+        (p, q, r), (s, u, v), (w, x, y) = A.tolist()
+        trace = a * p + b * q + c * r + d * s + e * u + f * v + g * w + h * x + i * y
+        return trace < self._cos if self.reuse > 0 else not np.array_equal(R, A)
+
+
+def _affine_terms(model: TorqueModel):
+    """The compiled ``call(R, K, bias)`` for ``model`` (:func:`spherestep._fast.linear.affine_call`), or ``None`` when the model has no packed terms or their currents are not affine in each coil's
+    own current (checked on 0, 1 and 2 per unit in every live coil)."""
+    N = model.coil_count
+    live = np.ones(N)
+    live[list(model.failed)] = 0.0
+    packs = [model.packed_terms(x * live) for x in (0.0, 1.0, 2.0)]
+    if any(p is None for p in packs):
+        return None
+    p0, p1, p2 = packs
+    C0 = np.ascontiguousarray(p0.C, dtype=float)
+    D = np.ascontiguousarray(p1.C - p0.C, dtype=float)
+    if C0.ndim != 2 or not np.allclose(p2.C, C0 + 2.0 * D, rtol=0.0, atol=1e-14) \
+            or not np.array_equal(p0.params, p1.params) or not np.array_equal(p0.signs, p1.signs):
+        return None
+    from .._fast.linear import affine_call
+
+    return affine_call(p0, C0, D)
 
 
 @dataclass(frozen=True)

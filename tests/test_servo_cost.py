@@ -1,0 +1,83 @@
+"""The servo loop's fast path: the compiled K(R) and bias of ModelCache against the models' own methods, and its
+reuse rule; the cost of one control period is measured by benchmarks/bench_servo_loop.py."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from spherestep import so3
+from spherestep.control import ModelCache
+from spherestep.magnetics import iron_model, torque_map
+from spherestep.motor import prototype
+
+
+@pytest.fixture(scope="module")
+def models():
+    design = prototype()
+    tmap = torque_map(design)
+    return {"air": tmap, "iron": iron_model(design), "air, coils 3 and 17 failed": replace(tmap, failed=(3, 17))}
+
+
+@pytest.mark.parametrize("name", ["air", "iron", "air, coils 3 and 17 failed"])
+def test_compiled_k_and_bias_are_the_models_own(models, name):
+    model = models[name]
+    cache = ModelCache(model, reuse=0.0)
+    assert cache.compiled
+    for R in so3.random(12, 8):
+        K, b = cache.at(R)
+        K_ref = model.torque_matrix(R)
+        b_ref = model.torque(R, np.zeros(model.coil_count))
+        scale = np.abs(K_ref).max()
+        assert np.abs(K - K_ref).max() <= 1e-12 * scale
+        assert np.abs(b - b_ref).max() <= 1e-12 * scale
+        assert np.all(K[:, list(model.failed)] == 0.0)
+    assert cache.evaluations == 12
+    if not model.has_bias:
+        assert np.all(b == 0.0)
+    else:
+        assert np.abs(b).max() > 1e-3 * np.abs(K).max()  # the iron's detent is there
+
+
+def test_reuse_rule_reevaluates_past_the_angle(models):
+    model = models["iron"]
+    cache = ModelCache(model, reuse=2e-3)
+    R0 = so3.random(1, 2)[0]
+    K0 = cache.at(R0)[0].copy()
+    axis = np.array([0.3, -0.5, 0.8]) / np.linalg.norm([0.3, -0.5, 0.8])
+    assert cache.evaluations == 1
+    cache.at(so3.exp(1.9e-3 * axis) @ R0)  # within: the cached K
+    assert cache.evaluations == 1 and np.array_equal(cache.at(R0)[0], K0)
+    R1 = so3.exp(2.1e-3 * axis) @ R0
+    K1 = cache.at(R1)[0]
+    assert cache.evaluations == 2
+    assert np.abs(K1 - model.torque_matrix(R1)).max() <= 1e-12 * np.abs(K1).max()
+    # what reusing K costs: its change over the reuse angle (the iron's sharp tables: 4.7 % here, the air's 1.1 %)
+    assert np.abs(K1 - K0).max() / np.abs(K0).max() < 0.06
+    assert math.isclose(cache.reuse, 2e-3)
+
+
+def test_a_model_without_packed_terms_takes_its_own_methods(models):
+    class Slow:
+        """A torque model without a compiled form (the protocol's defaults)."""
+
+        def __init__(self, model):
+            self.m = model
+            self.coil_count, self.failed, self.has_bias = model.coil_count, model.failed, model.has_bias
+
+        def __getattr__(self, name):
+            return getattr(self.m, name)
+
+        def packed_terms(self, currents):
+            return None
+
+    model = models["iron"]
+    slow = Slow(model)
+    cache = ModelCache(slow, reuse=0.0)
+    assert not cache.compiled
+    R = so3.random(1, 4)[0]
+    K, b = cache.at(R)
+    assert np.array_equal(K, model.torque_matrix(R)) and np.array_equal(b, model.torque(R, np.zeros(29)))
