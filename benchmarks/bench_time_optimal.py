@@ -51,11 +51,14 @@ def main() -> None:
             t = time.perf_counter()
             ft = fastest_turn(dm.model, R0, axis, 2 * math.pi, inertia, dm.limits)
             times.append(time.perf_counter() - t)
+        t = time.perf_counter()
         bound = bang_bang_time(dm.model, R0, axis, 2 * math.pi, inertia, dm.limits)
+        bound_time = time.perf_counter() - t
         if trap is not None:
             print(f"{core:5} {'trapezoid':13} {trap.duration:9.3f} {'':>9} {bound:9.3f} {trap.duration / bound:6.2f}")
         print(f"{core:5} {'time-optimal':13} {ft.duration:9.3f} {statistics.median(times):9.2f} {bound:9.3f} "
-              f"{ft.duration / bound:6.2f}  {ft.path} ({len(ft.candidates)} paths tried)")
+              f"{ft.duration / bound:6.2f}  {ft.path} ({len(ft.candidates)} paths tried; the bound took "
+              f"{bound_time:.1f} s)")
         if args.servo:
             for name, traj in (("trapezoid", None if trap is None else trap), ("time-optimal", ft.trajectory)):
                 if traj is None:

@@ -150,7 +150,7 @@ class Trajectory:
     """A chain of :class:`Segment` (trapezoidal) or :class:`TimeLaw` (tabulated) turns about fixed axes, each
     starting where the previous ends, at rest."""
 
-    segments: tuple[Segment, ...]
+    segments: tuple[Segment | TimeLaw, ...]
 
     @property
     def duration(self) -> float:
