@@ -93,10 +93,12 @@ class ModelCache:
 
     def _moved(self, R: np.ndarray, A: np.ndarray) -> bool:
         """Whether ``R`` is more than ``reuse`` rad from ``A``: ``tr(R Aᵀ) < 1 + 2 cos(reuse)``."""
-        (a, b, c), (d, e, f), (g, h, i) = R.tolist()
-        (p, q, r), (s, u, v), (w, x, y) = A.tolist()
-        trace = a * p + b * q + c * r + d * s + e * u + f * v + g * w + h * x + i * y
-        return trace < self._cos if self.reuse > 0 else not np.array_equal(R, A)
+        Rl, Al = R.tolist(), A.tolist()
+        if self.reuse == 0:
+            return Rl != Al
+        (a, b, c), (d, e, f), (g, h, i) = Rl
+        (p, q, r), (s, u, v), (w, x, y) = Al
+        return a * p + b * q + c * r + d * s + e * u + f * v + g * w + h * x + i * y < self._cos
 
 
 def _affine_terms(model: TorqueModel):

@@ -24,7 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .. import checks, so3
-from ..control import DriveLimits, GeometricPD, ServoLaw, Trajectory
+from ..control import DriveLimits, GeometricPD, ModelCache, ServoLaw, Trajectory
 from ..control.controller import CONTROL_RATE
 from ..errors import bad_value
 from ..statics import TorqueModel, is_torque_model
@@ -174,6 +174,7 @@ def simulate_servo(design, trajectory: Trajectory, model: TorqueModel | None = N
                    sensor_rate=sensor.rate, observer_bandwidth=observer_bandwidth)
     h = 1.0 / rate
     N, In = model.coil_count, limits.nominal_current
+    plant = ModelCache(model, reuse=0.0)  # the true K(R) and bias, exact; compiled for a packed affine model
     R = trajectory.start.copy() if start is None else so3.as_rotations(start, "start").copy()
     w = np.zeros(3)
     i = np.zeros(N)
@@ -188,15 +189,18 @@ def simulate_servo(design, trajectory: Trajectory, model: TorqueModel | None = N
         meas = sensor.measure(t, R, i / In)
         cmd = law.step(t, meas, t - latency)
         i_ref = law.amperes(cmd.currents)
-        K_true = np.asarray(model.torque_matrix(R), dtype=float)
+        K_true, b_true = plant.at(R) if plant.compiled else (np.asarray(model.torque_matrix(R), dtype=float), None)
         emf = (w @ K_true) / In
         i, integral, i_mean, v_mean, energy = drive.run(i, integral, i_ref, emf, h)
         c_mean = i_mean / In
         rec["Rh"].append(cmd.estimate)
         rec["R"].append(R)
         rec["w"].append(w)
-        R, w, _ = rotor.step(R[None], w[None], lambda Rb, c=c_mean[None]: model.torque(Rb, c), h)
-        R, w = R[0], w[0]
+        if plant.compiled:  # τ = b(R) + K(R) c at each stage, the start's from the K and b above
+            R, w, _ = rotor.step(R, w, lambda Rb, c=c_mean: _affine_torque(plant, Rb, c), h, b_true + K_true @ c_mean)
+        else:
+            R, w, _ = rotor.step(R[None], w[None], lambda Rb, c=c_mean[None]: model.torque(Rb, c), h)
+            R, w = R[0], w[0]
         rec["i"].append(i_mean)
         rec["iref"].append(i_ref)
         rec["v"].append(v_mean)
@@ -207,6 +211,12 @@ def simulate_servo(design, trajectory: Trajectory, model: TorqueModel | None = N
     return ServoRun(times, np.array(rec["R"]), np.array(rec["Rh"]), Rd_all, np.array(rec["w"]), np.array(rec["i"]),
                     np.array(rec["iref"]), np.array(rec["v"]), np.array(rec["p"]), np.array(rec["pc"]),
                     np.array(rec["tau"]), np.array(rec["ok"]), float(trajectory.duration))
+
+
+def _affine_torque(plant: ModelCache, R: np.ndarray, c: np.ndarray) -> np.ndarray:
+    """``b(R) + K(R) c`` (N·m) of an affine model through its exact (``reuse = 0``) :class:`ModelCache`."""
+    K, b = plant.at(R)
+    return b + K @ c
 
 
 def hold(design, R_target, model: TorqueModel | None = None, *, duration: float = 1.0, start=None,
