@@ -50,8 +50,9 @@ Paths tried (:func:`fastest_turn`): the turn about ``n`` itself; if infeasible, 
 the part of it where the coils (within the margin, at rest) cannot hold against the detent: that stretch (merged
 with any within ``DETOUR_PAD``, then ``DETOUR_PAD`` beyond, out to where the coils hold) is replaced by two
 geodesic pieces through ``exp(δ m) R(s_m)`` (``s_m`` its middle, ``m ⊥ n`` in ``DETOUR_DIRECTIONS`` directions,
-tilts ``δ`` in ``DETOUR_TILTS``), at rest at each waypoint, so that every piece turns about a fixed axis and the
-constraints stay exact. The fastest feasible candidate wins.
+tilts ``δ`` in ``DETOUR_TILTS``, smallest first, stopping at the first tilt with a feasible detour), at rest at
+each waypoint, so that every piece turns about a fixed axis and the constraints stay exact. The fastest feasible
+candidate wins.
 """
 
 from __future__ import annotations
@@ -472,7 +473,9 @@ def _fastest_at(model, R0, n, theta, end, limits, I, bd, margin, step, pieces, l
     e2 = np.cross(n, e1)
     Pa, Pm, Pb = (so3.exp(x * n) @ R0 for x in (sa, sm, sb))
     best = None
-    for tilt in DETOUR_TILTS:
+    for tilt in DETOUR_TILTS:  # the smallest tilt with a feasible detour: its fastest direction
+        if best is not None:
+            break
         for k in range(DETOUR_DIRECTIONS):
             phi = 2 * math.pi * k / DETOUR_DIRECTIONS
             m = math.cos(phi) * e1 + math.sin(phi) * e2
