@@ -160,6 +160,30 @@ def test_compiled_newton_is_the_numpy_reference_to_rounding(matrices):
     assert converged >= 60  # most requests are reachable: the comparison is not vacuous
 
 
+def test_compiled_closest_reachable_is_at_least_as_close_as_clarabel(matrices):
+    """Out of reach, the compiled bisection on the power ball's multiplier finds the closest reachable torque:
+    within the box and the ball, as close to the request as Clarabel's conic solution (to 1e-7) and the same
+    torque (to 1e-5 of the request: Clarabel stops at its own tolerance and is pulled back into the limits)."""
+    from spherestep.control.allocation import closest_reachable, closest_reachable_compiled
+
+    rng = np.random.default_rng(4)
+    u = np.ones(29)
+    u[7] = 0.0
+    solved = 0
+    for K in matrices:
+        for size in (0.5, 3.0, 30.0):
+            t = size * rng.normal(size=3)
+            c = closest_reachable_compiled(K, t, u, RHO)
+            if c is None:
+                continue
+            solved += 1
+            ref = closest_reachable(K, t, u, RHO)
+            assert np.all(np.abs(c) <= u) and c @ c <= RHO * RHO * (1 + 1e-12) and c[7] == 0.0
+            assert np.linalg.norm(K @ c - t) <= np.linalg.norm(K @ ref - t) * (1 + 1e-7) + 1e-9 * np.linalg.norm(t)
+            assert np.linalg.norm(K @ c - K @ ref) <= 1e-5 * np.linalg.norm(t)
+    assert solved >= 30
+
+
 def test_relay_allocation_is_the_best_combination():
     rng = np.random.default_rng(9)
     K = rng.normal(size=(3, 8))

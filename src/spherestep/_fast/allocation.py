@@ -124,3 +124,94 @@ def least_power_box(K, t, u, lam0, warm, max_iter, c, lam):
         lam[:] = trial
         g = gt
     return _primal(K, t, u, lam, c, s, r) <= tol2
+
+
+@njit(cache=True)
+def _tikhonov(K, t, u, mu, nu, c, s, r, tol2, max_iter):
+    """``argmin ½‖K c − t‖² + ½μ‖c‖²`` over the box ``|c| ≤ u`` (``μ > 0``): semismooth Newton on
+    ``F(ν) = t − μν − K clip(Kᵀν, −u, u) = 0`` (the gradient of the strongly concave dual
+    ``g(ν) − ½μ‖ν‖²``), ``ν ← ν + (K_F K_Fᵀ + μI)⁻¹ F`` with backtracking; ``c = clip(Kᵀν)``. ``ν`` in (start)
+    and out; returns whether ``‖F‖² ≤ tol2``."""
+    N = K.shape[1]
+    A = np.empty((3, 3))
+    d, trial = np.empty(3), np.empty(3)
+    free = np.empty(N, dtype=np.bool_)
+    g = _dual(K, t, u, nu) - 0.5 * mu * (nu[0] * nu[0] + nu[1] * nu[1] + nu[2] * nu[2])
+    for _ in range(max_iter):
+        _primal(K, t, u, nu, c, s, r)
+        for i in range(3):
+            r[i] -= mu * nu[i]
+        if r[0] * r[0] + r[1] * r[1] + r[2] * r[2] <= tol2:
+            return True
+        for k in range(N):
+            free[k] = abs(s[k]) < u[k]
+        _gram(K, free, A)
+        for i in range(3):
+            A[i, i] += mu
+        if not _solve3(A, r, d):
+            return False
+        step = 1.0
+        accepted = False
+        gt = 0.0
+        for _ in range(60):
+            for i in range(3):
+                trial[i] = nu[i] + step * d[i]
+            gt = _dual(K, t, u, trial) - 0.5 * mu * (trial[0] * trial[0] + trial[1] * trial[1] + trial[2] * trial[2])
+            if gt >= g - 1e-15 * max(abs(g), 1.0):
+                accepted = True
+                break
+            step *= 0.5
+        if not accepted:
+            return False
+        nu[:] = trial
+        g = gt
+    _primal(K, t, u, nu, c, s, r)
+    for i in range(3):
+        r[i] -= mu * nu[i]
+    return r[0] * r[0] + r[1] * r[1] + r[2] * r[2] <= tol2
+
+
+@njit(cache=True)
+def closest_reachable(K, t, u, rho, c):
+    """``argmin ‖K c − t‖²`` over ``|c| ≤ u``, ``‖c‖ ≤ ρ`` into ``c``; returns whether it converged. The ball's
+    multiplier ``μ ≥ 0``: ``c(μ)`` minimises ``½‖K c − t‖² + ½μ‖c‖²`` over the box (:func:`_tikhonov`) and
+    ``‖c(μ)‖`` falls with ``μ`` (``‖c(μ)‖ ≤ ‖t‖/√μ``: ``μ = (‖t‖/ρ)²`` is feasible). The root of
+    ``‖c(μ)‖ = ρ`` is bisected in ``log μ`` to 1e-13, warm-started from the feasible side, and the feasible end
+    returned; below ``μ = 1e-13 ‖K‖²`` the ball does not bind (``μ = 0``, taken there). The same KKT point
+    :func:`spherestep.control.allocation.closest_reachable` finds with Clarabel."""
+    N = K.shape[1]
+    kk = 0.0
+    uu = 0.0
+    for k in range(N):
+        kk += K[0, k] * K[0, k] + K[1, k] * K[1, k] + K[2, k] * K[2, k]
+        uu += u[k] * u[k]
+    tn = math.sqrt(t[0] * t[0] + t[1] * t[1] + t[2] * t[2])
+    tol = 1e-12 * (math.sqrt(kk * uu) + tn) + 1e-300
+    tol2 = tol * tol
+    floor = 1e-13 * kk
+    if not floor > 0.0 or not rho > 0.0:
+        c[:] = 0.0
+        return rho >= 0.0 and floor >= 0.0
+    nu, nu_hi, s, r = np.zeros(3), np.zeros(3), np.empty(N), np.empty(3)
+    c_hi = np.empty(N)
+    hi = max((tn / rho) ** 2 * 1.0001, 2.0 * floor)
+    if not _tikhonov(K, t, u, hi, nu_hi, c_hi, s, r, tol2, 200) or math.sqrt(np.dot(c_hi, c_hi)) > rho:
+        return False
+    lo = floor
+    for _ in range(200):
+        if hi <= lo * (1.0 + 1e-13):
+            break
+        mid = math.sqrt(lo * hi)
+        nu[:] = nu_hi
+        if not _tikhonov(K, t, u, mid, nu, c, s, r, tol2, 200):
+            if mid < 1e-9 * kk:  # the ball is not binding: c(hi) is within rounding of the answer
+                break
+            return False
+        if math.sqrt(np.dot(c, c)) > rho:
+            lo = mid
+        else:
+            hi = mid
+            nu_hi[:] = nu
+            c_hi[:] = c
+    c[:] = c_hi
+    return True

@@ -15,6 +15,8 @@ This module is the single Python statement of that grammar; the reference firmwa
 
 from __future__ import annotations
 
+import binascii
+import re
 from dataclasses import dataclass
 
 VERSION = 1
@@ -81,11 +83,19 @@ def crc16(data: bytes) -> int:
     """CRC-16/CCITT-FALSE of ``data`` (``crc16(b"123456789") == 0x29B1``), one table look-up per byte:
     ``crc = (crc << 8) ^ T[(crc >> 8) ^ b]`` with ``T[b]`` eight register steps from ``b << 8`` (the bit-by-bit
     form is in docs/protocol.md; the two agree because the register is linear)."""
+    return binascii.crc_hqx(data, 0xFFFF)  # the same CRC (polynomial 0x1021, MSB first) in C: ~1 µs per frame
+
+
+def crc16_table(data: bytes) -> int:
+    """:func:`crc16` by the table in Python (the reference the tests hold :func:`binascii.crc_hqx` to)."""
     crc = 0xFFFF
     table = _CRC_TABLE
     for byte in data:
         crc = ((crc << 8) & 0xFFFF) ^ table[(crc >> 8) ^ byte]
     return crc
+
+
+_PRINTABLE = re.compile(rb"[\x20-\x7e]*")  # printable ASCII, checked in C
 
 
 def format_mask(mask: int) -> str:
@@ -128,7 +138,7 @@ def decode(line: bytes, max_frame: int = MAX_FRAME) -> Frame:
     """
     if len(line) > max_frame:
         raise FrameError("FRAME", f"longer than {max_frame} bytes")
-    if any(b < 0x20 or b > 0x7E for b in line):
+    if _PRINTABLE.fullmatch(line) is None:
         raise FrameError("FRAME", "non-printable byte")
     star = line.rfind(b"*")
     if star < 0:

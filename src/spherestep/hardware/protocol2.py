@@ -56,7 +56,7 @@ NAK_CODES2 = {"LIMIT": "a setpoint above the current limit, or setpoints above t
 def encode_block(values) -> str:
     """Signed 16-bit integers as concatenated four-digit upper-case hex (two's complement), clipped."""
     v = np.clip(np.rint(np.asarray(values, dtype=float)).astype(np.int64), -FULL_SCALE, FULL_SCALE)
-    return "".join(f"{x & 0xFFFF:04X}" for x in v.reshape(-1))
+    return v.reshape(-1).astype(">i2").tobytes().hex().upper()  # big-endian int16: the digits of x & 0xFFFF
 
 
 def decode_block(text: str, count: int) -> np.ndarray | None:
