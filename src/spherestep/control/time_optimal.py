@@ -21,9 +21,10 @@ the inertial one, each stage is one interval in ``y`` — no need for TOPP-RA's 
 Speed bands. ``B`` shrinks as ``ṡ`` grows (each coil loses, on the side its back-EMF opposes, ``|g_k| ṡ`` with
 ``g_k = K_k·n/(R I_n²)``), so the interval computed with the box at ``v_j`` holds for every speed up to ``v_j``.
 The phase plane uses ``SPEED_BANDS`` levels ``v_j`` (equal steps up to ``TOP_SPEED × v₀``, :func:`speed_levels`;
-``v₀`` the speed at which the best-aligned coil's back-EMF equals the supply; ``TOP_SPEED`` = 0.6 because the
+``v₀`` the speed at which the best-aligned coil's back-EMF equals the supply; ``TOP_SPEED`` = 0.8 because the
 servo's least-power allocation does not know the back-EMF — measured on the prototype's iron turn, the servo
-tracks within 0.42° at 0.6, 0.49° at 0.65, 0.52° at 0.7 and loses the rotor by 19° at 2.0):
+tracks within 0.21° at 0.6 (2.91 s), 0.33° at 0.8 (2.35 s), 0.42° at 0.9, 0.55° at 1.0 (2.05 s) and loses the
+rotor by 11° at 2.0 (1.67 s)):
 a piece whose larger end speed is in ``(v_{j−1}, v_j]`` uses band ``j`` (conservative by one band's width);
 damping conservatively as ``D_j ≤ s̈ ≤ A_j − β v_j``, ``β = b_d/I``. The intervals are computed lazily, only in
 the bands the passes visit.
@@ -400,8 +401,8 @@ def fastest_turn(model, start, axis, angle: float, inertia: float, limits: Drive
     """The fastest rest-to-rest turn of ``angle`` (rad) about the fixed ``axis`` from ``start`` whose feed-forward
     torque ``I α + b_d ω − b(R)`` the coils give within ``margin`` of their limits all along (see the module): the
     turn itself if feasible, else the fastest detour found; :class:`FastestTurn`. Speeds up to ``top_speed × v₀``
-    (default ``TOP_SPEED`` = 0.6: the servo's allocation does not know the back-EMF, so the plan keeps the
-    best-aligned coil's back-EMF within 60 % of ``V``; :func:`speed_levels`) and ``speed`` if given. Raises an
+    (default ``TOP_SPEED`` = 0.8: the servo's allocation does not know the back-EMF, so the plan keeps the
+    best-aligned coil's back-EMF within 80 % of ``V``; :func:`speed_levels`) and ``speed`` if given. Raises an
     ``InputError`` naming ``axis`` when no path tried is feasible."""
     I, bd, margin = _check(model, limits, inertia, damping, margin)
     n = checks.axis(axis)
@@ -433,7 +434,7 @@ def fastest_turn(model, start, axis, angle: float, inertia: float, limits: Drive
 
 
 SPEED_BANDS = 24  # speed levels of the phase plane's bands
-TOP_SPEED = 0.6  # × v₀: the planner's fastest band (the best-aligned coil's back-EMF is 60 % of V there)
+TOP_SPEED = 0.8  # × v₀: the planner's fastest band (the best-aligned coil's back-EMF is 80 % of V there)
 BOUND_SPEED = 2.0  # × v₀: the bound's fastest band (that coil's back-EMF twice the supply)
 
 
