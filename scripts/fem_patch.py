@@ -1,0 +1,504 @@
+"""Whole-motor reference (issue 28 §1): a stator patch of four iron cores under the rotor magnets within reach,
+3-D FEM with NGSolve, linear iron and the B–H curve; and the package's iron model on the same cases.
+
+    OPENBLAS_NUM_THREADS=1 nice -n 19 python scripts/fem_patch.py --quick     # one coarse case (minutes), printed
+    OPENBLAS_NUM_THREADS=1 nohup nice -n 19 python scripts/fem_patch.py > fem_patch.log 2>&1 &
+        # every case missing from data/iron_fem_patch.csv, appended row by row (a stopped run keeps its rows)
+    ... scripts/fem_patch.py --cases 0 27   and   ... --cases 27 54     # a range of case indices, to share work
+    python scripts/fem_patch.py --list          # the cases
+    python scripts/fem_patch.py --compare       # the iron model (pairwise, coupled) against the stored rows
+
+Geometry (the stator frame, sphere's centre at the origin). The patch is coil 0 and its three nearest neighbours
+(coils 0, 1, 8, 28 of ``prototype()``; 24.9°–25.6° apart, 1 and 8 43.9°), each a pot core of
+``_iron.CoreGeometry.of(design, coil)`` along its axis ``v_k``, face at ``R_s + g``. The rotor magnets included at
+an orientation ``R`` are those whose direction ``w_j = R u_j`` lies within :data:`REACH_DEG` of a patch coil's axis
+(the coil's angular radius 9.5° + the magnet's 4.8° + 10.7° margin: the pair torque there is < 3 % of its peak),
+each a cylinder with its outer face at ``_iron.magnet_face_radius`` (as in the pair tables), magnetisation
+``p_j B_r/μ0 w_j``. Outer boundary ψ = 0 on a sphere of 0.3 m about the patch's centre.
+
+Formulation: that of ``scripts/fem_iron.py`` for several cores and magnets — total scalar potential ψ (H1, order 2),
+``H = T0 − ∇ψ`` with one current vector potential ``T0_k = c_k NI/d (profile in r_k) v_k`` per energised coil in its
+own frame (``0 ≤ z_k ≤ d``). Linear iron (μr of ``design.coil.material``): ``∫ μr ∇ψ·∇v = ∫ μr T0·∇v +
+Σ_j ∫_j M_j·∇v``, one factorisation per orientation for the three current cases. B–H: the co-energy
+``∫_iron w*(|H|)/μ0 + ∫_rest |H|²/2 + Σ_j ∫_j M_j·H``, ``w*(H) = ∫_0^H B(h) dh``, minimised by Newton with line
+search (``ngsolve.solvers.NewtonMinimization``) from the linear solution; ``B(H)`` is the curve ``_iron``'s
+saturation check uses (``CoreSolver.saturated_polarization``): the linear line ``μ0 μr H`` up to
+``_iron.saturation_onset``, the material's normal curve beyond, so only saturation differs from the linear solve.
+Torque on the rotor about the centre: ``Σ_j Σ σ (x × B_ext) dA`` over the included magnets' face charges
+(``_iron.magnet_faces``, ``charge_wrench``), ``B_ext`` = the solve minus the same mesh with no iron and no
+current (the magnets' own field and its discretisation error cancel; magnet–magnet forces are internal).
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import os
+import sys
+import time
+from dataclasses import dataclass, replace
+from pathlib import Path
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from spherestep.magnetics import _iron as iron
+from spherestep.magnetics import TorqueMap, iron_model
+from spherestep.motor import prototype
+
+MU0 = 4e-7 * math.pi
+DATA = Path(__file__).resolve().parents[1] / "data"
+OUT = DATA / "iron_fem_patch.csv"
+SEED = 28
+REACH_DEG = 25.0  # magnets within this of a patch coil's axis are meshed
+STATES = 4  # stepper states in the patch; as many intermediate orientations
+TILT_DEG = 8.0  # an intermediate orientation: a state turned by this about a random axis
+MAXH = 2.5e-3  # m: the face mesh of every case
+MAXH_FINE = 1.8e-3  # m: the convergence check's face mesh
+OUTER = 0.3  # m: radius of the ψ = 0 sphere about the patch's centre
+COLUMNS = ("case", "orientation", "kind", "qx", "qy", "qz", "qw", "coils", "currents", "magnets", "material",
+           "maxh_face_m", "elements", "torque_x_Nm", "torque_y_Nm", "torque_z_Nm", "newton_steps", "mesh_s",
+           "solve_s")
+HEADER = ("# NGSolve 3-D FEM (total scalar potential, order 2) of a stator patch of four iron-cored coils of the "
+          "prototype under the rotor magnets within 25 deg of them (scripts/fem_patch.py).\n"
+          "# Torque on the rotor about the sphere's centre (N m, stator frame); orientation R as a quaternion "
+          "(x, y, z, w; scipy); coils: stator indices; currents per nominal (nominal_ampere_turns); magnets: rotor "
+          "indices included; material linear (mu_r) or bh (B-H curve); maxh_face the mesh at the core faces (m); "
+          "times wall-clock (s): mesh (with the air solve) and this case's solve.\n" + ",".join(COLUMNS) + "\n")
+
+
+@dataclass(frozen=True)
+class Case:
+    """One FEM case: orientation ``R`` (label ``orientation``, ``kind`` state/intermediate), ``currents`` on the
+    patch ``coils`` (per nominal), ``material`` ("linear" or "bh"), face mesh ``maxh`` (m)."""
+
+    index: int
+    orientation: int
+    kind: str
+    R: np.ndarray
+    coils: tuple
+    currents: tuple
+    material: str
+    maxh: float
+
+
+def patch_coils(design) -> tuple:
+    """Coil 0 and its three nearest neighbours (stator indices, sorted by angle from coil 0)."""
+    v = design.stator.centers
+    return tuple(int(k) for k in np.argsort(-(v @ v[0]))[:4])
+
+
+def orientations(design, coils):
+    """``STATES`` stepper states whose held coils all belong to the patch (≥ 2 of them; random, seed ``SEED``)
+    and, for each, an intermediate orientation (the state turned by ``TILT_DEG`` about a random axis): a list of
+    ``(R, kind, currents on the patch)`` — the intermediate one carries its state's currents."""
+    states = design.states()
+    patch = set(coils)
+    ok = [i for i in range(len(states)) if states.counts[i] >= 2 and set(states.coils(i)) <= patch]
+    rng = np.random.default_rng(SEED)
+    chosen = rng.choice(ok, STATES, replace=False)
+    out, tilted = [], []
+    for i in chosen:
+        held = states.coils(int(i))
+        c = tuple(float(held.get(k, 0)) for k in coils)
+        R = states.rotations[int(i)]
+        out.append((R, "state", c))
+        axis = rng.normal(size=3)
+        turn = Rotation.from_rotvec(math.radians(TILT_DEG) * axis / np.linalg.norm(axis)).as_matrix()
+        tilted.append((turn @ R, "intermediate", c))
+    return out + tilted
+
+
+def current_cases(c):
+    """Coils off, the state's coils, the state's coils with the first energised one reversed."""
+    c = np.asarray(c, dtype=float)
+    rev = c.copy()
+    rev[np.flatnonzero(c)[0]] *= -1.0
+    return [tuple(float(v) + 0.0 for v in a) for a in (0.0 * c, c, rev)]  # + 0.0: no −0
+
+
+def all_cases(design=None) -> list[Case]:
+    """Linear iron at ``MAXH`` (8 orientations × 3 currents), the convergence check (linear, ``MAXH_FINE``, at
+    orientations 0 and 4: a state and an intermediate one), the B–H curve at ``MAXH`` (8 × 3): 54 cases, grouped
+    so that consecutive cases share a mesh."""
+    design = prototype() if design is None else design
+    coils = patch_coils(design)
+    orient = orientations(design, coils)
+    runs = [(o, "linear", MAXH) for o in range(len(orient))] + [(o, "linear", MAXH_FINE) for o in (0, STATES)]
+    runs += [(o, "bh", MAXH) for o in range(len(orient))]
+    out = []
+    for o, material, h in runs:
+        R, kind, c = orient[o]
+        for cur in current_cases(c):
+            out.append(Case(len(out), o, kind, R, coils, cur, material, h))
+    return out
+
+
+def included_magnets(design, R, coils) -> np.ndarray:
+    """Rotor indices of the magnets within ``REACH_DEG`` of a patch coil's axis at ``R``."""
+    w = design.rotor.centers @ np.asarray(R).T
+    v = design.stator.centers[list(coils)]
+    return np.flatnonzero(np.max(w @ v.T, axis=1) >= math.cos(math.radians(REACH_DEG)))
+
+
+# ---------------------------------------------------------------------------------------------------- the FEM
+
+
+class PatchSolver:
+    """The mesh of one orientation (cores of ``coils``, magnets ``magnets`` at ``R``) and its solves."""
+
+    def __init__(self, design, R, coils, magnets, maxh: float):
+        from netgen.occ import Cylinder, Dir, Glue, OCCGeometry, Pnt, Sphere
+        from ngsolve import Mesh
+
+        t0 = time.perf_counter()
+        self.design, self.coils, self.magnets = design, tuple(coils), np.asarray(magnets)
+        coil = design.coil
+        g = self.g = iron.CoreGeometry.of(design, coil)
+        face = self.face = design.radius + design.air_gap
+        self.v = design.stator.centers[list(coils)]
+        iron_parts, grooves = [], []
+        for v in self.v:
+            p0 = face * v
+
+            def cyl(r, z0, h, v=v, p0=p0):
+                return Cylinder(Pnt(*(p0 + z0 * v)), Dir(*v), r, h)
+
+            pole_lo, pole_hi = cyl(g.r_p, 0.0, g.depth), cyl(g.r_p, g.depth, g.L - g.depth)
+            wall = cyl(g.R, 0.0, g.depth) - cyl(g.r_w, 0.0, g.depth)
+            back = cyl(g.R, g.depth, g.L - g.depth) - pole_hi
+            groove = cyl(g.r_w, 0.0, g.depth) - pole_lo
+            for p in (pole_lo, pole_hi, wall, back):
+                p.mat("iron")
+                p.maxh = 2.5 * maxh
+            for f in pole_lo.faces + wall.faces:
+                f.maxh = maxh
+            groove.mat("winding")
+            iron_parts += [pole_lo, pole_hi, wall, back]
+            grooves.append(groove)
+        self.w = np.asarray(R) @ design.rotor.centers[self.magnets].T  # (3, m)
+        self.w = self.w.T
+        self.p = design.polarity[self.magnets].astype(float)
+        r_c = iron.magnet_face_radius(design) - 0.5 * design.magnet_length
+        self.centres = r_c * self.w
+        mags = []
+        for j, (c, w) in enumerate(zip(self.centres, self.w)):
+            base = c - 0.5 * design.magnet_length * w
+            m = Cylinder(Pnt(*base), Dir(*w), 0.5 * design.magnet_diameter, design.magnet_length)
+            m.mat(f"magnet{j}")
+            m.maxh = 1.5 * maxh
+            mags.append(m)
+        centre = face * self.v.mean(axis=0)
+        outer = Sphere(Pnt(*centre), OUTER)
+        outer.faces.name = "outer"
+        air = outer
+        for s in iron_parts + grooves + mags:
+            air = air - s
+        air.mat("air")
+        shape = Glue([air, *iron_parts, *grooves, *mags])
+        self.mesh = Mesh(OCCGeometry(shape).GenerateMesh(maxh=0.04, grading=0.25))
+        self._points()
+        self.B_air = self._field(self._linear(1.0, np.zeros(len(coils)))[0])
+        self._inverse = None  # the linear iron's factorisation, once made
+        self.mesh_s = time.perf_counter() - t0
+
+    def _points(self):
+        """The magnets' face-charge points (a hair inside each magnet) and charges."""
+        d = self.design
+        pts, qs = [], []
+        for c, w, p in zip(self.centres, self.w, self.p):
+            x, q = iron.magnet_faces(c, p * w, d.magnet_diameter, d.magnet_length, d.remanence)
+            x = x + np.where(q > 0, -1.0, 1.0)[:, None] * (p * w) * 1e-7
+            pts.append(x)
+            qs.append(q)
+        self.pts, self.q = np.concatenate(pts), np.concatenate(qs)
+
+    def _space(self):
+        from ngsolve import H1
+        return H1(self.mesh, order=2, dirichlet="outer")
+
+    def _sources(self, currents):
+        """``T0`` (A/m, the sum over the energised coils) and the magnets' ``M`` (A/m) as coefficient functions."""
+        from ngsolve import CoefficientFunction, IfPos, sqrt, x, y, z
+
+        g = self.g
+        T0 = CoefficientFunction((0.0, 0.0, 0.0))
+        for v, c in zip(self.v, currents):
+            if c == 0:
+                continue
+            s = v[0] * x + v[1] * y + v[2] * z
+            zl = s - self.face
+            r = sqrt(IfPos(x * x + y * y + z * z - s * s, x * x + y * y + z * z - s * s, 0.0))
+            prof = IfPos(g.r_p - r, 1.0, IfPos(g.r_w - r, (g.r_w - r) / (g.r_w - g.r_p), 0.0))
+            t = c * g.NI / g.depth * prof * IfPos(zl, IfPos(g.depth - zl, 1.0, 0.0), 0.0)
+            T0 = T0 + t * CoefficientFunction(tuple(float(a) for a in v))
+        Ms = {f"magnet{j}": CoefficientFunction(tuple(float(a) for a in self.design.remanence / MU0 * p * w))
+              for j, (w, p) in enumerate(zip(self.w, self.p))}
+        return T0, Ms
+
+    def _linear(self, mu_r: float, currents, inverse=None):
+        from ngsolve import BilinearForm, GridFunction, LinearForm, TaskManager, dx, grad
+
+        fes = self._space()
+        psi, v = fes.TnT()
+        if inverse is None:
+            mu = self.mesh.MaterialCF({"iron": mu_r}, default=1.0)
+            a = BilinearForm(fes, symmetric=True)
+            a += mu * grad(psi) * grad(v) * dx
+            with TaskManager():
+                a.Assemble()
+                inverse = a.mat.Inverse(fes.FreeDofs(), inverse="sparsecholesky")
+        mu = self.mesh.MaterialCF({"iron": mu_r}, default=1.0)
+        T0, Ms = self._sources(currents)
+        f = LinearForm(fes)
+        for name, M in Ms.items():
+            f += M * grad(v) * dx(definedon=self.mesh.Materials(name))
+        if any(currents):
+            f += mu * T0 * grad(v) * dx(definedon=self.mesh.Materials("iron|winding"))
+        gfu = GridFunction(fes)
+        with TaskManager():
+            f.Assemble()
+            gfu.vec.data = inverse * f.vec
+        return gfu, inverse
+
+    def _field(self, gfu) -> np.ndarray:
+        """``−μ0 ∇ψ`` (T) at the charge points (the ``T0`` and ``M`` terms cancel in the difference taken)."""
+        from ngsolve import grad
+
+        P = self.pts
+        return -MU0 * np.asarray(grad(gfu)(self.mesh(P[:, 0], P[:, 1], P[:, 2]))).reshape(-1, 3)
+
+    def torque(self, B) -> np.ndarray:
+        return iron.charge_wrench(self.pts, self.q, B - self.B_air, (0.0, 0.0, 0.0))[1]
+
+    def solve_linear(self, currents_list):
+        """Torques (N·m) for each currents vector, linear iron: one factorisation, one solve each."""
+        out = []
+        for c in currents_list:
+            t0 = time.perf_counter()
+            gfu, self._inverse = self._linear(self.g.mu_r, c, self._inverse)
+            out.append((self.torque(self._field(gfu)), 0, time.perf_counter() - t0))
+        return out
+
+    def solve_bh(self, currents, material):
+        """Torque (N·m), Newton steps and time for the B–H curve (see the module docstring)."""
+        from ngsolve import BilinearForm, BSpline, TaskManager, Variation, dx, grad, sqrt
+        from ngsolve.solvers import NewtonMinimization
+
+        t0 = time.perf_counter()
+        onset = iron.saturation_onset(material, self.g.mu_r)
+        bh = np.asarray(material.bh, dtype=float)
+        H = np.concatenate([[0.0, onset], bh[bh[:, 0] > onset, 0], [1e8]])
+        B = np.concatenate([[0.0, MU0 * self.g.mu_r * onset], bh[bh[:, 0] > onset, 1],
+                            [bh[-1, 1] + MU0 * (1e8 - bh[-1, 0])]])
+        curve = BSpline(2, [0.0] + list(H), list(B / MU0))  # B/μ0 (A/m) against H (A/m)
+        wstar = curve.Integrate()
+        gfu, self._inverse = self._linear(self.g.mu_r, currents, self._inverse)  # the start: the linear solve
+        fes = gfu.space
+        psi = fes.TrialFunction()
+        T0, Ms = self._sources(currents)
+        Hcf = T0 - grad(psi)
+        a = BilinearForm(fes, symmetric=True)
+        a += Variation(wstar(sqrt(1e-6 + Hcf * Hcf)) * dx("iron"))
+        a += Variation(0.5 * Hcf * Hcf * dx("air|winding|" + "|".join(Ms)))
+        for name, M in Ms.items():
+            a += Variation(M * Hcf * dx(name))
+        with TaskManager():
+            status, steps = NewtonMinimization(a, gfu, freedofs=fes.FreeDofs(), maxit=40, maxerr=1e-3,
+                                               inverse="sparsecholesky", linesearch=True, printing=False)
+        if status != 0:
+            raise RuntimeError(f"Newton did not converge in {steps} steps")
+        return self.torque(self._field(gfu)), steps, time.perf_counter() - t0
+
+
+def _fmt(values) -> str:
+    return ";".join(f"{v:g}" for v in values)
+
+
+def run(cases, out: Path | None = OUT) -> list[str]:
+    """Solve ``cases`` (consecutive ones sharing a mesh are solved on it), appending a row per case to ``out``
+    (one ``write`` per complete line) and returning the rows."""
+    from ngsolve import SetNumThreads
+
+    SetNumThreads(1)
+    design = prototype()
+    material = design.coil.material
+    rows = []
+    groups = {}
+    for c in cases:
+        groups.setdefault((c.orientation, c.material, c.maxh), []).append(c)
+    if out is not None and not out.exists():
+        out.write_text(HEADER)
+    for (o, mat, h), group in groups.items():
+        mags = included_magnets(design, group[0].R, group[0].coils)
+        solver = PatchSolver(design, group[0].R, group[0].coils, mags, h)
+        print(f"orientation {o} ({group[0].kind}), {len(mags)} magnets, maxh {h * 1e3:g} mm: "
+              f"{solver.mesh.ne} tetrahedra, {solver.mesh_s:.0f} s", flush=True)
+        if mat == "linear":
+            results = solver.solve_linear([c.currents for c in group])
+        else:
+            results = [solver.solve_bh(c.currents, material) for c in group]
+        for c, (T, steps, dt) in zip(group, results):
+            q = Rotation.from_matrix(c.R).as_quat()
+            row = [str(c.index), str(c.orientation), c.kind, *(f"{v:.12g}" for v in q), _fmt(c.coils),
+                   _fmt(c.currents), _fmt(mags), c.material, f"{c.maxh:g}", str(solver.mesh.ne),
+                   *(f"{v:.9g}" for v in T), str(steps), f"{solver.mesh_s:.1f}", f"{dt:.1f}"]
+            line = ",".join(row) + "\n"
+            print(line, end="", flush=True)
+            rows.append(line)
+            if out is not None:
+                with open(out, "a") as fh:
+                    fh.write(line)
+                    fh.flush()
+                    os.fsync(fh.fileno())
+    return rows
+
+
+# ---------------------------------------------------------------------------------------------------- the model
+
+
+def read_rows(path: Path = OUT) -> list[dict]:
+    """The stored rows (dicts of the columns; arrays for coils, currents, magnets, the torque); the last row of
+    a case index wins."""
+    if not path.exists():
+        return []
+    lines = [ln for ln in path.read_text().splitlines() if ln and not ln.startswith("#")]
+    if not lines:
+        return []
+    rows = {}
+    for ln in lines[1:]:
+        r = dict(zip(COLUMNS, ln.split(",")))
+        if len(r) != len(COLUMNS):
+            continue  # an incomplete line
+        r["R"] = Rotation.from_quat([float(r[k]) for k in ("qx", "qy", "qz", "qw")]).as_matrix()
+        for k in ("coils", "magnets"):
+            r[k] = np.array([int(float(v)) for v in r[k].split(";")])
+        r["currents"] = np.array([float(v) for v in r["currents"].split(";")])
+        r["torque"] = np.array([float(r[k]) for k in ("torque_x_Nm", "torque_y_Nm", "torque_z_Nm")])
+        r["maxh"] = float(r["maxh_face_m"])
+        rows[int(r["case"])] = r
+    return [rows[k] for k in sorted(rows)]
+
+
+def model_torque(model, R, coils, currents, magnets) -> np.ndarray:
+    """The iron model's torque (N·m) restricted to the rotor poles ``magnets`` and the cores ``coils`` (the same
+    pair tables, polarities and — if the model has it — coupling terms, over these poles and cores only)."""
+    mags = np.asarray(magnets, dtype=int)
+    idx = np.asarray(coils, dtype=int)
+
+    def cut(m: TorqueMap, polarity):
+        return TorqueMap(m.poles[mags], polarity, m.coils[idx], (), m.nodes, m.tau, m.meshing)
+
+    coupling = model.coupling
+    if coupling is not None:
+        where = -np.ones(len(coupling.poles), dtype=int)
+        where[mags] = np.arange(len(mags))
+        keep = (where[coupling.pairs] >= 0).all(axis=1)
+        coupling = replace(coupling, poles=coupling.poles[mags], polarity=coupling.polarity[mags],
+                           coils=coupling.coils[idx], pairs=where[coupling.pairs[keep]])
+    sub = type(model)(cut(model.detent, model.detent.polarity[mags]), cut(model.linear, model.linear.polarity[mags]),
+                      model.coil, coupling)
+    return sub.torque(R, np.asarray(currents, dtype=float))
+
+
+@dataclass(frozen=True)
+class Comparison:
+    """The model against the FEM rows: per row ``|T_model − T_fem| / max_rows |T_fem|`` (vector norms), pairwise
+    and coupled; ``peak`` the FEM's largest torque (N·m) over the rows compared."""
+
+    rows: list
+    pairwise: np.ndarray
+    coupled: np.ndarray
+    fem: np.ndarray
+    model_pairwise: np.ndarray
+    model_coupled: np.ndarray
+    peak: float
+
+    def to_dict(self, degrees: bool = True) -> dict:
+        return {"cases": [int(r["case"]) for r in self.rows], "peak_Nm": self.peak,
+                "pairwise_max": float(self.pairwise.max()), "pairwise_median": float(np.median(self.pairwise)),
+                "coupled_max": float(self.coupled.max()), "coupled_median": float(np.median(self.coupled))}
+
+
+def compare(rows, material: str = "linear", maxh: float = MAXH, design=None) -> Comparison | None:
+    """The iron model (pairwise and with coupling) against the stored rows of ``material`` at face mesh
+    ``maxh``; the error of each row as a fraction of the FEM's largest torque over those rows."""
+    rows = [r for r in rows if r["material"] == material and math.isclose(r["maxh"], maxh)]
+    if not rows:
+        return None
+    design = prototype() if design is None else design
+    models = iron_model(design), iron_model(design, coupling=True)
+    fem = np.array([r["torque"] for r in rows])
+    got = [np.array([model_torque(m, r["R"], r["coils"], r["currents"], r["magnets"]) for r in rows])
+           for m in models]
+    peak = float(np.linalg.norm(fem, axis=1).max())
+    err = [np.linalg.norm(g - fem, axis=1) / peak for g in got]
+    return Comparison(rows, err[0], err[1], fem, got[0], got[1], peak)
+
+
+def report(rows) -> None:
+    """Print the comparison table for both materials and the mesh-convergence rows."""
+    for material in ("linear", "bh"):
+        cmp_ = compare(rows, material)
+        if cmp_ is None:
+            continue
+        print(f"\n{material} iron, face mesh {MAXH * 1e3:g} mm: FEM peak |T| = {cmp_.peak:.3f} N m")
+        print("case orient kind         currents       |T_fem|  T_fem (x, y, z)           "
+              "pairwise |dT|/peak (N m)  coupled |dT|/peak (N m)")
+        for r, f, e1, e2 in zip(cmp_.rows, cmp_.fem, cmp_.pairwise, cmp_.coupled):
+            print(f"{r['case']:>4} {r['orientation']:>6} {r['kind']:<12} {_fmt(r['currents']):<14} "
+                  f"{np.linalg.norm(f):7.3f}  ({f[0]:+.3f}, {f[1]:+.3f}, {f[2]:+.3f})   {100 * e1:5.1f} % "
+                  f"({e1 * cmp_.peak:.3f})      {100 * e2:5.1f} % ({e2 * cmp_.peak:.3f})")
+        print(f"error / peak: pairwise max {100 * cmp_.pairwise.max():.1f} %, median "
+              f"{100 * np.median(cmp_.pairwise):.1f} %; coupled max {100 * cmp_.coupled.max():.1f} %, median "
+              f"{100 * np.median(cmp_.coupled):.1f} %")
+    fine = {(r["orientation"], _fmt(r["currents"])): r for r in rows
+            if r["material"] == "linear" and math.isclose(r["maxh"], MAXH_FINE)}
+    coarse = {(r["orientation"], _fmt(r["currents"])): r for r in rows
+              if r["material"] == "linear" and math.isclose(r["maxh"], MAXH)}
+    both = sorted(set(fine) & set(coarse))
+    if both:
+        peak = max(np.linalg.norm(r["torque"]) for r in coarse.values())
+        print(f"\nmesh convergence ({MAXH * 1e3:g} -> {MAXH_FINE * 1e3:g} mm), |dT| / peak:")
+        for k in both:
+            d = np.linalg.norm(fine[k]["torque"] - coarse[k]["torque"]) / peak
+            print(f"  orientation {k[0]}, currents {k[1]}: {coarse[k]['elements']} -> {fine[k]['elements']} "
+                  f"tetrahedra, {100 * d:.2f} %")
+    sat = {(r["orientation"], _fmt(r["currents"])): r for r in rows if r["material"] == "bh"}
+    both = sorted(set(sat) & set(coarse))
+    if both:
+        peak = max(np.linalg.norm(r["torque"]) for r in coarse.values())
+        worst = max(np.linalg.norm(sat[k]["torque"] - coarse[k]["torque"]) / peak for k in both)
+        print(f"\nB-H against linear (same mesh), largest |dT| / peak: {100 * worst:.1f} % over {len(both)} cases")
+
+
+def main(argv=None) -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--quick", action="store_true", help="one coarse case (4 mm face mesh), printed, not stored")
+    ap.add_argument("--cases", nargs=2, type=int, metavar=("FIRST", "STOP"), help="case indices FIRST..STOP-1")
+    ap.add_argument("--list", action="store_true", help="print the cases")
+    ap.add_argument("--compare", action="store_true", help="the iron model against the stored rows")
+    ap.add_argument("--redo", action="store_true", help="solve cases already stored too")
+    args = ap.parse_args(argv)
+    if args.compare:
+        report(read_rows())
+        return
+    cases = all_cases()
+    if args.list:
+        for c in cases:
+            q = Rotation.from_matrix(c.R).as_quat()
+            print(c.index, c.orientation, c.kind, np.round(q, 4), c.coils, c.currents, c.material, c.maxh)
+        return
+    if args.quick:
+        run([replace(cases[1], maxh=4e-3)], out=None)
+        return
+    if args.cases:
+        cases = cases[args.cases[0]:args.cases[1]]
+    if not args.redo:
+        done = {int(r["case"]) for r in read_rows()}
+        cases = [c for c in cases if c.index not in done]
+    run(cases)
+
+
+if __name__ == "__main__":
+    main(sys.argv[1:])
