@@ -6,6 +6,8 @@
 * :mod:`.trajectory`: :class:`Trajectory` — rest-to-rest turns on SO(3), trapezoidal or tabulated speed profiles.
 * :mod:`.time_optimal`: :func:`fastest_turn` — the time-optimal turn with the detent (phase plane, detours).
 * :mod:`.controller`: :class:`GeometricPD` and :class:`Observer` — feedback on the log-map error.
+* :mod:`.calibration`: :func:`collect_holds` and :func:`calibrate` — the torque model fitted to the motor's own
+  holds and moves (the iron model's pair tables by least squares), :class:`Calibration` saved beside the design.
 * :mod:`.servo`: :class:`ServoLaw` — the one servo law (observer, feedback, cached ``K(R)``/bias, allocation) that
   the simulation and the hardware loop call each period; :class:`ModelCache`, :class:`ServoCommand`.
 
@@ -14,6 +16,8 @@ is in :mod:`spherestep.dynamics`.
 """
 
 from .allocation import Allocation, allocate, allocate_matrix, allocate_relay, closest_reachable, least_power_box
+from .calibration import (Calibration, Emulated, Holds, Port, calibrate, calibration_beside, collect_holds,
+                          hold_orientations, torque_error)
 from .capability import Capability, available_torque, feasible_support, figure_capability, torque_capability
 from .controller import GeometricPD, Observer
 from .limits import DriveLimits
@@ -22,7 +26,9 @@ from .time_optimal import FastestTurn, fastest_time, fastest_turn
 from .trajectory import (Segment, TimeLaw, Trajectory, bang_bang_time, path_capability, plan_through, plan_trapezoid,
                          plan_turn)
 
-__all__ = ["Allocation", "Capability", "DriveLimits", "GeometricPD", "ModelCache", "Observer", "Segment",
+__all__ = ["Calibration", "Emulated", "Holds", "Port", "calibrate", "calibration_beside", "collect_holds",
+           "hold_orientations", "torque_error",
+           "Allocation", "Capability", "DriveLimits", "GeometricPD", "ModelCache", "Observer", "Segment",
            "ServoCommand", "ServoLaw", "Trajectory", "TimeLaw", "FastestTurn", "fastest_time", "fastest_turn",
            "plan_trapezoid",
            "bang_bang_time", "path_capability", "plan_through", "plan_turn", "available_torque", "feasible_support", "figure_capability",

@@ -37,10 +37,12 @@ class DesignModel:
         return {"model": self.label, "core": self.core, "limits": self.limits.to_dict()}
 
 
-def design_model(design, core: str | None = None, *, coupling: bool = False) -> DesignModel:
+def design_model(design, core: str | None = None, *, coupling: bool = False, calibration=None) -> DesignModel:
     """The torque model and drive limits of ``design`` as its file states them (module docstring); ``core``
     ``"air"``/``"iron"`` overrides the design's core (same winding); ``coupling`` adds the iron's core-to-core
-    coupling term (:func:`~spherestep.magnetics.iron_model`)."""
+    coupling term (:func:`~spherestep.magnetics.iron_model`). ``calibration`` (a path, e.g.
+    :func:`spherestep.control.calibration_beside` of the design file, or a :class:`spherestep.control.Calibration`)
+    replaces the iron model by the one fitted to the motor's holds; the label then says "calibrated"."""
     from ..control import DriveLimits
     from ._ironmap import iron_model
 
@@ -54,12 +56,27 @@ def design_model(design, core: str | None = None, *, coupling: bool = False) -> 
         raise bad_value("coupling", "False for an air-core coil (the coupling is through the iron)", coupling)
     model = iron_model(design, coil, coupling=coupling)
     limits = DriveLimits.from_spec(coil, design)
+    if calibration is not None:
+        return _calibrated(design, coil, calibration, limits)
     if coil.core == "iron":
         source = "FEM table" if _has_fem_table(design, coil) else "method-of-moments table"
         label = f"iron ({'pairwise + coupling' if coupling else 'pairwise'}, {source})"
     else:
         label = "air (magnets' torque map)"
     return DesignModel(model, limits, coil.core, label)
+
+
+def _calibrated(design, coil, calibration, limits) -> DesignModel:
+    """The design's model from ``calibration`` (a path or a Calibration; the control room's fit, imported here
+    lazily as :class:`DriveLimits` is)."""
+    from ..control.calibration import Calibration
+
+    if coil.core != "iron":
+        raise bad_value("calibration", "used with the iron core (it fits the iron model's tables)", coil.core)
+    cal = calibration if isinstance(calibration, Calibration) else Calibration.load(calibration, design)
+    label = (f"iron (pairwise{' + coupling' if cal.coupling else ''}), calibrated from {cal.holds} holds "
+             f"({cal.backend})")
+    return DesignModel(cal.model, limits, coil.core, label)
 
 
 def _has_fem_table(design, coil) -> bool:

@@ -1,0 +1,97 @@
+"""``spherestep calibrate``: the torque model fitted to the motor's own holds (:mod:`spherestep.control.calibration`)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import typer
+
+from .app import app
+from .common import design_from, number, print_json, usable
+from .progress import progress
+
+ERROR_KEYS = ("detent", "winding")
+
+
+def plant_error(text: str) -> dict:
+    """``"detent=1.2,winding=0.85"`` as ``{"detent": 1.2, "winding": 0.85}`` (factors on the model's tables);
+    InputError naming ``--plant-error`` otherwise."""
+    from ..errors import bad_value
+
+    expected = "factors on the tables, e.g. detent=1.2,winding=0.85 (keys detent, winding; positive numbers)"
+    out = {}
+    for item in text.split(","):
+        key, sep, value = item.strip().partition("=")
+        if not sep or key.strip() not in ERROR_KEYS or key.strip() in out:
+            raise bad_value("--plant-error", expected, text)
+        try:
+            factor = float(value)
+        except ValueError:
+            raise bad_value("--plant-error", expected, text) from None
+        if not 0.0 < factor < 100.0:
+            raise bad_value("--plant-error", expected, text)
+        out[key.strip()] = factor
+    return out
+
+
+@app.command()
+def calibrate(
+    out: Path = typer.Option(..., "--out", help="Where to write the calibration (YAML). Name it calibration.yaml "
+                                                "beside the design file for design_model(calibration=...)."),
+    design_path: Path = typer.Option(None, "--design", help="Design file (iron-cored); default the built-in "
+                                                            "prototype."),
+    emulate: bool = typer.Option(False, "--emulate", help="Calibrate the emulated motor (a plant built with "
+                                                          "--plant-error), on the lockstep link."),
+    port: str = typer.Option(None, "--port", help="Calibrate the motor on this coil controller's serial device."),
+    orientations: int = typer.Option(30, "--orientations", callback=number("a whole number of holds from 2 to "
+                                                                           "200", 2, 200),
+                                     help="How many holds (a random walk of 25° moves)."),
+    error: str = typer.Option("detent=1.2,winding=0.85", "--plant-error",
+                              help="With --emulate: the emulated plant's tables as factors on the model's."),
+    seed: int = typer.Option(0, "--seed", help="Seed of the random walk of holds."),
+    as_json: bool = typer.Option(False, "--json", help="Print the fit as JSON."),
+) -> None:
+    """Drive the servo to a walk of orientations, record the steady currents and the moves, and fit the iron
+    model's detent and winding tables to them (least squares with a smoothness prior); print the fit (residuals,
+    scales, the nodes moved and their uncertainty, what the data cannot see) and write it to --out.
+
+    Example: [bold]spherestep calibrate --emulate --plant-error detent=1.2,winding=0.85 --out calibration.yaml[/bold]
+    """
+    from ..control import Emulated, Port, calibrate as fit, collect_holds, hold_orientations, torque_error
+    from ..errors import bad_value
+    from ..magnetics import design_model
+    from ..magnetics.mismatch import scaled_model
+
+    if emulate == (port is not None):
+        raise bad_value("--emulate/--port", "one of --emulate or --port DEV", "both" if emulate else "neither")
+    factors = plant_error(error)
+    if not emulate and error != "detent=1.2,winding=0.85":
+        raise bad_value("--plant-error", "used only with --emulate", error)
+    if out.exists() and not out.is_file():
+        raise bad_value("--out", "a file to write (not a folder or device)", str(out))
+    design = usable(design_from(design_path), path=design_path)
+    own = design_model(design)
+    if own.core != "iron":
+        raise bad_value("--design", "an iron-cored design (the fit is of the iron model's tables)", own.core)
+    plant = scaled_model(own.model, **factors) if emulate else None
+    backend = Emulated(plant) if emulate else Port(port)
+    walk = hold_orientations(int(orientations), seed=seed)
+    with progress("calibrating", enabled=not as_json) as say:
+        holds = collect_holds(design, backend, walk, model=own.model, limits=own.limits, progress=say)
+        say("fitting the tables")
+        cal = fit(design, own.model, holds)
+        before = after = None
+        if plant is not None:
+            say("measuring the torque error against the emulated plant")
+            before, after = torque_error(own.model, plant), torque_error(cal.model, plant)
+    path = cal.save(out)
+    if as_json:
+        print_json({"calibration": cal.to_dict(), "holds": holds.to_dict(), "file": str(path),
+                    "plant_error": factors if emulate else None,
+                    "torque_error_before": before, "torque_error_after": after})
+        return
+    print(cal.summary())
+    if before is not None:
+        print(f"torque error against the emulated plant ({error}): {before:.4f} -> {after:.4f} "
+              f"({before / after:.1f}x smaller), 200 random orientations and currents")
+    print(f"wrote {path}")
