@@ -131,25 +131,28 @@ def _tikhonov(K, t, u, mu, nu, c, s, r, tol2, max_iter):
     """``argmin ½‖K c − t‖² + ½μ‖c‖²`` over the box ``|c| ≤ u`` (``μ > 0``): semismooth Newton on
     ``F(ν) = t − μν − K clip(Kᵀν, −u, u) = 0`` (the gradient of the strongly concave dual
     ``g(ν) − ½μ‖ν‖²``), ``ν ← ν + (K_F K_Fᵀ + μI)⁻¹ F`` with backtracking; ``c = clip(Kᵀν)``. ``ν`` in (start)
-    and out; returns whether ``‖F‖² ≤ tol2``."""
+    and out; returns ``‖F‖²`` at the end (converged when ``≤ tol2``; the iteration stops there, after
+    ``max_iter`` steps, or where the line search cannot improve the dual any more — rounding)."""
     N = K.shape[1]
     A = np.empty((3, 3))
     d, trial = np.empty(3), np.empty(3)
     free = np.empty(N, dtype=np.bool_)
     g = _dual(K, t, u, nu) - 0.5 * mu * (nu[0] * nu[0] + nu[1] * nu[1] + nu[2] * nu[2])
+    r2 = 0.0
     for _ in range(max_iter):
         _primal(K, t, u, nu, c, s, r)
         for i in range(3):
             r[i] -= mu * nu[i]
-        if r[0] * r[0] + r[1] * r[1] + r[2] * r[2] <= tol2:
-            return True
+        r2 = r[0] * r[0] + r[1] * r[1] + r[2] * r[2]
+        if r2 <= tol2:
+            return r2
         for k in range(N):
             free[k] = abs(s[k]) < u[k]
         _gram(K, free, A)
         for i in range(3):
             A[i, i] += mu
         if not _solve3(A, r, d):
-            return False
+            return r2
         step = 1.0
         accepted = False
         gt = 0.0
@@ -162,13 +165,13 @@ def _tikhonov(K, t, u, mu, nu, c, s, r, tol2, max_iter):
                 break
             step *= 0.5
         if not accepted:
-            return False
+            return r2
         nu[:] = trial
         g = gt
     _primal(K, t, u, nu, c, s, r)
     for i in range(3):
         r[i] -= mu * nu[i]
-    return r[0] * r[0] + r[1] * r[1] + r[2] * r[2] <= tol2
+    return r[0] * r[0] + r[1] * r[1] + r[2] * r[2]
 
 
 @njit(cache=True)
@@ -186,8 +189,9 @@ def closest_reachable(K, t, u, rho, c):
         kk += K[0, k] * K[0, k] + K[1, k] * K[1, k] + K[2, k] * K[2, k]
         uu += u[k] * u[k]
     tn = math.sqrt(t[0] * t[0] + t[1] * t[1] + t[2] * t[2])
-    tol = 1e-12 * (math.sqrt(kk * uu) + tn) + 1e-300
+    tol = 1e-12 * (math.sqrt(kk * uu) + tn) + 1e-300  # each step's KKT residual aimed at ...
     tol2 = tol * tol
+    loose2 = 1e8 * tol2  # ... and accepted (1e-8 of the scale: far below what the torque needs) where rounding stops it
     floor = 1e-13 * kk
     if not floor > 0.0 or not rho > 0.0:
         c[:] = 0.0
@@ -195,17 +199,34 @@ def closest_reachable(K, t, u, rho, c):
     nu, nu_hi, s, r = np.zeros(3), np.zeros(3), np.empty(N), np.empty(3)
     c_hi = np.empty(N)
     hi = max((tn / rho) ** 2 * 1.0001, 2.0 * floor)
-    if not _tikhonov(K, t, u, hi, nu_hi, c_hi, s, r, tol2, 200) or math.sqrt(np.dot(c_hi, c_hi)) > rho:
+    if _tikhonov(K, t, u, hi, nu_hi, c_hi, s, r, tol2, 100) > loose2 or math.sqrt(np.dot(c_hi, c_hi)) > rho:
         return False
-    lo = floor
-    for _ in range(200):
+    # bracket the root stepping down by tenths (ν scaled along: μν = t − K c stays about the same), then bisect
+    # in log μ, each solve warm-started from the feasible end the same way
+    lo = hi
+    while True:
+        lo = max(hi * 0.1, floor)
+        for i in range(3):
+            nu[i] = nu_hi[i] * (hi / lo)
+        if _tikhonov(K, t, u, lo, nu, c, s, r, tol2, 100) > loose2:
+            if lo < 1e-9 * kk:  # the ball is not binding: c(hi) is within rounding of the answer
+                c[:] = c_hi
+                return True
+            return False
+        if math.sqrt(np.dot(c, c)) > rho:
+            break
+        hi = lo
+        nu_hi[:] = nu
+        c_hi[:] = c
+        if lo <= floor:  # feasible down to μ ≈ 0: the ball does not bind
+            return True
+    for _ in range(60):
         if hi <= lo * (1.0 + 1e-13):
             break
         mid = math.sqrt(lo * hi)
-        nu[:] = nu_hi
-        if not _tikhonov(K, t, u, mid, nu, c, s, r, tol2, 200):
-            if mid < 1e-9 * kk:  # the ball is not binding: c(hi) is within rounding of the answer
-                break
+        for i in range(3):
+            nu[i] = nu_hi[i] * (hi / mid)
+        if _tikhonov(K, t, u, mid, nu, c, s, r, tol2, 100) > loose2:
             return False
         if math.sqrt(np.dot(c, c)) > rho:
             lo = mid

@@ -167,6 +167,7 @@ def least_power_box_compiled(K: np.ndarray, t: np.ndarray, u: np.ndarray, lam0: 
     arrays (trusted)."""
     from .._fast.allocation import least_power_box as compiled
 
+    _warm()
     c, lam = np.empty(K.shape[1]), np.empty(3)
     warm = lam0 is not None
     ok = compiled(K if K.flags.c_contiguous else np.ascontiguousarray(K), t, u, lam0 if warm else _NO_LAM, warm,
@@ -175,6 +176,25 @@ def least_power_box_compiled(K: np.ndarray, t: np.ndarray, u: np.ndarray, lam0: 
 
 
 _NO_LAM = np.zeros(3)
+_WARM = []
+
+
+def _warm() -> None:
+    """Load both compiled solvers and the conic fallback on the first allocation (numba's on-disk cache and
+    Clarabel's imports: tens of ms each), so that a control loop never meets that cost in a period: its law
+    allocates once when it is built."""
+    if _WARM:
+        return
+    _WARM.append(True)
+    K, u = np.eye(3, 4), np.ones(4)
+    fixed = u.copy()
+    fixed.flags.writeable = False  # the cached bounds are read-only: numba compiles that signature apart
+    for t in (np.array([0.1, 0.0, 0.0]), np.array([9.0, 0.0, 0.0])):
+        for bounds in (u, fixed):
+            least_power_box_compiled(K, t, bounds)
+            least_power_box_compiled(K, t, bounds, np.zeros(3))
+            closest_reachable_compiled(K, t, bounds, 1.0)
+    closest_reachable(K, np.array([9.0, 0.0, 0.0]), u, 1.0)  # the fallback's imports (Clarabel, SciPy)
 
 
 def closest_reachable_compiled(K: np.ndarray, t: np.ndarray, u: np.ndarray, rho: float) -> np.ndarray | None:

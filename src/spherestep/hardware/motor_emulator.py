@@ -20,12 +20,14 @@
 
 :class:`MotorFaults` injects the faults the servo must survive: an open coil, a coil stuck at full current (a
 shorted bridge, which only the supply cut stops), a frozen current reading, a magnetometer that stops (stale)
-or returns garbage, and link loss (the device vanishes, or stops reading). :class:`MotorPty` runs device and
+or returns garbage, link loss (the device vanishes, or stops reading), and a starved device (its answers late).
+:class:`MotorPty` runs device and
 motor on the master end of ``os.openpty()``; a host opens :attr:`MotorPty.port` like a USB serial device.
 """
 
 from __future__ import annotations
 
+import gc
 import math
 import os
 import select
@@ -54,6 +56,9 @@ class MotorFaults:
     value. ``sensor_stops``: the magnetometer stops answering (repeats its last sample, flagged stale).
     ``sensor_garbage``: it returns random counts (not flagged: the host must notice). ``vanish_at`` s: the
     device closes its end of the line; ``deaf_at`` s: it stops reading the line (the watchdog still runs).
+    ``slow_answers`` ``(delay, from, until)`` s: between those times every answer leaves ``delay`` s late (a
+    starved device or link: the host's loop misses its deadlines; on :class:`LockstepLink` the emulated time
+    runs on by ``delay`` before the answer).
     """
 
     open_coil: tuple[int, float] | None = None
@@ -63,6 +68,14 @@ class MotorFaults:
     sensor_garbage: tuple[int, float] | None = None
     vanish_at: float | None = None
     deaf_at: float | None = None
+    slow_answers: tuple[float, float, float] | None = None
+
+    def answer_delay(self, t: float) -> float:
+        """How late an answer at emulated time ``t`` leaves (s): ``slow_answers``' delay within its window."""
+        if self.slow_answers is None:
+            return 0.0
+        delay, since, until = self.slow_answers
+        return float(delay) if since <= t < until else 0.0
 
 
 class EmulatedMotor:
@@ -235,6 +248,9 @@ class LockstepLink:
     def _transact(self, verb: str, *args):
         self._seq = (self._seq + 1) & 0xFF
         reply = self.device.receive(encode(self._seq, verb, *args, max_frame=MAX_FRAME2), round(self.motor.t * 1e6))
+        delay = self.motor.faults.answer_delay(self.motor.t)
+        if delay > 0:  # a starved device: the answer arrives late, emulated time runs on meanwhile
+            self.sleep(delay)
         frame = decode(reply[1:-1], MAX_FRAME2)
         if frame.verb == "NAK":
             code = frame.args[0]
@@ -285,6 +301,7 @@ def truth_of(motor: EmulatedMotor, device: CurrentDevice, slip: float = 0.0) -> 
 
 _TRIP_ORDER = ("WDOG", "CRCS", "OVER", "OPEN", "STUCK", "HEAT")
 _MAX_TRIPS = 8
+DEVICE_RT_PRIORITY = 30  # above the host loop's (spherestep.hardware.servo.RT_PRIORITY): the device answers first
 PUBLISH_EVERY = 2e-3  # s of emulated time between two publications of the truth
 MAX_CATCH_UP = 0.01  # s: when the process falls further behind the wall clock, emulated time slips instead
 
@@ -297,14 +314,17 @@ class MotorPty:
     the process was held up (beyond that emulated time slips, so that the host never meets a motor that ran
     10 ms unattended in a burst); frames are answered as they complete. :meth:`truth` returns
     the :class:`Truth` the process publishes after every step and frame. ``device_options`` go to
-    :class:`CurrentDevice` (``watchdog_ms``, ``limits``...). POSIX only.
+    :class:`CurrentDevice` (``watchdog_ms``, ``limits``...). With ``realtime`` the device process asks for
+    ``SCHED_FIFO`` scheduling (``DEVICE_RT_PRIORITY``, where the OS permits it) and pauses its garbage collector, as
+    the firmware runs on its own core. POSIX only.
     """
 
-    def __init__(self, motor: EmulatedMotor, **device_options):
+    def __init__(self, motor: EmulatedMotor, *, realtime: bool = True, **device_options):
         import multiprocessing as mp
         import tty
 
         self.motor = motor
+        self.realtime = bool(realtime)
         self.device = CurrentDevice(motor, len(motor.design.stator), len(motor.sensors),
                                     **{**matching_device_options(motor), **device_options})
         self._master, self._slave = os.openpty()
@@ -330,7 +350,8 @@ class MotorPty:
                      float(v[15 + n]), float(v[16 + n]), trips)
 
     def start(self) -> MotorPty:
-        self.motor.sense()  # first calls (spline set-up, caches) here, inherited by the device process
+        self.motor.sense()  # first calls (spline set-up, caches, compiled code) here, inherited by the device process
+        self.motor.torque_cache.at(self.motor.R)
         self.motor.sync()
         self._publish()
         self.started = time.monotonic() - self.motor.t
@@ -383,6 +404,9 @@ class MotorPty:
         except OSError:  # no host has the slave open yet
             return
         reply = self.device.receive(data, round(self.motor.t * 1e6))
+        delay = self.motor.faults.answer_delay(self.motor.t)
+        if reply and delay > 0:  # a starved device: the process stalls before it answers
+            time.sleep(delay)
         if reply:
             try:
                 os.write(master, reply)
@@ -396,6 +420,12 @@ class MotorPty:
         group): it is ignored here, and the host stops the device after switching the coils off."""
         signal.signal(signal.SIGINT, signal.SIG_IGN)
         signal.signal(signal.SIGTERM, signal.SIG_DFL)
+        if self.realtime:  # a microcontroller's loop: real-time scheduling where the OS permits it
+            try:
+                os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(DEVICE_RT_PRIORITY))
+            except (AttributeError, OSError):
+                pass
+            gc.disable()
         m, f = self.motor, self.motor.faults
         t0 = self.started
         master = self._master

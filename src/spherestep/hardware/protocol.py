@@ -177,16 +177,25 @@ class LineReader:
     def feed(self, data: bytes) -> list[bytes]:
         """Consume ``data``; return the frame bodies completed by it, in order."""
         done = []
-        for byte in data:
-            if byte == 0x24:  # '$'
+        i, n = 0, len(data)
+        while i < n:  # by runs between the framing bytes (bytes.find in C, not a loop over bytes)
+            if not self._in_frame:  # outside a frame: drop everything up to a '$'
+                i = data.find(b"$", i)
+                if i < 0:
+                    break
                 self._buf.clear()
-                self._in_frame = True
-            elif not self._in_frame or byte == 0x0D:  # outside a frame, or '\r'
+                self._in_frame, i = True, i + 1
                 continue
-            elif byte == 0x0A:  # '\n'
+            ends = [j for j in (data.find(b"$", i), data.find(b"\n", i)) if j >= 0]
+            stop = min(ends) if ends else n
+            room = self.max_frame + 1 - len(self._buf)  # an over-long body is kept truncated to MAX_FRAME + 1
+            if room > 0:
+                self._buf += data[i:stop].replace(b"\r", b"")[:room]
+            if stop == n:
+                break
+            if data[stop] == 0x0A:  # '\n' ends the frame; a '$' starts another
                 done.append(bytes(self._buf))
-                self._buf.clear()
                 self._in_frame = False
-            elif len(self._buf) <= self.max_frame:
-                self._buf.append(byte)
+            self._buf.clear()
+            i = stop + 1
         return done

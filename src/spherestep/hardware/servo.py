@@ -18,6 +18,19 @@ against the :class:`~spherestep.hardware.limits.CurrentLimits`, then wait for th
 starts more than one period late misses deadlines (counted; the ticks that passed are skipped, not caught up
 in a burst); one that starts more than ``max_late`` late (default half the device's watchdog period) ends the
 run (``SLOW``) — unless the device's watchdog saw the silence first (``WDOG``).
+
+A loop that keeps missing deadlines (``miss_budget`` late cycles among the last ``MISS_WINDOW``) fails safe by
+``on_missed``:
+``"slow"`` (default) halves its rate and the trajectory's pace together — the law sees the trajectory at
+``τ(t) = τ_k + s (t − t_k)``, with ``(R_d, s ω_d, s² α_d)``, so the motion per cycle stays what it was designed
+for, and the run is lengthened so that the whole trajectory is still followed — down to ``MIN_SCALE``, below
+which it stops; after ``RECOVER_AFTER`` s without a miss, every cycle done within ``RECOVER_BUSY`` of the faster
+period, it doubles them again; ``"stop"`` stops at once. Stopping
+is the ``SLOW`` outcome with every coil off, the message saying how many deadlines were missed and where the rotor
+stopped (its estimate's distance from the trajectory's end). The report carries what a caller needs to judge the
+run: the deadlines missed, the host's CPU per cycle (thread time: mean and max), the pace ``time_scale``, the
+trajectory time ``reference_times`` of every cycle, and the last estimate's ``end_error`` from the trajectory's
+end.
 Whatever ends the run — done, a fault seen by the host, a trip reported by the device, a lost link, Ctrl-C —
 the loop sends ``OFF`` and reports whether the device acknowledged it (if the link is gone, the device's
 watchdog switches the coils off within its period). Each cycle is one line of the log, streamed to
@@ -27,8 +40,11 @@ place).
 
 from __future__ import annotations
 
+import gc
+import math
 import os
 import time
+from collections import deque
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -52,13 +68,27 @@ class ServoFault(ComputationError):
         self.code = code
 
 
+WARMUP = 0.1  # s of zero-current frames before the schedule starts (on the wall clock)
+RT_PRIORITY = 20  # SCHED_FIFO priority the loop asks for (1–99; the kernel's RT throttling still leaves 5 %)
+MISS_WINDOW = 25  # cycles: deadlines missed within the last this many count against the budget
+MIN_SCALE = 0.125  # the slowest pace a starved loop follows the trajectory at before it stops
+RECOVER_AFTER = 2.0  # s without a missed deadline before a slowed loop doubles its pace and rate again ...
+RECOVER_BUSY = 0.8  # ... if every cycle since ended within this share of the doubled rate's period
+ON_MISSED = ("slow", "stop")
+
+
 @dataclass
 class ServoReport:
-    """What a run did: ``cycles`` completed, ``duration`` s, achieved ``rate`` Hz, ``missed`` deadlines,
-    ``outcome`` (``"done"`` or the fault code: a device trip code, ``SENSOR``, ``SLOW``, ``LIMIT``, ``LINK``,
-    ``INTERRUPT``), ``message``, ``off_acknowledged`` (the device confirmed all off), ``ended_at`` s (loop time
-    of the end), and per-cycle ``times`` (s), ``orientations (T, 3, 3)`` (estimates), ``currents (T, N)`` (A
-    commanded)."""
+    """What a run did: ``cycles`` completed, ``duration`` s, achieved ``rate`` Hz and the ``nominal_rate``,
+    ``missed`` deadlines, ``outcome`` (``"done"`` or the fault code: a device trip code, ``SENSOR``, ``SLOW``,
+    ``LIMIT``, ``LINK``, ``INTERRUPT``), ``message``, ``off_acknowledged`` (the device confirmed all off),
+    ``ended_at`` s (loop time of the end), ``realtime`` whether the loop ran with real-time scheduling,
+    ``cpu_mean``/``cpu_max`` s of the host's CPU per cycle (this thread's
+    time from the cycle's start to its end: the link's frames, estimate, law, log), ``time_scale`` the pace the
+    trajectory was followed at in the end (1: as planned; see the module), ``slowed`` how often it was halved,
+    ``end_error`` rad from the last estimate to the trajectory's end (``None`` before a first cycle), and per
+    cycle ``times`` (s), ``reference_times`` (s, the trajectory time the law followed), ``orientations (T, 3,
+    3)`` (estimates), ``currents (T, N)`` (A commanded)."""
 
     cycles: int = 0
     duration: float = 0.0
@@ -68,7 +98,15 @@ class ServoReport:
     off_acknowledged: bool = False
     ended_at: float = 0.0
     log: Path | None = None
+    nominal_rate: float = 0.0
+    realtime: bool = False
+    cpu_mean: float = 0.0
+    cpu_max: float = 0.0
+    time_scale: float = 1.0
+    slowed: int = 0
+    end_error: float | None = None
     times: list = field(default_factory=list)
+    reference_times: list = field(default_factory=list)
     orientations: list = field(default_factory=list)
     currents: list = field(default_factory=list)
 
@@ -77,10 +115,67 @@ class ServoReport:
         """Cycles per second between the first and the last cycle."""
         return (self.cycles - 1) / self.duration if self.duration > 0 else 0.0
 
-    def to_dict(self) -> dict:
-        return {"cycles": self.cycles, "duration_s": self.duration, "rate_Hz": self.rate, "missed": self.missed,
+    def to_dict(self, degrees: bool = True) -> dict:
+        """The summary (no per-cycle lists); ``end_error`` in degrees (``degrees=False``: radians)."""
+        unit, f = ("deg", math.degrees) if degrees else ("rad", float)
+        return {"cycles": self.cycles, "duration_s": self.duration, "rate_Hz": self.rate,
+                "nominal_rate_Hz": self.nominal_rate, "missed": self.missed, "realtime": self.realtime,
+                "cpu_mean_ms": 1e3 * self.cpu_mean,
+                "cpu_max_ms": 1e3 * self.cpu_max, "time_scale": self.time_scale, "slowed": self.slowed,
+                f"end_error_{unit}": None if self.end_error is None else f(self.end_error),
                 "outcome": self.outcome, "message": self.message, "off_acknowledged": self.off_acknowledged,
                 "ended_at_s": self.ended_at, "log": None if self.log is None else str(self.log)}
+
+
+class Paced:
+    """``trajectory`` (anything with ``at(t) -> (R, ω, α)``, ``start``, ``end``) followed at a pace ``scale``
+    that only falls: trajectory time ``τ(t) = τ_k + s (t − t_k)`` since the last change at ``t_k``, and
+    :meth:`at` gives ``(R_d(τ), s ω_d(τ), s² α_d(τ))``. What the servo law follows when the loop slows."""
+
+    def __init__(self, trajectory):
+        self.trajectory = trajectory
+        self.start, self.end = trajectory.start, trajectory.end
+        self.scale, self._t, self._tau = 1.0, 0.0, 0.0
+
+    def tau(self, t: float) -> float:
+        return self._tau + self.scale * (t - self._t)
+
+    def slow(self, t: float, factor: float) -> None:
+        """From loop time ``t`` on, ``factor`` times the pace."""
+        self._tau, self._t = self.tau(t), t
+        self.scale *= factor
+
+    def at(self, t: float):
+        R, w, a = self.trajectory.at(self.tau(t))
+        s = self.scale
+        return R, s * np.asarray(w), (s * s) * np.asarray(a)
+
+
+def _realtime():
+    """Ask for ``SCHED_FIFO`` at ``RT_PRIORITY`` for this thread; the previous ``(policy, priority)``, or ``None``
+    when the OS refuses (no permission, another OS)."""
+    try:
+        before = (os.sched_getscheduler(0), os.sched_getparam(0).sched_priority)
+        os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(RT_PRIORITY))
+    except (AttributeError, OSError):
+        return None
+    return before
+
+
+def _restore(before) -> None:
+    try:
+        os.sched_setscheduler(0, before[0], os.sched_param(before[1]))
+    except OSError:
+        pass
+
+
+def _where(report: ServoReport, trajectory) -> str:
+    """Where the rotor is (the last estimate) against the trajectory's end, for a message."""
+    if not report.orientations:
+        return "before the first cycle"
+    error = math.degrees(float(so3.distance(report.orientations[-1], trajectory.end)))
+    turned = math.degrees(float(so3.distance(report.orientations[-1], trajectory.start)))
+    return f"the rotor was {turned:.2f}° from the start, {error:.2f}° from the target, when the coils went off"
 
 
 def _check_state(state) -> None:
@@ -94,23 +189,40 @@ def _check_state(state) -> None:
 def run_servo(link: DriveLink, estimate, law, *, duration: float, rate: float = 200.0,
               limits: CurrentLimits | None = None, log: str | Path | None = None, status=None,
               max_late: float | None = None, clock=time.monotonic, sleep=time.sleep,
-              device_time: bool = True) -> ServoReport:
+              device_time: bool = True, on_missed: str = "slow", miss_budget: int = 3,
+              cpu_clock=time.thread_time, realtime: bool = True, warmup: float | None = None) -> ServoReport:
     """Run the loop for ``duration`` s at ``rate`` Hz on an open ``link`` (see the module); returns the
     :class:`ServoReport` (its ``rate`` on the host's clock). ``status(t, R, ω, currents)`` is called every cycle (live display); ``log`` a path
     for the per-cycle log. With ``device_time`` the control law's time ``t`` (and the log's) is the device's
     clock at the reading (``<time>`` of the state), the time the motor lives in; otherwise the host's.
     ``clock``/``sleep`` are the loop's schedule (wall time by default; a simulated clock for
-    :class:`~spherestep.hardware.motor_emulator.LockstepLink`). Never raises for a fault of the motor, the sensors, the host or the link: the
-    report says what ended the run."""
+    :class:`~spherestep.hardware.motor_emulator.LockstepLink`). ``on_missed`` (``"slow"`` or ``"stop"``) and
+    ``miss_budget`` (deadlines within ``MISS_WINDOW`` s): what a starved loop does (see the module);
+    ``duration`` is then in trajectory time (a slowed run lasts longer, at most ``duration / MIN_SCALE``).
+    ``cpu_clock`` measures the host's CPU per cycle. With ``realtime`` the loop's thread asks the OS for
+    real-time scheduling (``SCHED_FIFO`` at ``RT_PRIORITY``, where permitted; the report's ``realtime`` says
+    whether it got it) and the garbage collector pauses, both until the loop ends. ``warmup`` s (default
+    ``WARMUP`` on the wall clock, 0 on another ``clock``) of zero-current ``DRIVE`` frames at the rate come
+    before the schedule starts, so that first calls on both ends of the link (a forked device's first pages,
+    caches) fall outside it. Never raises for a fault of the motor, the sensors, the host
+    or the link: the report says what ended the run."""
     if link.info is None:
         raise bad_value("link", "an open DriveLink (call open() or use it in a with block)", link)
     max_late = 0.5 * link.info.watchdog if max_late is None else max_late
     duration, rate = checks.positive(duration, "duration"), checks.positive(rate, "rate")
     max_late = checks.positive(max_late, "max_late")
+    if on_missed not in ON_MISSED:
+        raise bad_value("on_missed", "'slow' or 'stop'", on_missed)
+    miss_budget = checks.count(miss_budget, "miss_budget", 1)
     limits = limits if limits is not None else CurrentLimits(max_current=link.info.max_current,
                                                              max_power=link.info.max_power)
-    report = ServoReport(log=None if log is None else Path(log))
+    report = ServoReport(log=None if log is None else Path(log), nominal_rate=rate)
     period = 1.0 / rate
+    paced = Paced(law.trajectory)
+    planned, law.trajectory = law.trajectory, paced
+    end = duration  # loop time at which the trajectory time reaches duration
+    window = deque(maxlen=MISS_WINDOW)  # deadlines missed before each of the last cycles
+    cpu: list[float] = []
     n = link.info.coils
     currents = np.zeros(n)
     part = None if log is None else Path(str(log) + ".part")
@@ -121,7 +233,16 @@ def run_servo(link: DriveLink, estimate, law, *, duration: float, rate: float = 
     k = 0
     host: list[float] = []  # the host's clock at each cycle, for the achieved rate
     t0 = clock()
+    scheduling = _realtime() if realtime else None
+    report.realtime = scheduling is not None
+    collecting = gc.isenabled()
+    if realtime:
+        gc.disable()
     try:
+        warm_until = clock() + (WARMUP if warmup is None and clock is time.monotonic else (warmup or 0.0))
+        while clock() < warm_until:  # every coil at zero, at the loop's rate: first calls on both sides, unscheduled
+            _check_state(link.drive(np.zeros(n)))
+            sleep(period)
         state = link.read()  # prime: the first estimate and currents come from a reading, before the clock starts
         _check_state(state)
         start_us = state.time_us
@@ -129,19 +250,44 @@ def run_servo(link: DriveLink, estimate, law, *, duration: float, rate: float = 
         currents = law.amperes(cmd.currents)
         limits.check_setpoints(currents)
         t0 = clock()
-        while k * period < duration:
-            start = t0 + k * period
+        t = 0.0
+        sched = 0.0  # the cycle's start on the schedule, s after t0
+        clean = 0.0  # schedule time since which no deadline was missed
+        while sched < end:
+            start = t0 + sched
             now = clock()
             if now < start:
                 sleep(start - now)
             late = clock() - start
+            busy = cpu_clock()
             if late > max_late:
                 raise ServoFault(f"cycle {k} started {late * 1e3:.1f} ms late, over max_late = {max_late * 1e3:.0f} "
-                                 "ms: the host is too slow for this rate", "SLOW")
+                                 f"ms: the host is too slow for this rate ({_where(report, planned)})", "SLOW")
             if late > period:  # missed deadlines: skip the ticks that passed, do not burst to catch up
                 skipped = int(late // period)
                 report.missed += skipped
-                k += skipped
+                sched += skipped * period
+                late -= skipped * period
+                window.append(1)  # one late cycle, however many ticks it skipped
+                clean = sched
+                if sum(window) >= miss_budget:
+                    if on_missed == "stop" or paced.scale * 0.5 < MIN_SCALE:
+                        raise ServoFault(f"the loop missed {report.missed} deadlines at {rate * paced.scale:g} Hz "
+                                         f"({sum(window)} of its last {len(window)} cycles late"
+                                         f"{', at the slowest pace' if on_missed == 'slow' else ''}): stopped "
+                                         f"with every coil off; {_where(report, planned)}", "SLOW")
+                    end = sched + (end - sched) * 2.0  # the rest of the trajectory at half the pace
+                    paced.slow(t, 0.5)
+                    period *= 2.0
+                    report.slowed += 1
+                    window.clear()
+            else:
+                window.append(0)
+                if paced.scale < 1.0 and sched - clean >= RECOVER_AFTER:
+                    end = sched + (end - sched) * 0.5  # starved no longer: back up a step
+                    paced.slow(t, 2.0)
+                    period *= 0.5
+                    clean = sched
             state = link.drive(currents)
             _check_state(state)
             t = (((state.time_us - start_us) & 0xFFFFFFFF) * 1e-6 if device_time else clock() - t0)
@@ -150,6 +296,7 @@ def run_servo(link: DriveLink, estimate, law, *, duration: float, rate: float = 
             currents = law.amperes(cmd.currents)
             limits.check_setpoints(currents)
             report.times.append(t)
+            report.reference_times.append(paced.tau(t))
             host.append(clock() - t0)
             report.orientations.append(R)
             report.currents.append(currents)
@@ -161,7 +308,11 @@ def run_servo(link: DriveLink, estimate, law, *, duration: float, rate: float = 
                           f"{state.stale:X}\n")
             if status is not None:
                 status(t, R, w, currents)
+            cpu.append(cpu_clock() - busy)
+            if clock() - start > RECOVER_BUSY * 0.5 * period:  # too long a cycle for twice the rate
+                clean = sched
             k += 1
+            sched += period
     except NakError as exc:  # a device trip (DeviceTrip) or a refused setpoint (LIMIT)
         report.outcome, report.message = exc.code, str(exc)
     except ServoFault as exc:
@@ -173,8 +324,18 @@ def run_servo(link: DriveLink, estimate, law, *, duration: float, rate: float = 
     except KeyboardInterrupt:
         report.outcome, report.message = "INTERRUPT", "interrupted"
     finally:
+        if collecting:
+            gc.enable()
+        if scheduling is not None:
+            _restore(scheduling)
+        law.trajectory = planned
         report.ended_at = clock() - t0
         report.duration = host[-1] - host[0] if host else 0.0
+        report.time_scale = paced.scale
+        if cpu:
+            report.cpu_mean, report.cpu_max = float(np.mean(cpu)), float(np.max(cpu))
+        if report.orientations:
+            report.end_error = float(so3.distance(report.orientations[-1], planned.end))
         try:
             link.off()
             report.off_acknowledged = True
