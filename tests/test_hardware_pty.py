@@ -1,7 +1,12 @@
 """The Serial back end against the emulated device over a real pseudo-terminal, with faults on the line.
 
 Every test ends with the device's outputs all off, by the host (OFF) or, when the link is gone, by the
-device's watchdog; failures are one-line LinkErrors within a bounded time, never a hang.
+device's watchdog; failures are one-line LinkErrors after a bounded number of attempts, never a hang.
+
+The checks hold whatever the machine's load: what a stall of either end cannot change — counts of frames,
+attempts and their identities, the schedule's lower bounds (a step is never applied early; the watchdog never
+trips before its period). The wall-clock promises (the plan's duration, failures within a second) are in
+``test_wall_clock_promises``, marked ``realtime`` (the Makefile runs those alone, after the parallel run).
 """
 
 from __future__ import annotations
@@ -74,7 +79,11 @@ def test_whole_plan_is_streamed_and_acknowledged(device_factory):
     serial = host(dev)
     t = time.monotonic()
     report = play(plan, serial, rate=50.0)
-    assert time.monotonic() - t == pytest.approx(12 / 50, abs=0.1)
+    # the schedule, which a stall can only delay: SET i leaves no earlier than i / rate after the start, and
+    # the last step is held a whole period
+    assert time.monotonic() - t >= 12 / 50
+    sent = [when for when, kind, line in serial.transcript.entries if kind == "TX" and ",SET," in line]
+    assert len(sent) == 12 and all(when >= t + i / 50 for i, when in enumerate(sent))
     assert report.device.name == "spherestep-emu" and report.device.channels == 8
     assert report.device.watchdog == pytest.approx(WATCHDOG_MS / 1000)
     assert enables_driven(dev) == [s.masks(plan.channel_map)[0] for s in plan.steps]
@@ -109,21 +118,21 @@ def test_line_faults_are_retried_and_the_plan_completes(device_factory, faults, 
     plan = make_plan(8)
     serial = host(dev)
     play(plan, serial, rate=25.0)
-    assert serial.stats["retransmissions"] == 1 and serial.stats[counter] >= 1
-    assert serial.stats["acked"] == 10
+    # the fault forced a retransmission; a stall longer than the timeout may force more, each accounted for
+    stats = serial.stats
+    assert stats["retransmissions"] >= 1 and stats[counter] >= 1
+    assert stats["acked"] == 10 and stats["frames"] == stats["acked"] + stats["retransmissions"]
+    assert serial.transcript.count("NOTE", "retransmitting") == stats["retransmissions"]
     assert enables_driven(dev)[-1] == plan.steps[-1].masks(plan.channel_map)[0]
     assert set(enables_driven(dev)) == {s.masks(plan.channel_map)[0] for s in plan.steps}
     assert dev.state() == (0, 0) and dev.emulator.trips == 0
-    assert serial.transcript.count("NOTE", "retransmitting") == 1
 
 
 def test_persistent_corruption_gives_up_after_bounded_retries(device_factory):
     dev = device_factory(Faults(corrupt=frozenset(range(3, 1000))))
     serial = host(dev)
-    t = time.monotonic()
     with pytest.raises(LinkError) as err:
         play(make_plan(8), serial, rate=25.0)
-    assert time.monotonic() - t < 1.0
     text = one_line(err.value)
     assert text.startswith(f"no valid answer from the device on {dev.port} to SET after 3 attempts")
     assert "switching the coils off failed too" in text and "watchdog opens every relay within 0.2 s" in text
@@ -134,10 +143,8 @@ def test_persistent_corruption_gives_up_after_bounded_retries(device_factory):
 def test_no_answer_aborts_and_the_watchdog_switches_off(device_factory):
     dev = device_factory(Faults(silent_after=4))
     serial = host(dev)
-    t = time.monotonic()
     with pytest.raises(LinkError) as err:
         play(make_plan(8), serial, rate=25.0)
-    assert time.monotonic() - t < 1.0
     assert "to SET after 3 attempts (3 timeouts" in one_line(err.value)
     # the hung device drove the last step it obeyed until its watchdog opened every relay
     assert len(enables_driven(dev)) == 3
@@ -148,10 +155,8 @@ def test_no_answer_aborts_and_the_watchdog_switches_off(device_factory):
 def test_device_vanishing_mid_plan_is_a_clean_abort(device_factory):
     dev = device_factory(Faults(vanish_after=5))
     serial = host(dev)
-    t = time.monotonic()
     with pytest.raises(LinkError) as err:
         play(make_plan(8), serial, rate=25.0)
-    assert time.monotonic() - t < 1.0
     text = one_line(err.value)
     assert text.startswith(f"serial link to {dev.port} lost during SET") and "watchdog" in text
     assert wait_all_off(dev) == (0, 0) and dev.emulator.trips == 1
@@ -162,9 +167,11 @@ def test_host_falling_silent_trips_the_watchdog_and_is_told(device_factory):
     plan = make_plan(4)
     with pytest.raises(NakError) as err:
         with CoilDriver(host(dev), plan.channel_map) as driver:
+            sent = time.monotonic()
             driver.apply(plan.steps[0], duration=0.1)
-            time.sleep(WATCHDOG_MS / 1000 + 0.05)  # a host stuck without keep-alives
-            assert dev.state() == (0, 0) and dev.emulator.trips == 1
+            # a host stuck without keep-alives: the device switches off by itself, never before its period
+            assert wait_all_off(dev, seconds=5.0) == (0, 0) and dev.emulator.trips == 1
+            assert time.monotonic() - sent >= WATCHDOG_MS / 1000
             driver.apply(plan.steps[1], duration=0.1)
     assert err.value.code == "WDOG"
     assert one_line(err.value).startswith("device refused SET: NAK WDOG (the device's watchdog expired")
@@ -195,10 +202,8 @@ def test_ctrl_c_mid_plan_switches_everything_off(device_factory):
 def test_handshake_without_a_device_times_out(device_factory):
     dev = PtyDevice(channels=8)  # a pseudo-terminal nobody answers on
     try:
-        t = time.monotonic()
         with pytest.raises(LinkError, match="to HELLO after 4 attempts"):
             Serial(dev.port, timeout=0.05, open_timeout=0.2).open()
-        assert time.monotonic() - t < 1.0
     finally:
         dev.stop()
 
@@ -220,3 +225,28 @@ def test_masks_sent_are_those_of_the_plan_convention(device_factory):
     sets = [line.split(",")[2:4] for _, kind, line in serial.transcript.entries if kind == "TX" and ",SET," in line]
     assert [(int(e, 16), int(p.split("*")[0], 16)) for e, p in sets] == \
         [coil_masks(s.coils, plan.channel_map) for s in plan.steps]
+
+
+@pytest.mark.realtime
+def test_wall_clock_promises(device_factory):
+    """What the tests above leave to the wall clock, judged alone (marker ``realtime``): the 12-step plan at
+    50 Hz takes 0.24 s (± 0.1 s), and each failure — persistent corruption, a silent device, a vanishing one, no
+    device at the handshake — is reported within a second (attempts × the 0.1 s timeout, and the OFF)."""
+    dev = device_factory()
+    t = time.monotonic()
+    play(make_plan(12), host(dev), rate=50.0)
+    assert time.monotonic() - t == pytest.approx(12 / 50, abs=0.1)
+    for faults in (Faults(corrupt=frozenset(range(3, 1000))), Faults(silent_after=4), Faults(vanish_after=5)):
+        dev = device_factory(faults)
+        t = time.monotonic()
+        with pytest.raises(LinkError):
+            play(make_plan(8), host(dev), rate=25.0)
+        assert time.monotonic() - t < 1.0, faults
+    nobody = PtyDevice(channels=8)
+    try:
+        t = time.monotonic()
+        with pytest.raises(LinkError):
+            Serial(nobody.port, timeout=0.05, open_timeout=0.2).open()
+        assert time.monotonic() - t < 1.0
+    finally:
+        nobody.stop()

@@ -22,7 +22,6 @@ hold = Trajectory.hold
 pytestmark = pytest.mark.slow
 
 DEMO_AXIS = (1.0, 0.5, 2.0)
-MIN_RATE = 150.0  # Hz: below this (a loaded test machine) the 360° turn is not judged
 FAULT_AT = 0.4  # s of device time
 
 
@@ -60,15 +59,40 @@ def test_holds_a_pose_within_a_tenth_of_a_degree(rig, tmp_path):
     assert not (tmp_path / "hold.csv.part").exists()
 
 
-def test_turns_360_degrees_about_the_demo_axis_within_3_s(rig):
-    s = run(rig, turn_reference(np.eye(3), DEMO_AXIS, 2 * math.pi, 2.4, delay=0.2), 3.0)
-    load = os.getloadavg()[0]
-    if s.report.rate < MIN_RATE or (s.report.outcome == "LINK" and load >= os.cpu_count()):
-        pytest.skip(f"the shared machine held the loop at {s.report.rate:.0f} Hz ({s.report.missed} deadlines "
-                    f"missed, outcome {s.report.outcome}, load {load:.1f} on {os.cpu_count()} cores: the emulator "
-                    f"starved of CPU); the turn is judged at {MIN_RATE:.0f} Hz or more on a machine with a free core "
-                    "(benchmarks/bench_hardware.py measures it)")
-    assert s.report.outcome == "done", s.report.message
+def other_cpu(run):
+    """``(result, s)``: ``run()``'s result and the CPU seconds that processes other than this one and its children
+    (the emulator) used meanwhile, from ``/proc/stat`` (None where there is none): what starved the machine."""
+    def busy():
+        with open("/proc/stat") as f:
+            fields = [float(x) for x in f.readline().split()[1:]]
+        return (sum(fields) - fields[3] - fields[4]) / os.sysconf("SC_CLK_TCK")  # all but idle and iowait
+
+    try:
+        before, mine = busy(), sum(os.times()[:4])
+    except (OSError, ValueError):
+        return run(), None
+    result = run()
+    return result, busy() - before - (sum(os.times()[:4]) - mine)
+
+
+@pytest.mark.realtime
+def test_turns_360_degrees_about_the_demo_axis_at_500_hz(rig):
+    """Over the pseudo-terminal on the wall clock: 500 Hz, no deadline missed, back within 0.05°. Skipped, saying
+    why, only when it fails while other processes took more than half a core of this machine meanwhile (the loop
+    runs with SCHED_FIFO where permitted, which holds it on a busy machine, but not on one whose two cores other
+    processes fill: measured 4–5 deadlines missed of 1,500 at a load of 15)."""
+    s, others = other_cpu(lambda: run(rig, turn_reference(np.eye(3), DEMO_AXIS, 2 * math.pi, 2.4, delay=0.2), 3.0,
+                                      rate=500.0))
+    r = s.report
+    starved = others is not None and others > 0.5 * 3.0
+    if (r.missed or r.outcome != "done") and starved:
+        pytest.skip(f"other processes used {others:.1f} CPU s of the machine during the 3 s run (load "
+                    f"{os.getloadavg()[0]:.1f} on {os.cpu_count()} cores; real-time scheduling "
+                    f"{'on' if r.realtime else 'refused'}): {r.missed} deadlines missed at {r.rate:.0f} Hz, "
+                    f"outcome {r.outcome}, are theirs to explain")
+    assert r.outcome == "done", r.to_dict()
+    assert r.missed == 0 and r.rate == pytest.approx(500.0, rel=0.01), (r.to_dict(), others)
+    assert r.cpu_mean < 0.5 / 500.0, r.to_dict()  # the host's CPU: under half the period
     # on the way the rotor is half a turn from the start, about the demo axis; at 3 s it is back where it started
     t_half, half = max(s.truth, key=lambda sample: so3.distance(sample[1].R, np.eye(3)))
     assert math.degrees(so3.distance(half.R, np.eye(3))) > 170
@@ -76,7 +100,101 @@ def test_turns_360_degrees_about_the_demo_axis_within_3_s(rig):
     turned = so3.log(half.R)
     assert abs(abs(turned @ axis) - np.linalg.norm(turned)) < 0.05
     assert s.truth[-1][0] > 2.9
-    assert math.degrees(s.final_error()) < 0.1, s.report.to_dict()
+    # the estimate at the loop's end, and the emulated rotor at its last sample (≤ 50 ms before; once the coils
+    # are off it drifts on what speed it had left, measured 0.2° by 0.15 s later)
+    at_end = math.degrees(so3.distance(s.truth[-1][1].R, np.eye(3)))
+    assert math.degrees(r.end_error) < 0.05 and at_end < 0.1, (r.to_dict(), at_end)
+
+
+def test_in_lockstep_the_360_degree_turn_holds_500_hz_within_its_cpu_budget(rig):
+    """The emulated 360° turn judged always, whatever the machine's load: on the lockstep clock the loop keeps
+    500 Hz exactly and misses nothing, the rotor ends within 0.05° (measured 0.0067° at the loop's end, 0.028°
+    0.15 s after the coils went off, 0.15° max tracking error), and the host's CPU per cycle — this thread's
+    time for the frames (with the in-process device's answer), the estimate and the law — stays under half the
+    period on average and under the period in the worst cycle (measured 0.36 and 0.57 ms): a slow loop fails
+    here."""
+    s = run(rig, turn_reference(np.eye(3), DEMO_AXIS, 2 * math.pi, 2.4, delay=0.2), 3.0, lockstep=True,
+            watchdog_ms=100, max_late=0.05, rate=500.0)
+    r = s.report
+    assert r.outcome == "done" and r.rate == pytest.approx(500.0) and r.missed == 0 and r.slowed == 0, r.to_dict()
+    assert max(math.degrees(so3.distance(truth.R, np.eye(3))) for _, truth in s.truth) > 170
+    assert max(math.degrees(so3.distance(truth.R, s.trajectory.at(t)[0])) for t, truth in s.truth) < 0.3
+    assert math.degrees(r.end_error) < 0.05 and math.degrees(s.final_error()) < 0.05, r.to_dict()
+    assert r.cpu_mean < 0.5 / 500.0 and r.cpu_max < 1.0 / 500.0, r.to_dict()
+    assert not s.final.enabled and np.abs(s.final.i).max() < 1e-3
+
+
+def starved(rig, faults, duration=3.0, rate=200.0, lockstep=True, **options):
+    """The 360° turn with ``faults`` (a starved device: ``slow_answers``) and the loop's ``options`` (``on_missed``
+    ...): ``(report, final truth)``, the session assembled as the drive room does, run_servo called directly."""
+    from spherestep.control import GeometricPD, ServoLaw
+    from spherestep.dynamics import Rotor
+    from spherestep.hardware import (DriveLink, EmulatedMotor, FieldTracker, LockstepLink, MotorPty, run_servo,
+                                     wire_limits)
+    from spherestep.sensing import CoilField, Estimator, FieldTable
+
+    design, sensors, drive = rig["design"], rig["sensors"], rig["drive"]
+    traj = turn_reference(np.eye(3), DEMO_AXIS, 2 * math.pi, 2.4, delay=0.2)
+    rotor = Rotor.from_design(design, damping=0.01)
+    estimator = Estimator(FieldTable.build(design, sensors.positions), sensors.axes, sensors.part,
+                          (CoilField.build(design, sensors.positions),))
+    law = ServoLaw(rig["model"], traj, GeometricPD(rotor.inertia, bandwidth=2 * math.pi * 3, rate=rate,
+                                                   damping=rotor.damping),
+                   limits=wire_limits(drive), sensor_rate=rate, delay=1, observer_bandwidth=rate)
+    motor = EmulatedMotor(design, rig["model"], sensors, rotor=rotor, drive=drive, faults=faults)
+    tracker = FieldTracker(estimator, np.eye(3), drive.nominal_current)
+    if lockstep:
+        link = LockstepLink(motor, watchdog_ms=100)
+        report = run_servo(link, tracker, law, duration=duration, rate=rate, clock=link.clock, sleep=link.sleep,
+                           max_late=0.05, **options)
+        link.sleep(0.15)
+        return report, link.truth(), traj
+    with MotorPty(motor, watchdog_ms=250) as dev:
+        with DriveLink(dev.port) as link:
+            report = run_servo(link, tracker, law, duration=duration, rate=rate, max_late=0.2, **options)
+        time.sleep(0.15)
+        return report, dev.truth(), traj
+
+
+STARVED = 0.012  # s: answers 2.4 periods late at 200 Hz
+
+
+def test_a_starved_loop_told_to_stop_stops_with_every_coil_off_and_says_why(rig):
+    report, final, _ = starved(rig, MotorFaults(slow_answers=(STARVED, 0.8, 9.0)), on_missed="stop")
+    assert report.outcome == "SLOW" and report.missed >= 3, report.to_dict()
+    assert f"missed {report.missed} deadlines" in report.message and "every coil off" in report.message
+    assert "from the target" in report.message and report.end_error > math.radians(10)
+    assert report.off_acknowledged and not final.enabled and np.abs(final.i).max() < 1e-3
+
+
+def test_a_loop_starved_for_a_while_slows_the_motion_and_still_ends_on_target(rig):
+    """Answers late for 0.4 s mid-turn: the loop halves its rate and the trajectory's pace (twice: 100 Hz is
+    still too fast for 12 ms answers), follows the whole turn slower, recovers its rate once the device answers
+    on time again, and ends on the target; the report says so."""
+    report, final, traj = starved(rig, MotorFaults(slow_answers=(STARVED, 0.8, 1.2)))
+    assert report.outcome == "done" and report.slowed == 2 and report.missed >= 3, report.to_dict()
+    assert report.time_scale == 1.0  # back to the planned pace
+    assert report.reference_times[-1] == pytest.approx(3.0, abs=0.01) and report.times[-1] > 4.0
+    assert math.degrees(report.end_error) < 0.05, report.to_dict()
+    slowed_at = np.flatnonzero(np.diff(report.reference_times) < 0.9 * np.diff(report.times))
+    assert 0.8 <= report.times[slowed_at[0]] <= 1.0  # the pace fell where the answers came late
+    assert not final.enabled
+
+
+def test_a_loop_starved_beyond_the_slowest_pace_stops(rig):
+    report, final, _ = starved(rig, MotorFaults(slow_answers=(0.045, 0.8, 9.0)))
+    assert report.outcome == "SLOW" and report.time_scale == pytest.approx(0.125), report.to_dict()
+    assert "at the slowest pace" in report.message and "every coil off" in report.message
+    assert report.off_acknowledged and not final.enabled
+
+
+def test_a_starved_emulator_over_the_line_stops_the_loop(rig):
+    """The same on the wall clock, over the pseudo-terminal: the device process sleeps before every answer
+    after 0.5 s, so the loop must miss its deadlines whatever the machine; told to stop, it stops."""
+    report, final, _ = starved(rig, MotorFaults(slow_answers=(STARVED, 0.5, 9.0)), lockstep=False,
+                               on_missed="stop")
+    assert report.outcome == "SLOW" and report.missed >= 3, report.to_dict()
+    assert report.off_acknowledged and not final.enabled
 
 
 def test_in_lockstep_the_loop_meets_the_targets_at_200_hz(rig):
