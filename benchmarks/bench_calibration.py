@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import argparse
 import datetime
+import hashlib
 import math
 import os
 import pickle
@@ -83,7 +84,7 @@ def main() -> None:
     for name in chosen:
         plant, _ = cases[name].build(design)
         truth = plant.coupled if isinstance(plant, CoupledPlant) else plant  # held-out: the exact coupled model
-        key = cache / f"{''.join(ch if ch.isalnum() else '_' for ch in name)}_{holds_n}.pkl"
+        key = cache / f"{hashlib.sha1(name.encode()).hexdigest()[:12]}_{holds_n}.pkl"
         t0 = time.perf_counter()
         if key.is_file():
             holds = pickle.loads(key.read_bytes())

@@ -363,8 +363,9 @@ class Calibration:
     """A fitted torque model (module docstring): ``model`` the corrected
     :class:`~spherestep.magnetics.IronTorqueMap` (the base model's coupling kept); ``nodes`` (rad); the fitted
     tables ``detent``, ``winding`` and their standard deviations ``detent_std``, ``winding_std`` (N·m), the
-    ``nominal_detent``/``nominal_winding`` they started from; the global scales ``scale_detent``,
-    ``scale_winding`` (fitted ``1 + s``) and their ``scale_std``; the equations' residual RMS (N·m)
+    ``nominal_detent``/``nominal_winding`` they started from; the effective scales ``scale_detent``,
+    ``scale_winding`` (``θ⁰·θ / θ⁰·θ⁰`` per table: what the global scale and the shape did together) and their
+    ``scale_std``; the equations' residual RMS (N·m)
     ``residual_before`` (the base model) and ``residual_after``, ``sigma`` the noise it assumed; ``holds`` and
     ``equations`` counted; ``moved`` the nodes moved beyond 2σ; ``unseen`` what the data cannot see;
     ``coupling`` whether the base model had the cores' coupling; ``backend``; ``label``."""
@@ -396,8 +397,8 @@ class Calibration:
         lines = [f"{self.holds} holds, {self.equations} equations ({self.backend}): residual RMS "
                  f"{self.residual_before * 1e3:.3g} -> {self.residual_after * 1e3:.3g} mN·m (noise taken "
                  f"{self.sigma * 1e3:.2g} mN·m)",
-                 f"detent scale {self.scale_detent:.4f} ± {self.scale_std[0]:.4f}, winding scale "
-                 f"{self.scale_winding:.4f} ± {self.scale_std[1]:.4f}",
+                 f"detent table ×{self.scale_detent:.4f} ± {self.scale_std[0]:.4f}, winding table "
+                 f"×{self.scale_winding:.4f} ± {self.scale_std[1]:.4f} (fitted against nominal, θ⁰·θ / θ⁰·θ⁰)",
                  f"{len(self.moved)} table nodes moved beyond 2σ"]
         for m in self.moved[:8]:
             lines.append(f"  {m.table} at {math.degrees(m.angle):g}°: {m.nominal:+.4g} -> {m.fitted:+.4g} "
@@ -573,7 +574,14 @@ def calibrate(design, model, holds: Holds, *, prior: dict | None = None, scales:
     J[fi, k + np.arange(nf)] = ed[fi]
     J[n + fi, k + nf + np.arange(nf)] = el[fi]
     theta = np.concatenate([d0, l0]) + J @ x
-    std = np.sqrt(np.maximum(np.einsum("ij,jk,ik->i", J, cov, J), 0.0))
+    cov_theta = J @ cov @ J.T
+    std = np.sqrt(np.maximum(np.diag(cov_theta), 0.0))
+    # the effective scale of each table, θ⁰·θ / θ⁰·θ⁰ (what the scale and the shape together did), and its std
+    g = np.zeros((2, 2 * n))
+    g[0, :n] = d0 / (d0 @ d0)
+    g[1, n:] = l0 / (l0 @ l0)
+    eff = g @ theta
+    eff_std = np.sqrt(np.maximum(np.diag(g @ cov_theta @ g.T), 0.0))
     det, win = theta[:n], theta[n:]
     # what the data cannot see
     ratio = np.diag(cov) / prior_var
@@ -607,9 +615,8 @@ def calibrate(design, model, holds: Holds, *, prior: dict | None = None, scales:
                                        coupling=model.coupling)
     rms_before = float(np.sqrt(np.mean(y ** 2)))
     rms_after = float(np.sqrt(np.mean((y - X @ x) ** 2)))
-    sd_scale = (float(math.sqrt(cov[0, 0])), float(math.sqrt(cov[1, 1]))) if scales else (0.0, 0.0)
     return Calibration(fitted, nodes.copy(), det, win, std[:n], std[n:], d0.copy(), l0.copy(),
-                       1.0 + float(x[0]) if scales else 1.0, 1.0 + float(x[1]) if scales else 1.0, sd_scale,
+                       float(eff[0]), float(eff[1]), (float(eff_std[0]), float(eff_std[1])),
                        rms_before, rms_after, sigma, len(holds), E, tuple(moved), tuple(unseen),
                        model.coupling is not None, holds.backend)
 
