@@ -15,12 +15,12 @@ import importlib
 
 _LAZY = ("atomic", "channels", "checks", "commutation", "control", "demo", "design_file", "drive", "dynamics", "errors", "explore",
          "export", "fig10", "gallery", "hardware", "harmonics", "magnetics", "motor", "outputs", "packing", "plots",
-         "potential", "report", "rotor_field", "sensing", "so3", "sphere", "statics", "units")
+         "potential", "report", "rotor_field", "sensing", "so3", "sphere", "statics", "synthesis", "units")
 # every room loads on first use: `spherestep --help` must not wait for SciPy
 
 __all__ = ["atomic", "channels", "checks", "commutation", "control", "demo", "design_file", "drive", "dynamics", "errors", "explore",
            "export", "fig10", "gallery", "hardware", "harmonics", "magnetics", "motor", "outputs", "packing", "plots",
-           "potential", "report", "rotor_field", "sensing", "so3", "sphere", "statics", "units"]
+           "potential", "report", "rotor_field", "sensing", "so3", "sphere", "statics", "synthesis", "units"]
 __version__ = "0.1.0"
 
 

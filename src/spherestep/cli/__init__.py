@@ -24,6 +24,7 @@ from . import design, explore, export, forces, motor, packings, report, run, sim
 from . import capability, move  # noqa: F401 (registers)
 from . import sense  # noqa: F401 (registers)
 from . import gallery  # noqa: F401 (registers)
+from . import synthesize  # noqa: F401 (registers)
 from . import calibrate  # noqa: F401 (registers)
 from .app import app
 from .signals import Terminated, interrupt_of, sigterm_as_interrupt

@@ -46,10 +46,12 @@ _PART = re.compile(r"^part-(\d{6,})-([0-9a-f]{8})\.parquet$")
 
 
 class ResultStore:
-    """Part files of one sweep's results in ``folder`` (created on the first write)."""
+    """Part files of one sweep's results in ``folder`` (created on the first write); ``schema`` the Arrow schema
+    of every part (default :data:`SCHEMA`, the sweep's; :mod:`spherestep.synthesis` stores its own rows)."""
 
-    def __init__(self, folder: str | Path):
+    def __init__(self, folder: str | Path, schema: pa.Schema = SCHEMA):
         self.folder = Path(folder)
+        self.schema = schema
         if self.folder.exists() and not self.folder.is_dir():
             raise InputError(f"results folder {str(self.folder)!r} is a file; give a folder")
 
@@ -66,7 +68,7 @@ class ResultStore:
             return None
         parts = self.parts()
         seq = int(_PART.match(parts[-1].name).group(1)) + 1 if parts else 1
-        table = pa.Table.from_pylist([{c: row.get(c) for c in COLUMNS} for row in rows], schema=SCHEMA)
+        table = pa.Table.from_pylist([{c: row.get(c) for c in self.schema.names} for row in rows], schema=self.schema)
         path = self.folder / f"part-{seq:06d}-{secrets.token_hex(4)}.parquet"
         with atomic_path(path) as tmp:
             pq.write_table(table, tmp)
@@ -78,10 +80,10 @@ class ResultStore:
         tables = []
         for path in self.parts():
             try:
-                tables.append(pq.read_table(path, schema=SCHEMA))
+                tables.append(pq.read_table(path, schema=self.schema))
             except (pa.ArrowException, OSError) as exc:
                 raise InputError(f"results part {str(path)!r} cannot be read as a sweep's results ({exc}); move "
                                  "it out of the folder") from None
-        table = pa.concat_tables(tables) if tables else SCHEMA.empty_table()
+        table = pa.concat_tables(tables) if tables else self.schema.empty_table()
         frame = table.to_pandas(types_mapper=_NULLABLE.get)
         return frame.drop_duplicates("key", keep="last").reset_index(drop=True)

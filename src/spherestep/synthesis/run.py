@@ -1,0 +1,508 @@
+"""The search (issue 29 §2): candidates on a Dask cluster through the ladder, the Pareto set of what the spec leaves
+free, finalists verified by full simulation, and the answer.
+
+**The optimiser.** The layout choice is discrete and small — a few hundred rotor × stator × refinement × cap × ball
+size × core combinations per spec — and most of it is pruned by the cheap rungs, so the search *enumerates* it
+(:func:`candidates`) instead of sampling it with optuna or pymoo: enumeration is exhaustive over the budget's grid,
+deterministic for a seed, trivially parallel on Dask and resumable by key from the explore room's store
+(:class:`spherestep.explore.ResultStore`), and a multi-objective Pareto set over every candidate is exact rather than
+estimated (:func:`spherestep.explore.pareto_mask`). A sampler would pay off for continuous part sizes, which only the
+``thorough`` budget varies (on a grid of ball sizes; iron with other parts costs a table solve each).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from .. import checks
+from ..errors import InputError, bad_value
+from .ladder import PROTOTYPE, Candidate, baseline_layout, build, evaluate
+
+STORE = "results"
+
+
+@dataclass(frozen=True)
+class Budget:
+    """How much of the design space a search covers and how finely it measures (``BUDGETS``)."""
+
+    name: str
+    rotors: tuple[str, ...] | None  # None: the 16 distinct packings
+    stators: tuple[str, ...] | None
+    primary_ratio: float
+    rotor_levels: tuple[int, ...]
+    stator_levels: tuple[int, ...]
+    caps: tuple[float, ...]
+    diameters: int
+    samples: int
+    capability_samples: int
+    finalists: int
+    holds: int
+    verify_samples: int
+    verify_capability: int
+    allow_costly: bool = False
+
+
+BUDGETS = {
+    "quick": Budget("quick", ("truncated-icosahedron",), ("truncated-cuboctahedron",), 9.0, (0, 1), (0,),
+                    (60.0, 80.0), 1, 400, 32, 2, 1, 1000, 64),
+    "normal": Budget("normal", None, None, 1.25, (0, 1), (0, 1), (60.0, 70.0, 80.0), 2, 1000, 64, 4, 3, 4000, 200),
+    "thorough": Budget("thorough", None, None, 1.6, (0, 1, 2), (0, 1, 2), (50.0, 60.0, 70.0, 80.0, 85.0), 3, 2000,
+                       128, 8, 5, 8000, 400, True),
+}
+
+
+def ball_diameters(spec, count: int) -> list[float]:
+    """``count`` ball diameters spread over the envelope, largest first; the prototype's 12 in exactly when it lies
+    in the envelope (its parts reuse the stored iron table)."""
+    low, high = spec.envelope.ball_diameter
+    values = [high] if count == 1 or math.isclose(low, high) else list(np.linspace(high, low, count))
+    proto = PROTOTYPE["sphere_diameter"]
+    if low * (1 - 1e-9) <= proto <= high * (1 + 1e-9) and not any(math.isclose(v, proto) for v in values):
+        values[int(np.argmin([abs(v - proto) for v in values]))] = proto
+    return [proto if math.isclose(v, proto, rel_tol=1e-9) else float(v) for v in values]
+
+
+def candidates(spec, budget: Budget, seed: int = 0) -> list[Candidate]:
+    """The layouts a budget searches for ``spec`` (module docstring): rotor × stator pairs whose primary circles are
+    within the budget's ratio (both symmetry-family rules, as the sweep), refinements, caps and ball sizes; with a
+    baseline, also every layout one choice away from it (packings at its levels, levels, caps 50°–85°)."""
+    from ..explore import distinct_names, primary_ratio
+
+    names = distinct_names()
+    rotors = budget.rotors or names
+    stators = budget.stators or names
+    common = dict(samples=budget.samples, capability_samples=budget.capability_samples, seed=seed)
+    out: dict = {}
+    for D in ball_diameters(spec, budget.diameters):
+        for r in rotors:
+            for s in stators:
+                if primary_ratio(r, s) > budget.primary_ratio:
+                    continue
+                for rl in budget.rotor_levels:
+                    for sl in budget.stator_levels:
+                        for cap in budget.caps:
+                            c = Candidate(r, rl, s, sl, cap, D, **common)
+                            out[c] = None
+    base = baseline_layout(spec)
+    if base is not None:
+        D = base["sphere_diameter"]
+        one = dict(rotor=base["rotor"], rotor_level=base["rotor_level"], stator=base["stator"],
+                   stator_level=base["stator_level"], cap_deg=base["cap_deg"])
+        variants = [one]
+        variants += [one | {"cap_deg": float(c)} for c in range(50, 90, 5)]
+        variants += [one | {"rotor_level": lv} for lv in range(3)] + [one | {"stator_level": lv} for lv in range(3)]
+        variants += [one | {"rotor": n} for n in names] + [one | {"stator": n} for n in names]
+        for v in variants:
+            out[Candidate(sphere_diameter=D, **v, **common)] = None
+    return list(out)
+
+
+@dataclass
+class Progress:
+    """Counts and an ETA for the search's progress line."""
+
+    total: int
+    done: int = 0
+    start: float = field(default_factory=time.perf_counter)
+
+    def eta(self) -> str:
+        if not self.done:
+            return "ETA —"
+        left = (time.perf_counter() - self.start) / self.done * (self.total - self.done)
+        return f"ETA {left:.0f} s" if left < 120 else f"ETA {left / 60:.1f} min"
+
+
+def _store(out: Path):
+    import pyarrow as pa
+
+    from ..explore import ResultStore
+    return ResultStore(out / STORE, schema=pa.schema(_schema()))
+
+
+def _schema():
+    import pyarrow as pa
+
+    s, i, f, b = pa.string(), pa.int64(), pa.float64(), pa.bool_()
+    return [("key", s), ("spec", s), ("rotor", s), ("rotor_level", i), ("stator", s), ("stator_level", i),
+            ("cap_deg", f), ("sphere_diameter_mm", f), ("core", s), ("stage", s), ("status", s), ("reason", s),
+            ("motor", s), ("coils", i), ("rotor_poles", i), ("magnet_diameter_mm", f), ("coil_diameter_mm", f),
+            ("air_gap_mm", f), ("magnet_mass_kg", f), ("power_W", f), ("iron_stored", b), ("states", i),
+            ("resolution_median_deg", f), ("resolution_p95_deg", f), ("range_fraction", f), ("reaches_all", b),
+            ("torque_quantile_Nm", f), ("torque_median_Nm", f), ("torque_positive_fraction", f), ("detent_Nm", f),
+            ("failed_coil_torque_Nm", f), ("step_torque_Nm", f), ("time_estimate_s", f), ("relay_steps", i),
+            ("relay_steps_on_plan", i), ("relay_executed", b), ("change", f), ("model", s), ("params", s),
+            ("seconds", f), ("worker", s)]
+
+
+def _submit_all(client, fn, items: list, *, say, what: str, retries: int = 2, priority=None) -> list:
+    """Run ``fn(item)`` for every item on ``client``, in order of completion; returns the results in item order
+    (a failed future's exception re-raised as a ComputationError after all others finish)."""
+    from distributed import as_completed
+
+    from ..errors import ComputationError
+
+    futures = {client.submit(fn, item, pure=False, retries=retries,
+                             priority=0 if priority is None else priority(item)): n for n, item in enumerate(items)}
+    results: list = [None] * len(items)
+    bar = Progress(len(items))
+    lost = []
+    for future in as_completed(list(futures)):
+        n = futures[future]
+        if future.status != "finished":
+            lost.append(f"{items[n]}: {future.exception()!r}")
+        else:
+            results[n] = future.result()
+        future.release()
+        bar.done += 1
+        say(f"{what} ({bar.eta()})", done=bar.done, total=bar.total)
+    if lost:
+        raise ComputationError(f"{len(lost)} of {len(items)} tasks failed on the cluster; first: {lost[0]}")
+    return results
+
+
+class Ladder:
+    """The cheap rungs for one spec as a picklable callable, ``Ladder(spec, allow_costly, baseline)(candidate)`` →
+    rows (:func:`~spherestep.synthesis.ladder.evaluate`, then :func:`relay_rung` for relay specs): what each Dask
+    task runs."""
+
+    def __init__(self, spec, allow_costly: bool, baseline: dict | None):
+        self.spec, self.allow_costly, self.baseline = spec, allow_costly, baseline
+
+    def __call__(self, candidate: Candidate) -> list[dict]:
+        rows = evaluate(candidate, self.spec, self.allow_costly, self.baseline)
+        if self.spec.relays:
+            for row in rows:
+                if row.get("status") == "ok":
+                    relay_rung(candidate, row, self.spec)
+        return rows
+
+
+def relay_rung(candidate: Candidate, row: dict, spec) -> None:
+    """The ladder's relay rung, for relay specs: the settled relay plan of the stated turn (30° about z without
+    one) on the design's own model (:func:`spherestep.drive.drive_turn`, ``mode="settled"``); prunes the row unless
+    every step lands within 0.5° of the plan."""
+    from ..drive import drive_turn
+
+    start = time.perf_counter()
+    design = build(candidate, row["core"], spec)
+    axis = spec.speed.axis.vector if spec.speed is not None else np.array([0.0, 0.0, 1.0])
+    angle = spec.speed.turn if spec.speed is not None else math.radians(30.0)
+    try:
+        det = drive_turn(design, axis, angle, mode="settled").details
+    except Exception as exc:  # noqa: BLE001 (a plan that cannot be made is recorded)
+        row.update(stage="relays", status="pruned", reason=f"no relay plan: {type(exc).__name__}: {exc}")
+        return
+    row.update(relay_steps=det.steps, relay_steps_on_plan=det.steps_settled_on_plan, relay_executed=det.executed)
+    if not det.executed:
+        row.update(stage="relays", status="pruned", reason=f"settled relay plan: {det.steps_settled_on_plan} of "
+                   f"{det.steps} steps within 0.5° of the plan")
+    else:
+        row["stage"] = "relays"
+    row["seconds"] = row.get("seconds", 0.0) + time.perf_counter() - start
+
+
+def objectives(spec) -> list[tuple[str, bool]]:
+    """The Pareto objectives, ``(column, maximise)``: what the spec leaves free — magnet mass, coils, drive power,
+    resolution, torque in every direction (servo) or step torque (relays), the turn's time estimate (with a speed),
+    the change from the baseline (with one)."""
+    out = [("magnet_mass_kg", False), ("coils", False), ("power_W", False), ("resolution_median_deg", False)]
+    if spec.servo:
+        out.append(("torque_quantile_Nm", True))
+        if spec.speed is not None:
+            out.append(("time_estimate_s", False))
+    if spec.relays and spec.torque.step is not None:
+        out.append(("step_torque_Nm", True))
+    if spec.baseline is not None:
+        out.append(("change", False))
+    return out
+
+
+PREFER = {"mass": ("magnet_mass_kg", False), "power": ("power_W", False), "time": ("time_estimate_s", False),
+          "precision": ("resolution_median_deg", False), "torque": ("torque_quantile_Nm", True),
+          "coils": ("coils", False), "change": ("change", False)}
+
+
+def pareto(table, spec):
+    """The feasible rows (status ``ok``) that no other feasible row dominates on :func:`objectives`, each motor
+    once, in the order of the spec's ``prefer``."""
+    from ..explore import pareto_mask
+
+    ok = table[table["status"] == "ok"].copy()
+    if "motor" in ok and ok["motor"].notna().any():
+        ok = ok.drop_duplicates("motor")
+    cols = objectives(spec)
+    values = ok[[c for c, _ in cols]].astype("float64").to_numpy()
+    values = np.where(np.isnan(values), np.inf, values)  # an objective not measured never wins
+    front = ok[pareto_mask(values, maximize=[n for n, (_, mx) in enumerate(cols) if mx])]
+    return sort_preferred(front, spec)
+
+
+def sort_preferred(frame, spec):
+    column, maximise = PREFER[spec.prefer]
+    if column not in frame:
+        column, maximise = "magnet_mass_kg", False
+    return frame.sort_values([column, "coils", "key"], ascending=[not maximise, True, True]).reset_index(drop=True)
+
+
+def choose_finalists(front, spec, count: int):
+    """Up to ``count`` rows of the front: the preferred best first, then the best in each other objective, then the
+    rest in preferred order."""
+    if len(front) <= count:
+        return front
+    picks = [0]
+    for column, maximise in objectives(spec):
+        series = front[column].astype("float64")
+        if series.notna().any():
+            picks.append(int(series.idxmax() if maximise else series.idxmin()))
+    picks += list(range(len(front)))
+    seen = list(dict.fromkeys(picks))[:count]
+    return front.loc[sorted(seen)].reset_index(drop=True)
+
+
+@dataclass(frozen=True)
+class Finalist:
+    """A finalist: its ``row`` of the search (a dict), its design file ``path`` and ``verification``."""
+
+    row: dict
+    path: str
+    verification: object
+
+    def to_dict(self) -> dict:
+        return {"key": self.row["key"], "layout": _layout(self.row), "design_file": self.path,
+                "search": {k: _json(v) for k, v in self.row.items() if k not in ("params",)},
+                "verification": self.verification.to_dict()}
+
+
+def _json(v):
+    if isinstance(v, (np.integer,)):
+        return int(v)
+    if isinstance(v, (float, np.floating)):
+        return None if not math.isfinite(float(v)) else float(v)
+    if v is None or isinstance(v, (str, bool, int)):
+        return v
+    try:
+        import pandas as pd
+
+        if pd.isna(v):
+            return None
+    except (TypeError, ValueError):
+        pass
+    return str(v)
+
+
+def _layout(row) -> str:
+    return (f"{row['rotor']}/L{row['rotor_level']} × {row['stator']}/L{row['stator_level']}, cap "
+            f"{row['cap_deg']:g}°, ball {row['sphere_diameter_mm']:.4g} mm, {row['core']}")
+
+
+@dataclass(frozen=True)
+class SynthesisResult:
+    """The answer: the ``spec``, the ``budget`` name, every candidate row (``table``, a DataFrame), the Pareto
+    ``front``, the verified ``finalists``, the ``winner`` (a Finalist meeting every requirement, or None), a
+    ``statement`` for people (what won and which requirement binds, or that nothing was found in the budget), the
+    files ``written`` and ``seconds`` of wall time."""
+
+    spec: object
+    budget: str
+    table: object
+    front: object
+    finalists: tuple
+    winner: Finalist | None
+    statement: str
+    written: tuple
+    seconds: float
+    counts: dict
+
+    def to_dict(self) -> dict:
+        return {"spec": self.spec.to_dict(), "budget": self.budget, "candidates": int(len(self.table)),
+                "counts": self.counts, "pareto": int(len(self.front)),
+                "finalists": [f.to_dict() for f in self.finalists],
+                "winner": None if self.winner is None else self.winner.row["key"], "statement": self.statement,
+                "seconds": self.seconds, "files": [str(p) for p in self.written]}
+
+
+def synthesize(spec, out, *, budget: str = "quick", scheduler: str | None = None, workers: int | None = None,
+               threads: bool = False, resume: bool = False, seed: int = 0, client=None,
+               progress: Callable[..., None] | None = None) -> SynthesisResult:
+    """Search designs for ``spec`` (a :class:`~spherestep.synthesis.Spec` or a spec file's path) into the folder
+    ``out`` (module docstring; docs/synthesis.md): candidates through the ladder on a Dask cluster (``client``; else
+    :func:`spherestep.explore.dask_client` with ``scheduler``/``workers``/``threads``), rows into ``out/results``
+    (``resume`` continues from them; without it a folder holding results is refused), the Pareto front, the
+    finalists verified (:func:`~spherestep.synthesis.verify`, their design files loaded fresh), the files and the
+    HTML report. ``progress(text, done=, total=)`` hears each stage with an ETA."""
+    from ..explore import dask_client
+    from .spec import Spec, load_spec
+
+    started = time.perf_counter()
+    if not isinstance(spec, Spec):
+        spec = load_spec(spec)
+    if budget not in BUDGETS:
+        raise bad_value("budget", f"one of {', '.join(BUDGETS)}", budget)
+    seed = checks.count(seed, "seed", 0, expected="a non-negative integer")
+    plan = BUDGETS[budget]
+    out = Path(out)
+    store = _store(out)
+    if store.parts() and not resume:
+        error = InputError(f"--out {str(out)!r} holds the results of an earlier search; give --resume to continue "
+                           "it or another folder")
+        error.field = "resume"
+        raise error
+    say = progress or (lambda text, done=None, total=None: None)
+    base = baseline_layout(spec)
+    todo = candidates(spec, plan, seed)
+    say(f"{len(todo)} layouts × {len(spec.cores)} cores for {spec.name!r} ({budget} budget)")
+    if client is None:
+        with dask_client(scheduler, workers=workers, threads=threads) as own:
+            return _search(spec, plan, out, store, own, todo, base, seed, started, say)
+    return _search(spec, plan, out, store, client, todo, base, seed, started, say)
+
+
+def _search(spec, plan: Budget, out: Path, store, client, todo, base, seed, started, say) -> SynthesisResult:
+
+    from .outputs import write_outputs
+
+    stored = store.read()
+    done = set(stored["key"]) if len(stored) else set()
+    fresh = [c for c in todo if any(c.key(spec.digest, core) not in done for core in spec.cores)]
+    if fresh:
+        runner = Ladder(spec, plan.allow_costly, base)
+        batch: list = []
+        from distributed import as_completed
+
+        futures = {client.submit(runner, c, pure=False, retries=2,
+                                 priority=c.rotor_level + c.stator_level): c for c in fresh}
+        bar = Progress(len(fresh))
+        last = time.perf_counter()
+        try:
+            for future in as_completed(list(futures)):
+                if future.status == "finished":
+                    batch.extend(future.result())
+                future.release()
+                bar.done += 1
+                say(f"ladder: geometry → states → capability{' → relays' if spec.relays else ''} ({bar.eta()})",
+                    done=bar.done, total=bar.total)
+                if len(batch) >= 32 or time.perf_counter() - last > 15:
+                    store.append(batch)
+                    batch, last = [], time.perf_counter()
+        finally:
+            store.append(batch)
+    table = store.read()
+    keys = {c.key(spec.digest, core) for c in todo for core in spec.cores}
+    table = table[table["key"].isin(keys)].reset_index(drop=True)
+    counts = {f"{stage}:{status}": int(n) for (stage, status), n in
+              table.groupby(["stage", "status"]).size().items()}
+    front = pareto(table, spec) if len(table) else table
+    chosen = choose_finalists(front, spec, plan.finalists)
+    say(f"verifying {len(chosen)} finalists by full simulation")
+    finalist_dir = out / "finalists"
+    finalist_dir.mkdir(parents=True, exist_ok=True)
+    texts, paths = [], []
+    for n, row in enumerate(chosen.to_dict("records"), start=1):
+        candidate = Candidate(**json.loads(row["params"]))
+        design = build(candidate, row["core"], spec, name=f"{spec.name} finalist {n}")
+        path = finalist_dir / f"{n:02d}-{row['key']}.yaml"
+        design.save(path)
+        paths.append(path)
+        texts.append(path.read_text(encoding="utf-8"))
+    cache = out / "verification"
+    results: list = [None] * len(texts)
+    need = []
+    for n, (row, _text) in enumerate(zip(chosen.to_dict("records"), texts)):
+        hit = cache / f"{row['key']}-{seed + 1}.json"
+        if hit.is_file():
+            results[n] = _verification_from(json.loads(hit.read_text(encoding="utf-8")))
+        else:
+            need.append(n)
+    if need:
+        job = _Verify(spec, seed + 1, plan)
+        got = _submit_all(client, job, [(texts[n], str(paths[n])) for n in need], say=say,
+                          what="full simulation of the finalists")
+        from ..atomic import write_text
+
+        cache.mkdir(parents=True, exist_ok=True)
+        for n, v in zip(need, got):
+            results[n] = v
+            write_text(cache / f"{chosen.iloc[n]['key']}-{seed + 1}.json", json.dumps(v.to_dict(), indent=1))
+    finalists = tuple(Finalist({k: _json(v) for k, v in row.items()}, str(p), v)
+                      for row, p, v in zip(chosen.to_dict("records"), paths, results))
+    winner, statement = _answer(spec, finalists, counts, len(table))
+    say("writing the answer and the report")
+    result = SynthesisResult(spec, plan.name, table, front, finalists, winner, statement, (), 0.0, counts)
+    written = write_outputs(result, out)
+    return SynthesisResult(spec, plan.name, table, front, finalists, winner, statement,
+                           tuple(paths) + tuple(written), time.perf_counter() - started, counts)
+
+
+class _Verify:
+    def __init__(self, spec, seed: int, plan: Budget):
+        self.spec, self.seed, self.plan = spec, seed, plan
+
+    def __call__(self, item):
+        from .verify import verify
+
+        text, source = item
+        return verify(text, self.spec, seed=self.seed, samples=self.plan.verify_samples,
+                      capability_samples=self.plan.verify_capability, holds=self.plan.holds, source=source)
+
+
+def _verification_from(data: dict):
+    from .verify import Check, Verification
+
+    return Verification(data["design"], tuple(Check(c["name"], c["required"], c["achieved"], c["met"], c["margin"])
+                                              for c in data["checks"]), data["numbers"], data["seed"],
+                        data["seconds"])
+
+
+def describe_change(row: dict, base: dict) -> str:
+    """What differs between the layout of ``row`` and the baseline layout ``base``, for people."""
+    parts = []
+    for key, label in (("rotor", "rotor packing"), ("rotor_level", "rotor refinement"), ("stator", "stator packing"),
+                       ("stator_level", "stator refinement"), ("core", "core")):
+        if row[key] != base[key]:
+            parts.append(f"{label} {base[key]} → {row[key]}")
+    if not math.isclose(row["cap_deg"], base["cap_deg"]):
+        parts.append(f"stator cap {base['cap_deg']:g}° → {row['cap_deg']:g}°")
+    if not math.isclose(row["sphere_diameter_mm"], 1e3 * base["sphere_diameter"], rel_tol=1e-9):
+        parts.append(f"ball {1e3 * base['sphere_diameter']:.4g} → {row['sphere_diameter_mm']:.4g} mm")
+    return ", ".join(parts) or "none (the baseline itself)"
+
+
+def _answer(spec, finalists, counts, total) -> tuple[Finalist | None, str]:
+    """The winner (the preferred finalist meeting every requirement) and the sentence that says why."""
+    passing = [f for f in finalists if f.verification.met]
+    column, maximise = PREFER[spec.prefer]
+    if not passing:
+        if not finalists:
+            return None, (f"Not found in the budget: none of the {total} candidates passed the cheap rungs "
+                          f"({', '.join(f'{k} {v}' for k, v in sorted(counts.items()))}).")
+        best = max(finalists, key=lambda f: (sum(c.met for c in f.verification.checks),
+                                             min((c.margin or 0.0) for c in f.verification.checks
+                                                 if c.margin is not None) if any(
+                                                 c.margin is not None for c in f.verification.checks) else 0.0))
+        missed = [c for c in best.verification.checks if not c.met]
+        return None, (f"Not found in the budget: {len(finalists)} finalists passed the cheap rungs but none met every "
+                      f"requirement under full simulation; the closest ({_layout(best.row)}) misses "
+                      + "; ".join(f"{c.name} (required {c.required}, achieved {c.achieved})" for c in missed) + ".")
+
+    def score(f):
+        v = f.row.get(column)
+        v = math.inf if v is None else float(v)
+        return (-v if maximise else v, f.row["key"])
+
+    winner = min(passing, key=score)
+    b = winner.verification.binding
+    binding = (f"the binding requirement is {b.name}: required {b.required}, achieved {b.achieved} (margin "
+               f"{b.margin:.2f}×)") if b is not None else "no requirement has a graded margin"
+    change = ""
+    base = baseline_layout(spec)
+    if base is not None:
+        change = f" Change from the baseline ({spec.baseline}): {describe_change(winner.row, base)}."
+    return winner, (f"Winner ({spec.prefer} preferred, of {len(passing)} of {len(finalists)} finalists meeting every "
+                    f"requirement): {_layout(winner.row)}; {binding}.{change}")

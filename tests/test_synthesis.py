@@ -1,0 +1,208 @@
+"""spherestep.synthesis (issue 29 §1–3): the spec's validation errors, the ladder's rungs, a quick search end to end
+on a real Dask cluster (threads on loopback), and every finalist re-measured independently of the search — its
+design file loaded fresh, another seed, more orientations — meeting its spec."""
+
+from __future__ import annotations
+
+import json
+import math
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from spherestep import so3
+from spherestep.errors import InputError
+from spherestep.synthesis import (BUDGETS, Candidate, SpecError, candidates, iron_is_stored, load_spec, parse_spec,
+                                  range_orientations, synthesize, verify)
+
+EXAMPLES = Path(__file__).resolve().parents[1] / "examples" / "specs"
+GOOD = "spec_version: 1\nenvelope: {ball_diameter: [40 mm, 60 mm]}\n"
+
+
+# --- §1 the specification ---------------------------------------------------------------------------------------
+
+@pytest.mark.parametrize("name", ["camera-gimbal", "robot-wrist", "paper-task", "prototype-relays-iron"])
+def test_examples_load(name):
+    spec = load_spec(EXAMPLES / f"{name}.yaml")
+    assert spec.spec_version == 1 and spec.name
+    assert json.loads(json.dumps(spec.to_dict()))  # JSON-ready
+
+
+def test_units_convert_once():
+    spec = load_spec(EXAMPLES / "camera-gimbal.yaml")
+    assert spec.envelope.ball_diameter == [0.040, 0.060]
+    assert spec.torque.every_direction == pytest.approx(5e-3, rel=1e-12)
+    assert spec.speed.turn == pytest.approx(math.pi / 2, rel=1e-12)
+    assert spec.speed.within == 0.5
+    assert spec.precision.servo_hold == pytest.approx(math.radians(0.1), rel=1e-12)
+    assert spec.range.cone == pytest.approx(math.radians(45), rel=1e-12)
+    assert spec.supply.voltage == 12.0 and spec.supply.power == 20.0
+    assert parse_spec(GOOD + "torque: {every_direction: 250 mN m}").torque.every_direction == pytest.approx(0.25)
+    assert parse_spec("spec_version: 1\nenvelope: {ball_diameter: [1 in, 2 in], mass_limit: 300 g}").envelope \
+        .mass_limit == pytest.approx(0.3)
+
+
+@pytest.mark.parametrize("text, field, words", [
+    (GOOD + "torque: {every_direction: 1 kg}", "torque.every_direction", "must be a torque with unit one of N m"),
+    ("spec_version: 1\nenvelope: {ball_diameter: [10 in]}", "envelope.ball_diameter", "at least 2 items"),
+    ("spec_version: 1\nenvelope: {ball_diameter: [12 in, 10 in]}", "envelope", "[smallest, largest]"),
+    ("spec_version: 1\nenvelope: {ball_diameter: [10, 12]}", "envelope.ball_diameter[0]", "with its unit"),
+    (GOOD + "range: {cone: 40 deg, axs: [0, 0, 1]}", "range.axs", "known here: cone, axis"),
+    (GOOD + "range: sphere", "range", "'all' or a mapping"),
+    (GOOD + "core: copper", "core", "'air', 'iron' or 'either'"),
+    (GOOD + "drive: stepper", "drive", "'servo', 'relays' or 'both'"),
+    (GOOD + "torque: {step: 1 N m}", "torque.step", "unless drive is relays or both"),
+    (GOOD + "drive: relays\nprecision: {servo_hold: 0.1 deg}", "precision.servo_hold", "unless drive is servo"),
+    (GOOD + "prefer: change", "baseline", "with prefer: change"),
+    (GOOD + "speed: {turn: 90 deg, within: -1 s}", "speed.within", "finite positive time"),
+    (GOOD + "speed: {turn: 90 deg}", "speed.within", "is missing"),
+    (GOOD + "max_coils: 1", "max_coils", "greater than or equal to 2"),
+    (GOOD + "torque: {every_direction: 1 N m, over_fraction: 1.5}", "torque.over_fraction", "less than or equal"),
+    (GOOD + "sensing: {hall_parts: 2}", "sensing.hall_parts", "greater than or equal to 3"),
+    (GOOD + "colis: 3", "colis", "not a known key"),
+    ("spec_version: 2\nenvelope: {ball_diameter: [10 in, 12 in]}", "spec_version", "must be 1"),
+    ("envelope: {ball_diameter: [10 in, 12 in]}", "spec_version", "is missing"),
+])
+def test_spec_errors_name_the_field(text, field, words):
+    with pytest.raises(SpecError) as info:
+        parse_spec(text, source="s.yaml")
+    assert info.value.field == field
+    message = str(info.value)
+    assert message.startswith(f"s.yaml: {field} ") and words in message
+    assert "\n" not in message
+
+
+@pytest.mark.parametrize("text, words", [("", "is empty"), ("x: [", "YAML syntax error"), ("- 1\n- 2", "mapping")])
+def test_spec_errors_without_a_field(text, words):
+    with pytest.raises(SpecError) as info:
+        parse_spec(text, source="s.yaml")
+    assert info.value.field is None and words in str(info.value)
+
+
+def test_spec_file_errors(tmp_path):
+    with pytest.raises(SpecError, match="does not exist"):
+        load_spec(tmp_path / "missing.yaml")
+    (tmp_path / "s.toml").write_text('spec_version = 1\n[envelope]\nball_diameter = ["40 mm", "60 mm"]\n')
+    assert load_spec(tmp_path / "s.toml").envelope.ball_diameter == [0.04, 0.06]
+
+
+# --- §2 the ladder -----------------------------------------------------------------------------------------------
+
+def test_range_orientations_stay_in_the_cone():
+    spec = load_spec(EXAMPLES / "camera-gimbal.yaml")
+    R = range_orientations(spec, 2000, 3)
+    a = np.array([0.0, 0.0, 1.0])
+    tilt = np.degrees(np.arccos(np.clip((R @ a) @ a, -1, 1)))
+    assert tilt.max() <= 45.0 + 1e-9
+    # R a is uniform on the cap: the share within half the cap's area is one half (binomial σ ≈ 1.1 %)
+    half = math.degrees(math.acos(1 - 0.5 * (1 - math.cos(math.radians(45)))))
+    assert abs(np.mean(tilt <= half) - 0.5) < 0.04
+    assert np.allclose(R @ np.swapaxes(R, -1, -2), np.eye(3), atol=1e-12)
+    assert so3.random(1, np.random.default_rng(0)).shape == (1, 3, 3)
+
+
+def test_candidates_cover_the_baseline_neighbourhood():
+    spec = load_spec(EXAMPLES / "prototype-relays-iron.yaml")
+    found = candidates(spec, BUDGETS["quick"])
+    proto = Candidate("truncated-icosahedron", 1, "truncated-cuboctahedron", 1, 80.0, 12 * 0.0254,
+                      samples=BUDGETS["quick"].samples, capability_samples=BUDGETS["quick"].capability_samples)
+    assert proto in found
+    assert any(c.cap_deg == 60.0 and c.stator_level == 1 for c in found)
+    assert len(set(found)) == len(found)
+
+
+def test_iron_affordability_is_the_prototype_parts(proto):
+    from dataclasses import replace
+
+    from spherestep.synthesis.ladder import build
+
+    spec = load_spec(EXAMPLES / "prototype-relays-iron.yaml")
+    c = Candidate("truncated-icosahedron", 1, "truncated-cuboctahedron", 0, 80.0, 12 * 0.0254)
+    design = build(c, "iron", spec)
+    assert iron_is_stored(design) and iron_is_stored(proto)
+    assert not iron_is_stored(replace(design, air_gap=2 * design.air_gap))
+    assert not iron_is_stored(replace(design, coil=replace(design.coil, supply_voltage=12.0)))  # fewer ampere-turns
+
+
+# --- §2–3 a quick search end to end, and every finalist re-measured --------------------------------------------
+
+@pytest.fixture(scope="module")
+def quick(tmp_path_factory):
+    out = tmp_path_factory.mktemp("synth") / "gimbal"
+    start = time.perf_counter()
+    result = synthesize(EXAMPLES / "camera-gimbal.yaml", out, budget="quick", threads=True, workers=2, seed=0)
+    return result, out, time.perf_counter() - start
+
+
+def test_quick_search_end_to_end(quick):
+    result, out, seconds = quick
+    assert seconds < 90, f"the quick budget took {seconds:.0f} s"
+    spec = result.spec
+    assert len(result.table) == len(candidates(spec, BUDGETS["quick"])) * len(spec.cores)
+    assert set(result.table["status"]) <= {"ok", "pruned", "costly", "failed"}
+    assert len(result.finalists) >= 1 and result.winner is not None
+    assert result.winner.verification.met
+    assert "binding requirement" in result.statement
+    for name in ("candidates.csv", "pareto.csv", "pareto.png", "synthesis.json", "report.html"):
+        assert (out / name).is_file() and (out / name).stat().st_size > 0
+    summary = json.loads((out / "synthesis.json").read_text())
+    assert summary["winner"] == result.winner.row["key"]
+    page = (out / "report.html").read_text()
+    assert "required / achieved" in page and "Beside the gallery" in page and "jhu-as-built" in page
+    # the front: no feasible row dominates a front row
+    from spherestep.synthesis.run import objectives
+
+    cols = objectives(spec)
+    ok = result.table[result.table["status"] == "ok"]
+    for _, f in result.front.iterrows():
+        for _, r in ok.iterrows():
+            better = [(r[c] > f[c]) if mx else (r[c] < f[c]) for c, mx in cols]
+            worse = [(r[c] < f[c]) if mx else (r[c] > f[c]) for c, mx in cols]
+            assert not (any(better) and not any(worse))
+
+
+def test_quick_search_resumes_and_is_deterministic(quick):
+    result, out, _ = quick
+    with pytest.raises(InputError, match="--resume"):
+        synthesize(EXAMPLES / "camera-gimbal.yaml", out, budget="quick", threads=True, workers=1)
+    again = synthesize(EXAMPLES / "camera-gimbal.yaml", out, budget="quick", threads=True, workers=1, resume=True)
+    assert again.statement == result.statement
+    cols = ["key", "status", "coils", "states", "resolution_median_deg", "torque_quantile_Nm"]
+    assert again.table.sort_values("key")[cols].reset_index(drop=True).equals(
+        result.table.sort_values("key")[cols].reset_index(drop=True))
+
+
+def test_every_finalist_remeasured_independently(quick):
+    """Each finalist's design file loaded fresh and verified with another seed and more orientations: the verdict
+    of the search holds (a finalist the search found missing a requirement may still miss it), and the winner
+    meets every requirement of its spec."""
+    from spherestep.control import torque_capability
+    from spherestep.motor import MotorDesign
+
+    result, _, _ = quick
+    for f in result.finalists:
+        text = Path(f.path).read_text(encoding="utf-8")
+        again = verify(text, result.spec, seed=11, samples=2000, capability_samples=150, holds=2)
+        design = MotorDesign.load(f.path)
+        assert len(design.stator) == f.row["coils"] and len(design.rotor) == f.row["rotor_poles"]
+        if f is result.winner:
+            assert again.met, [c for c in again.checks if not c.met]
+        cap = torque_capability(design, samples=100, seed=5)  # the capability room's own path, all of SO(3)
+        assert cap.percentiles(q=(50,))[50] > 0
+        search = {c.name: c for c in f.verification.checks}
+        for c in again.checks:
+            assert c.name in search
+        turn = [c for c in again.checks if c.name.startswith("servo turn")]
+        assert turn and float(turn[0].achieved.split()[0]) == pytest.approx(
+            float(search[turn[0].name].achieved.split()[0]), rel=1e-6)  # the turn itself is deterministic
+
+
+def test_cli_refuses_a_bad_spec(tmp_path):
+    from spherestep.cli import main
+
+    bad = tmp_path / "bad.yaml"
+    bad.write_text(GOOD + "core: copper\n")
+    assert main(["synthesize", str(bad), "--out", str(tmp_path / "o")]) == 2
+    assert not (tmp_path / "o").exists()
