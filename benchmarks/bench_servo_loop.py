@@ -1,13 +1,27 @@
-"""Host CPU per control period of the simulated servo loop (``dynamics.simulate_servo`` at 1 kHz) on the prototype's
-air-core torque map and on its iron model: a hold at a random orientation and a 20° turn, each 0.3 s simulated;
-and of the servo law alone (``control.ServoLaw.step``: observer, feedback, cached ``K(R)``/bias, allocation) on the
-turn's measurements (0.02° noise), with how often its ``K(R)`` was re-evaluated.
+"""Host CPU per control period of the servo law and of the simulated servo loop, with a per-part breakdown, on
+the prototype's air-core torque map and on its iron model — now, and with today's (before issue 27) paths in the
+same run.
 
-Run: ``OPENBLAS_NUM_THREADS=1 python benchmarks/bench_servo_loop.py``. Prints CPU ms per period (process time, so a
-busy machine does not inflate it) and the ratio of simulated to CPU time."""
+* The law's parts on a 20° turn at 1 kHz with 0.02° noise, each timed alone over the turn's 300 periods:
+  *estimate* (the observer's predict and correct), *feedback* (the trajectory and the geometric PD), *K(R) and
+  bias* (one evaluation: :class:`~spherestep.control.ModelCache`, compiled, against the model's own
+  ``torque_matrix`` + ``torque``), *allocation* (warm-started; the compiled Newton against the NumPy reference)
+  and, out of reach, the *closest reachable* torque (the compiled bisection against Clarabel); the
+  *magnetometer update* (the Hall tracker, :meth:`spherestep.sensing.Estimator.track_until` as
+  :class:`~spherestep.hardware.FieldTracker` calls it, 8 magnetometers); then :meth:`ServoLaw.step` whole, with how
+  often ``K(R)`` was re-evaluated, and in the worst case (re-evaluated every period).
+* ``simulate_servo`` per 1 kHz period (hold and 20° turn, 0.3 s): the plant through the compiled affine form now,
+  the models' own methods before, and the largest difference of the two runs' orientations.
+* The emulated motor's tick: one device control step with the coils and rotor advanced, and one magnetometer read.
+
+"Before" is the same code with the compiled pieces swapped for the reference ones (a model wrapper without packed
+terms; the NumPy Newton and Clarabel). Run: ``OPENBLAS_NUM_THREADS=1 python benchmarks/bench_servo_loop.py``.
+Prints CPU µs (process time, so a busy machine does not inflate it much) and the load average.
+"""
 
 from __future__ import annotations
 
+import contextlib
 import datetime
 import math
 import os
@@ -17,54 +31,169 @@ import time
 import numpy as np
 
 from spherestep import so3
-from spherestep.control import GeometricPD, ServoLaw, Trajectory
+from spherestep.control import GeometricPD, ModelCache, ServoLaw, Trajectory
+from spherestep.control import allocation as alloc_module
 from spherestep.dynamics import simulate_servo
 from spherestep.magnetics import iron_model, torque_map
 from spherestep.motor import prototype
 
-
-def cpu_per_period(design, model, trajectory, settle: float, repeats: int = 3) -> float:
-    runs = []
-    for _ in range(repeats):
-        start = time.process_time()
-        run = simulate_servo(design, trajectory, model, settle=settle)
-        runs.append((time.process_time() - start) / len(run.times))
-    return float(np.median(runs))
+PERIODS = 300
 
 
-def law_cpu_per_period(model, trajectory, steps: int = 300, repeats: int = 3, reuse: float = 2e-3
-                       ) -> tuple[float, int]:
-    """CPU s per :meth:`ServoLaw.step` along ``trajectory`` at 1 kHz with 0.02° noise, and K(R) evaluations
-    (``reuse=0``: K(R) and the bias every period, as the simulation's loop did before the law had its cache)."""
+class Unpacked:
+    """``model`` without its compiled form (``packed_terms`` None): the paths before the fast ones."""
+
+    def __init__(self, model):
+        self.model = model
+        self.coil_count, self.failed, self.has_bias = model.coil_count, model.failed, model.has_bias
+
+    def __getattr__(self, name):
+        return getattr(self.model, name)
+
+    def packed_terms(self, currents):
+        return None
+
+
+@contextlib.contextmanager
+def reference_allocation():
+    """The allocation's NumPy Newton and Clarabel fallback in place of the compiled ones."""
+    saved = alloc_module.least_power_box_compiled, alloc_module.closest_reachable_compiled
+    alloc_module.least_power_box_compiled = alloc_module.least_power_box
+    alloc_module.closest_reachable_compiled = lambda K, t, u, rho: None
+    try:
+        yield
+    finally:
+        alloc_module.least_power_box_compiled, alloc_module.closest_reachable_compiled = saved
+
+
+def cpu_us(func, n: int) -> float:
+    """CPU µs per call of ``func(k)`` for ``k < n`` (one warm-up call first)."""
+    func(0)
+    start = time.process_time()
+    for k in range(n):
+        func(k)
+    return 1e6 * (time.process_time() - start) / n
+
+
+def turn_data(trajectory, steps: int = PERIODS):
     R = trajectory.sample(np.arange(steps) * 1e-3)[0]
     noise = so3.exp(np.random.default_rng(0).normal(0.0, math.radians(0.02), (steps, 3)))
-    runs = []
-    for _ in range(repeats):
-        law = ServoLaw(model, trajectory, GeometricPD(0.0724), reuse=reuse)
-        start = time.process_time()
-        for k in range(steps):
-            law.step(k * 1e-3, noise[k] @ R[k])
-        runs.append((time.process_time() - start) / steps)
-    return float(np.median(runs)), law.cache.evaluations
+    return np.einsum("kab,kbc->kac", noise, R)
+
+
+def law_parts(model, trajectory, measured) -> dict:
+    """CPU µs of each part of one period (module docstring)."""
+    law = ServoLaw(model, trajectory, GeometricPD(0.0724))
+    law.step(0.0, measured[0])
+    obs = law.observer
+    out = {}
+
+    def estimate(k):
+        obs.predict(np.zeros(3), 1e-3)
+        obs.correct(measured[k % len(measured)])
+    out["estimate"] = cpu_us(estimate, PERIODS)
+    states = [(obs.R.copy(), obs.w.copy())] * PERIODS
+    out["feedback"] = cpu_us(lambda k: law.controller.torque(states[k][0], states[k][1], *trajectory.at(k * 1e-3)),
+                             PERIODS)
+    cache = ModelCache(model, reuse=0.0)
+    out["K(R) and bias"] = cpu_us(lambda k: cache.at(measured[k]), PERIODS)
+    K, b = (a.copy() for a in cache.at(measured[0]))
+    tau = b + K @ np.full(model.coil_count, 0.05)
+    lam = [None]
+
+    def allocate(k):
+        a, lam[0] = alloc_module.allocate_matrix(K, tau * (1 + 1e-3 * k), law.limits, bias=b, lam0=lam[0])
+    out["allocation"] = cpu_us(allocate, PERIODS)
+    far = tau * 40.0  # out of reach
+    out["closest reachable"] = cpu_us(lambda k: alloc_module.allocate_matrix(K, far * (1 + 1e-3 * k), law.limits,
+                                                                            bias=b), 30)
+    return out
+
+
+def step_us(model, trajectory, measured, reuse: float = 2e-3) -> tuple[float, int]:
+    law = ServoLaw(model, trajectory, GeometricPD(0.0724), reuse=reuse)
+    us = cpu_us(lambda k: law.step(k * 1e-3, measured[k]), PERIODS)
+    return us, law.cache.evaluations
+
+
+def tracker_us(design, trajectory) -> float:
+    from spherestep.hardware import FieldTracker
+    from spherestep.sensing import CoilField, Estimator, FieldTable, default_array
+
+    sensors = default_array(design, 8)
+    table = FieldTable.build(design, sensors.positions)
+    estimator = Estimator(table, sensors.axes, sensors.part, (CoilField.build(design, sensors.positions),))
+    R = trajectory.sample(np.arange(PERIODS) * 1e-3)[0]
+    rng = np.random.default_rng(1)
+    fields = [np.einsum("sab,sa->sb", sensors.axes, table.field(r)) + sensors.part.noise_T *
+              rng.standard_normal((len(sensors), 3)) for r in R]
+
+    class State:
+        def __init__(self, field):
+            self.field, self.currents = field, np.zeros(len(design.stator))
+    states = [State(f) for f in fields]
+    tracker = FieldTracker(estimator, R[0], 1.0)
+    return cpu_us(lambda k: tracker(states[k], R[k]), PERIODS)
+
+
+def simulate_us(design, model, trajectory, settle: float) -> tuple[float, np.ndarray]:
+    simulate_servo(design, trajectory, model, settle=0.01)
+    start = time.process_time()
+    run = simulate_servo(design, trajectory, model, settle=settle)
+    return 1e6 * (time.process_time() - start) / len(run.times), run.orientations
+
+
+def emulator_tick_us(design, model) -> tuple[float, float]:
+    from spherestep.hardware import EmulatedMotor, LockstepLink
+    from spherestep.sensing import default_array
+
+    motor = EmulatedMotor(design, model, default_array(design, 8), R0=np.eye(3))
+    link = LockstepLink(motor)
+    link.drive(np.full(motor.i.shape, 0.2))
+    step = cpu_us(lambda k: link.sleep(motor.period), 500)
+    sense = cpu_us(lambda k: motor.sense(), 500)
+    return step, sense
 
 
 def main() -> None:
     print(f"# bench_servo_loop  {datetime.datetime.now().isoformat(timespec='minutes')}  {platform.platform()}  "
-          f"cpus={os.cpu_count()}  OPENBLAS_NUM_THREADS={os.environ.get('OPENBLAS_NUM_THREADS', 'unset')}")
+          f"cpus={os.cpu_count()}  load={os.getloadavg()[0]:.1f}  "
+          f"OPENBLAS_NUM_THREADS={os.environ.get('OPENBLAS_NUM_THREADS', 'unset')}")
     design = prototype()
     R0 = so3.random(1, 3)[0]
-    cases = {"hold 0.3 s": (Trajectory.turn(R0, [0.0, 0.0, 1.0], 0.0, 1.0), 0.3),
-             "turn 20°": (Trajectory.turn(R0, [1.0, 0.5, 2.0], math.radians(20), 20.0), 0.3)}
-    print(f"{'model':>28} {'case':>12} {'CPU ms/period':>14} {'x real time':>12}")
-    for name, model in (("air core (torque_map)", torque_map(design)), ("iron (iron_model)", iron_model(design))):
-        simulate_servo(design, cases["hold 0.3 s"][0], model, settle=0.01)  # first calls
-        for case, (traj, settle) in cases.items():
-            sec = cpu_per_period(design, model, traj, settle)
-            print(f"{name:>28} {case:>12} {1e3 * sec:>14.3f} {1e-3 / sec:>12.2f}")
-        sec, evaluations = law_cpu_per_period(model, cases["turn 20°"][0])
-        print(f"{name:>28} {'law.step':>12} {1e3 * sec:>14.3f} {'':>12}  (K(R) evaluated {evaluations} times in 300)")
-        sec, evaluations = law_cpu_per_period(model, cases["turn 20°"][0], reuse=0.0)
-        print(f"{name:>28} {'law, K each':>12} {1e3 * sec:>14.3f} {'':>12}  (K(R) and bias every period: before)")
+    turn = Trajectory.turn(R0, [1.0, 0.5, 2.0], math.radians(20), 20.0)
+    hold = Trajectory.turn(R0, [0.0, 0.0, 1.0], 0.0, 1.0)
+    measured = turn_data(turn)
+    models = {"air": torque_map(design), "iron": iron_model(design)}
+    print("\nthe law, one period (CPU µs): now | before")
+    for name, model in models.items():
+        now = law_parts(model, turn, measured)
+        with reference_allocation():
+            before = law_parts(Unpacked(model), turn, measured)
+        for part in now:
+            print(f"  {name:>5} {part:>20} {now[part]:9.1f} | {before[part]:9.1f}")
+        step, evaluations = step_us(model, turn, measured)
+        worst, _ = step_us(model, turn, measured, reuse=0.0)
+        with reference_allocation():
+            step_b, _ = step_us(Unpacked(model), turn, measured)
+            worst_b, _ = step_us(Unpacked(model), turn, measured, reuse=0.0)
+        print(f"  {name:>5} {'law.step (turn)':>20} {step:9.1f} | {step_b:9.1f}   (K(R) evaluated {evaluations} "
+              f"times in {PERIODS})")
+        print(f"  {name:>5} {'law.step, K each':>20} {worst:9.1f} | {worst_b:9.1f}")
+    tracker = tracker_us(design, turn)
+    print(f"  {'':>5} {'magnetometer update':>20} {tracker:9.1f}   (Hall tracker, 8 magnetometers)")
+    print("\nsimulate_servo, one 1 kHz period (CPU µs): now | before | x real time now | max |ΔR| (rad)")
+    for name, model in models.items():
+        for case, traj in (("hold", hold), ("turn 20°", turn)):
+            now, R_now = simulate_us(design, model, traj, 0.3)
+            before, R_before = simulate_us(design, Unpacked(model), traj, 0.3)
+            diff = float(so3.distance(R_now, R_before).max())
+            print(f"  {name:>5} {case:>9} {now:9.1f} | {before:9.1f} | {1e3 / now:6.2f} | {diff:.1e}")
+    print("\nthe emulated motor's tick (CPU µs): device step with coils and rotor | magnetometer read")
+    for name, model in models.items():
+        step, sense = emulator_tick_us(design, model)
+        print(f"  {name:>5} {step:9.1f} | {sense:9.1f}")
+    print(f"# load at the end {os.getloadavg()[0]:.1f}")
 
 
 if __name__ == "__main__":

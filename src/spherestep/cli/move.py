@@ -62,7 +62,7 @@ def move(
                                                   "(protocol 2, docs/protocol.md), e.g. /dev/ttyACM0."),
     emulate: bool = typer.Option(False, "--emulate", help="Servo on the emulated motor behind a pseudo-terminal."),
     rate: float = typer.Option(None, "--rate", callback=number("Hz", 1, 2000, what="the loop rate"),
-                               help="With --port/--emulate: the loop rate in Hz (default 200)."),
+                               help="With --port/--emulate: the loop rate in Hz (default 500)."),
 ) -> None:
     """Drive a turn about an axis on the simulated motor (the design's own model: the iron-cored coils of the
     prototype, their winding's limits, 24 V / 100 W supply) and write the trajectory (trajectory.csv), coil currents
@@ -144,7 +144,10 @@ def move(
         if backend != "simulated":
             d = result.details
             console.print(f"loop: {d.outcome} after {d.cycles} cycles at {d.rate:.0f} Hz ({d.missed} deadlines "
-                          f"missed); all off {'acknowledged' if d.off_acknowledged else 'NOT acknowledged'}"
+                          f"missed, {1e3 * d.cpu_mean:.2f} ms CPU per cycle, worst {1e3 * d.cpu_max:.2f}"
+                          f"{'' if d.realtime else ', no real-time scheduling'}"
+                          f"{f', slowed {d.slowed}× to {d.time_scale:g} of the pace' if d.slowed else ''}); "
+                          f"all off {'acknowledged' if d.off_acknowledged else 'NOT acknowledged'}"
                           + (f"; {d.message}" if d.message else ""))
     if not result.ok:
         raise ComputationError(result.verdict())

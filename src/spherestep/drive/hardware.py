@@ -52,7 +52,9 @@ def drive_on_hardware(design, axis, angle: float, chosen, *, duration: float | N
         currents = np.asarray(report.currents, dtype=float)
     else:  # the loop ended before its first cycle
         times, estimates, currents = np.zeros(1), np.eye(3)[None], np.zeros((1, chosen.model.coil_count))
-    targets = np.array([np.asarray(session.reference(t)[0]) for t in times])
+    # the trajectory at the time the loop followed it (a starved loop slows its pace: report.reference_times)
+    paced = report.reference_times if report.cycles else [0.0]
+    targets = np.array([np.asarray(session.reference(t)[0]) for t in paced])
     if emulate and session.truth:
         truth_t = np.array([t for t, _ in session.truth])
         truth_R = np.array([s.R for _, s in session.truth])
@@ -68,7 +70,8 @@ def drive_on_hardware(design, axis, angle: float, chosen, *, duration: float | N
         time, arrival = _arrival(times, so3.distance(estimates, end), tolerance)
     details = HardwareDetails(report.outcome, report.message, report.cycles, report.rate, rate, report.missed,
                               report.off_acknowledged, kind, note, float(traj.duration),
-                              "" if report.log is None else str(report.log), bool(emulate))
+                              "" if report.log is None else str(report.log), bool(emulate), report.cpu_mean,
+                              report.cpu_max, report.realtime, report.time_scale, report.slowed, report.end_error)
     power = np.einsum("tn,tn->t", currents, currents) * chosen.limits.resistance
     return job.result("servo", "emulated" if emulate else "port", times, estimates, targets, np.zeros(len(times)),
                       currents, power, time, arrival, final, max_tracking, details)

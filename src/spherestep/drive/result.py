@@ -95,7 +95,10 @@ class HardwareDetails:
     deadlines, whether the device acknowledged all off (``off_acknowledged``), ``trajectory``/``note``/
     ``motion_time`` as for the simulated servo, the ``log`` file, and ``truth``: whether the errors are measured
     against the emulated rotor (``True``) or the loop's own estimate (``False``, a real port). Power on hardware
-    is the copper power ``R Σ i²`` of the commanded currents (nothing measures the supply)."""
+    is the copper power ``R Σ i²`` of the commanded currents (nothing measures the supply). The loop's health
+    (:class:`~spherestep.hardware.ServoReport`): ``cpu_mean``/``cpu_max`` s of host CPU per cycle, ``realtime``
+    (it ran with real-time scheduling), ``time_scale`` the pace it followed the trajectory at in the end and
+    ``slowed`` how often it halved rate and pace for missed deadlines, ``end_error`` rad of its last estimate."""
 
     outcome: str
     message: str
@@ -109,10 +112,21 @@ class HardwareDetails:
     motion_time: float
     log: str
     truth: bool
+    cpu_mean: float = 0.0
+    cpu_max: float = 0.0
+    realtime: bool = False
+    time_scale: float = 1.0
+    slowed: int = 0
+    end_error: float | None = None
 
     def to_dict(self, degrees: bool = True) -> dict:
+        unit, f = ("deg", math.degrees) if degrees else ("rad", float)
         return {"outcome": self.outcome, "message": self.message, "cycles": self.cycles, "rate_Hz": self.rate,
-                "loop_rate_Hz": self.loop_rate, "missed": self.missed, "off_acknowledged": self.off_acknowledged,
+                "loop_rate_Hz": self.loop_rate, "missed": self.missed, "cpu_per_cycle_ms": 1e3 * self.cpu_mean,
+                "cpu_max_ms": 1e3 * self.cpu_max, "realtime": self.realtime, "time_scale": self.time_scale,
+                "slowed": self.slowed,
+                f"loop_end_error_{unit}": None if self.end_error is None else f(self.end_error),
+                "off_acknowledged": self.off_acknowledged,
                 "trajectory": self.trajectory, "trajectory_note": self.note, "motion_time_s": self.motion_time,
                 "log": self.log, "errors_against": "emulated rotor" if self.truth else "the loop's estimate"}
 

@@ -314,16 +314,18 @@ def drive_turn(design, axis, angle_rad: float, *, mode: str = "servo", backend: 
     turned by noise of σ ``sensor_noise`` rad), ``"hall"`` (the stator's magnetometer array and its estimator,
     the coils' field subtracted at a 1 % current error) or ``"imu"`` (gyro, accelerometer and magnetometer in the
     rotor). ``port`` (backend ``"port"``) the serial device; ``rate`` the loop rate (Hz) on an emulated motor or
-    a port (default 200); ``log`` the loop's per-cycle CSV there. ``rates``: the ramped cruise rates tried.
+    a port (default :data:`spherestep.hardware.LOOP_RATE`, 500); ``log`` the loop's per-cycle CSV there.
+    ``rates``: the ramped cruise rates tried.
     ``tolerance`` (rad): a result is :attr:`~DriveResult.ok` only within it. ``progress(text)`` hears each stage.
     """
     check_options(mode, backend, duration=duration, sensor=sensor, sensor_noise=sensor_noise, port=port, rate=rate)
     chosen = choose_model(design, model, limits)
     if backend != "simulated":
+        from ..hardware import LOOP_RATE
         from .hardware import drive_on_hardware
 
         return drive_on_hardware(design, axis, angle_rad, chosen, duration=duration, port=port,
-                                 emulate=backend == "emulated", rate=200.0 if rate is None else rate, log=log,
+                                 emulate=backend == "emulated", rate=LOOP_RATE if rate is None else rate, log=log,
                                  tolerance=tolerance, progress=progress)
     job = Turn(design, axis, angle_rad, chosen, tolerance, progress)
     if duration is not None:

@@ -25,14 +25,14 @@ from .drive_link import DeviceTrip, DriveInfo, DriveLink
 from .limits import CurrentLimits, ThermalGuard, ThermalLimitError, ThermalLimits, heating_step
 from .motor_emulator import EmulatedMotor, LockstepLink, MotorFaults, MotorPty, Truth
 from .serialport import NakError, Serial
-from .servo import ServoFault, ServoReport, run_servo
+from .servo import LOOP_RATE, ServoFault, ServoReport, run_servo
 from .servo_parts import FieldTracker, wire_limits
 from .simulated import Simulated
 from .stream import PlayReport, play
 from .transcript import Transcript
 
 __all__ = [
-    "Backend", "CoilDriver", "CurrentDevice", "CurrentLimits", "DeviceInfo", "DeviceTrip", "DriveInfo", "DriveLink",
+    "LOOP_RATE", "Backend", "CoilDriver", "CurrentDevice", "CurrentLimits", "DeviceInfo", "DeviceTrip", "DriveInfo", "DriveLink",
     "DryRun", "EmulatedMotor", "Emulator", "LockstepLink", "Faults", "FieldTracker", "LinkError", "MotorFaults", "MotorPty",
     "NakError", "PlayReport", "PtyDevice", "Sent", "Serial", "ServoFault", "ServoReport",
     "Simulated", "ThermalGuard", "ThermalLimitError", "ThermalLimits", "Transcript", "Truth", "coil_masks",

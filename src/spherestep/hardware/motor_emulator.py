@@ -301,6 +301,7 @@ def truth_of(motor: EmulatedMotor, device: CurrentDevice, slip: float = 0.0) -> 
 
 _TRIP_ORDER = ("WDOG", "CRCS", "OVER", "OPEN", "STUCK", "HEAT")
 _MAX_TRIPS = 8
+STARTUP = 0.2  # s of emulated time the device process runs idle before start() returns
 DEVICE_RT_PRIORITY = 30  # above the host loop's (spherestep.hardware.servo.RT_PRIORITY): the device answers first
 PUBLISH_EVERY = 2e-3  # s of emulated time between two publications of the truth
 MAX_CATCH_UP = 0.01  # s: when the process falls further behind the wall clock, emulated time slips instead
@@ -356,6 +357,11 @@ class MotorPty:
         self._publish()
         self.started = time.monotonic() - self.motor.t
         self._process.start()
+        # the forked process's first steps touch (and copy) its pages: milliseconds to tens of them on a busy
+        # machine. Let that happen before a host talks to it — the device idles, coils off, for STARTUP s.
+        deadline = time.monotonic() + 10 * STARTUP
+        while self.truth().t < STARTUP and time.monotonic() < deadline and self._process.is_alive():
+            time.sleep(0.005)
         return self
 
     def stop(self) -> None:

@@ -68,6 +68,7 @@ class ServoFault(ComputationError):
         self.code = code
 
 
+LOOP_RATE = 500.0  # Hz: the loop's default rate (its cost leaves the 2 ms period ~4× headroom: docs/hardware.md)
 WARMUP = 0.1  # s of zero-current frames before the schedule starts (on the wall clock)
 RT_PRIORITY = 20  # SCHED_FIFO priority the loop asks for (1–99; the kernel's RT throttling still leaves 5 %)
 MISS_WINDOW = 25  # cycles: deadlines missed within the last this many count against the budget
@@ -186,7 +187,7 @@ def _check_state(state) -> None:
         raise ServoFault(f"magnetometer {int(np.argmax(state.saturated))} reads full scale", "SENSOR")
 
 
-def run_servo(link: DriveLink, estimate, law, *, duration: float, rate: float = 200.0,
+def run_servo(link: DriveLink, estimate, law, *, duration: float, rate: float = LOOP_RATE,
               limits: CurrentLimits | None = None, log: str | Path | None = None, status=None,
               max_late: float | None = None, clock=time.monotonic, sleep=time.sleep,
               device_time: bool = True, on_missed: str = "slow", miss_budget: int = 3,
