@@ -28,15 +28,17 @@ def test_forces_json_and_files(tmp_path, capsys):
 
 
 def test_forces_table_for_people(tmp_path, capsys):
-    assert main(["forces", "--states", "1", "--out", str(tmp_path)]) == 0
+    assert main(["forces", "--states", "1", "--core", "air", "--out", str(tmp_path)]) == 0
     text = capsys.readouterr().out
     assert "peak lateral force" in text and "holding" in text
 
 
 def test_forces_with_a_design_file(tmp_path, capsys):
     path = prototype().save(tmp_path / "m.yaml")
-    assert main(["forces", "--design", str(path), "--states", "1", "--json", "--out", str(tmp_path / "o")]) == 0
-    assert len(json.loads(capsys.readouterr().out)["states"]) == 1
+    assert main(["forces", "--design", str(path), "--states", "1", "--core", "air", "--json", "--out",
+                 str(tmp_path / "o")]) == 0
+    info = json.loads(capsys.readouterr().out)
+    assert len(info["states"]) == 1 and "iron" not in info  # --core air: the air-core report only
 
 
 @pytest.mark.parametrize("args", [["--states", "0"], ["--design", "/nonexistent/m.yaml"]])
