@@ -219,8 +219,7 @@ def run_servo(link: DriveLink, estimate, law, *, duration: float, rate: float = 
                                                              max_power=link.info.max_power)
     report = ServoReport(log=None if log is None else Path(log), nominal_rate=rate)
     period = 1.0 / rate
-    paced = Paced(law.trajectory)
-    planned, law.trajectory = law.trajectory, paced
+    warmup = (WARMUP if clock is time.monotonic else 0.0) if warmup is None else checks.non_negative(warmup, "warmup")
     end = duration  # loop time at which the trajectory time reaches duration
     window = deque(maxlen=MISS_WINDOW)  # deadlines missed before each of the last cycles
     cpu: list[float] = []
@@ -234,13 +233,15 @@ def run_servo(link: DriveLink, estimate, law, *, duration: float, rate: float = 
     k = 0
     host: list[float] = []  # the host's clock at each cycle, for the achieved rate
     t0 = clock()
+    paced = Paced(law.trajectory)  # the law follows the trajectory at the loop's pace until the end of the run
+    planned, law.trajectory = law.trajectory, paced
     scheduling = _realtime() if realtime else None
     report.realtime = scheduling is not None
     collecting = gc.isenabled()
     if realtime:
         gc.disable()
     try:
-        warm_until = clock() + (WARMUP if warmup is None and clock is time.monotonic else (warmup or 0.0))
+        warm_until = clock() + warmup
         while clock() < warm_until:  # every coil at zero, at the loop's rate: first calls on both sides, unscheduled
             _check_state(link.drive(np.zeros(n)))
             sleep(period)
