@@ -191,21 +191,22 @@ def run_servo(link: DriveLink, estimate, law, *, duration: float, rate: float = 
               limits: CurrentLimits | None = None, log: str | Path | None = None, status=None,
               max_late: float | None = None, clock=time.monotonic, sleep=time.sleep,
               device_time: bool = True, on_missed: str = "slow", miss_budget: int = 3,
-              cpu_clock=time.thread_time, realtime: bool = True, warmup: float | None = None) -> ServoReport:
+              cpu_clock=time.thread_time, realtime: bool | None = None, warmup: float | None = None) -> ServoReport:
     """Run the loop for ``duration`` s at ``rate`` Hz on an open ``link`` (see the module); returns the
     :class:`ServoReport` (its ``rate`` on the host's clock). ``status(t, R, ω, currents)`` is called every cycle (live display); ``log`` a path
     for the per-cycle log. With ``device_time`` the control law's time ``t`` (and the log's) is the device's
     clock at the reading (``<time>`` of the state), the time the motor lives in; otherwise the host's.
     ``clock``/``sleep`` are the loop's schedule (wall time by default; a simulated clock for
     :class:`~spherestep.hardware.motor_emulator.LockstepLink`). ``on_missed`` (``"slow"`` or ``"stop"``) and
-    ``miss_budget`` (deadlines within ``MISS_WINDOW`` s): what a starved loop does (see the module);
-    ``duration`` is then in trajectory time (a slowed run lasts longer, at most ``duration / MIN_SCALE``).
-    ``cpu_clock`` measures the host's CPU per cycle. With ``realtime`` the loop's thread asks the OS for
-    real-time scheduling (``SCHED_FIFO`` at ``RT_PRIORITY``, where permitted; the report's ``realtime`` says
-    whether it got it) and the garbage collector pauses, both until the loop ends. ``warmup`` s (default
-    ``WARMUP`` on the wall clock, 0 on another ``clock``) of zero-current ``DRIVE`` frames at the rate come
-    before the schedule starts, so that first calls on both ends of the link (a forked device's first pages,
-    caches) fall outside it. Never raises for a fault of the motor, the sensors, the host
+    ``miss_budget`` (late cycles among the last ``MISS_WINDOW``): what a starved loop does (see the module);
+    ``duration`` is in trajectory time (a slowed run lasts longer, at most ``duration / MIN_SCALE``).
+    ``cpu_clock`` measures the host's CPU per cycle. With ``realtime`` (default: on the wall clock, not on a
+    simulated one, where it would only hog a core) the loop's thread asks the OS for real-time scheduling
+    (``SCHED_FIFO`` at ``RT_PRIORITY``, where permitted; the report's ``realtime`` says whether it got it) until
+    the loop ends; the garbage collector pauses meanwhile (the loop's objects die young: reference counting frees
+    them). ``warmup`` s (default ``WARMUP`` on the wall clock, 0 on another ``clock``) of zero-current ``DRIVE``
+    frames at the rate come before the schedule starts, so that first calls on both ends of the link (a forked
+    device's first pages, caches) fall outside it. Never raises for a fault of the motor, the sensors, the host
     or the link: the report says what ended the run."""
     if link.info is None:
         raise bad_value("link", "an open DriveLink (call open() or use it in a with block)", link)
@@ -219,7 +220,9 @@ def run_servo(link: DriveLink, estimate, law, *, duration: float, rate: float = 
                                                              max_power=link.info.max_power)
     report = ServoReport(log=None if log is None else Path(log), nominal_rate=rate)
     period = 1.0 / rate
-    warmup = (WARMUP if clock is time.monotonic else 0.0) if warmup is None else checks.non_negative(warmup, "warmup")
+    wall = clock is time.monotonic
+    warmup = (WARMUP if wall else 0.0) if warmup is None else checks.non_negative(warmup, "warmup")
+    realtime = wall if realtime is None else bool(realtime)
     end = duration  # loop time at which the trajectory time reaches duration
     window = deque(maxlen=MISS_WINDOW)  # deadlines missed before each of the last cycles
     cpu: list[float] = []
@@ -238,8 +241,7 @@ def run_servo(link: DriveLink, estimate, law, *, duration: float, rate: float = 
     scheduling = _realtime() if realtime else None
     report.realtime = scheduling is not None
     collecting = gc.isenabled()
-    if realtime:
-        gc.disable()
+    gc.disable()
     try:
         warm_until = clock() + warmup
         while clock() < warm_until:  # every coil at zero, at the loop's rate: first calls on both sides, unscheduled
