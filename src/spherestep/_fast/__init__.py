@@ -21,6 +21,10 @@ What is where:
   out);
 * :mod:`.descent` — :func:`spherestep.statics.equilibrium`'s safeguarded Newton descent, row by row;
 * :mod:`.integrate` — :meth:`spherestep.dynamics.Rotor.step` repeated under a packed model's torque.
+* :mod:`.linear` — a packed model's torque as ``b(R) + K(R) c`` at one orientation, ``K`` and the bias in one call
+  (:class:`spherestep.control.ModelCache`: the servo law's model and the simulation's plant);
+* :mod:`.allocation` — the allocation's semismooth Newton and the closest reachable torque
+  (:func:`spherestep.control.allocation.allocate_matrix`; the NumPy Newton and Clarabel stay the references).
 * :mod:`.threads` — :func:`~.threads.single_blas_thread`, the decorator that runs the package's long entry points
   (equilibria, planners, tuning, simulation, calibration) on one BLAS thread.
 
