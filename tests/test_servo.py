@@ -120,8 +120,12 @@ def test_servo_tracks_a_turn_with_a_failed_coil(design, tmap):
     broken = replace(tmap, failed=failed)
     rotor = Rotor.from_design(design)
     traj = Trajectory.turn(R0, [1.0, 0.5, 2.0], math.radians(20), acceleration=10.0)
+    # the PD law alone (disturbance_bandwidth=0): the energy balance below sums per-period mean currents, and the
+    # disturbance estimate's noise (0.02° through poles at up to 300 rad/s in motion) makes the currents ripple
+    # within a period, a copper loss R·var(i) the means do not see (residual 0.06 J against 0.12 J of kinetic
+    # energy with it on); the law with the estimate is tested on the same turn in tests/test_servo_robust.py
     run = simulate_servo(design, traj, broken, rotor=rotor, sensor=NoisySensor(math.radians(0.02), rng=6),
-                         settle=0.15)
+                         settle=0.15, disturbance_bandwidth=0.0)
     assert np.all(run.currents[:, failed[0]] == 0) and np.all(run.references[:, failed[0]] == 0)
     assert run.tracking_error.max() < math.radians(0.2)
     assert run.final_error <= HOLD
@@ -212,9 +216,11 @@ def test_servo_holds_against_a_bias_torque(design):
     assert np.linalg.norm(bias) > 0.7
     tail = run.times >= 0.15
     assert run.tracking_error[tail].max() <= HOLD
-    # the coils cancel the spring: mean coil torque over the tail equals minus the bias
+    # the coils cancel the spring: mean coil torque over the tail equals minus the bias (to 0.02 N·m: the law's
+    # disturbance estimate, a triple pole at 300 rad/s for a model with a bias, carries the 0.02° sensor noise
+    # into the torque, and its mean over the 0.15 s tail is 0.013 N·m off; 0.01 held for the PD law alone)
     coil_torque = (run.currents[tail] / LIMITS.nominal_current) @ model.K.T
-    np.testing.assert_allclose(coil_torque.mean(axis=0), -bias, atol=0.01)
+    np.testing.assert_allclose(coil_torque.mean(axis=0), -bias, atol=0.02)
 
 
 @pytest.mark.slow

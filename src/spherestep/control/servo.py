@@ -22,8 +22,13 @@ One period, at loop time ``t`` (s):
    ``b + K c = τ*`` within the limits, warm-started from the last period's dual; the command is ``c``, the
    torque it promises ``τ_p = b + K c`` (what step 1 uses next period) and whether ``τ*`` was reachable.
 
-The observer's state is ``(R̂, ω̂, d̂)``: ``d̂`` an unmodelled torque, carried in the prediction
-``ω̂ ← ω̂ + h (τ_p + d̂)/I``; its gain is zero here (the disturbance observer of the servo issue sets it).
+The observer's state is ``(R̂, ω̂, d̂)``: ``d̂`` the torque the model gets wrong (N·m, fixed frame), carried in the
+prediction ``ω̂ ← ω̂ + h (τ_p + d̂)/I`` and corrected by the residual with the gain of the extended observer
+(:func:`~spherestep.control.controller.observer_gains`, bandwidth ``disturbance_bandwidth``, 0 turns it off).
+Step 3's torque is then ``τ* − d̂``: the allocation asks ``b̂ + K̂ c = τ* − d̂``, so the plant's ``b + K c + d``
+is ``τ*`` once ``d̂ = d``. Anti-windup: the observer predicts with the torque the allocation *promised* (the
+reachable one when ``τ* − d̂`` is out of reach), so ``d̂`` never integrates a shortfall of the drive, only the
+plant's departure from the model.
 """
 
 from __future__ import annotations
@@ -38,7 +43,7 @@ from .. import checks, so3
 from ..errors import bad_value
 from ..statics import TorqueModel, is_torque_model
 from .allocation import allocate_matrix
-from .controller import GeometricPD, Observer
+from .controller import SPEED_MEMORY, GeometricPD, Observer, disturbance_bandwidths
 from .limits import DriveLimits
 from .trajectory import Trajectory
 
@@ -125,8 +130,9 @@ def _affine_terms(model: TorqueModel):
 class ServoCommand:
     """One period's output of :meth:`ServoLaw.step`: ``currents (N,)`` per unit (:meth:`ServoLaw.amperes` for
     A); ``torque (3,)`` N·m that they promise at the estimate, ``b + K c``; ``requested (3,)`` the feedback's
-    ``τ*``; ``reachable`` whether ``τ*`` was within the limits; ``estimate (3, 3)`` and ``velocity (3,)`` rad/s,
-    the observer's ``(R̂, ω̂)`` the command was computed from."""
+    ``τ* − d̂``; ``reachable`` whether it was within the limits; ``estimate (3, 3)`` and ``velocity (3,)`` rad/s,
+    the observer's ``(R̂, ω̂)`` the command was computed from; ``disturbance (3,)`` N·m its ``d̂`` (already
+    subtracted from ``requested``: the torque the plant is estimated to add to the model's)."""
 
     currents: np.ndarray
     torque: np.ndarray
@@ -134,6 +140,7 @@ class ServoCommand:
     reachable: bool
     estimate: np.ndarray
     velocity: np.ndarray
+    disturbance: np.ndarray
 
 
 class ServoLaw:
@@ -144,7 +151,13 @@ class ServoLaw:
     ``controller`` a :class:`GeometricPD` (its ``inertia`` and ``damping`` are also the observer's);
     ``limits`` the :class:`DriveLimits` the allocation keeps within (default 24 V / 100 W);
     ``sensor_rate`` (Hz) the rate measurements arrive at (the observer's gains; default the controller's rate);
-    ``observer_bandwidth`` (rad/s, default the observer's); ``reuse`` rad (see :class:`ModelCache`);
+    ``observer_bandwidth`` (rad/s, default the observer's: ``ω_d`` with the disturbance estimate, else 120);
+    ``disturbance_bandwidth`` and ``motion_bandwidth`` (rad/s, the extended observer's triple pole at rest and
+    in motion; default :func:`~spherestep.control.controller.disturbance_bandwidths`: 300 with a 1 kHz sensor
+    for a model with a bias (the iron's detent), 100 at rest and 300 in motion without, off with a sensor slower
+    than 333 Hz; ``disturbance_bandwidth=0``: no disturbance estimate, the PD
+    law with feed-forward alone; a ``disturbance_bandwidth`` given alone: fixed poles); ``reuse``
+    rad (see :class:`ModelCache`);
     ``delay`` the control periods between a command and the drive applying it (0 in simulation; 1 on hardware,
     where the currents computed in a cycle are sent at the next cycle's start): the observer predicts with the
     torque promised ``delay`` periods before.
@@ -152,7 +165,8 @@ class ServoLaw:
 
     def __init__(self, model: TorqueModel, trajectory: Trajectory, controller: GeometricPD, *,
                  limits: DriveLimits | None = None, sensor_rate: float | None = None,
-                 observer_bandwidth: float | None = None, reuse: float = K_REUSE, delay: int = 0):
+                 observer_bandwidth: float | None = None, disturbance_bandwidth: float | None = None,
+                 motion_bandwidth: float | None = None, reuse: float = K_REUSE, delay: int = 0):
         if not isinstance(trajectory, Trajectory):
             raise bad_value("trajectory", "a spherestep.control.Trajectory", type(trajectory).__name__)
         if not isinstance(controller, GeometricPD):
@@ -163,9 +177,15 @@ class ServoLaw:
         self.model, self.trajectory, self.controller = model, trajectory, controller
         self.limits = DriveLimits() if limits is None else limits
         rate = controller.rate if sensor_rate is None else checks.positive(sensor_rate, "sensor_rate")
+        wd, wm = disturbance_bandwidths(rate, controller.bandwidth, bool(model.has_bias))
+        if disturbance_bandwidth is not None:
+            wd, wm = disturbance_bandwidth, 0.0
         self.observer = Observer(trajectory.start, inertia=controller.inertia, sensor_period=1.0 / rate,
-                                 **({} if observer_bandwidth is None else {"bandwidth": observer_bandwidth}))
+                                 **({} if observer_bandwidth is None else {"bandwidth": observer_bandwidth}),
+                                 disturbance_bandwidth=wd, motion_bandwidth=wm if motion_bandwidth is None
+                                 else motion_bandwidth)
         self.started = False  # the observer starts from the first measurement
+        self._speed = 0.0
         self._failed = tuple(model.failed)
         self._lam = None
         self.delay = checks.count(delay, "delay", 0, 8)
@@ -192,17 +212,21 @@ class ServoLaw:
         h = t - obs.t
         if h > 0:
             obs.predict(self._promised[0] - self.controller.damping * obs.w, h)
+        Rd, wd, ad = self.trajectory.at(t)
+        if obs.motion_bandwidth:  # the speed the observer's poles follow: |ω_d|, its peaks held SPEED_MEMORY s
+            self._speed = max(math.sqrt(float(wd @ wd)), self._speed * math.exp(-max(h, 0.0) / SPEED_MEMORY))
         if measurement is not None:
             if not self.started:
                 obs.restart(measurement)
                 self.started = True
             else:
-                obs.correct(measurement, measured_at)
-        Rd, wd, ad = self.trajectory.at(t)
+                obs.correct(measurement, measured_at, self._speed)
         tau = self.controller.torque(obs.R, obs.w, Rd, wd, ad)
+        if obs.l3:
+            tau = tau - obs.d
         alloc = self._allocate(tau, obs.R)
         self._promised.append(alloc.torque)
-        return ServoCommand(alloc.currents, alloc.torque, tau, alloc.reachable, obs.R, obs.w)
+        return ServoCommand(alloc.currents, alloc.torque, tau, alloc.reachable, obs.R, obs.w, obs.d)
 
     def _allocate(self, tau: np.ndarray, R: np.ndarray):
         """Steps 4 and 5 of the module: ``K``/bias at ``R`` and the warm-started allocation of ``tau``."""

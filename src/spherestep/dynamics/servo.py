@@ -76,7 +76,8 @@ class ServoRun:
     ``targets`` ``(T, 3, 3)``; ``angular_velocity (T, 3)`` rad/s; ``currents`` and ``references`` ``(T, N)`` (A,
     mean over each period and commanded); ``voltages (T, N)`` V (mean); ``power (T,)`` W drawn from the supply
     ``Σ v i`` (mean over each period); ``copper_power (T,)`` W ``Σ R i²``; ``torque_command (T, 3)`` N·m;
-    ``reachable (T,)`` whether the allocation met the command; ``motion_time`` the trajectory's duration (s)."""
+    ``reachable (T,)`` whether the allocation met the command; ``motion_time`` the trajectory's duration (s);
+    ``disturbance (T, 3)`` N·m the servo law's estimate ``d̂`` of the torque its model gets wrong."""
 
     times: np.ndarray
     orientations: np.ndarray
@@ -91,6 +92,7 @@ class ServoRun:
     torque_command: np.ndarray
     reachable: np.ndarray
     motion_time: float
+    disturbance: np.ndarray | None = None
 
     @property
     def tracking_error(self) -> np.ndarray:
@@ -137,7 +139,9 @@ def simulate_servo(design, trajectory: Trajectory, model: TorqueModel | None = N
                    controller: GeometricPD | None = None, sensor=None,
                    drive: CoilDrive | None = None, observer_bandwidth: float | None = None,
                    rate: float = CONTROL_RATE, settle: float = 0.5, start=None,
-                   controller_model: TorqueModel | None = None) -> ServoRun:
+                   controller_model: TorqueModel | None = None,
+                   disturbance_bandwidth: float | None = None, motion_bandwidth: float | None = None
+                   ) -> ServoRun:
     """Run the servo loop of the module along ``trajectory`` and ``settle`` s beyond its end.
 
     ``model`` (default: the design's magnets' torque map) is the plant; ``limits`` the drive (default 24 V /
@@ -146,7 +150,9 @@ def simulate_servo(design, trajectory: Trajectory, model: TorqueModel | None = N
     noiseless :class:`~spherestep.sensing.NoisySensor` at ``rate``); ``drive`` default
     :class:`CoilDrive` on ``limits``; ``start`` the true initial orientation (default the trajectory's start),
     the rotor at rest; the observer starts from the sensor's first measurement (the trajectory's start until
-    one arrives).
+    one arrives). ``controller_model`` the servo law's belief (default ``model``: no model error);
+    ``disturbance_bandwidth`` and ``motion_bandwidth`` rad/s its disturbance estimate at rest and in motion
+    (default on, ``disturbance_bandwidth=0`` off; :class:`ServoLaw`).
     """
     if model is None:
         from ..magnetics import torque_map
@@ -171,7 +177,8 @@ def simulate_servo(design, trajectory: Trajectory, model: TorqueModel | None = N
         raise bad_value("sensor", "a spherestep.sensing.OrientationSensor (measure(t, R_true, currents), rate, "
                         "latency)", type(sensor).__name__)
     law = ServoLaw(model if controller_model is None else controller_model, trajectory, controller, limits=limits,
-                   sensor_rate=sensor.rate, observer_bandwidth=observer_bandwidth)
+                   sensor_rate=sensor.rate, observer_bandwidth=observer_bandwidth,
+                   disturbance_bandwidth=disturbance_bandwidth, motion_bandwidth=motion_bandwidth)
     h = 1.0 / rate
     N, In = model.coil_count, limits.nominal_current
     plant = ModelCache(model, reuse=0.0)  # the true K(R) and bias, exact; compiled for a packed affine model
@@ -182,7 +189,7 @@ def simulate_servo(design, trajectory: Trajectory, model: TorqueModel | None = N
     steps = int(math.ceil((trajectory.duration + settle) * rate - 1e-9)) + 1
     times = np.arange(steps) * h
     Rd_all = trajectory.sample(times)[0]
-    rec = {k: [] for k in ("R", "Rh", "w", "i", "iref", "v", "p", "pc", "tau", "ok")}
+    rec = {k: [] for k in ("R", "Rh", "w", "i", "iref", "v", "p", "pc", "tau", "ok", "d")}
     latency = sensor.latency
     for n in range(steps):
         t = n * h
@@ -208,9 +215,10 @@ def simulate_servo(design, trajectory: Trajectory, model: TorqueModel | None = N
         rec["pc"].append(limits.resistance * float(i_mean @ i_mean))
         rec["tau"].append(cmd.requested)
         rec["ok"].append(cmd.reachable)
+        rec["d"].append(cmd.disturbance)
     return ServoRun(times, np.array(rec["R"]), np.array(rec["Rh"]), Rd_all, np.array(rec["w"]), np.array(rec["i"]),
                     np.array(rec["iref"]), np.array(rec["v"]), np.array(rec["p"]), np.array(rec["pc"]),
-                    np.array(rec["tau"]), np.array(rec["ok"]), float(trajectory.duration))
+                    np.array(rec["tau"]), np.array(rec["ok"]), float(trajectory.duration), np.array(rec["d"]))
 
 
 def _affine_torque(plant: ModelCache, R: np.ndarray, c: np.ndarray) -> np.ndarray:

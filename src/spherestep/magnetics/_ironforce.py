@@ -60,23 +60,25 @@ def magnet_wrenches(design, coil, centres, axes, pivot, level: int = IRON_LEVEL,
     return -Fd, -Td, -(Fi + Fw), -(Ti + Tw)
 
 
-def pole_poses(design, alpha, phi=0.0) -> tuple[np.ndarray, np.ndarray, tuple]:
+def pole_poses(design, alpha, phi=0.0, shell: float | None = None) -> tuple[np.ndarray, np.ndarray, tuple]:
     """Rotor magnets at angles ``alpha`` (rad) from a coil's axis and azimuths ``phi`` (rad; broadcast) about it,
     in the coil's frame (axis ``+z``, face at ``z = 0``): centres ``(K, 3)``, radial axes ``(K, 3)``, and the
-    sphere's centre ``(0, 0, −R_s − g)`` as the pivot."""
+    sphere's centre ``(0, 0, −R_s − g)`` as the pivot; ``shell`` the rotor's wall (m, default
+    :data:`._iron.ROTOR_SHELL`, see :func:`magnet_face_radius`)."""
     a, p = np.broadcast_arrays(np.atleast_1d(np.asarray(alpha, dtype=float)), np.asarray(phi, dtype=float))
     face = design.radius + design.air_gap
     w = np.stack([np.sin(a) * np.cos(p), np.sin(a) * np.sin(p), np.cos(a)], axis=-1).reshape(-1, 3)
-    centres = (magnet_face_radius(design) - 0.5 * design.magnet_length) * w - [0.0, 0.0, face]
+    centres = (magnet_face_radius(design, shell) - 0.5 * design.magnet_length) * w - [0.0, 0.0, face]
     return centres, w, (0.0, 0.0, -face)
 
 
-def pair_tables(design, coil, alpha, level: int = IRON_LEVEL, order: int = 3) -> tuple[np.ndarray, np.ndarray]:
+def pair_tables(design, coil, alpha, level: int = IRON_LEVEL, order: int = 3,
+                shell: float | None = None) -> tuple[np.ndarray, np.ndarray]:
     """``(detent, linear)`` torques ``τ(α)`` (N·m) on one ``+1`` pole at angles ``alpha`` (rad) from an iron-cored
     coil's axis, about the sphere's centre, positive away from the axis (the convention of ``pair_torque``);
     ``linear`` per nominal current. The torque at current ``c`` on a pole of polarity ``p`` is
-    ``detent + p c linear``. The magnet's face is at :func:`magnet_face_radius`."""
-    centres, w, pivot = pole_poses(design, alpha)
+    ``detent + p c linear``. The magnet's face is at :func:`magnet_face_radius` (of ``shell``, m)."""
+    centres, w, pivot = pole_poses(design, alpha, shell=shell)
     _, Td, _, Tl = magnet_wrenches(design, coil, centres, w, pivot, level, order)
     return Td[:, 1], Tl[:, 1]
 
