@@ -50,8 +50,9 @@ PROTOTYPE_LAYOUT = {"rotor": "truncated-icosahedron", "rotor_level": 1, "stator"
 @dataclass(frozen=True)
 class Candidate:
     """One layout at one ball size: ``rotor``/``stator`` base packings refined ``*_level`` times, the stator cap
-    ``cap_deg`` (degrees) about −z, the ball ``sphere_diameter`` (m); ``seed`` and ``samples`` of the measurements.
-    Cores are a row each (:func:`evaluate`)."""
+    ``cap_deg`` (degrees) about −z, the ball ``sphere_diameter`` (m); ``seed`` and ``samples`` of the measurements;
+    ``gap_scale`` widens the air gap (the baseline's neighbourhood: a wider gap weakens the iron's detent faster
+    than the coils' pull). Cores are a row each (:func:`evaluate`)."""
 
     rotor: str
     rotor_level: int
@@ -62,6 +63,7 @@ class Candidate:
     samples: int = 1000
     capability_samples: int = 64
     seed: int = 0
+    gap_scale: float = 1.0
 
     @property
     def scale(self) -> float:
@@ -70,11 +72,14 @@ class Candidate:
     @property
     def label(self) -> str:
         return (f"{self.rotor}/L{self.rotor_level} × {self.stator}/L{self.stator_level}, {self.cap_deg:g}°, "
-                f"{1e3 * self.sphere_diameter:.4g} mm")
+                f"{1e3 * self.sphere_diameter:.4g} mm" + (f", gap ×{self.gap_scale:g}" if self.gap_scale != 1 else ""))
 
     def key(self, spec_digest: str, core: str) -> str:
         """16 hex digits naming this candidate with ``core`` under a spec (its :attr:`~Spec.digest`)."""
-        text = json.dumps({"version": KEY_VERSION, "spec": spec_digest, "core": core} | asdict(self),
+        params = asdict(self)
+        if params["gap_scale"] == 1.0:  # keys of the layouts without it stay as they were
+            del params["gap_scale"]
+        text = json.dumps({"version": KEY_VERSION, "spec": spec_digest, "core": core} | params,
                           sort_keys=True, separators=(",", ":"))
         return hashlib.sha256(text.encode()).hexdigest()[:16]
 
@@ -87,7 +92,7 @@ class Candidate:
         return DesignPoint(rotor=self.rotor, rotor_level=self.rotor_level, stator=self.stator,
                            stator_level=self.stator_level, cap_half_angle_deg=self.cap_deg, samples=self.samples,
                            seed=self.seed, torque_states=0, sphere_diameter=self.sphere_diameter,
-                           air_gap=P["air_gap"] if s == 1.0 else max(MIN_GAP, P["air_gap"] * s),
+                           air_gap=(P["air_gap"] if s == 1.0 else max(MIN_GAP, P["air_gap"] * s)) * self.gap_scale,
                            magnet_diameter_max=P["magnet_diameter"] * s, magnet_diameter_min=0.25 * INCH * s,
                            magnet_length=P["magnet_length"] * s, coil_diameter_max=P["coil_diameter"] * s,
                            coil_diameter_min=0.5 * INCH * s, coil_length=P["coil_length"] * s)
@@ -165,12 +170,13 @@ def magnet_mass(design) -> float:
 def change_from(candidate: Candidate, core: str, baseline: dict | None) -> float | None:
     """How far ``candidate`` with ``core`` is from the ``baseline`` layout (a dict as :data:`PROTOTYPE_LAYOUT` with
     ``core`` and ``sphere_diameter``): one per changed choice (rotor packing, its level, stator packing, its level,
-    core, ball size) plus the cap's change in tens of degrees. None without a baseline."""
+    core, ball size, air gap) plus the cap's change in tens of degrees. None without a baseline."""
     if baseline is None:
         return None
     steps = sum(getattr(candidate, k) != baseline[k] for k in ("rotor", "rotor_level", "stator", "stator_level"))
     steps += core != baseline["core"]
     steps += not math.isclose(candidate.sphere_diameter, baseline["sphere_diameter"], rel_tol=1e-9)
+    steps += candidate.gap_scale != 1.0
     return float(steps + abs(candidate.cap_deg - baseline["cap_deg"]) / 10.0)
 
 
@@ -239,6 +245,7 @@ def _row(candidate: Candidate, core: str, spec, baseline) -> dict:
     return {"key": candidate.key(spec.digest, core), "spec": spec.digest, "rotor": candidate.rotor,
             "rotor_level": candidate.rotor_level, "stator": candidate.stator, "stator_level": candidate.stator_level,
             "cap_deg": candidate.cap_deg, "sphere_diameter_mm": 1e3 * candidate.sphere_diameter, "core": core,
+            "gap_scale": candidate.gap_scale,
             "change": change_from(candidate, core, baseline), "params": json.dumps(asdict(candidate), sort_keys=True),
             "worker": f"{socket.gethostname()}:{os.getpid()}"}
 

@@ -103,8 +103,9 @@ def gallery_rows() -> list:
     return rows
 
 
-def write_outputs(result, out) -> list[Path]:
-    """Write the files of the module docstring into ``out``; returns their paths."""
+def write_outputs(result, out, samples: int = 2000) -> list[Path]:
+    """Write the files of the module docstring into ``out`` (the report's resolution from ``samples``
+    orientations); returns their paths."""
     from ..motor import MotorDesign
     from ..report import Section, write_report
 
@@ -163,8 +164,8 @@ def write_outputs(result, out) -> list[Path]:
                                  "the spec's range).",
                             html=_table(rows + gallery_rows(), ("design", "magnets/coils", "core", "states",
                                                                 "res. median", "torque N·m", "magnets kg"))))
-    metrics = design.metrics(samples=2000, seed=0, escape=False)
-    summary = write_report(out / "report.html", design, metrics, samples=2000, seed=0,
+    metrics = design.metrics(samples=samples, seed=0, escape=False)
+    summary = write_report(out / "report.html", design, metrics, samples=samples, seed=0,
                            title=f"spherestep synthesis: {spec.name}", sections=tuple(sections))
     written.append(Path(summary["path"]))
     return written

@@ -26,6 +26,7 @@ from ..errors import InputError, bad_value
 from .ladder import PROTOTYPE, Candidate, baseline_layout, build, evaluate
 
 STORE = "results"
+GAP_SCALES = (2.0, 4.0, 8.0)  # the baseline's air gap widened (iron: a table solve each, thorough budget)
 
 
 @dataclass(frozen=True)
@@ -47,14 +48,16 @@ class Budget:
     verify_samples: int
     verify_capability: int
     allow_costly: bool = False
+    costly_neighbourhood: bool = False  # the baseline's wider gaps with iron solved even so (a few table solves)
 
 
 BUDGETS = {
     "quick": Budget("quick", ("truncated-icosahedron",), ("truncated-cuboctahedron",), 9.0, (0, 1), (0,),
                     (60.0, 80.0), 1, 400, 32, 2, 1, 1000, 64),
-    "normal": Budget("normal", None, None, 1.25, (0, 1), (0, 1), (60.0, 70.0, 80.0), 2, 1000, 64, 4, 3, 4000, 200),
+    "normal": Budget("normal", None, None, 1.25, (0, 1), (0, 1), (60.0, 70.0, 80.0), 2, 1000, 64, 4, 3, 4000, 200,
+                     costly_neighbourhood=True),
     "thorough": Budget("thorough", None, None, 1.6, (0, 1, 2), (0, 1, 2), (50.0, 60.0, 70.0, 80.0, 85.0), 3, 2000,
-                       128, 8, 5, 8000, 400, True),
+                       128, 8, 5, 8000, 400, True, True),
 }
 
 
@@ -72,7 +75,8 @@ def ball_diameters(spec, count: int) -> list[float]:
 def candidates(spec, budget: Budget, seed: int = 0) -> list[Candidate]:
     """The layouts a budget searches for ``spec`` (module docstring): rotor × stator pairs whose primary circles are
     within the budget's ratio (both symmetry-family rules, as the sweep), refinements, caps and ball sizes; with a
-    baseline, also every layout one choice away from it (packings at its levels, levels, caps 50°–85°)."""
+    baseline, also every layout one choice away from it (packings at its levels, levels, caps 50°–85°, the air gap
+    widened by :data:`GAP_SCALES`)."""
     from ..explore import distinct_names, primary_ratio
 
     names = distinct_names()
@@ -99,6 +103,7 @@ def candidates(spec, budget: Budget, seed: int = 0) -> list[Candidate]:
         variants += [one | {"cap_deg": float(c)} for c in range(50, 90, 5)]
         variants += [one | {"rotor_level": lv} for lv in range(3)] + [one | {"stator_level": lv} for lv in range(3)]
         variants += [one | {"rotor": n} for n in names] + [one | {"stator": n} for n in names]
+        variants += [one | {"gap_scale": k} for k in GAP_SCALES]
         for v in variants:
             out[Candidate(sphere_diameter=D, **v, **common)] = None
     return list(out)
@@ -131,7 +136,7 @@ def _schema():
 
     s, i, f, b = pa.string(), pa.int64(), pa.float64(), pa.bool_()
     return [("key", s), ("spec", s), ("rotor", s), ("rotor_level", i), ("stator", s), ("stator_level", i),
-            ("cap_deg", f), ("sphere_diameter_mm", f), ("core", s), ("stage", s), ("status", s), ("reason", s),
+            ("cap_deg", f), ("sphere_diameter_mm", f), ("core", s), ("gap_scale", f), ("stage", s), ("status", s), ("reason", s),
             ("motor", s), ("coils", i), ("rotor_poles", i), ("magnet_diameter_mm", f), ("coil_diameter_mm", f),
             ("air_gap_mm", f), ("magnet_mass_kg", f), ("power_W", f), ("iron_stored", b), ("states", i),
             ("resolution_median_deg", f), ("resolution_p95_deg", f), ("range_fraction", f), ("reaches_all", b),
@@ -172,11 +177,13 @@ class Ladder:
     rows (:func:`~spherestep.synthesis.ladder.evaluate`, then :func:`relay_rung` for relay specs): what each Dask
     task runs."""
 
-    def __init__(self, spec, allow_costly: bool, baseline: dict | None):
+    def __init__(self, spec, allow_costly: bool, baseline: dict | None, costly_neighbourhood: bool = False):
         self.spec, self.allow_costly, self.baseline = spec, allow_costly, baseline
+        self.neighbourhood = costly_neighbourhood
 
     def __call__(self, candidate: Candidate) -> list[dict]:
-        rows = evaluate(candidate, self.spec, self.allow_costly, self.baseline)
+        costly = self.allow_costly or (self.neighbourhood and candidate.gap_scale != 1.0)
+        rows = evaluate(candidate, self.spec, costly, self.baseline)
         if self.spec.relays:
             for row in rows:
                 if row.get("status") == "ok":
@@ -298,8 +305,10 @@ def _json(v):
 
 
 def _layout(row) -> str:
+    gap = row.get("gap_scale") or 1.0
     return (f"{row['rotor']}/L{row['rotor_level']} × {row['stator']}/L{row['stator_level']}, cap "
-            f"{row['cap_deg']:g}°, ball {row['sphere_diameter_mm']:.4g} mm, {row['core']}")
+            f"{row['cap_deg']:g}°, ball {row['sphere_diameter_mm']:.4g} mm, {row['core']}"
+            + (f", air gap ×{gap:g}" if gap != 1.0 else ""))
 
 
 @dataclass(frozen=True)
@@ -372,7 +381,7 @@ def _search(spec, plan: Budget, out: Path, store, client, todo, base, seed, star
     done = set(stored["key"]) if len(stored) else set()
     fresh = [c for c in todo if any(c.key(spec.digest, core) not in done for core in spec.cores)]
     if fresh:
-        runner = Ladder(spec, plan.allow_costly, base)
+        runner = Ladder(spec, plan.allow_costly, base, plan.costly_neighbourhood)
         batch: list = []
         from distributed import as_completed
 
@@ -435,7 +444,7 @@ def _search(spec, plan: Budget, out: Path, store, client, todo, base, seed, star
     winner, statement = _answer(spec, finalists, counts, len(table))
     say("writing the answer and the report")
     result = SynthesisResult(spec, plan.name, table, front, finalists, winner, statement, (), 0.0, counts)
-    written = write_outputs(result, out)
+    written = write_outputs(result, out, samples=plan.samples)
     return SynthesisResult(spec, plan.name, table, front, finalists, winner, statement,
                            tuple(paths) + tuple(written), time.perf_counter() - started, counts)
 
@@ -471,6 +480,8 @@ def describe_change(row: dict, base: dict) -> str:
         parts.append(f"stator cap {base['cap_deg']:g}° → {row['cap_deg']:g}°")
     if not math.isclose(row["sphere_diameter_mm"], 1e3 * base["sphere_diameter"], rel_tol=1e-9):
         parts.append(f"ball {1e3 * base['sphere_diameter']:.4g} → {row['sphere_diameter_mm']:.4g} mm")
+    if (row.get("gap_scale") or 1.0) != 1.0:
+        parts.append(f"air gap ×{row['gap_scale']:g} ({row['air_gap_mm']:.3g} mm)")
     return ", ".join(parts) or "none (the baseline itself)"
 
 
@@ -482,10 +493,11 @@ def _answer(spec, finalists, counts, total) -> tuple[Finalist | None, str]:
         if not finalists:
             return None, (f"Not found in the budget: none of the {total} candidates passed the cheap rungs "
                           f"({', '.join(f'{k} {v}' for k, v in sorted(counts.items()))}).")
-        best = max(finalists, key=lambda f: (sum(c.met for c in f.verification.checks),
-                                             min((c.margin or 0.0) for c in f.verification.checks
-                                                 if c.margin is not None) if any(
-                                                 c.margin is not None for c in f.verification.checks) else 0.0))
+        def closeness(f):
+            margins = [c.margin for c in f.verification.checks if c.margin is not None]
+            return sum(c.met for c in f.verification.checks), min(margins, default=0.0)
+
+        best = max(finalists, key=closeness)
         missed = [c for c in best.verification.checks if not c.met]
         return None, (f"Not found in the budget: {len(finalists)} finalists passed the cheap rungs but none met every "
                       f"requirement under full simulation; the closest ({_layout(best.row)}) misses "

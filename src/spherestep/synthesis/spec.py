@@ -162,7 +162,7 @@ class Spec(_Model):
     drive: Literal["servo", "relays", "both"] = "servo"
     single_coil_failure: bool = False
     sensing: Sensing | None = None
-    baseline: str | None = None
+    baseline: str | None = Field(None, min_length=1)
     prefer: Literal["mass", "power", "time", "precision", "torque", "coils", "change"] = "mass"
 
     def inconsistency(self) -> tuple[str, str] | None:
@@ -299,4 +299,7 @@ def load_spec(path) -> Spec:
     except InputError as exc:
         raise SpecError(str(path), None, str(exc).split(": ", 1)[-1].replace(
             "create it with `spherestep design new " + str(path) + "`", "start from examples/specs/")) from None
-    return parse_spec(text, "toml" if path.suffix.lower() == ".toml" else "yaml", str(path))
+    spec = parse_spec(text, "toml" if path.suffix.lower() == ".toml" else "yaml", str(path))
+    if spec.baseline not in (None, "prototype") and not Path(spec.baseline).is_absolute():
+        spec = spec.model_copy(update={"baseline": str(path.parent / spec.baseline)})  # beside the spec file
+    return spec

@@ -21,12 +21,12 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from ..units import result_dict
-from .ladder import in_range, magnet_mass, range_orientations, step_torque
+from .ladder import magnet_mass, range_orientations, step_torque
 
 HOLD_SECONDS = 0.5
 
@@ -178,7 +178,6 @@ def verify(design_text: str, spec, *, seed: int = 1, capability_samples: int = 2
     numbers["model"] = own.label
     if spec.servo:
         R = range_orientations(spec, capability_samples, seed)
-        assert in_range(spec, R).all()
         K = np.asarray(own.model.torque_matrix(R), dtype=float)
         bias = np.asarray(own.model.torque(R, np.zeros((len(R), own.model.coil_count))), dtype=float)
         r, _ = available_torque(K, own.limits, bias=bias, failed=own.model.failed)
@@ -209,8 +208,9 @@ def verify(design_text: str, spec, *, seed: int = 1, capability_samples: int = 2
             numbers["hold_error_max_deg"] = math.degrees(float(errors.max()))
             sensor = (f"Hall array of {spec.sensing.hall_parts}" if spec.sensing is not None
                       else "sensor noise 0.02°")
-            checks.append(_at_most(f"servo hold error ({holds} holds, {sensor})", numbers["hold_error_max_deg"],
-                                   math.degrees(spec.precision.servo_hold), ".3g", "°"))
+            hold = _at_most("servo hold error", numbers["hold_error_max_deg"], math.degrees(spec.precision.servo_hold),
+                            ".3g", "°")
+            checks.append(replace(hold, achieved=f"{hold.achieved} (worst of {holds} holds, {sensor})"))
         if spec.sensing is not None:
             from ..sensing import accuracy, default_array
 
