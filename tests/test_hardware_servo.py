@@ -60,36 +60,38 @@ def test_holds_a_pose_within_a_tenth_of_a_degree(rig, tmp_path):
 
 
 def other_cpu(run):
-    """``(result, s)``: ``run()``'s result and the CPU seconds that processes other than this one and its children
-    (the emulator) used meanwhile, from ``/proc/stat`` (None where there is none): what starved the machine."""
+    """``(result, share)``: ``run()``'s result and the share of the machine's cores (0 to 1) that processes other
+    than this one and its children (the emulator) used meanwhile, from ``/proc/stat`` (None where there is none):
+    what starved the machine."""
     def busy():
         with open("/proc/stat") as f:
-            fields = [float(x) for x in f.readline().split()[1:]]
-        return (sum(fields) - fields[3] - fields[4]) / os.sysconf("SC_CLK_TCK")  # all but idle and iowait
+            user, nice, system, idle, iowait, irq, softirq, steal = (float(x) for x in f.readline().split()[1:9])
+        return (user + nice + system + irq + softirq + steal) / os.sysconf("SC_CLK_TCK")  # guest is within user
 
     try:
-        before, mine = busy(), sum(os.times()[:4])
+        before, mine, wall = busy(), sum(os.times()[:4]), time.monotonic()
     except (OSError, ValueError):
         return run(), None
     result = run()
-    return result, busy() - before - (sum(os.times()[:4]) - mine)
+    others = busy() - before - (sum(os.times()[:4]) - mine)
+    return result, others / ((time.monotonic() - wall) * os.cpu_count())
 
 
 @pytest.mark.realtime
 def test_turns_360_degrees_about_the_demo_axis_at_500_hz(rig):
     """Over the pseudo-terminal on the wall clock: 500 Hz, no deadline missed, back within 0.05°. Skipped, saying
-    why, only when it fails while other processes took more than half a core of this machine meanwhile (the loop
+    why, only when it fails while other processes kept more than half a core of this machine busy (the loop
     runs with SCHED_FIFO where permitted, which holds it on a busy machine, but not on one whose two cores other
     processes fill: measured 4–5 deadlines missed of 1,500 at a load of 15)."""
     s, others = other_cpu(lambda: run(rig, turn_reference(np.eye(3), DEMO_AXIS, 2 * math.pi, 2.4, delay=0.2), 3.0,
                                       rate=500.0))
     r = s.report
-    starved = others is not None and others > 0.5 * 3.0
+    starved = others is not None and others > 0.25
     if (r.missed or r.outcome != "done") and starved:
-        pytest.skip(f"other processes used {others:.1f} CPU s of the machine during the 3 s run (load "
-                    f"{os.getloadavg()[0]:.1f} on {os.cpu_count()} cores; real-time scheduling "
-                    f"{'on' if r.realtime else 'refused'}): {r.missed} deadlines missed at {r.rate:.0f} Hz, "
-                    f"outcome {r.outcome}, are theirs to explain")
+        pytest.skip(f"other processes kept {100 * others:.0f} % of the machine's {os.cpu_count()} cores busy during "
+                    f"the session (load {os.getloadavg()[0]:.1f}; real-time scheduling "
+                    f"{'on' if r.realtime else 'refused'}): {r.missed} deadlines missed, {r.rate:.0f} Hz, outcome "
+                    f"{r.outcome} are theirs to explain")
     assert r.outcome == "done", r.to_dict()
     assert r.missed == 0 and r.rate == pytest.approx(500.0, rel=0.01), (r.to_dict(), others)
     assert r.cpu_mean < 0.5 / 500.0, r.to_dict()  # the host's CPU: under half the period
@@ -257,6 +259,7 @@ def test_every_fault_ends_with_all_coils_off_within_the_watchdog(rig, biased, fa
     assert np.abs(s.final.i).max() < 1e-3  # the coils' current has decayed
 
 
+@pytest.mark.realtime  # the device's watchdog measured against the host's stall on the wall clock (20 ms margin)
 def test_a_slow_host_is_stopped_by_the_device_watchdog(rig, monkeypatch):
     from spherestep.drive import session
 
