@@ -549,7 +549,9 @@ def calibrate(design, model, holds: Holds, *, prior: dict | None = None, scales:
     offset = np.zeros((E, 3))
     if model.coupling is not None:  # the cores' coupling is kept as it is: its torque moves to the right side
         pair = IronTorqueMap(model.detent, model.linear, model.coil)
-        tot = model.torque(holds.sample_R, holds.sample_c) - pair.torque(holds.sample_R, holds.sample_c)
+        tot = np.concatenate([model.torque(holds.sample_R[i:i + 64], holds.sample_c[i:i + 64])
+                              - pair.torque(holds.sample_R[i:i + 64], holds.sample_c[i:i + 64])
+                              for i in range(0, len(holds.sample_R), 64)])  # in blocks: the coupling's memory
         offset = np.stack([np.bincount(holds.sample_eq, holds.sample_w * tot[:, a], minlength=E) for a in range(3)], 1)
     free = np.ones(n, dtype=bool)
     free[[0, n - 1]] = False  # τ(0) = τ(π) = 0 by symmetry
