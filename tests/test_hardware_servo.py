@@ -42,10 +42,12 @@ def run(rig, reference, duration, **options):
     to 200 ms late, so that the load of a shared test machine does not end a run that is not under test."""
     options.setdefault("watchdog_ms", 250)
     options.setdefault("max_late", 0.2)
+    options.setdefault("rate", 200.0)  # the rate these numbers were measured at (the sessions' default is 500 Hz)
     return servo_session(rig["design"], reference, duration, emulate=True, sensors=rig["sensors"],
                          model=rig["model"], drive=rig["drive"], **options)
 
 
+@pytest.mark.realtime  # over the pseudo-terminal on the wall clock: a starved machine moves the rotor off
 def test_holds_a_pose_within_a_tenth_of_a_degree(rig, tmp_path):
     target = so3.exp([0.002, -0.001, 0.003])
     s = run(rig, hold(target), 2.0, R0=np.eye(3), log=tmp_path / "hold.csv")

@@ -5,7 +5,8 @@ The loop itself — estimator, control law, the link with protocol version 2, al
 :func:`~spherestep.drive.session.move_on_hardware` (the session assembled for the design, :mod:`.session`). The turn starts where the rotor is taken to be (the identity); its trajectory is the fastest
 turn, the given ``duration`` or the fixed time where the planner refuses the model, as in simulation
 (:meth:`~spherestep.drive.turn.Turn.servo_trajectory`). Errors are measured against the emulated rotor (its
-published truth, every 50 ms, and 0.15 s after the end) or, on a real port, against the loop's own estimate.
+published truth, every 50 ms, and at the loop's last cycle, with the servo holding; the drift in the 0.15 s after
+the coils go off is reported apart) or, on a real port, against the loop's own estimate.
 """
 
 from __future__ import annotations
@@ -71,7 +72,8 @@ def drive_on_hardware(design, axis, angle: float, chosen, *, duration: float | N
     details = HardwareDetails(report.outcome, report.message, report.cycles, report.rate, rate, report.missed,
                               report.off_acknowledged, kind, note, float(traj.duration),
                               "" if report.log is None else str(report.log), bool(emulate), report.cpu_mean,
-                              report.cpu_max, report.realtime, report.time_scale, report.slowed, report.end_error)
+                              report.cpu_max, report.realtime, report.time_scale, report.slowed, report.end_error,
+                              session.drift_after_off())
     power = np.einsum("tn,tn->t", currents, currents) * chosen.limits.resistance
     return job.result("servo", "emulated" if emulate else "port", times, estimates, targets, np.zeros(len(times)),
                       currents, power, time, arrival, final, max_tracking, details)

@@ -98,7 +98,10 @@ class HardwareDetails:
     is the copper power ``R Σ i²`` of the commanded currents (nothing measures the supply). The loop's health
     (:class:`~spherestep.hardware.ServoReport`): ``cpu_mean``/``cpu_max`` s of host CPU per cycle, ``realtime``
     (it ran with real-time scheduling), ``time_scale`` the pace it followed the trajectory at in the end and
-    ``slowed`` how often it halved rate and pace for missed deadlines, ``end_error`` rad of its last estimate."""
+    ``slowed`` how often it halved rate and pace for missed deadlines, ``end_error`` rad of its last estimate;
+    ``drift_after_off`` (emulated motor) how far the rotor moved in the 0.15 s after the coils went off — the final
+    error is judged at the loop's last cycle, with the servo holding; an iron motor's detent then pulls the unpowered
+    rotor into its nearest well."""
 
     outcome: str
     message: str
@@ -118,6 +121,7 @@ class HardwareDetails:
     time_scale: float = 1.0
     slowed: int = 0
     end_error: float | None = None
+    drift_after_off: float | None = None
 
     def to_dict(self, degrees: bool = True) -> dict:
         unit, f = ("deg", math.degrees) if degrees else ("rad", float)
@@ -126,6 +130,7 @@ class HardwareDetails:
                 "cpu_max_ms": 1e3 * self.cpu_max, "realtime": self.realtime, "time_scale": self.time_scale,
                 "slowed": self.slowed,
                 f"loop_end_error_{unit}": None if self.end_error is None else f(self.end_error),
+                f"drift_after_off_{unit}": None if self.drift_after_off is None else f(self.drift_after_off),
                 "off_acknowledged": self.off_acknowledged,
                 "trajectory": self.trajectory, "trajectory_note": self.note, "motion_time_s": self.motion_time,
                 "log": self.log, "errors_against": "emulated rotor" if self.truth else "the loop's estimate"}

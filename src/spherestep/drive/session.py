@@ -23,7 +23,7 @@ import numpy as np
 from .. import checks, so3
 from ..control import GeometricPD, ServoLaw, Trajectory
 from ..errors import bad_value
-from ..hardware import DriveLink, FieldTracker, ServoReport, run_servo, wire_limits
+from ..hardware import LOOP_RATE, DriveLink, FieldTracker, ServoReport, run_servo, wire_limits
 
 DELAY = 1  # control periods: the currents computed in a cycle are driven at the next cycle's start
 # The observer's bandwidth on hardware is the loop's rate in rad/s, ω_o = 1/h: its gains are then l₁ = 1, l₂ h = 1
@@ -38,9 +38,10 @@ BANDWIDTH = 2 * math.pi * 3  # rad/s: the servo's closed-loop natural frequency 
 class Session:
     """A finished session: the loop's :class:`~spherestep.hardware.servo.ServoReport`, the
     :class:`~spherestep.control.Trajectory` it followed, and for an emulated motor the ``truth`` samples
-    ``[(loop time, Truth)]`` taken every ``truth_every`` s, the ``final``
-    :class:`~spherestep.hardware.motor_emulator.Truth` (0.15 s after the end, the coils off), the device's
-    ``watchdog`` (s) and when it ``started`` (``time.monotonic()``)."""
+    ``[(loop time, Truth)]`` taken every ``truth_every`` s, ``held`` the
+    :class:`~spherestep.hardware.motor_emulator.Truth` at the loop's last cycle (the servo still holding) and
+    ``final`` 0.15 s after the end (the coils off: an iron motor's detent moves the rotor into its nearest well),
+    the device's ``watchdog`` (s) and when it ``started`` (``time.monotonic()``)."""
 
     report: ServoReport
     trajectory: Trajectory
@@ -48,6 +49,7 @@ class Session:
     final: object | None
     watchdog: float | None = None
     started: float | None = None
+    held: object | None = None
 
     @property
     def reference(self):
@@ -55,10 +57,18 @@ class Session:
         return self.trajectory.at
 
     def final_error(self) -> float | None:
-        """Park distance (rad) between the emulated rotor at the end and the trajectory's end (None on hardware)."""
-        if self.final is None:
+        """Park distance (rad) between the emulated rotor at the loop's last cycle, held by the servo, and the
+        trajectory's end (None on hardware)."""
+        end = self.held if self.held is not None else self.final
+        if end is None:
             return None
-        return float(so3.distance(self.final.R, self.trajectory.end))
+        return float(so3.distance(end.R, self.trajectory.end))
+
+    def drift_after_off(self) -> float | None:
+        """How far (rad) the emulated rotor moved in the 0.15 s after the coils went off (None on hardware)."""
+        if self.held is None or self.final is None:
+            return None
+        return float(so3.distance(self.final.R, self.held.R))
 
 
 def turn_reference(start, axis, angle: float, duration: float, delay: float = 0.0) -> Trajectory:
@@ -74,7 +84,7 @@ def turn_reference(start, axis, angle: float, duration: float, delay: float = 0.
 
 
 def servo_session(design, trajectory: Trajectory, duration: float, *, port: str | None = None, emulate: bool = False,
-                  lockstep: bool = False, rate: float = 200.0, log=None, status=None, faults=None, sensors=None, model=None, drive=None,
+                  lockstep: bool = False, rate: float = LOOP_RATE, log=None, status=None, faults=None, sensors=None, model=None, drive=None,
                   R0=None, watchdog_ms: int | None = None, max_late: float | None = None,
                   truth_every: float = 0.05, plant=None) -> Session:
     """Run the servo for ``duration`` s following ``trajectory`` (a :class:`~spherestep.control.Trajectory`;
@@ -125,24 +135,27 @@ def servo_session(design, trajectory: Trajectory, duration: float, *, port: str 
     motor = EmulatedMotor(design, model if plant is None else plant, sensors, rotor=rotor, drive=drive, R0=R0,
                           faults=faults)
     truth: list = []
+    held: list = [None]  # the truth at the latest cycle
     device = {} if watchdog_ms is None else {"watchdog_ms": watchdog_ms}
     if lockstep:
         link = LockstepLink(motor, **device)
 
         def observe_here(t, R, w, currents):
+            held[0] = link.truth()
             if len(truth) <= int(t / truth_every):
-                truth.append((t, link.truth()))
+                truth.append((t, held[0]))
             if status is not None:
                 status(t, R, w, currents)
 
         report = run_servo(link, estimate, law, duration=duration, rate=rate, log=log, status=observe_here,
                            clock=link.clock, sleep=link.sleep, **options)
         link.sleep(0.15)
-        return Session(report, trajectory, truth, link.truth(), link.device.watchdog_ms / 1000, 0.0)
+        return Session(report, trajectory, truth, link.truth(), link.device.watchdog_ms / 1000, 0.0, held[0])
     with MotorPty(motor, **device) as dev:
         def observe(t, R, w, currents):
+            held[0] = dev.truth()
             if len(truth) <= int(t / truth_every):
-                truth.append((t, dev.truth()))
+                truth.append((t, held[0]))
             if status is not None:
                 status(t, R, w, currents)
 
@@ -151,11 +164,11 @@ def servo_session(design, trajectory: Trajectory, duration: float, *, port: str 
                                **options)
         time.sleep(0.15)  # the device runs on: a watchdog trip after a lost link lands in the truth
         final = dev.truth()
-    return Session(report, trajectory, truth, final, dev.device.watchdog_ms / 1000, dev.started)
+    return Session(report, trajectory, truth, final, dev.device.watchdog_ms / 1000, dev.started, held[0])
 
 
 def move_on_hardware(design, axis, angle: float, *, duration: float | None = None, port: str | None = None,
-                     emulate: bool = False, rate: float = 200.0, log=None, status=None, settle: float = 0.5,
+                     emulate: bool = False, rate: float = LOOP_RATE, log=None, status=None, settle: float = 0.5,
                      **options) -> Session:
     """Turn the rotor by ``angle`` rad about ``axis`` from where it is taken to be (the identity) on a controller
     (``port``) or the emulated motor (``emulate``): in ``duration`` s (:func:`turn_reference`), or by default
