@@ -54,7 +54,7 @@ REACH_DEG = 25.0  # magnets within this of a patch coil's axis are meshed
 STATES = 4  # stepper states in the patch; as many intermediate orientations
 TILT_DEG = 8.0  # an intermediate orientation: a state turned by this about a random axis
 MAXH = 2.5e-3  # m: the face mesh of every case
-MAXH_FINE = 1.8e-3  # m: the convergence check's face mesh
+MAXH_FINE = 2.0e-3  # m: the convergence check's face mesh (1.8 mm would need ~18 GB)
 OUTER = 0.3  # m: radius of the ψ = 0 sphere about the patch's centre
 COLUMNS = ("case", "orientation", "kind", "qx", "qy", "qz", "qw", "coils", "currents", "magnets", "material",
            "maxh_face_m", "elements", "torque_x_Nm", "torque_y_Nm", "torque_z_Nm", "newton_steps", "mesh_s",

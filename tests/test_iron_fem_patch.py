@@ -1,0 +1,111 @@
+"""The iron model against the whole-motor patch FEM (issue 28 §1, §2's measurement): four neighbouring iron cores
+of the prototype under the rotor magnets within reach, NGSolve 3-D (``scripts/fem_patch.py``, stored rows in
+``data/iron_fem_patch.csv``; docs/magnetics.md, "Whole-motor patch FEM").
+
+The model is evaluated live on the stored cases (the same magnets, cores, polarities and currents) and held at
+the error measured today, as a regression bound; the issue's target, 5 % of the FEM's largest torque in every
+case, is not met yet and is stated as an expected failure."""
+
+from __future__ import annotations
+
+import importlib.util
+import math
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from spherestep.magnetics import iron_model
+from spherestep.motor import prototype
+
+ROOT = Path(__file__).resolve().parents[1]
+_spec = importlib.util.spec_from_file_location("fem_patch", ROOT / "scripts" / "fem_patch.py")
+fem_patch = importlib.util.module_from_spec(_spec)
+sys.modules.setdefault("fem_patch", fem_patch)  # its dataclasses look their module up
+_spec.loader.exec_module(fem_patch)  # the script imports NGSolve only inside its solver
+
+# Measured 2026-11-25 on the 24 linear rows at 2.5 mm (error = |T_model − T_FEM| / the FEM's largest |T| over the
+# rows, 7.86 N m; vector norms): pairwise max 6.4 % (median 2.5 %), coupled max 3.2 % (median 1.5 %); the bounds
+# are those rounded up. The B–H rows were not solved yet when this was written: they are held to the same bounds
+# (the model is linear), provisionally — a failure there says saturation matters (docs/magnetics.md).
+BOUND = {("linear", "pairwise"): 0.07, ("linear", "coupled"): 0.035, ("bh", "pairwise"): 0.07,
+         ("bh", "coupled"): 0.035}
+TARGET = 0.05  # issue 28 §2: every case within 5 % of the FEM's largest torque
+CONVERGENCE = 0.02  # |T(2.5 mm) − T(2.0 mm)| / peak: a priori (the pair FEM moved ≤ 0.9 % from 2 to 1.4 mm)
+
+
+@pytest.fixture(scope="module")
+def rows():
+    out = fem_patch.read_rows()
+    if not out:
+        pytest.skip("data/iron_fem_patch.csv has no rows yet: python scripts/fem_patch.py (docs/magnetics.md)")
+    return out
+
+
+@pytest.fixture(scope="module")
+def design():
+    return prototype()
+
+
+def test_cases_are_the_scripts(rows, design):
+    """Every stored row is the script's case of its index: orientation, coils, currents, material, mesh; and the
+    magnets meshed are those within reach of the patch at that orientation."""
+    cases = fem_patch.all_cases(design)
+    for r in rows:
+        c = cases[int(r["case"])]
+        assert np.allclose(r["R"], c.R, atol=1e-9)
+        assert tuple(r["coils"]) == c.coils
+        assert np.array_equal(r["currents"], c.currents)
+        assert (r["material"], r["maxh"]) == (c.material, c.maxh)
+        assert np.array_equal(r["magnets"], fem_patch.included_magnets(design, c.R, c.coils))
+
+
+def test_restriction_is_the_models(design):
+    """The model restricted to every pole and the patch's cores is ``torque_on`` of the full model (pairwise and
+    coupled), so the comparison uses the model's own pairs and polarities."""
+    c = fem_patch.all_cases(design)[1]
+    full = np.zeros(design.stator.centers.shape[0])
+    full[list(c.coils)] = c.currents
+    for coupling in (False, True):
+        m = iron_model(design, coupling=coupling)
+        got = fem_patch.model_torque(m, c.R, c.coils, c.currents, np.arange(len(design.rotor.centers)))
+        assert np.allclose(got, m.torque_on(c.R, full, c.coils), rtol=0, atol=1e-12)
+
+
+@pytest.mark.parametrize("material", ["linear", "bh"])
+def test_model_against_patch_fem(rows, design, material):
+    """Pairwise and coupled model within today's measured error of the FEM (regression bound, not the target)."""
+    cmp_ = fem_patch.compare(rows, material, design=design)
+    if cmp_ is None:
+        pytest.skip(f"no {material} rows stored yet")
+    assert cmp_.pairwise.max() <= BOUND[material, "pairwise"]
+    assert cmp_.coupled.max() <= BOUND[material, "coupled"]
+
+
+@pytest.mark.xfail(strict=True, reason="issue 28 §2: the pairwise model (the default) misses the patch FEM by up to "
+                   "6.4 % of its largest torque (the coupling through the cores)")
+def test_pairwise_model_within_target(rows, design):
+    cmp_ = fem_patch.compare(rows, "linear", design=design)
+    assert cmp_ is not None and cmp_.pairwise.max() <= TARGET
+
+
+def test_coupled_model_within_target_linear(rows, design):
+    """With the coupling the model meets 5 % on the linear cases (not yet shown for the B–H cases, nor fast)."""
+    cmp_ = fem_patch.compare(rows, "linear", design=design)
+    if cmp_ is None:
+        pytest.skip("no linear rows stored yet")
+    assert cmp_.coupled.max() <= TARGET
+
+
+def test_mesh_convergence(rows):
+    """The FEM at the face mesh of the cases against the finer mesh, at the same orientations and currents."""
+    fine = {(r["orientation"], tuple(r["currents"])): r["torque"] for r in rows
+            if r["material"] == "linear" and math.isclose(r["maxh"], fem_patch.MAXH_FINE)}
+    coarse = {(r["orientation"], tuple(r["currents"])): r["torque"] for r in rows
+              if r["material"] == "linear" and math.isclose(r["maxh"], fem_patch.MAXH)}
+    both = set(fine) & set(coarse)
+    if not both:
+        pytest.skip("no convergence rows stored yet")
+    peak = max(np.linalg.norm(t) for t in coarse.values())
+    assert max(np.linalg.norm(fine[k] - coarse[k]) for k in both) <= CONVERGENCE * peak
