@@ -104,13 +104,25 @@ def test_range_orientations_stay_in_the_cone():
 
 
 def test_candidates_cover_the_baseline_neighbourhood():
+    from spherestep.synthesis.run import GAP_SCALES, neighbours
+
     spec = load_spec(EXAMPLES / "prototype-relays-iron.yaml")
-    found = candidates(spec, BUDGETS["quick"])
+    quick, normal = BUDGETS["quick"], BUDGETS["normal"]
     proto = Candidate("truncated-icosahedron", 1, "truncated-cuboctahedron", 1, 80.0, 12 * 0.0254,
-                      samples=BUDGETS["quick"].samples, capability_samples=BUDGETS["quick"].capability_samples)
-    assert proto in found
-    assert any(c.cap_deg == 60.0 and c.stator_level == 1 for c in found)
+                      samples=quick.samples, capability_samples=quick.capability_samples)
+    found = candidates(spec, quick)
+    assert proto in found and len(found) == 5  # the quick grid's four layouts and the baseline alone
+    found = candidates(spec, normal)
     assert len(set(found)) == len(found)
+    near = neighbours(proto)
+    assert proto not in near and len(near) == 8 - 1 + 3 - 1 + 3 - 1 + 16 - 1 + 16 - 1 + len(GAP_SCALES)
+    for c in near:  # exactly one choice differs
+        diff = [k for k in ("rotor", "rotor_level", "stator", "stator_level", "cap_deg", "gap_scale")
+                if getattr(c, k) != getattr(proto, k)]
+        assert len(diff) == 1, diff
+    scaled = {(c.rotor, c.rotor_level, c.stator, c.stator_level, c.cap_deg, c.gap_scale) for c in found}
+    assert ("truncated-icosahedron", 1, "truncated-cuboctahedron", 0, 80.0, 1.0) in scaled
+    assert ("truncated-icosahedron", 1, "truncated-cuboctahedron", 1, 80.0, 4.0) in scaled
 
 
 def test_iron_affordability_is_the_prototype_parts(proto):

@@ -103,9 +103,10 @@ def gallery_rows() -> list:
     return rows
 
 
-def write_outputs(result, out, samples: int = 2000) -> list[Path]:
+def write_outputs(result, out, samples: int = 2000, closest=None) -> list[Path]:
     """Write the files of the module docstring into ``out`` (the report's resolution from ``samples``
-    orientations); returns their paths."""
+    orientations; ``closest`` the design file of the closest candidate, reported when there is no finalist);
+    returns their paths."""
     from ..motor import MotorDesign
     from ..report import Section, write_report
 
@@ -126,9 +127,9 @@ def write_outputs(result, out, samples: int = 2000) -> list[Path]:
     written.append(path)
     written.append(write_text(out / "synthesis.json", json.dumps(result.to_dict(), indent=1)))
     shown = result.winner or (result.finalists[0] if result.finalists else None)
-    if shown is None:
+    if shown is None and closest is None:
         return written
-    design = MotorDesign.load(shown.path)
+    design = MotorDesign.load(shown.path if shown is not None else closest)
     sections = [Section("answer", "The answer", html=f"<p><b>{html.escape(result.statement)}</b></p>"),
                 Section("spec", "Specification", html=_table(_spec_rows(spec), ("field", "value")))]
     for n, f in enumerate(result.finalists, start=1):

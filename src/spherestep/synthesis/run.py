@@ -49,15 +49,18 @@ class Budget:
     verify_capability: int
     allow_costly: bool = False
     costly_neighbourhood: bool = False  # the baseline's wider gaps with iron solved even so (a few table solves)
+    neighbourhood: bool = True  # with a baseline, every layout one choice away from it (else the baseline alone)
+    rounds: int = 1  # when no candidate passes: local rounds around the closest ones (their one-change neighbours)
+    round_seeds: int = 3
 
 
 BUDGETS = {
     "quick": Budget("quick", ("truncated-icosahedron",), ("truncated-cuboctahedron",), 9.0, (0, 1), (0,),
-                    (60.0, 80.0), 1, 400, 32, 2, 1, 1000, 64),
+                    (60.0, 80.0), 1, 400, 32, 2, 1, 1000, 64, neighbourhood=False, rounds=0),
     "normal": Budget("normal", None, None, 1.25, (0, 1), (0, 1), (60.0, 70.0, 80.0), 2, 1000, 64, 4, 3, 4000, 200,
                      costly_neighbourhood=True),
     "thorough": Budget("thorough", None, None, 1.6, (0, 1, 2), (0, 1, 2), (50.0, 60.0, 70.0, 80.0, 85.0), 3, 2000,
-                       128, 8, 5, 8000, 400, True, True),
+                       128, 8, 5, 8000, 400, True, True, rounds=2, round_seeds=5),
 }
 
 
@@ -96,17 +99,27 @@ def candidates(spec, budget: Budget, seed: int = 0) -> list[Candidate]:
                             out[c] = None
     base = baseline_layout(spec)
     if base is not None:
-        D = base["sphere_diameter"]
         one = dict(rotor=base["rotor"], rotor_level=base["rotor_level"], stator=base["stator"],
-                   stator_level=base["stator_level"], cap_deg=base["cap_deg"])
-        variants = [one]
-        variants += [one | {"cap_deg": float(c)} for c in range(50, 90, 5)]
-        variants += [one | {"rotor_level": lv} for lv in range(3)] + [one | {"stator_level": lv} for lv in range(3)]
-        variants += [one | {"rotor": n} for n in names] + [one | {"stator": n} for n in names]
-        variants += [one | {"gap_scale": k} for k in GAP_SCALES]
-        for v in variants:
-            out[Candidate(sphere_diameter=D, **v, **common)] = None
+                   stator_level=base["stator_level"], cap_deg=base["cap_deg"], sphere_diameter=base["sphere_diameter"])
+        out[Candidate(**one, **common)] = None
+        if budget.neighbourhood:  # (the quick budget: the baseline itself)
+            for c in neighbours(Candidate(**one, **common)):
+                out[c] = None
     return list(out)
+
+
+def neighbours(c: Candidate, gaps: tuple[float, ...] = GAP_SCALES) -> list[Candidate]:
+    """Every layout one choice away from ``c``: the cap 50°–85° in 5° steps, either refinement 0–2, either packing
+    among the distinct ones, the air gap widened by ``gaps``."""
+    from dataclasses import replace
+
+    from ..explore import distinct_names
+
+    out = [replace(c, cap_deg=float(cap)) for cap in range(50, 90, 5)]
+    out += [replace(c, rotor_level=lv) for lv in range(3)] + [replace(c, stator_level=lv) for lv in range(3)]
+    out += [replace(c, rotor=n) for n in distinct_names()] + [replace(c, stator=n) for n in distinct_names()]
+    out += [replace(c, gap_scale=k) for k in gaps]
+    return [x for x in dict.fromkeys(out) if x != c]
 
 
 @dataclass
@@ -373,38 +386,60 @@ def synthesize(spec, out, *, budget: str = "quick", scheduler: str | None = None
     return _search(spec, plan, out, store, client, todo, base, seed, started, say)
 
 
-def _search(spec, plan: Budget, out: Path, store, client, todo, base, seed, started, say) -> SynthesisResult:
-
-    from .outputs import write_outputs
+def _climb(client, runner, spec, store, todo, say, label: str) -> None:
+    """Evaluate the candidates of ``todo`` that ``store`` lacks on ``client``; rows stream into ``store``."""
+    from distributed import as_completed
 
     stored = store.read()
     done = set(stored["key"]) if len(stored) else set()
     fresh = [c for c in todo if any(c.key(spec.digest, core) not in done for core in spec.cores)]
-    if fresh:
-        runner = Ladder(spec, plan.allow_costly, base, plan.costly_neighbourhood)
-        batch: list = []
-        from distributed import as_completed
+    if not fresh:
+        return
+    futures = {client.submit(runner, c, pure=False, retries=2, priority=c.rotor_level + c.stator_level): c
+               for c in fresh}
+    bar = Progress(len(fresh))
+    batch: list = []
+    last = time.perf_counter()
+    try:
+        for future in as_completed(list(futures)):
+            if future.status == "finished":
+                batch.extend(future.result())
+            future.release()
+            bar.done += 1
+            say(f"{label}ladder: geometry → states → capability{' → relays' if spec.relays else ''} ({bar.eta()})",
+                done=bar.done, total=bar.total)
+            if len(batch) >= 32 or time.perf_counter() - last > 15:
+                store.append(batch)
+                batch, last = [], time.perf_counter()
+    finally:
+        store.append(batch)
 
-        futures = {client.submit(runner, c, pure=False, retries=2,
-                                 priority=c.rotor_level + c.stator_level): c for c in fresh}
-        bar = Progress(len(fresh))
-        last = time.perf_counter()
-        try:
-            for future in as_completed(list(futures)):
-                if future.status == "finished":
-                    batch.extend(future.result())
-                future.release()
-                bar.done += 1
-                say(f"ladder: geometry → states → capability{' → relays' if spec.relays else ''} ({bar.eta()})",
-                    done=bar.done, total=bar.total)
-                if len(batch) >= 32 or time.perf_counter() - last > 15:
-                    store.append(batch)
-                    batch, last = [], time.perf_counter()
-        finally:
-            store.append(batch)
-    table = store.read()
+
+def _search(spec, plan: Budget, out: Path, store, client, todo, base, seed, started, say) -> SynthesisResult:
+
+    from .outputs import write_outputs
+
+    runner = Ladder(spec, plan.allow_costly, base, plan.costly_neighbourhood)
+    _climb(client, runner, spec, store, todo, say, "")
+    todo = list(todo)
     keys = {c.key(spec.digest, core) for c in todo for core in spec.cores}
+    table = store.read()
     table = table[table["key"].isin(keys)].reset_index(drop=True)
+    for n in range(plan.rounds):  # local search around the closest candidates, while none passes
+        if (table["status"] == "ok").any():
+            break
+        seeds = nearest_rows(table, plan.round_seeds)
+        gaps = GAP_SCALES if plan.allow_costly else ()  # a wider gap with iron is a table solve each
+        more = [c for row in seeds for c in neighbours(Candidate(**json.loads(row["params"])), gaps)]
+        more = [c for c in dict.fromkeys(more) if c not in set(todo)]
+        if not more:
+            break
+        say(f"round {n + 1}: none passed; {len(more)} layouts one change from the {len(seeds)} closest")
+        _climb(client, runner, spec, store, more, say, f"round {n + 1}: ")
+        todo += more
+        keys |= {c.key(spec.digest, core) for c in more for core in spec.cores}
+        table = store.read()
+        table = table[table["key"].isin(keys)].reset_index(drop=True)
     counts = {f"{stage}:{status}": int(n) for (stage, status), n in
               table.groupby(["stage", "status"]).size().items()}
     front = pareto(table, spec) if len(table) else table
@@ -441,10 +476,17 @@ def _search(spec, plan: Budget, out: Path, store, client, todo, base, seed, star
             write_text(cache / f"{chosen.iloc[n]['key']}-{seed + 1}.json", json.dumps(v.to_dict(), indent=1))
     finalists = tuple(Finalist({k: _json(v) for k, v in row.items()}, str(p), v)
                       for row, p, v in zip(chosen.to_dict("records"), paths, results))
-    winner, statement = _answer(spec, finalists, counts, len(table))
+    closest = closest_row(table, spec) if not finalists else None
+    winner, statement = _answer(spec, finalists, counts, len(table), closest)
+    if closest is not None:  # nothing to verify: the report shows the closest candidate
+        design = build(Candidate(**json.loads(closest["params"])), closest["core"], spec,
+                       name=f"{spec.name} closest candidate")
+        path = finalist_dir / f"closest-{closest['key']}.yaml"
+        design.save(path)
+        paths.append(path)
     say("writing the answer and the report")
     result = SynthesisResult(spec, plan.name, table, front, finalists, winner, statement, (), 0.0, counts)
-    written = write_outputs(result, out, samples=plan.samples)
+    written = write_outputs(result, out, samples=plan.samples, closest=paths[-1] if closest is not None else None)
     return SynthesisResult(spec, plan.name, table, front, finalists, winner, statement,
                            tuple(paths) + tuple(written), time.perf_counter() - started, counts)
 
@@ -485,14 +527,40 @@ def describe_change(row: dict, base: dict) -> str:
     return ", ".join(parts) or "none (the baseline itself)"
 
 
-def _answer(spec, finalists, counts, total) -> tuple[Finalist | None, str]:
+RUNGS = ("geometry", "states", "capability", "relays")
+
+
+def nearest_rows(table, count: int) -> list[dict]:
+    """The ``count`` candidates that came nearest when none passed: the furthest rung reached, then (relays) the
+    most steps on the plan, then the smallest change from the baseline, then the key."""
+    if not len(table):
+        return []
+    frame = table.assign(_rung=table["stage"].map({r: n for n, r in enumerate(RUNGS)}).fillna(-1),
+                         _steps=table["relay_steps_on_plan"].astype("Float64").fillna(-1),
+                         _change=table["change"].astype("Float64").fillna(math.inf))
+    frame = frame[frame["status"].isin(["ok", "pruned"])]
+    order = frame.sort_values(["_rung", "_steps", "_change", "key"], ascending=[False, False, True, True])
+    return [{k: _json(v) for k, v in row.drop(["_rung", "_steps", "_change"]).items()}
+            for _, row in order.head(count).iterrows()]
+
+
+def closest_row(table, spec) -> dict | None:
+    """The nearest candidate (:func:`nearest_rows`), or None."""
+    rows = nearest_rows(table, 1)
+    return rows[0] if rows else None
+
+
+def _answer(spec, finalists, counts, total, closest=None) -> tuple[Finalist | None, str]:
     """The winner (the preferred finalist meeting every requirement) and the sentence that says why."""
     passing = [f for f in finalists if f.verification.met]
     column, maximise = PREFER[spec.prefer]
     if not passing:
         if not finalists:
+            near = ""
+            if closest is not None:
+                near = f" The closest: {_layout(closest)}, stopped at {closest['stage']}: {closest['reason']}."
             return None, (f"Not found in the budget: none of the {total} candidates passed the cheap rungs "
-                          f"({', '.join(f'{k} {v}' for k, v in sorted(counts.items()))}).")
+                          f"({', '.join(f'{k} {v}' for k, v in sorted(counts.items()))}).{near}")
         def closeness(f):
             margins = [c.margin for c in f.verification.checks if c.margin is not None]
             return sum(c.met for c in f.verification.checks), min(margins, default=0.0)
