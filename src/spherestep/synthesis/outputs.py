@@ -60,7 +60,8 @@ def figure_front(table, front, spec, winner_key: str | None = None):
         ax.set_xlabel(xl)
         ax.set_ylabel(yl)
         ax.grid(alpha=0.3)
-        ax.legend(fontsize=8)
+        if ax.get_legend_handles_labels()[0]:
+            ax.legend(fontsize=8)
     fig.suptitle(f"synthesis for {spec.name}: {len(table)} candidates")
     return fig
 

@@ -487,8 +487,12 @@ def _search(spec, plan: Budget, out: Path, store, client, todo, base, seed, star
     say("writing the answer and the report")
     result = SynthesisResult(spec, plan.name, table, front, finalists, winner, statement, (), 0.0, counts)
     written = write_outputs(result, out, samples=plan.samples, closest=paths[-1] if closest is not None else None)
-    return SynthesisResult(spec, plan.name, table, front, finalists, winner, statement,
-                           tuple(paths) + tuple(written), time.perf_counter() - started, counts)
+    final = SynthesisResult(spec, plan.name, table, front, finalists, winner, statement,
+                            tuple(paths) + tuple(written), time.perf_counter() - started, counts)
+    from ..atomic import write_text
+
+    write_text(out / "synthesis.json", json.dumps(final.to_dict(), indent=1))  # now with the files and the time
+    return final
 
 
 class _Verify:
