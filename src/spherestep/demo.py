@@ -11,7 +11,9 @@
 4. the turn driven three ways (:func:`spherestep.drive.compare_drives`): the paper's settled relay steps, ramped
    relay steps at the pull-out rate, and the current-controlled servo, with the bang-bang bound, on the design's
    own model and on the other core; and the relay steps as the potential planner finds them on the design's
-   model (on iron the detent holds the rotor: few or none of them move it);
+   model (on iron the detent holds the rotor: few or none of them move it); on an iron design, the servo against
+   the model's known error (:func:`robustness`: a plant with the winding ×0.85 and the detent ×1.2, the worst
+   case of docs/control.md's table — holds at random orientations and the turn);
 5. the HTML report with every section, and ``summary.json``.
 
 :data:`DEMO_FILES` names everything written, so a caller can check the folder before the work and count what was
@@ -38,6 +40,8 @@ QUICK_IRON_RATES = (2.0,)  # steps/s: on iron in the quick demo
 DRIVE_FILES = ("drives.json", "servo.png", "capability.png", "iron.png")
 DEMO_FILES = PLAN_FILES + SIMULATION_FILES + DRIVE_FILES + ("report.html", "summary.json")
 CAPABILITY_SAMPLES = 400
+ROBUSTNESS_CASE = "winding ×0.85, detent ×1.2"  # the worst case of the table in docs/control.md (issue 25 §2)
+ROBUSTNESS_HOLDS = 5
 QUICK_CAPABILITY_SAMPLES = 60
 
 
@@ -130,9 +134,13 @@ def run_demo(design, out: Path, axis, angle_deg: float, *,
     s = planned.summary(max_step=design.max_step).to_dict()
     info["potential_plan"] = {"model": own.label, "steps": s["steps"], "moves": s["moves"],
                               "final_error_deg": s["error_final_deg"]}
+    info["robustness"] = None
+    if own.core == "iron":
+        say(f"the servo against the model's known error: the plant with {ROBUSTNESS_CASE}")
+        info["robustness"] = robustness(design, axis, angle, holds=2 if quick else ROBUSTNESS_HOLDS)
     write_text(out / "drives.json", json.dumps({"drives": info["drives"], "drives_other": info["drives_other"],
-                                                "potential_plan": info["potential_plan"]}, indent=1,
-                                               allow_nan=False))
+                                                "potential_plan": info["potential_plan"],
+                                                "robustness": info["robustness"]}, indent=1, allow_nan=False))
     say("writing the HTML report")
     lim = own.limits
     sections = (
@@ -146,7 +154,8 @@ def run_demo(design, out: Path, axis, angle_deg: float, *,
                 figure=capability_figure(capability), height=440),
         Section("iron", "Iron: detent and saturation", html=_iron_table(iron_effects, iron_capability)),
         Section("drives", "The turn driven three ways", html=_drives_table(drives["own"]) + _drives_table(
-            drives["other"]) + '<p class="note">' + potential_plan_line(info["potential_plan"]) + ".</p>"),
+            drives["other"]) + '<p class="note">' + potential_plan_line(info["potential_plan"]) + ".</p>"
+            + ('<p class="note">' + robustness_line(info["robustness"]) + ".</p>" if info["robustness"] else "")),
         Section("servo", "Servo run", note=f"The servo's run of the same turn on the {own.label} model: tracking "
                 "error against the trajectory and the sensor's error, every coil's current, and the power drawn "
                 "from the supply.", figure=servo_figure(servo), height=640),
@@ -170,6 +179,27 @@ def drive_lines(d: dict) -> list[str]:
         lines.append(f"  bang-bang bound {d['bang_bang_bound_s']:.2f} s"
                      + (f" (servo {ratio:.2f}× it)" if ratio is not None else ""))
     return lines
+
+
+def robustness(design, axis, angle: float, holds: int = ROBUSTNESS_HOLDS) -> dict:
+    """The servo on a plant that differs from the design's model by the worst case of docs/control.md's table
+    (:data:`ROBUSTNESS_CASE`, :mod:`spherestep.magnetics.mismatch`): ``holds`` random holds and the turn of
+    ``angle`` rad about ``axis``, the controller on the design's own model (:mod:`spherestep.dynamics.robustness`)."""
+    from .dynamics.robustness import robustness_row
+    from .magnetics.mismatch import MISMATCH_CASES
+
+    case = next(c for c in MISMATCH_CASES if c.name == ROBUSTNESS_CASE)
+    return robustness_row(design, case, holds=holds, axis=axis, angle=angle).to_dict() | {"plant": case.to_dict()}
+
+
+def robustness_line(r: dict) -> str:
+    """The servo against the model's known error (:func:`robustness`), in one sentence."""
+    return (f"against a motor that differs from its model by {r['case']} (the worst case of docs/control.md's "
+            f"table), the servo on the "
+            f"design's model holds {r['holds_within']} of {r['holds']} random orientations within 0.05° (worst "
+            f"{r['worst_hold_deg']:.3f}°) and turns in {r['turn_time_s']:.2f} s, final error "
+            f"{r['final_error_deg']:.3f}°, max tracking error {r['max_tracking_error_deg']:.2f}°, mean "
+            f"{r['mean_power_W']:.0f} W")
 
 
 def potential_plan_line(p: dict) -> str:

@@ -68,7 +68,7 @@ def demo(
 
     Example: [bold]spherestep demo --out spherestep-out[/bold]
     """
-    from ..demo import DEMO_FILES, drive_lines, potential_plan_line, run_demo
+    from ..demo import DEMO_FILES, drive_lines, potential_plan_line, robustness_line, run_demo
     from ..motor import prototype
     from ..outputs import Outputs, output_folder
 
@@ -106,6 +106,8 @@ def demo(
         for line in drive_lines(info["drives"]) + drive_lines(info["drives_other"]):
             console.print(line)
         console.print(potential_plan_line(info["potential_plan"]))
+        if info["robustness"]:
+            console.print(robustness_line(info["robustness"]))
         console.print(f"wrote {len(files.paths)} files to {out}/")
 
 
