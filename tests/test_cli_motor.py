@@ -2,9 +2,12 @@
 
 import json
 
+import pytest
+
 from spherestep.cli import main
 
 
+@pytest.mark.slow
 def test_demo_writes_plan_figures_simulation_and_report(tmp_path, capsys):
     """The main job, quietly, on the reduced case of the same code path (``--quick``: a 90° turn, fewer samples and
     relay rates): summary, plan, figures, the simulated run, the drives on the design's own model (iron) and on air,

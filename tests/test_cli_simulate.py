@@ -4,10 +4,12 @@ import csv
 import json
 
 import numpy as np
+import pytest
 
 from spherestep.cli import main
 
 
+@pytest.mark.slow
 def test_open_loop_run_writes_trajectory_and_plot(tmp_path, capsys):
     assert main(["simulate", "--axis", "1,0.5,2", "--angle", "20", "--steps", "3", "--out", str(tmp_path),
                  "--json"]) == 0
@@ -21,6 +23,7 @@ def test_open_loop_run_writes_trajectory_and_plot(tmp_path, capsys):
     assert (tmp_path / "simulation.png").read_bytes()[:4] == b"\x89PNG"
 
 
+@pytest.mark.slow
 def test_closed_loop_with_failed_coil_and_missed_steps(tmp_path, capsys):
     assert main(["simulate", "--axis", "0,0,1", "--angle", "30", "--steps", "4", "--missed", "0.3",
                  "--noise", "0.1", "--failed-coils", "2", "--seed", "1", "--out", str(tmp_path), "--json"]) == 0

@@ -52,6 +52,7 @@ def _check_plan(design, plan, metrics):
     assert plan.errors[-1] <= metrics.resolution_p95_rad
 
 
+@pytest.mark.slow
 def test_full_turns_about_random_axes(proto, proto_metrics):
     rng = np.random.default_rng(2024)
     states = proto.states()
@@ -136,6 +137,7 @@ def test_planner_rejects_bad_targets(proto):
         plan_geometric(proto, np.stack([np.eye(3)] * 2), candidates=0)
 
 
+@pytest.mark.slow
 def test_planner_works_around_failed_coils(proto):
     broken = proto.without_coils([3, 7])
     T = about_axis([1, 1, 0], math.radians(90), 12, start=broken.states().rotations[0])
@@ -235,6 +237,7 @@ def _reference_plan(design, targets, model, max_coils=4, candidates=8, max_step=
     return out
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("case", ["turn", "two coils", "standing", "short reach", "failed coil"])
 def test_potential_planner_matches_its_plain_loop(proto, model, case):
     """plan_potential (inputs checked once, the descent called directly, compiled bookkeeping) chooses, step by
@@ -278,6 +281,7 @@ def test_potential_planner_beats_or_matches_geometric_on_a_turn(proto, model):
     assert potential.errors[-1] < math.radians(2)
 
 
+@pytest.mark.slow
 def test_potential_planner_avoids_failed_coils(proto):
     from spherestep.commutation import plan_potential
     from spherestep.potential import MotorPotential

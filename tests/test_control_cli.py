@@ -31,6 +31,7 @@ def test_move_servo_writes_trajectory_currents_power_and_plot(tmp_path, capsys):
     assert (tmp_path / "move.png").read_bytes()[:4] == b"\x89PNG"
 
 
+@pytest.mark.slow
 def test_capability_prints_and_plots(tmp_path, capsys):
     assert main(["capability", "--samples", "30", "--seed", "2", "--out", str(tmp_path), "--json"]) == 0
     summary = json.loads(capsys.readouterr().out)

@@ -405,6 +405,7 @@ def malformed(draw):
     return text.encode("utf-8", "surrogatepass"), ".toml" if form == "toml" else ".yaml"
 
 
+@pytest.mark.slow
 @settings(max_examples=1000, deadline=None)
 @given(case=malformed())
 def test_fuzz_malformed_files_give_a_design_or_one_input_error(case):
@@ -500,6 +501,7 @@ def test_design_help_has_an_example(command, capsys):
     assert "Example: spherestep design" in capsys.readouterr().out
 
 
+@pytest.mark.slow
 def test_plan_uses_the_design_file(tmp_path, capsys):
     doc = mutate(name="rewired", channel_map=[[k, 63 - k] for k in range(29)])
     path = write(tmp_path, doc)

@@ -70,6 +70,7 @@ def _drift(proto, wells, dt):
     return np.abs(E - E[0]).max() / scale
 
 
+@pytest.mark.slow
 def test_energy_drift_below_1e6_over_10_s(proto, wells):
     """Zero damping, fixed currents: |E(t) − E(0)| / energy scale < 1e-6 over 10 s at dt = 1 ms, and the
     error falls as dt⁴ (fourth-order composition)."""
@@ -132,6 +133,7 @@ def test_simulate_records_a_plan(proto, wells):
     assert np.degrees(sim.step_errors).max() < 3.0
 
 
+@pytest.mark.slow
 def test_closed_loop_recovers_missed_steps(proto, wells):
     """360° with 10 % missed steps and 0.2° measurement noise ends within the design's resolution."""
     states = proto.states()

@@ -333,6 +333,7 @@ def test_pareto_front_of_a_synthetic_table():
 
 # --- the command line --------------------------------------------------------------------------------------
 
+@pytest.mark.slow
 def test_cli_quick_sweep_writes_table_plot_and_design_files(tmp_path, capsys):
     out = tmp_path / "out"
     args = ["explore", "--quick", "--out", str(out), "--threads", "--workers", "2", "--samples", "500", "--json"]

@@ -98,6 +98,7 @@ def test_stored_metrics_cover_every_entry_and_round_trip():
     assert math.isclose(proto.magnet_mass_kg, 92 * 7500 * math.pi * 0.0127 ** 2 * 0.0127, rel_tol=1e-9)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("key", list(COUNTS))
 def test_stored_metrics_re_measured_independently(designs, key):
     """Another seed and fewer samples, straight through the motor and control rooms: states exactly, the

@@ -3,6 +3,7 @@
 import math
 
 import numpy as np
+import pytest
 
 from spherestep import so3
 from spherestep.cli import main
@@ -30,6 +31,7 @@ def test_play_on_the_simulated_rotor_follows_the_plan(proto):
     assert so3.distance(settled[-1], settled[0]) > math.radians(10)
 
 
+@pytest.mark.slow
 def test_run_simulate_cli(tmp_path, capsys):
     assert main(["plan", "--axis", "0,0,1", "--angle", "15", "--steps", "2", "--out", str(tmp_path)]) == 0
     capsys.readouterr()

@@ -18,6 +18,7 @@ from sympy.physics.quantum.spin import Rotation  # noqa: E402
 from sympy.physics.wigner import wigner_d_small  # noqa: E402
 
 
+@pytest.mark.slow
 def test_wigner_D_and_U_against_sympy_rotation_D():
     alpha, beta, gamma = 0.7, 1.1, -2.0
     R = so3.from_euler_zyz([alpha, beta, gamma])

@@ -9,6 +9,7 @@ from spherestep.motor import prototype
 from spherestep.potential import load_force_curve
 
 
+@pytest.mark.slow
 def test_forces_json_and_files(tmp_path, capsys):
     out = tmp_path / "f"
     assert main(["forces", "--states", "2", "--json", "--out", str(out)]) == 0

@@ -257,6 +257,7 @@ def test_pairwise_against_full_multibody_solve():
     assert np.median(err) < 0.05
 
 
+@pytest.mark.slow
 def test_coupling_energy_is_the_joint_solve_less_the_self_terms(design):
     """``_ironcoupling.coupling_energy`` by an independent route: one solve with every near magnet's field at once, its
     energy ``−(1/2μ0) ∫ J·B``, less each magnet's energy alone, equals the cross terms (linearity), to 1e-9."""
@@ -302,6 +303,7 @@ def test_coupling_brings_pairwise_toward_the_full_solve():
     assert after.max() < 0.31 and np.median(after) < 0.11 and np.median(before) > 0.35
 
 
+@pytest.mark.slow
 def test_saturating_solve_without_saturation_is_the_linear_one(design):
     """With a B–H curve that is the linear solve's own line (μr = 1000 all the way), the saturating solve never
     leaves it: one iteration, and the pair torque at 8° with the coil at +nominal equals the linear tables'
@@ -343,6 +345,7 @@ def coupled(design):
     return iron_model(design, coupling=True)
 
 
+@pytest.mark.slow
 def test_coupled_model_is_a_torque_model(coupled, design):
     """With the coupling the iron model is still a torque model: torque = −∂E/∂θ (central differences, 1e-6 of
     the largest torque), no zonal terms (the compiled paths step aside), equilibria by the NumPy descent."""

@@ -133,6 +133,7 @@ def test_state_torques_rows(proto, tmap):
         mg.state_torques(proto, tmap, [len(proto.states())])
 
 
+@pytest.mark.slow
 def test_calibrated_potential_against_magpylib(proto, tmap):
     cal = mg.calibrate(proto)
     assert 0.050 < cal.limit < 0.058  # m: the lateral force turns from pulling back to pushing at ~54 mm

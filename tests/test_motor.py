@@ -243,6 +243,7 @@ def test_from_packings_errors_carry_the_field(change, field):
     assert err.value.field == field and "\n" not in str(err.value)
 
 
+@pytest.mark.slow
 def test_the_coil_as_built(proto):
     """Default the prototype's iron coil; a mapping or a CoilSpec; checked by MotorDesign; not part of the
     geometry (stepper states, the air-core table key)."""
@@ -356,6 +357,7 @@ def test_summaries_convert_their_angles_to_radians():
                    "mode": "servo"}
 
 
+@pytest.mark.slow
 def test_prototype_headline_numbers(proto, proto_metrics):
     """The numbers the README and the demo quote (issue 27 §5), pinned to their noise: the state count is exact;
     the resolution median of 20,000 uniform samples has a sampling spread of about 0.01°."""

@@ -267,6 +267,7 @@ def test_coil_currents_from_a_state(proto):
 # ------------------------------------------------------------------------------------------ SO(3) grid
 
 
+@pytest.mark.slow
 def test_energy_grid_matches_direct_evaluation(proto, small, model):
     rng = np.random.default_rng(19)
     c = rng.uniform(-1, 1, size=(2, len(proto.stator)))

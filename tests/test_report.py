@@ -114,6 +114,7 @@ def test_report_has_every_step_and_stays_small(report50, plan50):
     assert info["bytes"] - PLOTLY_JS < 1_000_000, info["bytes"] - PLOTLY_JS
 
 
+@pytest.mark.slow
 def test_long_plans_are_animated_on_evenly_spaced_steps(proto):
     assert list(frame_steps(51)) == list(range(51))
     shown = frame_steps(10_001)
@@ -174,6 +175,7 @@ def test_report_is_written_atomically(proto, tmp_path):
     assert path.read_text().endswith("</html>\n") and sorted(p.name for p in tmp_path.iterdir()) == ["report.html"]
 
 
+@pytest.mark.slow
 def test_cli_report(tmp_path, capsys):
     design = tmp_path / "motor.yaml"
     assert main(["design", "new", str(design)]) == 0
@@ -213,6 +215,7 @@ def test_energy_map_from_an_euler_grid(proto):
         energy_figure((grid, values[:, :, :3]))
 
 
+@pytest.mark.slow
 def test_extra_sections_are_appended_in_order(proto, tmp_path):
     import plotly.graph_objects as go
 

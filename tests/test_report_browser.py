@@ -22,6 +22,8 @@ from PIL import Image
 from spherestep.commutation import about_axis, plan_geometric
 from spherestep.report import write_report
 
+pytestmark = pytest.mark.slow  # the heaviest module-wide: make check leaves it out
+
 CHROMIUM, CHROMEDRIVER = "/usr/bin/chromium", "/usr/bin/chromedriver"
 WINDOW = (1300, 1100)
 AXIS = np.array([1.0, 0.5, 2.0])

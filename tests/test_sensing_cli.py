@@ -6,6 +6,7 @@ import json
 import math
 
 import numpy as np
+import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -14,6 +15,7 @@ from spherestep.cli import main
 from spherestep.motor import prototype
 
 
+@pytest.mark.slow
 def test_sense_writes_layout_and_accuracy(tmp_path, capsys):
     assert main(["sense", "--sensors", "3", "--samples", "5", "--out", str(tmp_path), "--json"]) == 0
     out = json.loads(capsys.readouterr().out)
