@@ -251,6 +251,7 @@ def test_overrides_lift_the_hemisphere_and_coil_limits(tmp_path):
 BAD = [
     (mutate(dimensions__air_gap=None), "dimensions.air_gap", "is missing; add it; for example air_gap: 0.005 in"),
     (mutate(stator__colis="fit"), "stator.colis", "not a known key"),
+    (mutate(stator__colis="fit", stator__coils=None), "stator.colis", "not a known key"),  # misspelt, not missing
     (mutate(stator__cap_half_angle="80 in"), "stator.cap_half_angle", "unit deg or rad"),
     (mutate(dimensions__sphere_diameter=0.3), "dimensions.sphere_diameter", "with its unit, like '12 in'"),
     (mutate(dimensions__coil_length="2 furlongs"), "dimensions.coil_length", "unit one of m, cm, mm"),

@@ -353,8 +353,11 @@ def _example(path: str) -> str:
 
 
 def translate(exc: ValidationError) -> tuple[str, str]:
-    """``(field path, message)`` of the first error pydantic found, in this module's words."""
-    err = exc.errors(include_url=False)[0]
+    """``(field path, message)`` of the first error pydantic found, in this module's words; an unknown key comes
+    before everything else (a misspelt ``colis`` is what the user wrote, the missing ``coils`` only follows from
+    it)."""
+    errors = exc.errors(include_url=False)
+    err = next((e for e in errors if e["type"] == "extra_forbidden"), errors[0])
     path = _dotted(err["loc"])
     kind = err["type"]
     shown = path or "the design"
