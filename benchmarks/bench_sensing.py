@@ -79,7 +79,7 @@ def accuracy_vs_count(design, placement, samples):
         for name, arr in (("greedy", greedy), ("spread", spread)):
             a = sensing.accuracy(design, arr, samples=samples, seed=k)
             bound = placement.bound_deg()[k - 1] if name == "greedy" else float("nan")
-            print(f"| {k} | {name} | {a.rms_deg:.4f} | {a.worst_deg:.4f} | {a.predicted_rms_deg:.4f} | "
+            print(f"| {k} | {name} | {math.degrees(a.rms):.4f} | {math.degrees(a.worst):.4f} | {math.degrees(a.predicted_rms):.4f} | "
                   f"{bound:.4f} | {a.coil_residual_T * 1e6:.1f} |")
 
 

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import math
+
 from pathlib import Path
 
 import typer
@@ -60,7 +62,8 @@ def sense(
     for col in ("RMS error (°)", "worst error (°)", "Cramér–Rao RMS (°)", "worst-case bound (°)",
                 "coil residual (µT RMS)", "time per estimate (ms)"):
         table.add_column(col, justify="right")
-    table.add_row(f"{acc.rms_deg:.4f}", f"{acc.worst_deg:.4f}", f"{acc.predicted_rms_deg:.4f}",
+    table.add_row(f"{math.degrees(acc.rms):.4f}", f"{math.degrees(acc.worst):.4f}",
+                  f"{math.degrees(acc.predicted_rms):.4f}",
                   f"{summary['worst_case_bound_deg']:.4f}", f"{acc.coil_residual_T * 1e6:.1f}",
                   f"{acc.seconds_per_estimate * 1e3:.2f}")
     console.print(table)

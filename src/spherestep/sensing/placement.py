@@ -12,6 +12,7 @@ order is nested, so the first ``k`` sensors are the ``k``-sensor design.
 from __future__ import annotations
 
 import hashlib
+import math
 import time
 from dataclasses import dataclass
 
@@ -130,29 +131,34 @@ def default_array(design, count: int = DEFAULT_COUNT) -> SensorArray:
 
 @dataclass(frozen=True)
 class Accuracy:
-    """Orientation error over ``samples`` Haar-random orientations for an array of ``sensors``: RMS and worst
-    (degrees), the Cramér–Rao RMS predicted from the Fisher information (degrees), the RMS coil-field
-    residual at the sensors (tesla) and the median time per estimate (s)."""
+    """Orientation error over ``samples`` Haar-random orientations for an array of ``sensors``: ``rms`` and
+    ``worst`` (rad), ``predicted_rms`` the Cramér–Rao RMS from the Fisher information (rad), ``coil_residual_T``
+    the RMS coil-field residual at the sensors (tesla) and ``seconds_per_estimate`` the median time per estimate
+    (s)."""
 
     sensors: int
     samples: int
-    rms_deg: float
-    worst_deg: float
-    predicted_rms_deg: float
+    rms: float
+    worst: float
+    predicted_rms: float
     coil_residual_T: float
     seconds_per_estimate: float
 
-    def to_dict(self) -> dict:
-        return dict(self.__dict__)
+    def to_dict(self, degrees: bool = True) -> dict:
+        """JSON-ready: the angles in degrees (``*_deg``) or, with ``degrees=False``, radians (``*_rad``)."""
+        unit, f = ("deg", math.degrees) if degrees else ("rad", float)
+        return {"sensors": self.sensors, "samples": self.samples, f"rms_{unit}": f(self.rms),
+                f"worst_{unit}": f(self.worst), f"predicted_rms_{unit}": f(self.predicted_rms),
+                "coil_residual_T": self.coil_residual_T, "seconds_per_estimate": self.seconds_per_estimate}
 
 
 @single_blas_thread
 def accuracy(design, array: SensorArray, samples: int = 200, coils_on: int = 4, current_error: float = 0.01,
-             start_error_deg: float = 1.0, seed=0) -> Accuracy:
+             start_error: float = math.radians(1.0), seed=0) -> Accuracy:
     """Monte Carlo accuracy of ``array``: Haar-random orientations, readings by magpylib with ``coils_on``
     random coils at random ±1 (true currents off by ``current_error`` RMS), the part's noise, saturation and
     LSB; the estimator subtracts the coils at the commanded currents and runs Levenberg–Marquardt from a start
-    ``start_error_deg`` off (a tracking loop's prior)."""
+    ``start_error`` rad off (a tracking loop's prior)."""
     rng = np.random.default_rng(seed)
     R = so3.random(samples, rng)
     N = len(design.stator)
@@ -170,13 +176,13 @@ def accuracy(design, array: SensorArray, samples: int = 200, coils_on: int = 4, 
     times = np.empty(samples)
     for k in range(samples):
         axis = rng.normal(size=3)
-        R0 = so3.exp(np.radians(start_error_deg) * axis / np.linalg.norm(axis)) @ R[k]
+        R0 = so3.exp(start_error * axis / np.linalg.norm(axis)) @ R[k]
         t0 = time.perf_counter()
         e = est.solve(m[k], R0, c[k])
         times[k] = time.perf_counter() - t0
         err[k] = so3.distance(e.R, R[k])
         pred[k] = np.trace(e.covariance)
     residual = coils.field(c_true) - coils.field(c)
-    return Accuracy(len(array), samples, float(np.degrees(np.sqrt(np.mean(err ** 2)))),
-                    float(np.degrees(err.max())), float(np.degrees(np.sqrt(np.mean(pred)))),
+    return Accuracy(len(array), samples, float(np.sqrt(np.mean(err ** 2))), float(err.max()),
+                    float(np.sqrt(np.mean(pred))),
                     float(np.sqrt(np.mean(residual ** 2))), float(np.median(times)))

@@ -215,14 +215,14 @@ def verify(design_text: str, spec, *, seed: int = 1, capability_samples: int = 2
             from ..sensing import accuracy, default_array
 
             acc = accuracy(design, default_array(design, spec.sensing.hall_parts), samples=40, seed=seed)
-            numbers["hall_rms_deg"] = acc.rms_deg
+            numbers["hall_rms_deg"] = math.degrees(acc.rms)
             need = math.degrees(spec.precision.servo_hold) if spec.precision.servo_hold is not None else None
             if need is not None:
                 checks.append(_at_most(f"Hall array of {spec.sensing.hall_parts} parts, RMS orientation error",
-                                       acc.rms_deg, need, ".3g", "°"))
+                                       math.degrees(acc.rms), need, ".3g", "°"))
             else:
                 checks.append(_yes(f"Hall array of ≤ {spec.sensing.hall_parts} parts", "estimates the orientation",
-                                   f"RMS {acc.rms_deg:.3g}°", math.isfinite(acc.rms_deg)))
+                                   f"RMS {math.degrees(acc.rms):.3g}°", math.isfinite(math.degrees(acc.rms))))
     if spec.relays:
         if spec.torque.step is not None:
             st = step_torque(design, 8, seed)
