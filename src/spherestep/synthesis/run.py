@@ -536,16 +536,19 @@ RUNGS = ("geometry", "states", "capability", "relays")
 
 def nearest_rows(table, count: int) -> list[dict]:
     """The ``count`` candidates that came nearest when none passed: the furthest rung reached, then (relays) the
-    most steps on the plan, then the smallest change from the baseline, then the key."""
+    most steps on the plan, reaching all orientations, the finest resolution, the smallest change from the
+    baseline, then the key."""
     if not len(table):
         return []
     frame = table.assign(_rung=table["stage"].map({r: n for n, r in enumerate(RUNGS)}).fillna(-1),
                          _steps=table["relay_steps_on_plan"].astype("Float64").fillna(-1),
+                         _reach=table["reaches_all"].astype("boolean").fillna(False).astype(int),
+                         _res=table["resolution_median_deg"].astype("Float64").fillna(math.inf),
                          _change=table["change"].astype("Float64").fillna(math.inf))
     frame = frame[frame["status"].isin(["ok", "pruned"])]
-    order = frame.sort_values(["_rung", "_steps", "_change", "key"], ascending=[False, False, True, True])
-    return [{k: _json(v) for k, v in row.drop(["_rung", "_steps", "_change"]).items()}
-            for _, row in order.head(count).iterrows()]
+    extra = ["_rung", "_steps", "_reach", "_res", "_change"]
+    order = frame.sort_values(extra + ["key"], ascending=[False, False, False, True, True, True])
+    return [{k: _json(v) for k, v in row.drop(extra).items()} for _, row in order.head(count).iterrows()]
 
 
 def closest_row(table, spec) -> dict | None:
