@@ -91,7 +91,16 @@ def test_stored_metrics_cover_every_entry_and_round_trip():
     for key, m in stored.items():
         assert again[key].states == m.states
         assert math.isclose(again[key].resolution_median_rad, m.resolution_median_rad, rel_tol=1e-9)
-        assert m.servo_turn_s is None and m.relay_landed_fraction is None  # the drive room's hook is pending
+        assert again[key].relay_executed == m.relay_executed and again[key].drive_note == m.drive_note
+        # the drive: a settled relay plan for every design; a fastest servo turn, or None with the planner's reason
+        assert m.relay_steps > 0 and 0 <= m.relay_steps_on_plan <= m.relay_steps
+        assert m.relay_executed == (m.relay_steps_on_plan == m.relay_steps)
+        assert math.isclose(m.relay_landed_fraction, m.relay_steps_on_plan / m.relay_steps, rel_tol=1e-9)
+        if m.servo_turn_s is None:
+            assert "planner refused" in m.drive_note and m.servo_mean_power_W is None, key
+        else:
+            assert 0 < m.servo_turn_s < 10 and m.servo_final_error_rad < math.radians(0.5), key
+            assert m.servo_max_tracking_error_rad >= m.servo_final_error_rad and m.servo_mean_power_W > 0
     proto = stored["prototype"]
     assert proto.states == 101_640 and round(math.degrees(proto.resolution_median_rad), 2) == 3.52
     assert all(m.reaches_all for m in stored.values())
@@ -115,12 +124,36 @@ def test_stored_metrics_re_measured_independently(designs, key):
     assert (m.core, m.coils, m.rotor_poles) == (d.coil.core, len(d.stator), len(d.rotor))
 
 
-def test_measure_gives_the_metrics_and_the_pending_drive_hook():
-    m = gallery.measure(gallery.entry("dodecahedral-hobby"), samples=2000, capability_samples=50, escape=False)
+def test_stored_servo_turn_re_measured_through_the_drive_room(designs):
+    """The air-cored gimbal's fastest 360° turn about (1, 0.5, 2), straight through spherestep.drive (about 8 s):
+    the run is deterministic (ideal sensor), so the arrival time within 2 % (a few of its 1-ms control periods),
+    the mean power within 2 %, the final error within 0.5° as stored; and the planned time is the control room's
+    own (``control.plan_turn``), below the arrival."""
+    from spherestep.control import plan_turn
+    from spherestep.drive import drive_turn
+    from spherestep.dynamics import Rotor
+
+    m = gallery.stored_metrics()["gimbal-40mm"]
+    d = designs["gimbal-40mm"]
+    run = drive_turn(d, (1, 0.5, 2), 2 * math.pi, mode="servo")
+    assert run.details.trajectory == "fastest" and run.ok
+    assert math.isclose(run.time, m.servo_turn_s, rel_tol=0.02)
+    assert math.isclose(run.mean_power, m.servo_mean_power_W, rel_tol=0.02)
+    assert run.final_error < math.radians(0.5) and m.servo_final_error_rad < math.radians(0.5)
+    assert math.isclose(run.max_tracking_error, m.servo_max_tracking_error_rad, rel_tol=0.1)
+    own, rotor = design_model(d), Rotor.from_design(d)
+    start = run.orientations[0]
+    plan = plan_turn(own.model, start, run.axis, 2 * math.pi, rotor.inertia, own.limits, damping=rotor.damping)
+    assert math.isclose(plan.duration, run.details.motion_time, rel_tol=1e-6) and plan.duration < m.servo_turn_s
+
+
+def test_measure_gives_the_metrics_and_leaves_out_the_drive_on_request():
+    m = gallery.measure(gallery.entry("dodecahedral-hobby"), samples=2000, capability_samples=50, escape=False,
+                        drive=False)
     assert m.states == 1440 and m.escape_violations is None and m.core == "air"
     d = m.to_dict()
-    assert "resolution_median_deg" in d and d["servo_turn_s"] is None
-    assert gallery.drive_metrics(None).note == gallery.DRIVE_PENDING
+    assert "resolution_median_deg" in d and d["servo_turn_s"] is None and d["relay_executed"] is None
+    assert d["drive_note"] == "servo: not measured; relay: not measured"
     with pytest.raises(InputError, match="samples"):
         gallery.measure(gallery.entry("gimbal-40mm"), samples=0)
 
@@ -130,12 +163,15 @@ def test_cli_json_table_and_out(tmp_path, capsys):
     data = json.loads(capsys.readouterr().out)
     assert [r["key"] for r in data["entries"]] == list(COUNTS)
     assert data["entries"][1]["metrics"]["rotor_poles"] == 80 and data["entries"][1]["metrics"]["coils"] == 16
+    assert data["entries"][1]["metrics"]["servo_turn_s"] is None and "planner" in data["entries"][1]["metrics"][
+        "drive_note"] and data["entries"][4]["metrics"]["servo_final_error_deg"] < 0.5
     target = data["targets"][0]
     assert target["key"] == "kumagai-hollis-sim" and target["metrics"] is None
     assert "4 N·m" in target["requirements"]["torque"] and "300 rpm" in target["requirements"]["speed"]
     assert main(["gallery", "--out", str(tmp_path / "g")]) == 0
     out = capsys.readouterr().out
     assert "jhu-as-built" in out and "kumagai-hollis-sim" in out and "n/a" in out
+    assert "38/38" in out and "drive: the servo's fastest 360° turn" in " ".join(out.split())  # the drive column
     assert len(MotorDesign.load(tmp_path / "g" / "jhu-as-built.yaml").rotor) == 80
     assert gallery.parse_metrics((tmp_path / "g" / "metrics.csv").read_text())["gimbal-40mm"].states == 25_200
 

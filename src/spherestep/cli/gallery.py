@@ -21,7 +21,8 @@ def gallery(
                                                       "JSON."),
     out: Path = typer.Option(None, "--out", help="Also write every design file, metrics.csv and gallery.json "
                                                  "into this folder."),
-    measure: bool = typer.Option(False, "--measure", help="Measure every design now (about a minute) instead of "
+    measure: bool = typer.Option(False, "--measure", help="Measure every design now (about two minutes, the drive "
+                                                          "included) instead of "
                                                           "printing the stored metrics."),
     samples: int = typer.Option(20_000, "--samples", callback=number("a whole number of orientations from 100 to 1000000",
                                                                      100, 1_000_000),
@@ -71,7 +72,9 @@ def gallery(
         if m is None:
             view.add_row(row["key"], *["—"] * (len(view.columns) - 1))
             continue
-        drive = (f"{_deg(m['servo_turn_s'])} s, {_deg(m['relay_landed_fraction'])}",) if drive_known else ()
+        turn = "—" if m["servo_turn_s"] is None else f"{m['servo_turn_s']:.3g} s"
+        relay = "—" if m["relay_steps"] is None else f"{m['relay_steps_on_plan']}/{m['relay_steps']}"
+        drive = (f"{turn}, {relay}",) if drive_known else ()
         view.add_row(row["key"], f"{m['rotor_poles']}/{m['coils']}", m["core"], str(m["states"]),
                      _deg(m["resolution_median_deg"]), _deg(m["resolution_p95_deg"]),
                      "yes" if m["reaches_all"] else "no", f"{m['torque_median_N_m']:.3g}",
@@ -84,7 +87,9 @@ def gallery(
         console.print(f"target {t['key']}: {'; '.join(t['requirements'].values())} ({t['kind']})")
     console.print("res°, p95°: resolution, median and 95th percentile of the distance to the nearest state; all: "
                   "reaches all of SO(3); τ: torque available in every direction over SO(3) on the design's own "
-                  "model (median, 5th percentile); W/coil: one coil at nominal current" + ("" if drive_known else "; the fastest servo turn and relay stepping: pending the drive room "
+                  "model (median, 5th percentile); W/coil: one coil at nominal current" + ("; drive: the servo's fastest 360° "
+                  "turn about (1, 0.5, 2) (s; — where the planner refused the model) and the settled relay plan's "
+                  "steps that settled on the plan, of all" if drive_known else "; the fastest servo turn and relay stepping: pending the drive room "
                                      "(spherestep.gallery.drive_metrics)"))
     if written:
         console.print(f"wrote {len(written)} files to {out}/")
