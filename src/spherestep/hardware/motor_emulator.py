@@ -9,7 +9,10 @@
   diodes return the current to the supply, ``L di/dt = −V sign(i) − R i``, until it is zero. The sense reads
   ``round(1000 (i + noise))`` mA, ``current_noise`` A RMS.
 * Rotor: :class:`spherestep.dynamics.Rotor` under the torque model's ``b(R) + K(R) ī`` (currents per unit of
-  the nominal current; ``b`` the bias, zero for the air-core magnets), one step per ``torque_refresh`` s (20 ms),
+  the nominal current; ``b`` the bias, zero for the air-core magnets), one step per ``torque_refresh`` s (2 ms: the
+  servo's period at 500 Hz; at 20 ms the rotor's acceleration answered the coils up to 20 ms late on the
+  pseudo-terminal, where nothing else brings the rotor up to date, and the servo on iron tracked within ~10°
+  there, while in lockstep, whose truth is read every cycle, it did not),
   with ``K`` and ``b`` at the orientation predicted for the middle of the step (the control room's
   :class:`~spherestep.control.ModelCache`, the servo law's cache: re-evaluated when that orientation has turned
   more than ``K_REUSE``) and ``ī`` the coils' mean current over it; in between, the sensors see
@@ -83,7 +86,7 @@ class EmulatedMotor:
     see the module. ``sensors`` a :class:`~spherestep.sensing.SensorArray`; ``R0`` the start orientation."""
 
     def __init__(self, design, model, sensors, *, rotor=None, drive=None, current_noise: float = 0.002,
-                 R0=None, faults: MotorFaults | None = None, period: float = 2.5e-4, torque_refresh: float = 2e-2,
+                 R0=None, faults: MotorFaults | None = None, period: float = 2.5e-4, torque_refresh: float = 2e-3,
                  seed: int = 0):
         from ..control import DriveLimits, ModelCache
         from ..dynamics import Rotor
@@ -395,6 +398,7 @@ class MotorPty:
     # -- the device process -------------------------------------------------------------------------------------
     def _publish(self) -> None:
         m = self.motor
+        m.sync()  # the rotor brought up to the coils' time, as truth_of does in lockstep
         trips = self.device.trips[:_MAX_TRIPS]
         rows = [(_TRIP_ORDER.index(c), k, us * 1e-6) for c, k, us in trips]
         rows += [(0.0, 0.0, 0.0)] * (_MAX_TRIPS - len(rows))
