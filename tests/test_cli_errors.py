@@ -346,6 +346,8 @@ MISC = [  # (id, argv): other mistakes, all exit 2
                                "{base}/o"]),
     ("move-core", ["move", *AX, "--angle", "30", "--core", "copper", "--out", "{base}/o"]),
     ("move-axis-underflow", ["move", "--axis", "1e-320,0,0", "--angle", "30", "--out", "{base}/o"]),
+    ("move-bad-port", ["move", *AX, "--angle", "30", "--port", "/dev/spherestep-no-such-port", "--out", "{base}/o"]),
+    ("move-port-is-file", ["move", *AX, "--angle", "30", "--port", "{file}", "--out", "{base}/o"]),
 ]
 
 

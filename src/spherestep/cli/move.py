@@ -117,6 +117,10 @@ def move(
             from None
     noise = math.radians(sensor_noise or 0.0)
     check_options(mode, backend, duration=time, sensor=sensor, sensor_noise=noise, port=port, rate=rate)
+    if port is not None:  # a port that cannot be opened is refused before any work, with nothing written
+        from ..hardware.serialport import open_port
+
+        open_port(port, 115200, 0.1).close()
     out = output_folder(out, "--out")  # before the work: a bad location costs nothing
     design = usable(design_from(design_path))
     from ..magnetics import design_model
