@@ -11,10 +11,10 @@ from spherestep.cli import main
 
 @pytest.mark.slow
 def test_open_loop_run_writes_trajectory_and_plot(tmp_path, capsys):
-    assert main(["simulate", "--axis", "1,0.5,2", "--angle", "20", "--steps", "3", "--out", str(tmp_path),
+    assert main(["simulate", "--axis", "1,0.5,2", "--angle", "20", "--steps", "3", "--core", "air", "--out", str(tmp_path),
                  "--json"]) == 0
     summary = json.loads(capsys.readouterr().out)
-    assert summary["steps"] >= 3 and summary["closed_loop"] is False
+    assert summary["steps"] >= 3 and summary["closed_loop"] is False and summary["model"].startswith("air")
     rows = list(csv.DictReader((tmp_path / "trajectory.csv").open()))
     t = np.array([float(r["t_s"]) for r in rows])
     q = np.array([[float(r[k]) for k in ("qw", "qx", "qy", "qz")] for r in rows])
@@ -25,7 +25,7 @@ def test_open_loop_run_writes_trajectory_and_plot(tmp_path, capsys):
 
 @pytest.mark.slow
 def test_closed_loop_with_failed_coil_and_missed_steps(tmp_path, capsys):
-    assert main(["simulate", "--axis", "0,0,1", "--angle", "30", "--steps", "4", "--missed", "0.3",
+    assert main(["simulate", "--axis", "0,0,1", "--angle", "30", "--steps", "4", "--missed", "0.3", "--core", "air",
                  "--noise", "0.1", "--failed-coils", "2", "--seed", "1", "--out", str(tmp_path), "--json"]) == 0
     summary = json.loads(capsys.readouterr().out)
     assert summary["closed_loop"] and summary["failed_coils"] == [2]
@@ -44,3 +44,13 @@ def test_bad_input_exits_2(tmp_path, capsys):
         err = capsys.readouterr().err
         assert err.count("\n") == 1 and "Traceback" not in err
     assert not (tmp_path / "x").exists()
+
+
+@pytest.mark.slow
+def test_the_design_own_model_by_default(tmp_path, capsys):
+    """The prototype's coils are iron-cored: simulate runs on the iron model unless --core says otherwise, and says
+    which (issue 25 §1)."""
+    assert main(["simulate", "--axis", "1,0.5,2", "--angle", "20", "--steps", "3", "--out", str(tmp_path),
+                 "--json"]) == 0
+    summary = json.loads(capsys.readouterr().out)
+    assert summary["model"] == "iron (pairwise, FEM table)" and summary["steps"] >= 3

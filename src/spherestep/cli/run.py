@@ -37,11 +37,12 @@ def check_log(path: Path, force: bool) -> Path:
 
 
 def _simulated(design_path, plan):
-    """The :class:`Simulated` back end for ``plan``: the design's rotor under its magnets' torque map, tuned,
-    starting at rest at the plan's first orientation."""
+    """The :class:`Simulated` back end for ``plan``: the design's rotor under its own torque model
+    (:func:`spherestep.magnetics.design_model`: iron for the prototype), tuned, starting at rest at the plan's
+    first orientation."""
     from ..dynamics import tune
     from ..hardware import Simulated
-    from ..magnetics import torque_map
+    from ..magnetics import design_model
     from .common import design_from, usable
 
     design = design_from(design_path)
@@ -49,7 +50,7 @@ def _simulated(design_path, plan):
         raise bad_value("--design", f"the design the plan was made for ({plan.coil_count} coils)",
                         f"a design with {len(design.stator)} coils")
     design = usable(design, "--design", design_path)
-    model = torque_map(design)
+    model = design_model(design).model
     tuning = tune(design, model)
     return Simulated(design, model, plan.steps[0].achieved, rotor=tuning.rotor, dt=tuning.dt)
 
@@ -79,8 +80,8 @@ def run(
                                help="Steps per second (Hz); each step is held for 1/RATE s."),
     dry_run: bool = typer.Option(False, "--dry-run", help="Send nothing; print what would be sent to a "
                                                           "controller with --channels channels."),
-    simulate: bool = typer.Option(False, "--simulate", help="Run the plan on the simulated rotor (magnets' torque "
-                                                            "map, tuned damping) instead of a device."),
+    simulate: bool = typer.Option(False, "--simulate", help="Run the plan on the simulated rotor (the design's own torque "
+                                                            "model, tuned damping) instead of a device."),
     design_path: Path = typer.Option(None, "--design", help="With --simulate: the design file (default the "
                                                             "built-in prototype)."),
     channels: int = typer.Option(None, "--channels", help="With --dry-run: relay channels of the controller it "

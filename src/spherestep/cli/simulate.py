@@ -9,7 +9,8 @@ import typer
 
 from ..errors import bad_value
 from .app import app
-from .common import check_axis, console, design_from, number, parse_vector, print_json, usable, write_json
+from .common import check_axis, check_core, console, design_from, number, parse_vector, print_json, usable, write_json
+from .progress import progress
 from .motor import ANGLE
 
 PLANNERS = ("geometric", "potential")
@@ -62,10 +63,13 @@ def simulate(
                                      help="Coils that do not work, e.g. 3,7."),
     seed: int = typer.Option(0, "--seed", callback=number("a whole number ≥ 0 (a random seed)", 0, 2 ** 63 - 1),
                              help="Random seed for noise and missed steps (a whole number ≥ 0)."),
+    core: str = typer.Option(None, "--core", callback=check_core,
+                             help="air or iron: override the core the design file states (default: the design's)."),
     out: Path = typer.Option(Path("spherestep-out"), "--out", help="Output folder."),
     as_json: bool = typer.Option(False, "--json", help="Print the summary as JSON."),
 ) -> None:
-    """Plan a rotation and run it on the rotor under the magnets' physical torque (magpylib torque map):
+    """Plan a rotation and run it on the rotor under the design's own physical torque model (its coils' core:
+    iron for the prototype, with its detent; the magnets' torque map for air; --core overrides), which it names:
     trajectory CSV and a plot of desired vs achieved rotation angle (simulation.png). With --noise or --missed
     the loop is closed: the controller measures the orientation and re-plans from it (closed_loop.csv and
     closed_loop.png).
@@ -92,17 +96,18 @@ def simulate(
     targets = turn_targets(design, axis_vec, math.radians(angle), steps)  # checked before the torque map is built
     from .. import plots  # matplotlib and magpylib load once the command line is known to be good
     from ..dynamics import run_closed_loop, tune
-    from ..magnetics import torque_map
-    with console.status("building the torque map and tuning the rotor"):
-        physics = torque_map(design)
+    from ..magnetics import design_model
+    with progress("building the torque model and tuning the rotor", enabled=not as_json):
+        own = design_model(design, core)
+        physics = own.model
         tuning = tune(design, physics)
-    summary = {"design": design.name, "planner": planner, "failed_coils": failed,
+    summary = {"design": design.name, "model": own.label, "planner": planner, "failed_coils": failed,
                "damping_N_m_s": tuning.rotor.damping, "dwell_s": tuning.dwell}
     names = ("closed_loop.csv", "closed_loop.png") if closed else ("trajectory.csv", "simulation.png")
     files = Outputs(out, names + ("simulation.json",))
     with files:
         if closed:
-            with console.status("running the closed loop"):
+            with progress(f"running the closed loop on the {own.label} model", enabled=not as_json):
                 run = run_closed_loop(design, targets, physics, dwell=tuning.dwell, noise=math.radians(noise),
                                       missed=missed, rotor=tuning.rotor, dt=tuning.dt, rng=seed)
             run.to_csv(out / "closed_loop.csv", axis_vec)
@@ -112,7 +117,7 @@ def simulate(
                         "final_error_deg": math.degrees(run.final_error)}
         else:
             plan = turn(design, axis_vec, math.radians(angle), steps, planner)
-            with console.status("simulating"):
+            with progress(f"simulating the plan on the {own.label} model", enabled=not as_json):
                 from ..demo import simulate_and_write
 
                 _, result = simulate_and_write(design, plan, axis_vec, out, physics, tuning)
@@ -122,10 +127,10 @@ def simulate(
     if as_json:
         print_json(summary)
     elif summary["closed_loop"]:
-        console.print(f"closed loop: {summary['steps_taken']} steps, {summary['missed_steps']} missed; final error "
+        console.print(f"closed loop on the {own.label} model: {summary['steps_taken']} steps, {summary['missed_steps']} missed; final error "
                       f"{summary['final_error_deg']:.2f}°; wrote {len(files.paths)} files to {out}/")
     else:
-        console.print(f"{summary['steps']} steps; settled within {summary['settled_error_max_deg']:.2f}° of the plan "
+        console.print(f"{own.label} model: {summary['steps']} steps; settled within {summary['settled_error_max_deg']:.2f}° of the plan "
                       f"(median {summary['settled_error_median_deg']:.2f}°): "
                       f"{'executed' if summary['executed'] else 'NOT executed'}; wrote {len(files.paths)} files "
                       f"to {out}/")
