@@ -13,14 +13,13 @@ from __future__ import annotations
 
 import importlib
 
-_LAZY = ("atomic", "channels", "checks", "commutation", "control", "demo", "design_file", "drive", "dynamics", "errors", "explore",
-         "export", "fig10", "gallery", "hardware", "harmonics", "magnetics", "motor", "outputs", "packing", "plots",
-         "potential", "report", "rotor_field", "sensing", "so3", "sphere", "statics", "synthesis", "units")
+_LAZY = ("atomic", "channels", "checks", "commutation", "control", "demo", "design_file", "drive", "dynamics", "errors",
+         "explore", "export", "fig10", "gallery", "hardware", "harmonics", "lazy", "magnetics", "motor", "outputs",
+         "packing", "plots", "potential", "report", "rotor_field", "sensing", "so3", "sphere", "statics", "synthesis",
+         "units")
 # every room loads on first use: `spherestep --help` must not wait for SciPy
 
-__all__ = ["atomic", "channels", "checks", "commutation", "control", "demo", "design_file", "drive", "dynamics", "errors", "explore",
-           "export", "fig10", "gallery", "hardware", "harmonics", "magnetics", "motor", "outputs", "packing", "plots",
-           "potential", "report", "rotor_field", "sensing", "so3", "sphere", "statics", "synthesis", "units"]
+__all__ = list(_LAZY)  # noqa: PLE0605  (the one list of rooms)
 __version__ = "0.1.0"
 
 

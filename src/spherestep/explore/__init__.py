@@ -10,7 +10,7 @@ The public names are loaded from their modules on first use, so importing the pa
 ``spherestep`` command does, through the CLI) does not import pandas, pyarrow or Dask.
 """
 
-from importlib import import_module
+from ..lazy import lazy_names
 
 _MODULES = {
     "build": ("LIMIT_STATUSES", "STATUSES", "Limits", "Unbuildable", "build_design", "candidate_count",
@@ -23,17 +23,4 @@ _MODULES = {
     "run": ("SweepSummary", "dask_client", "finished_keys", "run_sweep"),
     "store": ("COLUMNS", "MEASURED", "SCHEMA", "ResultStore"),
 }
-_HOME = {name: module for module, names in _MODULES.items() for name in names}
-__all__ = sorted(_HOME)  # noqa: PLE0605  (the lazy table is the one list of names)
-
-
-def __getattr__(name: str):
-    if name not in _HOME:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    value = getattr(import_module(f".{_HOME[name]}", __name__), name)
-    globals()[name] = value
-    return value
-
-
-def __dir__():
-    return sorted(set(globals()) | set(__all__))
+__getattr__, __dir__, __all__ = lazy_names(__name__, _MODULES)  # noqa: PLE0605  (the one list of names)

@@ -15,7 +15,7 @@ speed, precision, size, power, drive, core — to verified design files.
 docs/synthesis.md describes every field of a spec, the ladder, the optimiser and measured results.
 """
 
-from importlib import import_module
+from ..lazy import lazy_names
 
 _MODULES = {
     "spec": ("SPEC_VERSION", "Spec", "SpecError", "load_spec", "parse_spec", "validate_spec"),
@@ -24,17 +24,4 @@ _MODULES = {
     "run": ("BUDGETS", "Budget", "Finalist", "Ladder", "SynthesisResult", "candidates", "objectives", "pareto", "synthesize"),
     "outputs": ("figure_front", "write_outputs"),
 }
-_HOME = {name: module for module, names in _MODULES.items() for name in names}
-__all__ = sorted(_HOME)  # noqa: PLE0605  (the lazy table is the one list of names)
-
-
-def __getattr__(name: str):
-    if name not in _HOME:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    value = getattr(import_module(f".{_HOME[name]}", __name__), name)
-    globals()[name] = value
-    return value
-
-
-def __dir__():
-    return sorted(set(globals()) | set(__all__))
+__getattr__, __dir__, __all__ = lazy_names(__name__, _MODULES)  # noqa: PLE0605  (the one list of names)
