@@ -10,6 +10,7 @@ import typer
 from .app import app
 from .common import check_axis, console, design_from, parse_vector, print_json, usable
 from .motor import ANGLE, DEMO_AXIS
+from .progress import progress
 
 
 @app.command()
@@ -26,8 +27,6 @@ def report(
 
     Example: [bold]spherestep report mymotor.yaml -o report.html --axis 0,1,1 --angle 90[/bold]
     """
-    from rich.progress import Progress, SpinnerColumn, TextColumn, TimeElapsedColumn
-
     from ..commutation import turn
     from ..outputs import Outputs, output_file
 
@@ -35,13 +34,10 @@ def report(
     axis_vec = parse_vector(axis, "--axis")
     design = usable(design_from(file, "FILE"), "FILE", file)
     from ..report import write_report  # plotly loads once the command line is known to be good
-    with Progress(SpinnerColumn(), TextColumn("{task.description}"), TimeElapsedColumn(), console=console,
-                  disable=quiet or as_json, transient=True) as progress:
-        task = progress.add_task("enumerating stepper states", total=None)
+    with progress("enumerating stepper states", enabled=not (quiet or as_json)) as say:
         plan = turn(design, axis_vec, math.radians(angle))
         with Outputs(out.parent, [out.name]):
-            info = write_report(out, design, plan=plan, axis=axis_vec,
-                                progress=lambda text: progress.update(task, description=text))
+            info = write_report(out, design, plan=plan, axis=axis_vec, progress=say)
     info |= {"design": design.name, "axis": (axis_vec / (axis_vec @ axis_vec) ** 0.5).tolist(), "angle_deg": angle}
     if as_json:
         print_json(info)
