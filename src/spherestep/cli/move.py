@@ -76,7 +76,6 @@ def move(
     fault ended the run (every coil is off either way) or it missed the tolerance.
     Example: [bold]spherestep move --axis 1,0.5,2 --angle 360 --time 2.4 --emulate[/bold]
     """
-    import numpy as np
 
     from .. import checks
     from ..drive import DriveResult, check_options, choose_model, drive_turn
@@ -128,7 +127,7 @@ def move(
     own = design_model(design, core)
     if time is not None:  # before the progress starts: a refusal is one line
         check_duration(design, axis_vec, math.radians(angle), choose_model(design, own), time, "--time",
-                       start=None if backend == "simulated" else np.eye(3))
+                       start=None)
     with progress("driving the turn", enabled=not as_json) as say:
         names = DriveResult.FILES + (("servo-log.csv",) if backend != "simulated" else ())
         files = Outputs(out, names)

@@ -2,8 +2,10 @@
 :class:`~spherestep.drive.result.DriveResult`.
 
 The loop itself — estimator, control law, the link with protocol version 2, all off at the end — is
-:func:`~spherestep.drive.session.move_on_hardware` (the session assembled for the design, :mod:`.session`). The turn starts where the rotor is taken to be (the identity); its trajectory is the fastest
-turn, the given ``duration`` or the fixed time where the planner refuses the model, as in simulation
+:func:`~spherestep.drive.session.servo_session` (the session assembled for the design, :mod:`.session`). The turn
+starts where the rotor is taken to be — the stepper state nearest the identity along the turn, as in simulation —
+and its trajectory is the fastest turn, the given ``duration`` or the fixed time where the planner refuses the model,
+as in simulation
 (:meth:`~spherestep.drive.turn.Turn.servo_trajectory`). Errors are measured against the emulated rotor (its
 published truth, every 50 ms, and at the loop's last cycle, with the servo holding; the drift in the 0.15 s after
 the coils go off is reported apart) or, on a real port, against the loop's own estimate.
@@ -25,14 +27,14 @@ def drive_on_hardware(design, axis, angle: float, chosen, *, duration: float | N
                       emulate: bool, rate: float, log=None, tolerance: float, progress=None):
     """Run the servo turn on ``port`` or the emulated motor (module docstring) on ``chosen``'s model and limits."""
     from ..dynamics import Rotor
-    from .session import move_on_hardware
+    from .session import SETTLE, servo_session
     from .turn import Turn, check_duration
 
     job = Turn(design, axis, angle, chosen, tolerance, progress)
     if duration is not None:
-        check_duration(design, job.axis, job.angle, chosen, duration, start=np.eye(3))
+        check_duration(design, job.axis, job.angle, chosen, duration, start=job.start)
     rotor = Rotor.from_design(design)
-    traj, kind, note = job.servo_trajectory(np.eye(3), duration, rotor)
+    traj, kind, note = job.servo_trajectory(job.start, duration, rotor)
     shown = [-math.inf]
 
     def status(t, R, w, currents):
@@ -42,9 +44,8 @@ def drive_on_hardware(design, axis, angle: float, chosen, *, duration: float | N
                      f"|ω| {float(np.linalg.norm(w)):5.2f} rad/s   max |i| {float(np.abs(currents).max()):.3f} A")
 
     job.say(f"servo on {'the emulated motor' if emulate else port} at {rate:g} Hz")
-    session = move_on_hardware(design, job.axis, job.angle, duration=None if kind == "fastest" else traj.duration,
-                               port=port, emulate=emulate, rate=rate, log=log, status=status, model=chosen.model,
-                               drive=chosen.limits)
+    session = servo_session(design, traj, traj.duration + SETTLE, port=port, emulate=emulate, rate=rate, log=log,
+                            status=status, model=chosen.model, drive=chosen.limits)
     report = session.report
     end = np.asarray(session.reference(1e9)[0])
     if report.cycles:

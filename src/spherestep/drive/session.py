@@ -18,7 +18,6 @@ import math
 import time
 from dataclasses import dataclass
 
-import numpy as np
 
 from .. import checks, so3
 from ..control import GeometricPD, ServoLaw, Trajectory
@@ -32,6 +31,7 @@ DELAY = 1  # control periods: the currents computed in a cycle are driven at the
 # 200 Hz: max tracking error 0.31° and final 0.019° (120 rad/s: 0.44° and 0.016°; the former difference filter:
 # 0.34° and 0.043°). The iron prototype at 500 Hz (the emulator's 4 kHz current loop, 2026-11-25): the 360° turn
 # about (1, 0.5, 2) from a detent well in lockstep tracks within 0.47° and parks 0.006° off; a hold within 0.004°.
+SETTLE = 0.5  # s the loop runs on after the trajectory's end
 BANDWIDTH = 2 * math.pi * 3  # rad/s: the servo's closed-loop natural frequency on hardware (a 5 ms loop, ~1 cycle late)
 
 
@@ -169,27 +169,30 @@ def servo_session(design, trajectory: Trajectory, duration: float, *, port: str 
 
 
 def move_on_hardware(design, axis, angle: float, *, duration: float | None = None, port: str | None = None,
-                     emulate: bool = False, rate: float = LOOP_RATE, log=None, status=None, settle: float = 0.5,
+                     emulate: bool = False, rate: float = LOOP_RATE, log=None, status=None, settle: float = SETTLE,
                      **options) -> Session:
-    """Turn the rotor by ``angle`` rad about ``axis`` from where it is taken to be (the identity) on a controller
+    """Turn the rotor by ``angle`` rad about ``axis`` from where it is taken to be (the stepper state nearest the
+    identity along the turn, as in simulation: :func:`spherestep.commutation.turn_targets`) on a controller
     (``port``) or the emulated motor (``emulate``): in ``duration`` s (:func:`turn_reference`), or by default
     the fastest trapezoidal turn the drive guarantees along the path
     (:func:`spherestep.control.plan_turn`); the loop runs ``settle`` s longer. ``model`` and ``drive`` (in
     ``options``) default to the design's own; the other ``options`` go to :func:`servo_session`. What
     :func:`spherestep.drive.drive_turn` runs for ``backend="emulated"``/``"port"``."""
+    from ..commutation import turn_targets
     from ..control import plan_turn
     from ..dynamics import Rotor
     from ..magnetics import design_model
 
     a = checks.axis(axis)
+    start = turn_targets(design, a, angle, steps=1)[0]
     model, drive = options.pop("model", None), options.pop("drive", None)
     if model is None or drive is None:
         own = design_model(design)
         model = own.model if model is None else model
         drive = own.limits if drive is None else drive
     if duration is None:
-        trajectory = plan_turn(model, np.eye(3), a, angle, Rotor.from_design(design).inertia, drive)
+        trajectory = plan_turn(model, start, a, angle, Rotor.from_design(design).inertia, drive)
     else:
-        trajectory = turn_reference(np.eye(3), a, angle, duration)
+        trajectory = turn_reference(start, a, angle, duration)
     return servo_session(design, trajectory, trajectory.duration + settle, port=port, emulate=emulate, rate=rate, log=log,
                          status=status, model=model, drive=drive, **options)
