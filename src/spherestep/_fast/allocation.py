@@ -73,16 +73,23 @@ def _primal(K, t, u, lam, c, s, r):
 
 
 @njit(cache=True)
+def _scales(K, u, t):
+    """``(‖K‖²_F, ‖u‖², ‖t‖)``: the scales the tolerances of both solvers are relative to."""
+    kk = 0.0
+    uu = 0.0
+    for k in range(K.shape[1]):
+        kk += K[0, k] * K[0, k] + K[1, k] * K[1, k] + K[2, k] * K[2, k]
+        uu += u[k] * u[k]
+    return kk, uu, math.sqrt(t[0] * t[0] + t[1] * t[1] + t[2] * t[2])
+
+
+@njit(cache=True)
 def least_power_box(K, t, u, lam0, warm, max_iter, c, lam):
     """The reference's iteration: fills ``c (N,)`` and ``λ (3,)``, returns whether it converged
     (``‖K c − t‖ ≤ 1e-11 (‖K‖ ‖u‖ + ‖t‖)``). ``warm``: start from ``lam0``, else from ``(KKᵀ)⁻¹ t``."""
     N = K.shape[1]
-    kk = 0.0
-    uu = 0.0
-    for k in range(N):
-        kk += K[0, k] * K[0, k] + K[1, k] * K[1, k] + K[2, k] * K[2, k]
-        uu += u[k] * u[k]
-    tol = 1e-11 * (math.sqrt(kk * uu) + math.sqrt(t[0] * t[0] + t[1] * t[1] + t[2] * t[2])) + 1e-300
+    kk, uu, tn = _scales(K, u, t)
+    tol = 1e-11 * (math.sqrt(kk * uu) + tn) + 1e-300
     tol2 = tol * tol
     A = np.empty((3, 3))
     s, r, d, trial = np.empty(N), np.empty(3), np.empty(3), np.empty(3)
@@ -183,12 +190,7 @@ def closest_reachable(K, t, u, rho, c):
     returned; below ``μ = 1e-13 ‖K‖²`` the ball does not bind (``μ = 0``, taken there). The same KKT point
     :func:`spherestep.control.allocation.closest_reachable` finds with Clarabel."""
     N = K.shape[1]
-    kk = 0.0
-    uu = 0.0
-    for k in range(N):
-        kk += K[0, k] * K[0, k] + K[1, k] * K[1, k] + K[2, k] * K[2, k]
-        uu += u[k] * u[k]
-    tn = math.sqrt(t[0] * t[0] + t[1] * t[1] + t[2] * t[2])
+    kk, uu, tn = _scales(K, u, t)
     tol = 1e-12 * (math.sqrt(kk * uu) + tn) + 1e-300  # each step's KKT residual aimed at ...
     tol2 = tol * tol
     loose2 = 1e8 * tol2  # ... and accepted (1e-8 of the scale: far below what the torque needs) where rounding stops it

@@ -22,6 +22,7 @@ wraps it), and the servo law takes its output as the measurement at the reading'
 
 from __future__ import annotations
 
+from abc import ABC, abstractmethod
 from collections import deque
 from dataclasses import replace
 from typing import Protocol, runtime_checkable
@@ -51,7 +52,7 @@ class OrientationSensor(Protocol):
     def measure(self, t: float, R_true: np.ndarray, currents: np.ndarray | None) -> np.ndarray | None: ...
 
 
-class SampledSensor:
+class SampledSensor(ABC):
     """The :class:`OrientationSensor` schedule: a sample every ``1/rate`` s from ``t = 0``, each delivered
     ``latency`` s later (several due at once: the newest). A subclass writes ``estimate(R_true, currents,
     R_prev)``; ``R_prev`` is its own previous estimate (``start`` before the first; ``None``: none known)."""
@@ -63,8 +64,9 @@ class SampledSensor:
         self._next = 0.0
         self._queue: deque = deque()
 
+    @abstractmethod
     def estimate(self, R_true, currents=None, R_prev=None) -> np.ndarray:
-        raise NotImplementedError
+        """One sample's orientation estimate ``(3, 3)`` for the true ``R_true`` (what each sensor writes)."""
 
     def measure(self, t: float, R_true, currents=None) -> np.ndarray | None:
         if t >= self._next - 1e-12:
