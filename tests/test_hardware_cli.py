@@ -145,10 +145,10 @@ def test_ctrl_c_switches_every_coil_off(tmp_path):
             out, err = proc.communicate(timeout=10)
         finally:
             proc.kill()
-        state, trips, trace = dev.state(), dev.emulator.trips, list(dev.emulator.trace)
+        state, trips, trace = dev.state(), dev.device.trips, list(dev.device.trace)
     assert proc.returncode == 130
     assert one_error_line(err) == "spherestep: interrupted (SIGINT): all coils off, acknowledged by the device"
-    assert state == (0, 0) and trips == 0 and trace[-2:] == [("enable", 0), ("polarity", 0)]
+    assert state == (0, 0) and trips == [] and trace[-2:] == [("enable", 0), ("polarity", 0)]
     lines = log.read_text().splitlines()
     last_tx = max(i for i, line in enumerate(lines) if " TX " in line)
     assert ",OFF*" in lines[last_tx] and any(",ACK,OFF,0,0*" in line for line in lines[last_tx:])

@@ -1,4 +1,4 @@
-"""The line protocol: CRC, framing, and the Python emulator against the firmware's shared vectors."""
+"""The line protocol: CRC, framing, and the Python device (as a relay board) against the firmware's shared vectors."""
 
 from __future__ import annotations
 
@@ -10,7 +10,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from spherestep.errors import InputError
-from spherestep.hardware import Emulator, protocol
+from spherestep.hardware import CurrentDevice, protocol
 from spherestep.hardware.protocol import Frame, FrameError, LineReader, crc16, decode, encode
 
 VECTORS = Path(__file__).resolve().parents[1] / "firmware" / "test" / "vectors.txt"
@@ -86,9 +86,10 @@ def _unescape(text: str) -> bytes:
                   else {"n": "\n", "r": "\r"}.get(m[1], m[1]), text).encode("latin-1")
 
 
-def test_emulator_passes_the_firmware_vectors():
-    """Every line of firmware/test/vectors.txt, as the C++ harness runs it (tests/test_firmware.py)."""
-    emulator, now, replies, checked = None, 0, [], 0
+def test_relay_board_passes_the_firmware_vectors():
+    """Every line of firmware/test/vectors.txt, as the C++ harness runs it (tests/test_firmware.py), against the
+    device as a relay board (its clock in µs: the vectors' ms × 1000)."""
+    board, now, replies, checked = None, 0, [], 0
     for number, line in enumerate(VECTORS.read_text().splitlines(), 1):
         if not line or line.startswith("#"):
             continue
@@ -99,15 +100,15 @@ def test_emulator_passes_the_firmware_vectors():
             assert f"{crc16(text.encode()):X}" == expected, where
         elif op == "device":
             channels, watchdog, name = rest.split()
-            emulator, now, replies = Emulator(int(channels), int(watchdog), name), 0, []
+            board, now, replies = CurrentDevice.relay_board(int(channels), int(watchdog), name), 0, []
         elif op == "@":
-            now = int(rest)
-            emulator.tick(now)
+            now = 1000 * int(rest)
+            board.tick(now)
         elif op in (">", ">raw"):
             assert not replies, f"{where}: a reply to the previous send was not checked: {replies}"
             data = b"$" + rest.encode() + b"*" + f"{crc16(rest.encode()):04X}".encode() + b"\n" if op == ">" \
                 else _unescape(rest)
-            replies = [b"$" + r for r in LineReader().feed(emulator.receive(data, now))]
+            replies = [b"$" + r for r in LineReader().feed(board.receive(data, now))]
         elif op == "<":
             expected = b"$" + rest.encode() + b"*" + f"{crc16(rest.encode()):04X}".encode()
             assert replies and replies.pop(0) == expected, where
@@ -115,15 +116,15 @@ def test_emulator_passes_the_firmware_vectors():
             assert not replies, where
         elif op == "=":
             enable, polarity = (int(v, 16) for v in rest.split())
-            assert (emulator.enable, emulator.polarity) == (enable, polarity), where
+            assert (board.enable, board.polarity) == (enable, polarity), where
         else:
             raise AssertionError(f"{where}: unknown operation")
         checked += 1
     assert checked > 100
 
 
-def test_emulator_switches_polarity_only_with_enables_open():
-    emu = Emulator(channels=8, watchdog_ms=500, name="bbm")
+def test_relay_board_switches_polarity_only_with_enables_open():
+    emu = CurrentDevice.relay_board(channels=8, watchdog_ms=500, name="bbm")
     for seq, body in enumerate(["HELLO,1", "SET,3,0", "SET,3,2", "SET,5,2", "OFF"]):
         emu.receive(encode(seq, *body.split(",")), 0)
     assert list(emu.trace)[2:] == [("enable", 0), ("polarity", 0),  # HELLO: all off
@@ -140,6 +141,6 @@ def test_emulator_switches_polarity_only_with_enables_open():
 @pytest.mark.parametrize("kwargs, field", [({"channels": 0}, "channels"), ({"channels": 65}, "channels"),
                                            ({"watchdog_ms": 0}, "watchdog_ms"), ({"name": "a,b"}, "name"),
                                            ({"name": ""}, "name")])
-def test_emulator_rejects_bad_configuration(kwargs, field):
+def test_relay_board_rejects_bad_configuration(kwargs, field):
     with pytest.raises(InputError, match=f"^{field} must be"):
-        Emulator(**kwargs)
+        CurrentDevice.relay_board(**kwargs)

@@ -57,7 +57,12 @@ def host(dev, **kwargs):
 
 def enables_driven(dev):
     """Enable masks the device drove, in order, without the zero writes of break-before-make and OFF."""
-    return [m for kind, m in dev.emulator.trace if kind == "enable" and m]
+    return [m for kind, m in dev.device.trace if kind == "enable" and m]
+
+
+def trip_codes(dev):
+    """The device's trips, by code (the relay board trips only on its watchdog)."""
+    return [code for code, _, _ in dev.device.trips]
 
 
 def wait_all_off(dev, seconds=2.0):
@@ -87,12 +92,12 @@ def test_whole_plan_is_streamed_and_acknowledged(device_factory):
     assert report.device.name == "spherestep-emu" and report.device.channels == 8
     assert report.device.watchdog == pytest.approx(WATCHDOG_MS / 1000)
     assert enables_driven(dev) == [s.masks(plan.channel_map)[0] for s in plan.steps]
-    assert dev.state() == (0, 0) and dev.emulator.trips == 0
+    assert dev.state() == (0, 0) and dev.device.trips == []
     # HELLO, 12 SET and OFF, each acknowledged once; nothing lost, nothing repeated
     assert serial.stats["acked"] == serial.stats["frames"] == dev.frames == 14
     assert serial.transcript.count("RX", "$") == 14 and serial.transcript.count("TX", "$") == 14
     enabled = 0
-    for kind, mask in dev.emulator.trace:  # break before make held on the line as well
+    for kind, mask in dev.device.trace:  # break before make held on the line as well
         assert kind == "enable" or enabled == 0
         enabled = mask if kind == "enable" else enabled
 
@@ -101,7 +106,7 @@ def test_keepalives_hold_coils_through_a_long_step(device_factory):
     dev = device_factory()
     serial = host(dev)
     play(make_plan(2), serial, rate=2.0)  # 0.5 s per step, watchdog 0.2 s
-    assert dev.emulator.trips == 0 and dev.state() == (0, 0)
+    assert dev.device.trips == [] and dev.state() == (0, 0)
     assert serial.transcript.count("TX", "$") - 4 == serial.transcript.count("RX", "$") - 4 >= 2 * 3
     assert [line for line in serial.transcript.lines() if " TX " in line][2].split(",")[1].startswith("PING")
 
@@ -125,7 +130,7 @@ def test_line_faults_are_retried_and_the_plan_completes(device_factory, faults, 
     assert serial.transcript.count("NOTE", "retransmitting") == stats["retransmissions"]
     assert enables_driven(dev)[-1] == plan.steps[-1].masks(plan.channel_map)[0]
     assert set(enables_driven(dev)) == {s.masks(plan.channel_map)[0] for s in plan.steps}
-    assert dev.state() == (0, 0) and dev.emulator.trips == 0
+    assert dev.state() == (0, 0) and dev.device.trips == []
 
 
 def test_persistent_corruption_gives_up_after_bounded_retries(device_factory):
@@ -137,7 +142,7 @@ def test_persistent_corruption_gives_up_after_bounded_retries(device_factory):
     assert text.startswith(f"no valid answer from the device on {dev.port} to SET after 3 attempts")
     assert "switching the coils off failed too" in text and "watchdog opens every relay within 0.2 s" in text
     assert serial.stats["naks"] == 6  # 3 SET + 3 OFF attempts, all NAK CRC
-    assert wait_all_off(dev) == (0, 0) and dev.emulator.trips == 1
+    assert wait_all_off(dev) == (0, 0) and trip_codes(dev) == ["WDOG"]
 
 
 def test_no_answer_aborts_and_the_watchdog_switches_off(device_factory):
@@ -148,8 +153,8 @@ def test_no_answer_aborts_and_the_watchdog_switches_off(device_factory):
     assert "to SET after 3 attempts (3 timeouts" in one_line(err.value)
     # the hung device drove the last step it obeyed until its watchdog opened every relay
     assert len(enables_driven(dev)) == 3
-    assert wait_all_off(dev) == (0, 0) and dev.emulator.trips == 1
-    assert list(dev.emulator.trace)[-2:] == [("enable", 0), ("polarity", 0)]
+    assert wait_all_off(dev) == (0, 0) and trip_codes(dev) == ["WDOG"]
+    assert list(dev.device.trace)[-2:] == [("enable", 0), ("polarity", 0)]
 
 
 def test_device_vanishing_mid_plan_is_a_clean_abort(device_factory):
@@ -159,7 +164,7 @@ def test_device_vanishing_mid_plan_is_a_clean_abort(device_factory):
         play(make_plan(8), serial, rate=25.0)
     text = one_line(err.value)
     assert text.startswith(f"serial link to {dev.port} lost during SET") and "watchdog" in text
-    assert wait_all_off(dev) == (0, 0) and dev.emulator.trips == 1
+    assert wait_all_off(dev) == (0, 0) and trip_codes(dev) == ["WDOG"]
 
 
 def test_host_falling_silent_trips_the_watchdog_and_is_told(device_factory):
@@ -170,7 +175,7 @@ def test_host_falling_silent_trips_the_watchdog_and_is_told(device_factory):
             sent = time.monotonic()
             driver.apply(plan.steps[0], duration=0.1)
             # a host stuck without keep-alives: the device switches off by itself, never before its period
-            assert wait_all_off(dev, seconds=5.0) == (0, 0) and dev.emulator.trips == 1
+            assert wait_all_off(dev, seconds=5.0) == (0, 0) and trip_codes(dev) == ["WDOG"]
             assert time.monotonic() - sent >= WATCHDOG_MS / 1000
             driver.apply(plan.steps[1], duration=0.1)
     assert err.value.code == "WDOG"
@@ -195,7 +200,7 @@ def test_ctrl_c_mid_plan_switches_everything_off(device_factory):
             play(make_plan(100), serial, rate=25.0)
     finally:
         timer.cancel()
-    assert dev.state() == (0, 0) and dev.emulator.trips == 0  # switched off by the host, not the watchdog
+    assert dev.state() == (0, 0) and dev.device.trips == []  # switched off by the host, not the watchdog
     assert serial.transcript.entries[-2][2].split(",")[1].startswith("OFF")
 
 

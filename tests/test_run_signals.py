@@ -54,10 +54,10 @@ def test_a_signal_mid_run_switches_every_coil_off_and_keeps_the_log(tmp_path, si
             out, err = proc.communicate(timeout=15)
         finally:
             proc.kill()
-        state, trips, trace = dev.state(), dev.emulator.trips, list(dev.emulator.trace)
+        state, trips, trace = dev.state(), dev.device.trips, list(dev.device.trace)
     assert proc.returncode == code, err
     assert err.strip() == f"spherestep: interrupted ({name}): all coils off, acknowledged by the device"
-    assert state == (0, 0) and trips == 0 and trace[-2:] == [("enable", 0), ("polarity", 0)]
+    assert state == (0, 0) and trips == [] and trace[-2:] == [("enable", 0), ("polarity", 0)]
     lines = log.read_text().splitlines()
     last_tx = max(i for i, line in enumerate(lines) if " TX " in line)
     assert ",OFF*" in lines[last_tx] and any(",ACK,OFF,0,0*" in line for line in lines[last_tx:])

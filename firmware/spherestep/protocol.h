@@ -3,7 +3,7 @@
 // Plain C++ with no Arduino headers, no heap and no standard library beyond <stdint.h>, <stddef.h>: the
 // sketch (spherestep.ino) feeds it received bytes and millis(); the host test harness
 // (firmware/test/test_protocol.cpp) does the same with g++. The Python emulator
-// (spherestep.hardware.emulator) is its line-for-line counterpart; both pass firmware/test/vectors.txt.
+// (spherestep.hardware.CurrentDevice.relay_board) is its counterpart; both pass firmware/test/vectors.txt.
 #ifndef SPHERESTEP_PROTOCOL_H
 #define SPHERESTEP_PROTOCOL_H
 

@@ -3,13 +3,14 @@
 :class:`CoilDriver` switches stator coils through a :class:`Backend` (:class:`DryRun`, :class:`Serial`,
 :class:`Simulated`) within
 :class:`ThermalLimits`, and always leaves them off; :func:`play` streams a commutation plan at a step rate.
-:mod:`~spherestep.hardware.protocol` is the wire format, :class:`Emulator`/:class:`PtyDevice` a device that
-speaks it on a pseudo-terminal. See ``docs/protocol.md``.
+:mod:`~spherestep.hardware.protocol` is the wire format. See ``docs/protocol.md``.
 
-Current mode (protocol version 2): :class:`CurrentDevice` is the device (PI current loops, limits, trips) the
-firmware's ``drive.cpp`` mirrors; :class:`DriveLink` the host side; :class:`EmulatedMotor`/:class:`MotorPty` the
-motor on a pseudo-terminal (:class:`LockstepLink` the same on a simulated clock); :func:`run_servo` the fixed-rate
-loop. Links, devices and emulators only: a whole session assembled for a design (``servo_session``) is the drive
+One device, one pseudo-terminal server: :class:`CurrentDevice` is the coil controller — the firmware's
+``drive.cpp`` (H-bridges: PI current loops, limits, trips; protocol version 2, and 1 with relay masks as ± the
+nominal current) or, as :meth:`CurrentDevice.relay_board`, ``protocol.cpp`` (relays, protocol 1 only);
+:class:`PtyDevice` serves one on a pseudo-terminal, with line :class:`Faults` (the relay board by default;
+:class:`MotorPty` the device driving an :class:`EmulatedMotor`, :class:`LockstepLink` the same device on a
+simulated clock). :class:`DriveLink` is the host side of version 2, :func:`run_servo` the fixed-rate loop. Links, devices and emulators only: a whole session assembled for a design (``servo_session``) is the drive
 room's, :mod:`spherestep.drive.session`. See ``docs/protocol.md`` and ``docs/hardware.md``.
 """
 
@@ -19,11 +20,11 @@ from . import protocol, protocol2
 from .backend import Backend, DeviceInfo, LinkError
 from .driver import CoilDriver, coil_masks
 from .dryrun import DryRun, Sent
-from .emulator import Emulator, Faults, PtyDevice
 from .current_device import CurrentDevice
 from .drive_link import DeviceTrip, DriveInfo, DriveLink
 from .limits import CurrentLimits, ThermalGuard, ThermalLimitError, ThermalLimits, heating_step
-from .motor_emulator import EmulatedMotor, LockstepLink, MotorFaults, MotorPty, Truth
+from .motor_emulator import EmulatedMotor, LockstepLink, MotorFaults, MotorPty
+from .pty_device import Faults, PtyDevice, Truth
 from .serialport import NakError, Serial
 from .servo import LOOP_RATE, ServoFault, ServoReport, run_servo
 from .servo_parts import FieldTracker, wire_limits
@@ -33,7 +34,7 @@ from .transcript import Transcript
 
 __all__ = [
     "LOOP_RATE", "Backend", "CoilDriver", "CurrentDevice", "CurrentLimits", "DeviceInfo", "DeviceTrip", "DriveInfo", "DriveLink",
-    "DryRun", "EmulatedMotor", "Emulator", "LockstepLink", "Faults", "FieldTracker", "LinkError", "MotorFaults", "MotorPty",
+    "DryRun", "EmulatedMotor", "LockstepLink", "Faults", "FieldTracker", "LinkError", "MotorFaults", "MotorPty",
     "NakError", "PlayReport", "PtyDevice", "Sent", "Serial", "ServoFault", "ServoReport",
     "Simulated", "ThermalGuard", "ThermalLimitError", "ThermalLimits", "Transcript", "Truth", "coil_masks",
     "heating_step", "play", "protocol", "protocol2", "run_servo", "wire_limits",

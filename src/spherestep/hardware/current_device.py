@@ -1,4 +1,6 @@
-"""The current-mode coil controller in Python: the counterpart of ``firmware/spherestep/drive.cpp``.
+"""The coil controller in Python, the one device the pseudo-terminal serves: the counterpart of
+``firmware/spherestep/drive.cpp`` (H-bridges, protocol 1 and 2) and, as :meth:`CurrentDevice.relay_board`, of
+``firmware/spherestep/protocol.cpp`` (relays, protocol 1 only).
 
 :class:`CurrentDevice` speaks protocol version 2 (:mod:`~spherestep.hardware.protocol2`) and, for relay
 plans, version 1 (``SET`` masks become ± the nominal current, coil ``k`` on enable bit ``k`` and polarity bit
@@ -20,11 +22,19 @@ until the next ``DRIVE`` (or ``SET``): the loops and the monitors run only while
 ``k_p = ω_c L / V``, ``k_i = k_p (R / L) h`` (anti-windup: the sum is clamped to ``±max_duty``), so the
 closed loop is first order with bandwidth ``ω_c`` when ``L``, ``R`` are right. Both implementations pass
 ``firmware/test/vectors2.txt`` with integer mA and µs, so they answer byte for byte alike.
+
+The relay board (:meth:`CurrentDevice.relay_board`, no bridges) has ``relays`` channels (1–64) that ``SET``
+drives as they are, polarity relays moved only while every enable relay is open (break before make; the last 4096
+writes in :attr:`CurrentDevice.trace`); it speaks protocol 1 only (frames of at most
+:data:`~spherestep.hardware.protocol.MAX_FRAME` bytes), has no current loop, no current limits and no ``CRCS``
+trip, and passes ``firmware/test/vectors.txt`` as ``protocol.cpp`` does. Times are µs on both (the relay board's
+``millis()`` × 1000).
 """
 
 from __future__ import annotations
 
 import math
+from collections import deque
 from typing import Protocol
 
 import numpy as np
@@ -32,7 +42,8 @@ import numpy as np
 from .. import checks
 from ..errors import bad_value
 from .limits import CurrentLimits
-from .protocol import FrameError, LineReader, decode, encode, format_mask, parse_decimal, parse_hex
+from .protocol import MAX_FRAME, MAX_MASK_DIGITS, FrameError, LineReader, decode, encode, format_mask, \
+    parse_decimal, parse_hex
 from .protocol2 import MAX_COILS, MAX_FRAME2, MAX_SENSORS, VERSION2, decode_block, format_state
 
 _NAME_CHARS = frozenset("ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789._-")
@@ -56,20 +67,33 @@ class Bridges(Protocol):
 
 
 class CurrentDevice:
-    """The device state machine for ``coils`` H-bridges and ``sensors`` magnetometers (see the module).
+    """The device state machine for ``coils`` H-bridges and ``sensors`` magnetometers, or (``bridges`` None,
+    ``coils`` and ``sensors`` 0, ``relays`` given: see :meth:`relay_board`) a relay board; see the module.
 
     ``watchdog_ms`` (1–65535), control ``period_us``, ``limits``, ``supply`` V, coil ``inductance`` H and
     ``resistance`` (from ``limits``) for the PI gains, closed-loop ``bandwidth`` rad/s, ``nominal_ma`` the
     current of a relay-mode coil, ``field_lsb_nt`` the magnetometers' nT per count (TMAG5273A2 at ±266 mT).
     ``off_us`` is the time the coils last went from driven to all off (a trip, ``OFF`` or ``HELLO``). ``trips`` lists ``(code, coil or -1, time µs)``.
+    ``enable``/``polarity`` are the protocol-1 masks last set (the relays driven, on a relay board), ``channels``
+    the protocol-1 channel count (``relays``, or ``2 coils``: coil ``k`` on enable bit ``k``, polarity bit
+    ``coils + k``), ``versions`` the protocol versions spoken.
     """
 
-    def __init__(self, bridges: Bridges, coils: int, sensors: int, *, watchdog_ms: int = 100,
-                 period_us: int = 1000, limits: CurrentLimits | None = None, supply: float = 24.0,
-                 inductance: float = 18.7e-3, bandwidth: float = 2 * math.pi * 100, nominal_ma: int = 1000,
-                 field_lsb_nt: int = 8118, name: str = "spherestep-t41"):
-        coils = checks.count(coils, "coils", 1, MAX_COILS, expected=f"an integer 1..{MAX_COILS}")
-        sensors = checks.count(sensors, "sensors", 0, MAX_SENSORS, expected=f"an integer 0..{MAX_SENSORS}")
+    def __init__(self, bridges: Bridges | None, coils: int, sensors: int, *, relays: int | None = None,
+                 watchdog_ms: int = 100, period_us: int = 1000, limits: CurrentLimits | None = None,
+                 supply: float = 24.0, inductance: float = 18.7e-3, bandwidth: float = 2 * math.pi * 100,
+                 nominal_ma: int = 1000, field_lsb_nt: int = 8118, name: str = "spherestep-t41"):
+        if relays is None:
+            if bridges is None:
+                raise bad_value("bridges", "the coils' bridges (or relays=channels for a relay board)", bridges)
+            coils = checks.count(coils, "coils", 1, MAX_COILS, expected=f"an integer 1..{MAX_COILS}")
+            sensors = checks.count(sensors, "sensors", 0, MAX_SENSORS, expected=f"an integer 0..{MAX_SENSORS}")
+            self.channels, self.versions, max_frame = 2 * coils, (1, VERSION2), MAX_FRAME2
+        else:
+            relays = checks.count(relays, "channels", 1, 4 * MAX_MASK_DIGITS, expected="an integer 1..64")
+            if bridges is not None or coils != 0 or sensors != 0:
+                raise bad_value("relays", "given alone: a relay board has no bridges, coils or sensors", relays)
+            self.channels, self.versions, max_frame = relays, (1,), MAX_FRAME
         watchdog_ms = checks.count(watchdog_ms, "watchdog_ms", 1, 65535, expected="an integer 1..65535 (milliseconds)")
         period_us = checks.count(period_us, "period_us", 50, 100000, expected="an integer 50..100000 (microseconds)")
         if not 1 <= len(name) <= 16 or not set(name) <= _NAME_CHARS:
@@ -98,12 +122,25 @@ class CurrentDevice:
         self.supply = float(supply)
         self.version = 0  # 0: no session, 1: relay session, 2: current session
         self.enable = self.polarity = 0  # relay-mode masks
+        self.trace: deque[tuple[str, int]] = deque(maxlen=4096)
         self.tripped: str | None = None
         self.trips: list[tuple[str, int, int]] = []
         self.bad_frames = 0
         self.last_valid_us = 0
-        self._reader = LineReader(MAX_FRAME2)
+        self.max_frame = max_frame
+        self._reader = LineReader(max_frame)
         self._all_off()
+
+    @classmethod
+    def relay_board(cls, channels: int = 32, watchdog_ms: int = 500, name: str = "spherestep-emu") -> CurrentDevice:
+        """The relay board of ``firmware/spherestep/protocol.cpp``: ``channels`` relays (1–64), watchdog
+        ``watchdog_ms`` (1–65535), ``name`` in the handshake; protocol 1 only (see the module)."""
+        return cls(None, 0, 0, relays=channels, watchdog_ms=watchdog_ms, name=name)
+
+    @property
+    def relays_only(self) -> bool:
+        """True for a relay board (no bridges: protocol 1 only, masks driven as they are)."""
+        return self.bridges is None
 
     # -- outputs and trips --------------------------------------------------------------------------------------
     @property
@@ -111,7 +148,7 @@ class CurrentDevice:
         return self.version != 0
 
     def _all_off(self, now_us: int = 0) -> None:
-        if not hasattr(self, "off_us") or np.any(self.setpoint != 0) or np.any(self.duty != 0):
+        if not hasattr(self, "off_us") or self.enable or np.any(self.setpoint != 0) or np.any(self.duty != 0):
             self.off_us = now_us  # the moment the coils went from driven to off
         self.driving = False
         self.setpoint[:] = 0.0
@@ -120,8 +157,27 @@ class CurrentDevice:
         self._follow[:] = 0
         self._frozen[:] = 0
         self._dead[:] = 0
-        self.enable = self.polarity = 0
-        self.bridges.drive(self.duty.copy(), False)
+        self._set_enable(0)
+        self._set_polarity(0)
+        if self.bridges is not None:
+            self.bridges.drive(self.duty.copy(), False)
+
+    def _set_enable(self, mask: int) -> None:
+        self.enable = mask
+        self.trace.append(("enable", mask))
+
+    def _set_polarity(self, mask: int) -> None:
+        self.polarity = mask
+        self.trace.append(("polarity", mask))
+
+    def _apply_masks(self, enable: int, polarity: int) -> None:
+        """Drive the masks, break before make: polarity relays move only while every enable relay is open."""
+        if polarity != self.polarity:
+            if self.enable:
+                self._set_enable(0)
+            self._set_polarity(polarity)
+        if enable != self.enable:
+            self._set_enable(enable)
 
     def _trip(self, code: str, coil: int, now_us: int) -> None:
         self._all_off(now_us)
@@ -135,8 +191,11 @@ class CurrentDevice:
             self._trip("WDOG", -1, now_us)
 
     def step(self, now_us: int) -> None:
-        """One control period at ``now_us``: read currents, update heat, run the PI loops, check, drive."""
+        """One control period at ``now_us``: read currents, update heat, run the PI loops, check, drive (a relay
+        board: the watchdog only)."""
         self.tick(now_us)
+        if self.bridges is None:
+            return
         lim = self.limits
         ma = np.asarray(self.bridges.measure(), dtype=np.int64)
         i = ma / 1000.0
@@ -181,14 +240,14 @@ class CurrentDevice:
 
     def _damaged(self, code: str, now_us: int) -> bytes:
         self.bad_frames += 1
-        if self.session and self.bad_frames >= CRC_STORM:
+        if self.session and self.bridges is not None and self.bad_frames >= CRC_STORM:
             self._trip("CRCS", -1, now_us)
         return encode(None, "NAK", code)
 
     def _process(self, body: bytes, now_us: int) -> bytes:
         self.tick(now_us)
         try:
-            frame = decode(body, MAX_FRAME2)
+            frame = decode(body, self.max_frame)
         except FrameError as exc:
             return self._damaged(exc.code, now_us)
         if frame.seq is None:
@@ -202,7 +261,7 @@ class CurrentDevice:
         def accepted(*data: object) -> bytes:
             if self.session:
                 self.last_valid_us = now_us
-            return encode(seq, "ACK", verb, *data, max_frame=MAX_FRAME2)
+            return encode(seq, "ACK", verb, *data, max_frame=self.max_frame)
 
         def refused() -> bytes:
             return nak(self.tripped or "SESSION")
@@ -211,14 +270,14 @@ class CurrentDevice:
             version = parse_decimal(args[0], 3) if len(args) == 1 else None
             if version is None:
                 return nak("ARGS")
-            if version not in (1, VERSION2) or (version == 1 and 2 * self.coils > 64):
+            if version not in self.versions or (version == 1 and self.channels > 4 * MAX_MASK_DIGITS):
                 return nak("VERSION")
             if np.any(self.heat > 0.9):
                 return nak("HEAT")
             self._all_off(now_us)
             self.version, self.tripped = version, None
             if version == 1:
-                return accepted(1, 2 * self.coils, self.watchdog_ms, self.name)
+                return accepted(1, self.channels, self.watchdog_ms, self.name)
             lim = self.limits
             return accepted(VERSION2, self.coils, self.sensors, self.watchdog_ms, self.period_us,
                             round(lim.max_current * 1000), round(lim.max_power), self.field_lsb_nt, self.name)
@@ -235,22 +294,23 @@ class CurrentDevice:
             return accepted() if self.version == VERSION2 else accepted(format_mask(self.enable),
                                                                        format_mask(self.polarity))
         if verb == "SET":
-            masks = [parse_hex(a, 1, 16) for a in args] if len(args) == 2 else [None]
+            masks = [parse_hex(a, 1, MAX_MASK_DIGITS) for a in args] if len(args) == 2 else [None]
             if None in masks:
                 return nak("ARGS")
             if self.version != 1:
                 return nak("VERB") if self.version == VERSION2 else refused()
             enable, polarity = masks
-            if (enable | polarity) >> (2 * self.coils):
+            if (enable | polarity) >> self.channels:
                 return nak("RANGE")
-            n = self.coils
-            on = np.array([(enable >> k) & 1 for k in range(n)], dtype=float)
-            sign = np.array([1.0 - 2.0 * ((polarity >> (n + k)) & 1) for k in range(n)])
-            if not self._set(on * sign * self.nominal_ma):
-                return nak("LIMIT")
-            self.enable, self.polarity = enable, polarity
-            return accepted(format_mask(enable), format_mask(polarity))
-        if verb in ("DRIVE", "READ"):
+            if self.bridges is not None:
+                n = self.coils
+                on = np.array([(enable >> k) & 1 for k in range(n)], dtype=float)
+                sign = np.array([1.0 - 2.0 * ((polarity >> (n + k)) & 1) for k in range(n)])
+                if not self._set(on * sign * self.nominal_ma):
+                    return nak("LIMIT")
+            self._apply_masks(enable, polarity)
+            return accepted(format_mask(self.enable), format_mask(self.polarity))
+        if verb in ("DRIVE", "READ") and VERSION2 in self.versions:
             block = None
             if verb == "DRIVE" and len(args) == 1:
                 block = decode_block(args[0], self.coils)

@@ -24,18 +24,14 @@
 :class:`MotorFaults` injects the faults the servo must survive: an open coil, a coil stuck at full current (a
 shorted bridge, which only the supply cut stops), a frozen current reading, a magnetometer that stops (stale)
 or returns garbage, link loss (the device vanishes, or stops reading), and a starved device (its answers late).
-:class:`MotorPty` runs device and
-motor on the master end of ``os.openpty()``; a host opens :attr:`MotorPty.port` like a USB serial device.
+:class:`MotorPty` is the one pseudo-terminal server (:class:`~spherestep.hardware.pty_device.PtyDevice`) built for
+a motor: a host opens :attr:`MotorPty.port` like a USB serial device; :class:`LockstepLink` talks to the same
+device in this process on a simulated clock.
 """
 
 from __future__ import annotations
 
-import gc
 import math
-import os
-import select
-import signal
-import time
 from dataclasses import dataclass
 
 import numpy as np
@@ -47,7 +43,9 @@ from .drive_link import DeviceTrip, device_info
 from .limits import CurrentLimits
 from .protocol import decode, encode
 from .protocol2 import FULL_SCALE, MAX_FRAME2, TRIP_CODES, VERSION2, encode_block, parse_state
+from .pty_device import Faults, PtyDevice, Truth
 from .serialport import NakError
+
 
 @dataclass(frozen=True)
 class MotorFaults:
@@ -158,6 +156,12 @@ class EmulatedMotor:
             counts[garbage] = self.rng.integers(-FULL_SCALE, FULL_SCALE + 1, 3)
         self._last_counts = counts
         return counts, stale
+
+    def warm_up(self) -> None:
+        """Make the first (slow) calls now: the field tables, the torque cache, compiled code, the rotor synced."""
+        self.sense()
+        self.torque_cache.at(self.R)
+        self.sync()
 
     # -- physics ----------------------------------------------------------------------------------------------------
     def advance_to(self, t: float) -> None:
@@ -285,24 +289,6 @@ class LockstepLink:
             raise LinkError(f"malformed state ({exc})") from None
 
 
-@dataclass(frozen=True)
-class Truth:
-    """The emulated motor as the device process last published it: orientation ``R``, angular velocity ``w``
-    (rad/s), coil currents ``i`` (A), emulated time ``t`` (s, from :attr:`MotorPty.started`), bridges
-    ``enabled``, ``off_at`` (s) the last time the coils went from driven to off, ``slip`` (s) how far emulated
-    time has fallen behind the wall clock (the process was starved), and the device's ``trips``
-    ``(code, coil, time s)``: emulated time ``t`` is wall time ``− started − slip``."""
-
-    R: np.ndarray
-    w: np.ndarray
-    i: np.ndarray
-    t: float
-    enabled: bool
-    off_at: float
-    slip: float
-    trips: tuple[tuple[str, int, float], ...]
-
-
 def truth_of(motor: EmulatedMotor, device: CurrentDevice, slip: float = 0.0) -> Truth:
     """The :class:`Truth` of a motor and its device in this process (the rotor brought up to date)."""
     motor.sync()
@@ -311,164 +297,14 @@ def truth_of(motor: EmulatedMotor, device: CurrentDevice, slip: float = 0.0) -> 
                  trips)
 
 
-_TRIP_ORDER = ("WDOG", "CRCS", "OVER", "OPEN", "STUCK", "HEAT")
-_MAX_TRIPS = 8
-STARTUP = 0.2  # s of emulated time the device process runs idle before start() returns
-DEVICE_RT_PRIORITY = 30  # above the host loop's (spherestep.hardware.servo.RT_PRIORITY): the device answers first
-PUBLISH_EVERY = 2e-3  # s of emulated time between two publications of the truth
-WAKE_EVERY = 1e-3  # s: the device process's longest sleep between steps when no frame arrives
-MAX_CATCH_UP = 0.01  # s: when the process falls further behind the wall clock, emulated time slips instead
+class MotorPty(PtyDevice):
+    """The pseudo-terminal server (:class:`~spherestep.hardware.pty_device.PtyDevice`) for ``motor``: a
+    :class:`CurrentDevice` with :func:`matching_device_options` (overridden by ``device_options``:
+    ``watchdog_ms``, ``limits``...) driving it, in a forked process (``realtime``: see ``PtyDevice``), with the
+    line ``faults``; :meth:`~PtyDevice.truth` the :class:`~spherestep.hardware.pty_device.Truth` it publishes."""
 
-
-class MotorPty:
-    """A :class:`CurrentDevice` driving an :class:`EmulatedMotor`, served on a pseudo-terminal by a separate
-    process (forked; as a real board, it does not share the host's interpreter and its lock).
-
-    The device's control step runs every ``motor.period`` of wall time, catching up at most ``MAX_CATCH_UP`` when
-    the process was held up (beyond that emulated time slips, so that the host never meets a motor that ran
-    10 ms unattended in a burst); frames are answered as they complete. :meth:`truth` returns
-    the :class:`Truth` the process publishes after every step and frame. ``device_options`` go to
-    :class:`CurrentDevice` (``watchdog_ms``, ``limits``...). With ``realtime`` the device process asks for
-    ``SCHED_FIFO`` scheduling (``DEVICE_RT_PRIORITY``, where the OS permits it) and pauses its garbage collector, as
-    the firmware runs on its own core. POSIX only.
-    """
-
-    def __init__(self, motor: EmulatedMotor, *, realtime: bool = True, **device_options):
-        import multiprocessing as mp
-        import tty
-
-        self.motor = motor
-        self.realtime = bool(realtime)
-        self.device = CurrentDevice(motor, len(motor.design.stator), len(motor.sensors),
-                                    **{**matching_device_options(motor), **device_options})
-        self._master, self._slave = os.openpty()
-        tty.setraw(self._slave)
-        self.port = os.ttyname(self._slave)
-        ctx = mp.get_context("fork")
-        n = len(motor.i)
-        self._shared = ctx.Array("d", 9 + 3 + n + 5 + 3 * _MAX_TRIPS, lock=True)
-        self._slip = 0.0
-        self.started: float | None = None  # time.monotonic() at emulated time 0
-        self._stop = ctx.Event()
-        self._process = ctx.Process(target=self._serve, name=f"MotorPty {self.port}", daemon=True)
-
-    def truth(self) -> Truth:
-        """The emulated motor now (see :class:`Truth`)."""
-        n = len(self.motor.i)
-        with self._shared.get_lock():
-            v = np.array(self._shared[:])
-        count = int(v[14 + n])
-        rows = v[17 + n:].reshape(_MAX_TRIPS, 3)[:min(count, _MAX_TRIPS)]
-        trips = tuple((_TRIP_ORDER[int(c)], int(k), float(t)) for c, k, t in rows)
-        return Truth(v[:9].reshape(3, 3), v[9:12], v[12:12 + n], float(v[12 + n]), bool(v[13 + n]),
-                     float(v[15 + n]), float(v[16 + n]), trips)
-
-    def start(self) -> MotorPty:
-        self.motor.sense()  # first calls (spline set-up, caches, compiled code) here, inherited by the device process
-        self.motor.torque_cache.at(self.motor.R)
-        self.motor.sync()
-        self._publish()
-        self.started = time.monotonic() - self.motor.t
-        self._process.start()
-        # the forked process's first steps touch (and copy) its pages: milliseconds to tens of them on a busy
-        # machine. Let that happen before a host talks to it — the device idles, coils off, for STARTUP s.
-        deadline = time.monotonic() + 10 * STARTUP
-        while self.truth().t < STARTUP and time.monotonic() < deadline and self._process.is_alive():
-            time.sleep(0.005)
-        return self
-
-    def stop(self) -> None:
-        self._stop.set()
-        if self._process.is_alive():
-            self._process.join(timeout=5)
-            if self._process.is_alive():
-                self._process.kill()
-                self._process.join()
-        for fd in (self._master, self._slave):
-            if fd is not None:
-                os.close(fd)
-        self._master = self._slave = None
-
-    def __enter__(self) -> MotorPty:
-        return self.start()
-
-    def __exit__(self, *exc) -> None:
-        self.stop()
-
-    # -- the device process -------------------------------------------------------------------------------------
-    def _publish(self) -> None:
-        m = self.motor
-        m.sync()  # the rotor brought up to the coils' time, as truth_of does in lockstep
-        trips = self.device.trips[:_MAX_TRIPS]
-        rows = [(_TRIP_ORDER.index(c), k, us * 1e-6) for c, k, us in trips]
-        rows += [(0.0, 0.0, 0.0)] * (_MAX_TRIPS - len(rows))
-        values = np.concatenate([m.R.ravel(), m.w, m.i, [m.t, float(m.enabled), len(self.device.trips),
-                                                         self.device.off_us * 1e-6, self._slip], np.ravel(rows)])
-        with self._shared.get_lock():
-            self._shared[:] = values.tolist()
-
-    def _steps_to(self, t: float, master) -> None:
-        """Control steps up to emulated time ``t``, answering frames between steps as they come."""
-        m, dev = self.motor, self.device
-        while m.t + m.period <= t + 1e-12:
-            self._answer(master)
-            m.advance_to(m.t + m.period)
-            dev.step(round(m.t * 1e6))
-
-    def _answer(self, master) -> None:
-        """Answer the bytes waiting on the line at the device's current time."""
-        if master is None or not select.select([master], [], [], 0)[0]:
-            return
-        try:
-            data = os.read(master, 4096)
-        except OSError:  # no host has the slave open yet
-            return
-        reply = self.device.receive(data, round(self.motor.t * 1e6))
-        delay = self.motor.faults.answer_delay(self.motor.t)
-        if reply and delay > 0:  # a starved device: the process stalls before it answers
-            time.sleep(delay)
-        if reply:
-            try:
-                os.write(master, reply)
-            except OSError:
-                pass
-
-    def _serve(self) -> None:
-        """Step the device up to the wall clock, answering frames between steps, then wait for bytes at most one
-        period. Frames are taken at the earliest time they can have arrived, so that a stall of this process
-        (not of the host) does not trip the watchdog. The host's Ctrl-C reaches this process too (one process
-        group): it is ignored here, and the host stops the device after switching the coils off."""
-        signal.signal(signal.SIGINT, signal.SIG_IGN)
-        signal.signal(signal.SIGTERM, signal.SIG_DFL)
-        if self.realtime:  # a microcontroller's loop: real-time scheduling where the OS permits it
-            try:
-                os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(DEVICE_RT_PRIORITY))
-            except (AttributeError, OSError):
-                pass
-            gc.disable()
-        m, f = self.motor, self.motor.faults
-        t0 = self.started
-        master = self._master
-        published = m.t
-        while not self._stop.is_set():
-            t = time.monotonic() - t0
-            if t > m.t + MAX_CATCH_UP:  # starved by the machine: let emulated time slip rather than burst
-                self._slip += t - (m.t + MAX_CATCH_UP)
-                t0 += t - (m.t + MAX_CATCH_UP)
-                t = m.t + MAX_CATCH_UP
-            if master is not None and f.vanish_at is not None and t >= f.vanish_at:
-                os.close(master)
-                master = None
-            listening = master if master is not None and (f.deaf_at is None or t < f.deaf_at) else None
-            self._answer(listening)
-            self._steps_to(t, listening)
-            if m.t - published >= PUBLISH_EVERY:
-                self._publish()
-                published = m.t
-            # wake for a frame at once, else every WAKE_EVERY s at most (the steps due are caught up on waking): a
-            # 4 kHz current loop need not wake the process 4000 times a second on a shared machine
-            wait = max(m.period, WAKE_EVERY)
-            if listening is not None:
-                select.select([listening], [], [], wait)
-            else:
-                time.sleep(wait)
+    def __init__(self, motor: EmulatedMotor, *, realtime: bool = True, faults: Faults | None = None,
+                 **device_options):
+        device = CurrentDevice(motor, len(motor.design.stator), len(motor.sensors),
+                               **{**matching_device_options(motor), **device_options})
+        super().__init__(device, faults, motor=motor, realtime=realtime)
