@@ -266,6 +266,20 @@ def test_the_coil_as_built(proto):
     assert proto.summary()["coil"]["turns"] == 2824
 
 
+def test_coil_electrics_is_a_result_with_an_explicit_misfit():
+    from spherestep.motor import prototype
+
+    proto = prototype()
+    e = proto.coil_electrics()
+    assert e.fits and e.misfit is None and e.turns == 2824 and e.core == "iron"
+    assert e.power == pytest.approx(e.resistance * e.nominal_current ** 2, rel=1e-12)
+    assert e.to_dict() == proto.coil.electrics(proto.coil_diameter, proto.coil_length) == proto.summary()["coil"]
+    bad = replace(proto, coil_diameter=0.001).coil_electrics()  # a pole wider than the groove: no winding
+    assert not bad.fits and "coil must be" in bad.misfit
+    assert (bad.turns, bad.resistance, bad.nominal_current, bad.ampere_turns, bad.power) == (None,) * 5
+    assert bad.to_dict() == {"core": "iron", "winding": bad.misfit} and bad.supply_voltage == 24.0
+
+
 def test_polarity_rule_and_explicit_rotor():
     from spherestep import packing as pk
     from spherestep.motor import MotorDesign, PolarityRule

@@ -167,5 +167,5 @@ def measure(entry, *, samples: int = 20_000, capability_samples: int = 500, seed
         escape_violations=None if m.escape_violations is None else len(m.escape_violations),
         capability_samples=capability_samples, torque_median_N_m=pct[50], torque_p5_N_m=pct[5],
         bias_torque_max_N_m=float(cap.bias.max()), magnet_mass_kg=magnet_mass(design),
-        coil_power_W=electrics.get("power_W"), supply_power_W=design.coil.supply_power,
+        coil_power_W=electrics.power, supply_power_W=design.coil.supply_power,
         **drive.measurement_fields())

@@ -23,7 +23,7 @@ from ..sphere import as_points, disc_angle
 from ..units import length
 from .coil import CoilSpec, IronMaterial, iron_coil
 
-__all__ = ["DEFAULT_TOL", "MAX_COILS", "MotorDesign", "PolarityRule", "check_fits", "default_channel_map"]
+__all__ = ["DEFAULT_TOL", "MAX_COILS", "CoilElectrics", "MotorDesign", "PolarityRule", "check_fits", "default_channel_map"]
 
 DEFAULT_TOL = math.radians(1.0)  # a pole within 1° of a coil's axis sits on it (2.7 mm on a 12-in rotor)
 DIMENSIONS = ("sphere_diameter", "magnet_diameter", "magnet_length", "coil_diameter", "coil_length", "air_gap")
@@ -128,6 +128,39 @@ def _packing(value: str | Packing, level: int, name: str) -> Packing:
         raise bad_value(name, "a Packing or a packing name listed by `spherestep packings --all`", value)
     level = checks.count(level, f"{name}_refine", 0, expected="a non-negative integer number of refinement levels")
     return pk.named(value, level)
+
+
+@dataclass(frozen=True)
+class CoilElectrics:
+    """The coil as built at a design's coil size (:meth:`MotorDesign.coil_electrics`), SI: its ``core``, the
+    supply (``supply_voltage`` V, ``supply_power`` W shared by ``coils_on`` coils) and, when the winding fits
+    (``misfit`` None), ``turns``, ``resistance`` (Ω), ``nominal_current`` (A: ``supply_power / coils_on`` at
+    ``resistance``), ``ampere_turns`` (at the nominal current) and ``power`` (W a coil); when it does not,
+    ``misfit`` says why and those five are None."""
+
+    core: str
+    supply_voltage: float
+    supply_power: float
+    coils_on: int
+    turns: int | None = None
+    resistance: float | None = None
+    nominal_current: float | None = None
+    ampere_turns: float | None = None
+    power: float | None = None
+    misfit: str | None = None
+
+    @property
+    def fits(self) -> bool:
+        """True when the winding fits the coil's size (its five quantities are numbers)."""
+        return self.misfit is None
+
+    def to_dict(self) -> dict:
+        """For people, units in the keys: ``core`` and either the winding and supply or ``winding`` (the misfit)."""
+        if self.misfit is not None:
+            return {"core": self.core, "winding": self.misfit}
+        return {"core": self.core, "turns": self.turns, "resistance_ohm": self.resistance,
+                "nominal_current_A": self.nominal_current, "ampere_turns": self.ampere_turns, "power_W": self.power,
+                "supply_V": self.supply_voltage, "supply_W": self.supply_power, "coils_on": self.coils_on}
 
 
 @dataclass(frozen=True, eq=False)
@@ -381,17 +414,21 @@ class MotorDesign:
 
         return design_metrics(self, samples=samples, seed=seed, escape=escape)
 
-    def coil_electrics(self) -> dict:
-        """The coil as built at this design's coil size: its core and :meth:`CoilSpec.electrics` (turns, Ω, A,
-        A-turns, W), or its core and why the winding does not fit (``winding``)."""
+    def coil_electrics(self) -> CoilElectrics:
+        """The coil as built at this design's coil size, a :class:`CoilElectrics` (the winding's quantities of
+        :class:`CoilSpec`, or why the winding does not fit in ``misfit``)."""
+        c, size = self.coil, (self.coil_diameter, self.coil_length)
+        supply = dict(core=c.core, supply_voltage=c.supply_voltage, supply_power=c.supply_power, coils_on=c.coils_on)
         try:
-            return self.coil.electrics(self.coil_diameter, self.coil_length)
+            return CoilElectrics(**supply, turns=c.turns(*size), resistance=c.resistance(*size),
+                                 nominal_current=c.nominal_current(*size), ampere_turns=c.nominal_ampere_turns(*size),
+                                 power=c.power(*size))
         except InputError as exc:
-            return {"core": self.coil.core, "winding": str(exc)}
+            return CoilElectrics(**supply, misfit=str(exc))
 
     def summary(self) -> dict:
         """Poles, coils and dimensions as a JSON-ready dict (degrees and millimetres for people); ``coil`` is
-        :meth:`coil_electrics`."""
+        :meth:`coil_electrics` as a dict."""
         return {
             "name": self.name,
             "rotor": self.rotor.label,
@@ -404,7 +441,7 @@ class MotorDesign:
             "magnet_mm": [1e3 * self.magnet_diameter, 1e3 * self.magnet_length],
             "coil_mm": [1e3 * self.coil_diameter, 1e3 * self.coil_length],
             "air_gap_mm": 1e3 * self.air_gap,
-            "coil": self.coil_electrics(),
+            "coil": self.coil_electrics().to_dict(),
             "state_tol_deg": math.degrees(self.state_tol),
             "max_step_deg": math.degrees(self.max_step),
             "rotor_inertia_isotropy": self.rotor.inertia_isotropy(),

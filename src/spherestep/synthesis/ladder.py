@@ -287,7 +287,8 @@ def evaluate(candidate: Candidate, spec, allow_costly: bool = False, baseline: d
                    coil_diameter_mm=1e3 * d.coil_diameter, air_gap_mm=1e3 * d.air_gap, magnet_mass_kg=magnet_mass(d))
         reach = d.air_gap + d.coil_length
         electrics = d.coil_electrics()
-        row["power_W"] = float(electrics.get("power_W", math.nan)) * min(d.coil.coils_on, len(d.stator))
+        power = math.nan if electrics.power is None else electrics.power
+        row["power_W"] = float(power) * min(d.coil.coils_on, len(d.stator))
         why = None
         if spec.envelope.stator_reach is not None and reach > spec.envelope.stator_reach * (1 + 1e-9):
             why = f"the stator reaches {1e3 * reach:.3g} mm from the ball, over {1e3 * spec.envelope.stator_reach:.3g} mm"
