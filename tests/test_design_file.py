@@ -93,7 +93,8 @@ def test_save_then_load_the_prototype_is_identical_and_uses_the_named_forms(tmp_
     assert doc["rotor"] == {"packing": "truncated-icosahedron", "refine": 1, "polarity": {"primary": 1, "filled": -1}}
     assert doc["stator"]["coils"] == "fit" and doc["stator"]["cap_half_angle"] == "80 deg"
     assert doc["dimensions"] == {"sphere_diameter": "12 in", "magnet_diameter": "1 in", "magnet_length": "0.5 in",
-                                 "coil_diameter": "2 in", "coil_length": "1.625 in", "air_gap": "0.005 in"}
+                                 "coil_diameter": "2 in", "coil_length": "1.625 in", "air_gap": "0.005 in",
+                                 "rotor_shell": "0.0625 in"}
     assert "channel_map" not in doc and "tolerance" not in doc  # defaults are left out
     assert doc["schema_version"] == 2 and doc["coil"] == {  # the coil as built is always stated
         "core": "iron", "material": {"name": "low-carbon steel (AISI 1010, annealed)",

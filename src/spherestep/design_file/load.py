@@ -31,7 +31,7 @@ FILE_FIELDS = {
     "stator_axis": "stator.axis", "cap_half_angle": "stator.cap_half_angle", "tol": "tolerance",
     "max_coils": "overrides.max_coils", "allow_hemisphere": "overrides.allow_hemisphere",
     **{size: f"dimensions.{size}" for size in ("sphere_diameter", "magnet_diameter", "magnet_length",
-                                              "coil_diameter", "coil_length", "air_gap")},
+                                              "coil_diameter", "coil_length", "air_gap", "rotor_shell")},
 }
 _INDEXED = re.compile(r"^(\w+)(\[\d+\])$")
 
@@ -132,7 +132,7 @@ class Document:
         polarity = rotor.polarity if isinstance(rotor.polarity, list) else rotor.polarity.model_dump()
         return dict(
             **rotor_args, **stator_args, polarity=polarity, stator_axis=stator.axis.vector,
-            cap_half_angle=stator.cap_half_angle, **dims.model_dump(), tol=spec.tolerance,
+            cap_half_angle=stator.cap_half_angle, **dims.model_dump(exclude_none=True), tol=spec.tolerance,
             remanence=spec.remanence, coil_ampere_turns=spec.coil_ampere_turns, name=spec.name,
             channel_map=None if spec.channel_map is None else np.array(spec.channel_map, dtype=int).reshape(-1, 2),
             allow_hemisphere=spec.overrides.allow_hemisphere, max_coils=spec.overrides.max_coils,

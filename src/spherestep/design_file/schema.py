@@ -230,7 +230,8 @@ class StatorSpec(_Model):
 
 
 class Dimensions(_Model):
-    """Sizes with units: rotor diameter, magnet and coil cylinders, the air gap."""
+    """Sizes with units: rotor diameter, magnet and coil cylinders, the air gap, and the rotor's wall in front of
+    the magnets (left out: 1/16 in)."""
 
     sphere_diameter: Length
     magnet_diameter: Length
@@ -238,6 +239,7 @@ class Dimensions(_Model):
     coil_diameter: Length
     coil_length: Length
     air_gap: Gap
+    rotor_shell: Gap | None = None
 
 
 class Overrides(_Model):
@@ -319,7 +321,8 @@ EXAMPLES: dict[str, str] = {
     "stator.coils": "fit", "dimensions": "{sphere_diameter: 12 in, magnet_diameter: 1 in, magnet_length: 0.5 in, "
     "coil_diameter: 2 in, coil_length: 1.625 in, air_gap: 0.005 in}", "dimensions.sphere_diameter": "12 in",
     "dimensions.magnet_diameter": "1 in", "dimensions.magnet_length": "0.5 in", "dimensions.coil_diameter": "2 in",
-    "dimensions.coil_length": "1.625 in", "dimensions.air_gap": "0.005 in", "tolerance": "1 deg",
+    "dimensions.coil_length": "1.625 in", "dimensions.air_gap": "0.005 in", "dimensions.rotor_shell": "0.0625 in",
+    "tolerance": "1 deg",
     "remanence": "1.32 T", "coil_ampere_turns": "1000", "channel_map": "[[0, 29], [1, 30], ...]",
     "overrides.max_coils": "40", "overrides.allow_hemisphere": "true", "failed_coils": "[3, 17]",
     "coil": "{core: iron}", "coil.core": "iron", "coil.material": "{name: AISI 1010, relative_permeability: 1000, "

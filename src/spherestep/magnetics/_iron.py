@@ -44,13 +44,13 @@ from magpylib_material_response.meshing import mesh_Cylinder
 from scipy.spatial.transform import Rotation
 
 from .. import checks
+from ..motor.design import ROTOR_SHELL  # noqa: F401 (the default shell; scripts read _iron.ROTOR_SHELL)
 from ._direct import EPS
 from ._model import MU0, z_to
 
 IRON_LEVEL = 0  # default mesh level of the tables (see the convergence study in docs/magnetics.md)
 FACE_RADIAL = 16  # Gauss–Legendre nodes over a magnet face's radius
 FACE_ANGULAR = 48  # trapezoidal nodes over its angle
-ROTOR_SHELL = 1.0 / 16.0 * 0.0254  # m: wall of the plastic ball in front of the magnets (the paper gives none)
 WINDING_GRID = (4, 8)  # winding loops across the groove's width × along its depth
 NEAR_DEPTH = 4e-3  # m: cells starting this close to the face get the finer quadrature
 NEAR_ORDER = 6  # Gauss points per direction in the cells within NEAR_DEPTH of the face
@@ -290,11 +290,11 @@ def dipole_wrench(points: np.ndarray, moments: np.ndarray, source, pivot) -> tup
 
 def magnet_face_radius(design, shell: float = None) -> float:
     """Distance (m) from the sphere's centre to a rotor magnet's outer face in the iron model: the magnets sit
-    inside the rotor's shell of thickness ``shell`` (default :data:`ROTOR_SHELL`), the rim of the flat face on
-    its inner surface, ``√((R_s − t)² − r_m²)``. (With the face's centre on the ball, as the air-core model has
-    it, the rim stands 0.53 mm proud of the ball and would cut into a core face 0.127 mm away as the rotor
-    turns.)"""
-    t = ROTOR_SHELL if shell is None else shell
+    inside the rotor's shell of thickness ``shell`` (default the design's ``rotor_shell``, by default
+    :data:`ROTOR_SHELL`, 1/16 in), the rim of the flat face on its inner surface, ``√((R_s − t)² − r_m²)``.
+    (With the face's centre on the ball, as the air-core model has it, the rim stands 0.53 mm proud of the ball
+    and would cut into a core face 0.127 mm away as the rotor turns.)"""
+    t = design.rotor_shell if shell is None else shell
     return math.sqrt((design.radius - t) ** 2 - (0.5 * design.magnet_diameter) ** 2)
 
 

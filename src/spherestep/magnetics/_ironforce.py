@@ -64,7 +64,7 @@ def pole_poses(design, alpha, phi=0.0, shell: float | None = None) -> tuple[np.n
     """Rotor magnets at angles ``alpha`` (rad) from a coil's axis and azimuths ``phi`` (rad; broadcast) about it,
     in the coil's frame (axis ``+z``, face at ``z = 0``): centres ``(K, 3)``, radial axes ``(K, 3)``, and the
     sphere's centre ``(0, 0, −R_s − g)`` as the pivot; ``shell`` the rotor's wall (m, default
-    :data:`._iron.ROTOR_SHELL`, see :func:`magnet_face_radius`)."""
+    the design's ``rotor_shell``, see :func:`magnet_face_radius`)."""
     a, p = np.broadcast_arrays(np.atleast_1d(np.asarray(alpha, dtype=float)), np.asarray(phi, dtype=float))
     face = design.radius + design.air_gap
     w = np.stack([np.sin(a) * np.cos(p), np.sin(a) * np.sin(p), np.cos(a)], axis=-1).reshape(-1, 3)

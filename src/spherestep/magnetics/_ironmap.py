@@ -35,11 +35,11 @@ import numpy as np
 
 from .. import so3
 from ..errors import bad_value
-from ..motor.coil import CoilSpec, iron_coil
+from ..motor.coil import CoilSpec
 from .._fast import Packed
 from ..rotor_field import pack_terms
 from ..statics import TorqueModelBase
-from . import _iron, _ironcoupling, _ironforce
+from . import _iron, _ironcoupling, _ironforce, _ironscale
 from ._coupling import COUPLING_ALPHA_DEG, COUPLING_DPHI_DEG, CoreCoupling
 from ._table import TorqueMap
 
@@ -69,18 +69,18 @@ def _key(design, coil: CoilSpec, level: int) -> tuple:
     way (``0.286 mm`` or ``286 um`` of wire) finds the same tables."""
     return (round(design.radius, 9), round(design.magnet_diameter, 9), round(design.magnet_length, 9),
             round(design.coil_diameter, 9), round(design.coil_length, 9), round(design.air_gap, 9),
-            round(design.remanence, 6), tuple(round(v, 9) for v in astuple(_iron.CoreGeometry.of(design, coil))),
-            level)
+            round(design.rotor_shell, 9), round(design.remanence, 6),
+            tuple(round(v, 9) for v in astuple(_iron.CoreGeometry.of(design, coil))), level)
 
 
 @lru_cache(maxsize=8)
 def _tables(key: tuple, design, coil: CoilSpec, level: int):
-    from ..motor import prototype
-    if key == _key(prototype(), iron_coil(), _iron.IRON_LEVEL):
+    scale = _ironscale.prototype_scale(design, coil, level)  # the prototype's shape: its tables, scaled
+    if scale is not None:
         path = resources.files("spherestep.data") / TABLE_FILE
         if path.is_file():
             arr = read_table(path)
-            return np.radians(arr[:, 0]), arr[:, 1], arr[:, 2]
+            return np.radians(arr[:, 0]), scale.detent * arr[:, 1], scale.linear * arr[:, 2]
     det, lin = pair_table(design, coil, level)
     return np.radians(TABLE_NODES_DEG), det, lin
 
@@ -218,10 +218,10 @@ def _coupling_table(key: tuple, design, coil: CoilSpec, level: int):
     """``(alpha, dphi, X)`` of :func:`._ironcoupling.cross_energy_table`: the prototype's stored table
     (``spherestep/data/iron_coupling_table.csv``, ``python scripts/iron_tables.py coupling-table``), else solved
     (about a minute) and cached."""
-    from ..motor import prototype
     alpha, dphi = np.radians(COUPLING_ALPHA_DEG), np.radians(COUPLING_DPHI_DEG)
-    if key == _key(prototype(), iron_coil(), _iron.IRON_LEVEL):
+    scale = _ironscale.prototype_scale(design, coil, level)
+    if scale is not None:
         path = resources.files("spherestep.data") / COUPLING_FILE
         if path.is_file():
-            return alpha, dphi, read_table(path)[:, 3].reshape(len(alpha), len(alpha), len(dphi))
+            return alpha, dphi, scale.detent * read_table(path)[:, 3].reshape(len(alpha), len(alpha), len(dphi))
     return alpha, dphi, _ironcoupling.cross_energy_table(design, coil, alpha, dphi, level)

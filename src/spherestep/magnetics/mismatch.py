@@ -61,11 +61,11 @@ def scaled_model(model, winding: float = 1.0, detent: float = 1.0):
 
 def shell_model(design, change: float, coil=None) -> IronTorqueMap:
     """The iron model of ``design`` (coil ``coil``, default the design's, iron-cored) whose rotor shell is
-    ``change`` m thicker than :data:`._iron.ROTOR_SHELL` (negative: thinner, the magnets nearer the cores); see
+    ``change`` m thicker than the design's ``rotor_shell`` (negative: thinner, the magnets nearer the cores); see
     the module docstring."""
-    change = checks.number(change, "change", low=-_iron.ROTOR_SHELL, high=0.1 * design.radius, low_open=True,
+    change = checks.number(change, "change", low=-design.rotor_shell, high=0.1 * design.radius, low_open=True,
                            expected=f"a change of the shell's thickness in metres, more than "
-                                    f"−{_iron.ROTOR_SHELL:.4g} (no shell) and at most a tenth of the radius")
+                                    f"−{design.rotor_shell:.4g} (no shell) and at most a tenth of the radius")
     nominal = iron_model(design, coil)
     if not isinstance(nominal, IronTorqueMap):
         raise bad_value("coil", "an iron-cored coil (the shell changes the gap to the cores)", "an air core")
@@ -94,7 +94,7 @@ def _shell_change(design, coil, change: float, nodes_deg: tuple) -> tuple[np.nda
                 return table[:, 3 + 2 * j] - table[:, 1], table[:, 4 + 2 * j] - table[:, 2]
     inner = (nodes > 0) & (nodes < 180)
     out = [np.zeros(len(nodes)) for _ in range(4)]
-    for k, shell in enumerate((_iron.ROTOR_SHELL, _iron.ROTOR_SHELL + change)):
+    for k, shell in enumerate((design.rotor_shell, design.rotor_shell + change)):
         out[2 * k][inner], out[2 * k + 1][inner] = pair_tables(design, coil, np.radians(nodes[inner]),
                                                                 _iron.IRON_LEVEL, shell=shell)
     return out[2] - out[0], out[3] - out[1]

@@ -27,6 +27,7 @@ __all__ = ["DEFAULT_TOL", "MAX_COILS", "CoilElectrics", "MotorDesign", "Polarity
 
 DEFAULT_TOL = math.radians(1.0)  # a pole within 1° of a coil's axis sits on it (2.7 mm on a 12-in rotor)
 DIMENSIONS = ("sphere_diameter", "magnet_diameter", "magnet_length", "coil_diameter", "coil_length", "air_gap")
+ROTOR_SHELL = 1.0 / 16.0 * 0.0254  # m: the default wall of the ball in front of the magnets (the paper gives none)
 
 
 @dataclass(frozen=True)
@@ -61,6 +62,17 @@ def _check_dimensions(values: dict) -> None:
         if values[label] >= values["sphere_diameter"]:
             raise bad_value(label, f"smaller than the sphere_diameter ({values['sphere_diameter']:.6g} m)",
                             values[label])
+
+
+def _check_shell(shell, radius: float, magnet_diameter: float, magnet_length: float) -> float:
+    """The rotor's wall (m): non-negative and thin enough that a magnet, its face's rim on the wall's inner
+    surface, still fits inside the ball (``(R − t)² > r_m² + l_m²``)."""
+    shell = checks.non_negative(shell, "rotor_shell", "a finite non-negative length in metres")
+    room = radius - math.hypot(0.5 * magnet_diameter, magnet_length)
+    if not shell < room:
+        raise bad_value("rotor_shell", f"thinner than {room * 1e3:.4g} mm (the magnets must fit inside the ball)",
+                        f"{shell * 1e3:.4g} mm")
+    return float(shell)
 
 
 def _open_angle(value, name: str, high: float, expected: str) -> None:
@@ -170,9 +182,11 @@ class MotorDesign:
     ``rotor``: packing of permanent-magnet poles (body frame); ``polarity``: ±1 per pole; ``stator``:
     packing of the coils actually present (fixed frame), all within ``cap_half_angle`` (radians) of
     ``stator_axis``. Dimensions in metres: ``sphere_diameter``, magnet ``magnet_diameter`` × ``magnet_length``,
-    coil ``coil_diameter`` × ``coil_length``, ``air_gap`` between rotor surface and coil faces. ``tol``
-    (radians) is how close a pole must sit to a coil to count as held; ``channel_map`` gives each coil its
-    (enable, polarity) relay channel. ``allow_hemisphere`` and ``max_coils`` lift the paper's limits.
+    coil ``coil_diameter`` × ``coil_length``, ``air_gap`` between rotor surface and coil faces, ``rotor_shell``
+    the ball's wall in front of the magnets (the rim of a magnet's flat face on its inner surface; default
+    :data:`ROTOR_SHELL`, 1/16 in; read by the iron model). ``tol`` (radians) is how close a pole must sit to a
+    coil to count as held; ``channel_map`` gives each coil its (enable, polarity) relay channel.
+    ``allow_hemisphere`` and ``max_coils`` lift the paper's limits.
     ``coil_ampere_turns`` drives the air-core torque model (:class:`~spherestep.magnetics.TorqueMap`); ``coil``
     is every coil as built (:class:`~spherestep.motor.coil.CoilSpec`: core, winding, supply; default the
     prototype's iron-cored :func:`~spherestep.motor.coil.iron_coil`), read by the iron model and the drive limits.
@@ -203,6 +217,7 @@ class MotorDesign:
     max_coils: int = MAX_COILS
     failed_coils: tuple[int, ...] = field(default=())
     coil: CoilSpec = field(default_factory=iron_coil)
+    rotor_shell: float = ROTOR_SHELL
 
     def __post_init__(self):
         polarity = np.asarray(self.polarity)
@@ -214,6 +229,8 @@ class MotorDesign:
         _check_dimensions({label: getattr(self, label) for label in DIMENSIONS})
         for label in ("remanence", "coil_ampere_turns"):
             checks.positive(getattr(self, label), label)
+        object.__setattr__(self, "rotor_shell", _check_shell(self.rotor_shell, self.radius, self.magnet_diameter,
+                                                             self.magnet_length))
         object.__setattr__(self, "max_coils", checks.count(self.max_coils, "max_coils", expected="a positive integer"))
         if len(self.stator) > self.max_coils:
             raise bad_value("stator", f"at most {self.max_coils} coils (four 8-relay boards, Sec. IV-B); raise "
@@ -302,6 +319,8 @@ class MotorDesign:
             chosen = full.subset(coils, name="coils")
         if coil is not None:
             options["coil"] = _coil(coil)
+        if isinstance(options.get("rotor_shell"), str):
+            options["rotor_shell"] = length(options["rotor_shell"], "rotor_shell", allow_zero=True)
         design = cls(rotor=rotor_packing, polarity=polarity, stator=chosen, stator_axis=axis,
                      cap_half_angle=cap_half_angle, **sizes, **options)
         if check_fit:
@@ -441,6 +460,7 @@ class MotorDesign:
             "magnet_mm": [1e3 * self.magnet_diameter, 1e3 * self.magnet_length],
             "coil_mm": [1e3 * self.coil_diameter, 1e3 * self.coil_length],
             "air_gap_mm": 1e3 * self.air_gap,
+            "rotor_shell_mm": 1e3 * self.rotor_shell,
             "coil": self.coil_electrics().to_dict(),
             "state_tol_deg": math.degrees(self.state_tol),
             "max_step_deg": math.degrees(self.max_step),

@@ -1,0 +1,125 @@
+"""Any design's iron (issue 28 §3): the rotor shell as a design dimension, and the scaling law of linear
+magnetostatics reusing the prototype's stored (FEM-based) tables for any scaled copy of its geometry."""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import replace
+from importlib import resources
+
+import numpy as np
+import pytest
+from scipy.spatial.transform import Rotation
+
+from spherestep.errors import InputError
+from spherestep.magnetics import iron_model
+from spherestep.magnetics import _iron
+from spherestep.magnetics._ironmap import TABLE_FILE, read_table
+from spherestep.magnetics._ironscale import prototype_scale, scale_between, scaled_design, shape
+from spherestep.motor import MotorDesign, prototype
+
+INCH = 0.0254
+
+
+@pytest.fixture(scope="module")
+def design():
+    return prototype()
+
+
+@pytest.fixture(scope="module")
+def rotations():
+    return Rotation.random(40, random_state=28).as_matrix()
+
+
+# --- the rotor shell, a design dimension -----------------------------------------------------------------------
+
+def test_shell_default_is_todays(design):
+    """The prototype's shell is 1/16 in (the constant it replaces), stated in its file and its summary."""
+    assert design.rotor_shell == pytest.approx(INCH / 16, rel=1e-15)
+    assert _iron.ROTOR_SHELL == design.rotor_shell
+    assert "rotor_shell: 0.0625 in" in design.dumps()
+    assert design.summary()["rotor_shell_mm"] == pytest.approx(1.5875, abs=1e-12)
+
+
+def test_shell_from_a_design_file_reaches_the_iron(design):
+    text = design.dumps().replace("rotor_shell: 0.0625 in", "rotor_shell: 2 mm")
+    d2 = MotorDesign.loads(text)
+    assert d2.rotor_shell == pytest.approx(2e-3, rel=1e-15)
+    r_m = 0.5 * d2.magnet_diameter
+    assert _iron.magnet_face_radius(d2) == pytest.approx(math.sqrt((d2.radius - 2e-3) ** 2 - r_m ** 2), rel=1e-15)
+    assert _iron.magnet_face_radius(design) == pytest.approx(math.sqrt((design.radius - INCH / 16) ** 2 - r_m ** 2),
+                                                             rel=1e-15)
+    assert prototype_scale(d2, d2.coil) is None  # another shape: not the prototype's tables
+    # a file without the key keeps the default
+    d3 = MotorDesign.loads(design.dumps().replace("  rotor_shell: 0.0625 in\n", ""))
+    assert d3.rotor_shell == design.rotor_shell
+
+
+@pytest.mark.parametrize("value", [-1e-3, 0.2, float("nan")])
+def test_bad_shell_is_refused(design, value):
+    with pytest.raises(InputError) as err:
+        replace(design, rotor_shell=value)
+    assert err.value.field == "rotor_shell"
+
+
+def test_bad_shell_in_a_file_names_the_field(design):
+    from spherestep.design_file import DesignFileError
+
+    with pytest.raises(DesignFileError, match="dimensions.rotor_shell"):
+        MotorDesign.loads(design.dumps().replace("rotor_shell: 0.0625 in", "rotor_shell: 7 in"))
+
+
+# --- the scaling law ---------------------------------------------------------------------------------------------
+
+def test_prototype_tables_unchanged(design):
+    """Scale 1: the prototype's model is its stored table, bit for bit."""
+    arr = read_table(resources.files("spherestep.data") / TABLE_FILE)
+    m = iron_model(design)
+    assert np.array_equal(m.detent.tau, arr[:, 1]) and np.array_equal(m.linear.tau, arr[:, 2])
+    sc = prototype_scale(design, design.coil)
+    assert (sc.s, sc.detent, sc.linear) == (1.0, 1.0, 1.0)
+
+
+def test_scaled_prototype_detent_is_s_cubed(design, rotations):
+    """Every length ×1.5: the detent torques ×3.375 (to 1e-6 of the peak; the issue's test), the energy too,
+    the coupled model's coils-off torque too, and the winding's part ×s²·NI'/NI (the nominal ampere-turns of the
+    same wire on the same supply change with the groove)."""
+    big = scaled_design(design, 1.5)
+    m0, m1 = iron_model(design), iron_model(big)
+    d0, d1 = m0.detent_torque(rotations), m1.detent_torque(rotations)
+    assert np.max(np.abs(d1 - 3.375 * d0)) <= 1e-6 * np.max(np.abs(d0))
+    off = np.zeros(len(design.stator))
+    e0, e1 = m0.energy(rotations, off), m1.energy(rotations, off)
+    assert np.max(np.abs(e1 - 3.375 * e0)) <= 1e-6 * np.max(np.abs(e0))
+    ni = (_iron.CoreGeometry.of(big, big.coil).NI / _iron.CoreGeometry.of(design, design.coil).NI)
+    K0, K1 = m0.torque_matrix(rotations), m1.torque_matrix(rotations)
+    assert np.max(np.abs(K1 - 2.25 * ni * K0)) <= 1e-6 * np.max(np.abs(K0))
+    c0, c1 = iron_model(design, coupling=True), iron_model(big, coupling=True)
+    t0, t1 = c0.torque(rotations[:8], off), c1.torque(rotations[:8], off)
+    assert np.max(np.abs(t1 - 3.375 * t0)) <= 1e-6 * np.max(np.abs(t0))
+
+
+def test_scaled_design_is_ready_at_once(design, rotations):
+    """A scaled copy (a scale not used before, so nothing is cached) needs no solve: well under 10 s cold."""
+    t = time.perf_counter()
+    m = iron_model(scaled_design(design, 0.731))
+    m.torque(rotations, np.zeros(len(design.stator)))
+    assert time.perf_counter() - t < 10.0
+
+
+def test_remanence_scales_the_tables(design, rotations):
+    """Linear iron: the detent goes as B_r², the winding's part as B_r."""
+    weak = replace(design, remanence=0.5 * design.remanence)
+    sc = scale_between(weak, weak.coil, design, design.coil)
+    assert (sc.s, sc.detent, sc.linear) == pytest.approx((1.0, 0.25, 0.5), rel=1e-15)
+    d0, d1 = iron_model(design).detent_torque(rotations), iron_model(weak).detent_torque(rotations)
+    assert np.max(np.abs(d1 - 0.25 * d0)) <= 1e-12 * np.max(np.abs(d0))
+
+
+def test_shape_is_scale_free(design):
+    a, mu = shape(design, design.coil)
+    b, mu_b = shape(scaled_design(design, 2.0), scaled_design(design, 2.0).coil)
+    assert mu == mu_b and np.allclose(a, b, rtol=1e-14, atol=0)
+    other = replace(design, air_gap=2 * design.air_gap)
+    assert scale_between(other, other.coil, design, design.coil) is None
