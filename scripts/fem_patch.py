@@ -398,7 +398,7 @@ def model_torque(model, R, coils, currents, magnets) -> np.ndarray:
                            coils=coupling.coils[idx], pairs=where[coupling.pairs[keep]])
     sub = type(model)(cut(model.detent, model.detent.polarity[mags]), cut(model.linear, model.linear.polarity[mags]),
                       model.coil, coupling)
-    return sub.torque(R, np.asarray(currents, dtype=float))
+    return sub.exact_torque(R, np.asarray(currents, dtype=float))  # the sums (the tables are for every pole)
 
 
 @dataclass(frozen=True)

@@ -99,9 +99,10 @@ class RotorField:
             from ._fast.kernels import kernel_params
 
             kind, arrays = compiled
-            if kind not in ("quintic", "angle_spline"):
-                raise bad_value("compiled", "a kernel kind 'quintic' or 'angle_spline'", kind)
-            self.cut = cutoff(kernel, self.polarity, CUTOFF_TAILS)
+            if kind not in ("quintic", "angle_spline", "sphere_table"):
+                raise bad_value("compiled", "a kernel kind 'quintic', 'angle_spline' or 'sphere_table'", kind)
+            # a "sphere_table" is F itself tabulated (spherestep._fast.spheretable): no poles to cut
+            self.cut = None if kind == "sphere_table" else cutoff(kernel, self.polarity, CUTOFF_TAILS)
             self.compiled = kernel_params(kind, arrays, -2.0 if self.cut is None else math.cos(self.cut))
         self.lmax = None if lmax is None else int(lmax)
         self.epsilon = float(epsilon)

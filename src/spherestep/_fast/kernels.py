@@ -33,8 +33,10 @@ import math
 import numpy as np
 from numba import njit
 
+from .spheretable import sphere_point
 
-QUINTIC, ANGLE_SPLINE = 0, 1
+
+QUINTIC, ANGLE_SPLINE, SPHERE_TABLE = 0, 1, 2
 NO_CUT = -2.0
 _FAST = {"contract", "reassoc", "nsz", "arcp"}  # no "nnan"/"ninf": the clamps of t keep their meaning
 
@@ -47,6 +49,10 @@ def kernel_params(kind: str, arrays, cut: float = NO_CUT) -> np.ndarray:
     if kind == "quintic":
         table, inv_h = arrays
         parts = [[QUINTIC, len(table), cut, inv_h], table]
+    elif kind == "sphere_table":  # a whole rotor function, not a zonal kernel (:mod:`.spheretable`)
+        coef, n, halo = arrays
+        coef = np.asarray(coef, dtype=float)
+        parts = [[SPHERE_TABLE, coef.shape[1], NO_CUT, 2.0 * n / math.pi, halo], coef]
     else:
         breaks, tau, energy, ends = (np.asarray(a, dtype=float) for a in arrays)
         delta = 0.5 * float(np.min(np.diff(breaks)))
@@ -65,6 +71,9 @@ def _unpack(params):
     if params[0] == QUINTIC:
         return (QUINTIC, params[2], params[4:].reshape(n, 6), params[3], empty, empty.reshape(0, 4),
                 empty.reshape(0, 5), empty, empty)
+    if params[0] == SPHERE_TABLE:  # (m, 1/δ, halo) in g_ends' place, the coefficients in breaks'
+        return (SPHERE_TABLE, params[2], empty.reshape(0, 6), params[3], params[5:], empty.reshape(0, 4),
+                empty.reshape(0, 5), params[1:5], empty)
     m = int(params[4])
     b = 5 + n + 1
     e = b + 4 * n
@@ -158,6 +167,8 @@ def _point(kernel, x0, x1, x2, poles, polarity, order, S, M, t, near):
     ``S (3,)`` and the upper triangle of ``M`` (``M[0..5]`` = 00, 01, 02, 11, 12, 22) filled for ``order ≥ 1, 2``
     (module docstring). ``t, near``: scratch of the poles' length. One loop per kernel kind."""
     kind, cut, table, inv_h, breaks, tau, energy, g_ends, lut = kernel
+    if kind == SPHERE_TABLE:  # the rotor function itself, tabulated: no sum over the poles
+        return sphere_point(breaks, int(g_ends[0]), inv_h, int(g_ends[3]), x0, x1, x2, order, S, M)
     count = _near(cut, x0, x1, x2, poles, t, near)
     f = 0.0
     S[:] = 0.0

@@ -41,6 +41,7 @@ from ..rotor_field import pack_terms
 from ..statics import TorqueModelBase
 from . import _iron, _ironcoupling, _ironforce, _ironscale
 from ._coupling import COUPLING_ALPHA_DEG, COUPLING_DPHI_DEG, CoreCoupling
+from ._model import as_rotations, currents_for, unflatten
 from ._table import TorqueMap
 
 TABLE_NODES_DEG = np.concatenate([np.arange(0.0, 30.0, 1.0), np.arange(30.0, 60.0, 2.0), np.arange(60.0, 180.1, 5.0)])
@@ -139,21 +140,23 @@ class IronTorqueMap(TorqueModelBase):
         return np.ones(lead + (self.coil_count,))
 
     def detent_torque(self, R) -> np.ndarray:
-        """``D(R)`` (N·m, fixed frame): the torque with every coil off."""
+        """``D(R)`` (N·m, fixed frame): the torque with every coil off (with the coupling, its torque too)."""
+        if self.coupling is not None:
+            return self.torque(R, np.zeros(self.coil_count))
         return self.detent.torque(R, self._ones(R))
 
     has_bias = True  # the detent: torque with every coil off
 
     def zonal_terms(self, currents) -> list | None:
-        """The detent's and the coils' zonal terms (:func:`spherestep.rotor_field.pack_terms`); ``None`` with the
-        coupling, which is not a zonal sum (the compiled paths then step aside for the NumPy ones)."""
+        """The detent's and the coils' zonal terms (:func:`spherestep.rotor_field.pack_terms`); with the coupling
+        the coupled model's two tabulated rotor functions (:class:`._coupling.CoupledTables`)."""
         if self.coupling is not None:
-            return None
+            return self.coupling.zonal_terms(self.detent, self.linear, self.as_currents(currents))
         return self.detent.zonal_terms(np.ones(self.coil_count)) + self.linear.zonal_terms(self.as_currents(currents))
 
     def packed_terms(self, currents) -> Packed | None:
-        """The detent's and the coils' terms compiled (:func:`spherestep.rotor_field.pack_terms`), ``None`` with
-        the coupling."""
+        """The detent's and the coils' terms compiled (:func:`spherestep.rotor_field.pack_terms`; with the
+        coupling, its tables)."""
         return pack_terms(self.zonal_terms(currents))
 
     def _coupled(self, R, torque: bool) -> np.ndarray | float:
@@ -168,18 +171,50 @@ class IronTorqueMap(TorqueModelBase):
 
     def torque(self, R, currents) -> np.ndarray:
         """``D(R) + L(R) c`` (+ the coupling's torque) (N·m, fixed frame, about the centre), ``(K, 3)`` or
-        ``(3,)``."""
-        c = self.as_currents(currents)
-        return self.detent.torque(R, self._ones(R)) + self.linear.torque(R, c) + self._coupled(R, torque=True)
+        ``(3,)``; with the coupling from its tables (:meth:`exact_torque`: the sums they interpolate)."""
+        if self.coupling is not None:
+            return self.evaluate(R, currents, 1)[1]
+        return self.exact_torque(R, currents)
 
     def energy(self, R, currents) -> np.ndarray:
         """``Σ e_d(α_jk) + Σ p_j c_k e_1(α_jk)`` (+ the coupling's energy) (J); the pair terms are zero with
-        every pole opposite every coil."""
+        every pole opposite every coil; with the coupling from its tables (:meth:`exact_energy`)."""
+        if self.coupling is not None:
+            return self.evaluate(R, currents, 0)[0]
+        return self.exact_energy(R, currents)
+
+    def exact_torque(self, R, currents) -> np.ndarray:
+        """:meth:`torque` from the pair splines and the coupling's series (NumPy, ~0.1 s per orientation with
+        the coupling): the reference of its tables."""
+        c = self.as_currents(currents)
+        return self.detent.torque(R, self._ones(R)) + self.linear.torque(R, c) + self._coupled(R, torque=True)
+
+    def exact_energy(self, R, currents) -> np.ndarray:
+        """:meth:`energy` from the pair splines and the coupling's series (the reference of its tables)."""
         c = self.as_currents(currents)
         return self.detent.energy(R, self._ones(R)) + self.linear.energy(R, c) + self._coupled(R, torque=False)
 
+    def evaluate(self, R, currents, order: int) -> tuple[np.ndarray, ...]:
+        """``(E,)``, ``(E, τ)`` or ``(E, τ, H)`` (J, N·m, N·m/rad); with the coupling all from its tables
+        (the Hessian analytic), else energy and torque from the pair maps and the Hessian by differences."""
+        if self.coupling is None:
+            return super().evaluate(R, currents, order)
+        Rf, batch = as_rotations(R)
+        c = currents_for(currents, self.coil_count, self.failed, batch)
+        out = self.coupling.fast_evaluate(self.detent, self.linear, Rf, c, order)
+        return tuple(unflatten(np.asarray(a), batch) for a in out)
+
+    def hessian(self, R, currents) -> np.ndarray:
+        """``H = ∂²E/∂θ²`` (N·m/rad): with the coupling analytic from its tables, else by differences."""
+        if self.coupling is None:
+            return super().hessian(R, currents)
+        return self.evaluate(R, currents, 2)[2]
+
     def torque_matrix(self, R, currents=None) -> np.ndarray:
         """``∂T/∂c = L(R)`` (N·m per nominal current), ``(3, N)`` or ``(K, 3, N)``; independent of ``currents``."""
+        if self.coupling is not None:
+            Rf, batch = as_rotations(R)
+            return unflatten(self.coupling.fast_torque_matrix(self.detent, self.linear, Rf, self.failed), batch)
         return self.linear.torque_matrix(R)
 
     def torque_reference(self, currents) -> np.ndarray:
