@@ -2,10 +2,12 @@
 least_power_box` (the NumPy reference, kept there) step for step, equal to it to rounding
 (``tests/test_control.py``).
 
-``argmin ½‖c‖²`` s.t. ``K c = t``, ``|c| ≤ u``: ``λ ← λ + (K_F K_Fᵀ)⁻¹ (t − K c(λ))`` over the free coils
-``F = {k : |K_kᵀλ| < u_k}``, ``c = clip(Kᵀλ, −u, u)``, backtracking on the dual
-``g(λ) = λ·t − Σ_k φ_k(K_kᵀλ)`` (see :mod:`spherestep.control.allocation`). One call costs a few µs for 29
-coils where the NumPy loop costs ~30 µs of call overhead.
+``argmin ½‖c‖²`` s.t. ``K c = t``, ``l ≤ c ≤ u`` (per-coil bounds, ``l_k ≤ u_k``; ``l = −u`` the symmetric
+box): ``λ ← λ + (K_F K_Fᵀ)⁻¹ (t − K c(λ))`` over the free coils ``F = {k : l_k < K_kᵀλ < u_k}``,
+``c = clip(Kᵀλ, l, u)``, backtracking on the dual ``g(λ) = λ·t − Σ_k φ_k(K_kᵀλ)``, ``φ_k(s) = s c_k − ½c_k²`` at
+``c_k = clip(s, l_k, u_k)`` (see :mod:`spherestep.control.allocation`). One call costs a few µs for 29 coils where
+the NumPy loop costs ~30 µs of call overhead. :func:`voltage_box` gives the servo's per-period bounds (supply
+voltage against the back-EMF and the coil's slew).
 """
 
 from __future__ import annotations
@@ -47,24 +49,24 @@ def _gram(K, free, A):
 
 
 @njit(cache=True)
-def _dual(K, t, u, lam):
-    """``g(λ) = λ·t − Σ_k φ_k(K_kᵀλ)``."""
+def _dual(K, t, lo, hi, lam):
+    """``g(λ) = λ·t − Σ_k φ_k(K_kᵀλ)``, ``φ_k(s) = s c − ½c²`` at ``c = clip(s, l_k, u_k)``."""
     total = 0.0
     for k in range(K.shape[1]):
         s = K[0, k] * lam[0] + K[1, k] * lam[1] + K[2, k] * lam[2]
-        a = abs(s)
-        total += 0.5 * s * s if a <= u[k] else u[k] * a - 0.5 * u[k] * u[k]
+        c = min(max(s, lo[k]), hi[k])
+        total += s * c - 0.5 * c * c
     return lam[0] * t[0] + lam[1] * t[1] + lam[2] * t[2] - total
 
 
 @njit(cache=True)
-def _primal(K, t, u, lam, c, s, r):
-    """``s = Kᵀλ``, ``c = clip(s, −u, u)``, ``r = t − K c``; returns ``‖r‖²``."""
+def _primal(K, t, lo, hi, lam, c, s, r):
+    """``s = Kᵀλ``, ``c = clip(s, l, u)``, ``r = t − K c``; returns ``‖r‖²``."""
     r[0], r[1], r[2] = t[0], t[1], t[2]
     for k in range(K.shape[1]):
         sk = K[0, k] * lam[0] + K[1, k] * lam[1] + K[2, k] * lam[2]
         s[k] = sk
-        ck = min(max(sk, -u[k]), u[k])
+        ck = min(max(sk, lo[k]), hi[k])
         c[k] = ck
         r[0] -= K[0, k] * ck
         r[1] -= K[1, k] * ck
@@ -73,22 +75,23 @@ def _primal(K, t, u, lam, c, s, r):
 
 
 @njit(cache=True)
-def _scales(K, u, t):
-    """``(‖K‖²_F, ‖u‖², ‖t‖)``: the scales the tolerances of both solvers are relative to."""
+def _scales(K, lo, hi, t):
+    """``(‖K‖²_F, Σ max(|l_k|, |u_k|)², ‖t‖)``: the scales the tolerances of both solvers are relative to."""
     kk = 0.0
     uu = 0.0
     for k in range(K.shape[1]):
         kk += K[0, k] * K[0, k] + K[1, k] * K[1, k] + K[2, k] * K[2, k]
-        uu += u[k] * u[k]
+        m = max(abs(lo[k]), abs(hi[k]))
+        uu += m * m
     return kk, uu, math.sqrt(t[0] * t[0] + t[1] * t[1] + t[2] * t[2])
 
 
 @njit(cache=True)
-def least_power_box(K, t, u, lam0, warm, max_iter, c, lam):
-    """The reference's iteration: fills ``c (N,)`` and ``λ (3,)``, returns whether it converged
-    (``‖K c − t‖ ≤ 1e-11 (‖K‖ ‖u‖ + ‖t‖)``). ``warm``: start from ``lam0``, else from ``(KKᵀ)⁻¹ t``."""
+def least_power_box(K, t, lo, hi, lam0, warm, max_iter, c, lam):
+    """The reference's iteration within ``lo ≤ c ≤ hi``: fills ``c (N,)`` and ``λ (3,)``, returns whether it
+    converged (``‖K c − t‖ ≤ 1e-11 (‖K‖ ‖u‖ + ‖t‖)``). ``warm``: start from ``lam0``, else from ``(KKᵀ)⁻¹ t``."""
     N = K.shape[1]
-    kk, uu, tn = _scales(K, u, t)
+    kk, uu, tn = _scales(K, lo, hi, t)
     tol = 1e-11 * (math.sqrt(kk * uu) + tn) + 1e-300
     tol2 = tol * tol
     A = np.empty((3, 3))
@@ -105,15 +108,15 @@ def least_power_box(K, t, u, lam0, warm, max_iter, c, lam):
     have_g = False
     g = 0.0
     for _ in range(max_iter):
-        if _primal(K, t, u, lam, c, s, r) <= tol2:
+        if _primal(K, t, lo, hi, lam, c, s, r) <= tol2:
             return True
         for k in range(N):
-            free[k] = abs(s[k]) < u[k]
+            free[k] = lo[k] < s[k] < hi[k]
         _gram(K, free, A)
         if not np.any(free) or not _solve3(A, r, d):
             return False
         if not have_g:
-            g = _dual(K, t, u, lam)
+            g = _dual(K, t, lo, hi, lam)
             have_g = True
         step = 1.0
         accepted = False
@@ -121,7 +124,7 @@ def least_power_box(K, t, u, lam0, warm, max_iter, c, lam):
         for _ in range(40):
             for i in range(3):
                 trial[i] = lam[i] + step * d[i]
-            gt = _dual(K, t, u, trial)
+            gt = _dual(K, t, lo, hi, trial)
             if gt >= g - 1e-15 * max(abs(g), 1.0):
                 accepted = True
                 break
@@ -130,13 +133,13 @@ def least_power_box(K, t, u, lam0, warm, max_iter, c, lam):
             return False
         lam[:] = trial
         g = gt
-    return _primal(K, t, u, lam, c, s, r) <= tol2
+    return _primal(K, t, lo, hi, lam, c, s, r) <= tol2
 
 
 @njit(cache=True)
-def _tikhonov(K, t, u, mu, nu, c, s, r, tol2, max_iter):
-    """``argmin ½‖K c − t‖² + ½μ‖c‖²`` over the box ``|c| ≤ u`` (``μ > 0``): semismooth Newton on
-    ``F(ν) = t − μν − K clip(Kᵀν, −u, u) = 0`` (the gradient of the strongly concave dual
+def _tikhonov(K, t, lo, hi, mu, nu, c, s, r, tol2, max_iter):
+    """``argmin ½‖K c − t‖² + ½μ‖c‖²`` over the box ``l ≤ c ≤ u`` (``μ > 0``): semismooth Newton on
+    ``F(ν) = t − μν − K clip(Kᵀν, l, u) = 0`` (the gradient of the strongly concave dual
     ``g(ν) − ½μ‖ν‖²``), ``ν ← ν + (K_F K_Fᵀ + μI)⁻¹ F`` with backtracking; ``c = clip(Kᵀν)``. ``ν`` in (start)
     and out; returns ``‖F‖²`` at the end (converged when ``≤ tol2``; the iteration stops there, after
     ``max_iter`` steps, or where the line search cannot improve the dual any more — rounding)."""
@@ -144,17 +147,17 @@ def _tikhonov(K, t, u, mu, nu, c, s, r, tol2, max_iter):
     A = np.empty((3, 3))
     d, trial = np.empty(3), np.empty(3)
     free = np.empty(N, dtype=np.bool_)
-    g = _dual(K, t, u, nu) - 0.5 * mu * (nu[0] * nu[0] + nu[1] * nu[1] + nu[2] * nu[2])
+    g = _dual(K, t, lo, hi, nu) - 0.5 * mu * (nu[0] * nu[0] + nu[1] * nu[1] + nu[2] * nu[2])
     r2 = 0.0
     for _ in range(max_iter):
-        _primal(K, t, u, nu, c, s, r)
+        _primal(K, t, lo, hi, nu, c, s, r)
         for i in range(3):
             r[i] -= mu * nu[i]
         r2 = r[0] * r[0] + r[1] * r[1] + r[2] * r[2]
         if r2 <= tol2:
             return r2
         for k in range(N):
-            free[k] = abs(s[k]) < u[k]
+            free[k] = lo[k] < s[k] < hi[k]
         _gram(K, free, A)
         for i in range(3):
             A[i, i] += mu
@@ -166,7 +169,7 @@ def _tikhonov(K, t, u, mu, nu, c, s, r, tol2, max_iter):
         for _ in range(60):
             for i in range(3):
                 trial[i] = nu[i] + step * d[i]
-            gt = _dual(K, t, u, trial) - 0.5 * mu * (trial[0] * trial[0] + trial[1] * trial[1] + trial[2] * trial[2])
+            gt = _dual(K, t, lo, hi, trial) - 0.5 * mu * (trial[0] * trial[0] + trial[1] * trial[1] + trial[2] * trial[2])
             if gt >= g - 1e-15 * max(abs(g), 1.0):
                 accepted = True
                 break
@@ -175,22 +178,23 @@ def _tikhonov(K, t, u, mu, nu, c, s, r, tol2, max_iter):
             return r2
         nu[:] = trial
         g = gt
-    _primal(K, t, u, nu, c, s, r)
+    _primal(K, t, lo, hi, nu, c, s, r)
     for i in range(3):
         r[i] -= mu * nu[i]
     return r[0] * r[0] + r[1] * r[1] + r[2] * r[2]
 
 
 @njit(cache=True)
-def closest_reachable(K, t, u, rho, c):
-    """``argmin ‖K c − t‖²`` over ``|c| ≤ u``, ``‖c‖ ≤ ρ`` into ``c``; returns whether it converged. The ball's
-    multiplier ``μ ≥ 0``: ``c(μ)`` minimises ``½‖K c − t‖² + ½μ‖c‖²`` over the box (:func:`_tikhonov`) and
-    ``‖c(μ)‖`` falls with ``μ`` (``‖c(μ)‖ ≤ ‖t‖/√μ``: ``μ = (‖t‖/ρ)²`` is feasible). The root of
+def closest_reachable(K, t, lower, upper, rho, c):
+    """``argmin ‖K c − t‖²`` over ``lower ≤ c ≤ upper``, ``‖c‖ ≤ ρ`` into ``c``; returns whether it converged
+    (``False`` also when the box misses the ball). The ball's multiplier ``μ ≥ 0``: ``c(μ)`` minimises
+    ``½‖K c − t‖² + ½μ‖c‖²`` over the box (:func:`_tikhonov`) and ``‖c(μ)‖`` falls with ``μ`` (``‖c(μ)‖ ≤
+    ‖t‖/√μ`` for a box that holds 0: ``μ = (‖t‖/ρ)²`` is feasible; see the code for one that does not). The root of
     ``‖c(μ)‖ = ρ`` is bisected in ``log μ`` to 1e-13, warm-started from the feasible side, and the feasible end
     returned; below ``μ = 1e-13 ‖K‖²`` the ball does not bind (``μ = 0``, taken there). The same KKT point
     :func:`spherestep.control.allocation.closest_reachable` finds with Clarabel."""
     N = K.shape[1]
-    kk, uu, tn = _scales(K, u, t)
+    kk, uu, tn = _scales(K, lower, upper, t)
     tol = 1e-12 * (math.sqrt(kk * uu) + tn) + 1e-300  # each step's KKT residual aimed at ...
     tol2 = tol * tol
     loose2 = 1e8 * tol2  # ... and accepted (1e-8 of the scale: far below what the torque needs) where rounding stops it
@@ -200,8 +204,21 @@ def closest_reachable(K, t, u, rho, c):
         return rho >= 0.0 and floor >= 0.0
     nu, nu_hi, s, r = np.zeros(3), np.zeros(3), np.empty(N), np.empty(3)
     c_hi = np.empty(N)
-    hi = max((tn / rho) ** 2 * 1.0001, 2.0 * floor)
-    if _tikhonov(K, t, u, hi, nu_hi, c_hi, s, r, tol2, 100) > loose2 or math.sqrt(np.dot(c_hi, c_hi)) > rho:
+    # the box's least-norm point c₀ = clip(0, l, u) (0 when the box holds it): comparing with c₀,
+    # ‖c(μ)‖² ≤ ‖c₀‖² + ‖K c₀ − t‖²/μ, so μ = ‖K c₀ − t‖²/(ρ² − ‖c₀‖²) is feasible
+    c0n = 0.0
+    for i in range(3):
+        r[i] = -t[i]
+    for k in range(N):
+        ck = min(max(0.0, lower[k]), upper[k])
+        c0n += ck * ck
+        for i in range(3):
+            r[i] += K[i, k] * ck
+    if c0n >= rho * rho:
+        c[:] = 0.0
+        return False
+    hi = max((r[0] * r[0] + r[1] * r[1] + r[2] * r[2]) / (rho * rho - c0n) * 1.0001, 2.0 * floor)
+    if _tikhonov(K, t, lower, upper, hi, nu_hi, c_hi, s, r, tol2, 100) > loose2 or math.sqrt(np.dot(c_hi, c_hi)) > rho:
         return False
     # bracket the root stepping down by tenths (ν scaled along: μν = t − K c stays about the same), then bisect
     # in log μ, each solve warm-started from the feasible end the same way
@@ -210,7 +227,7 @@ def closest_reachable(K, t, u, rho, c):
         lo = max(hi * 0.1, floor)
         for i in range(3):
             nu[i] = nu_hi[i] * (hi / lo)
-        if _tikhonov(K, t, u, lo, nu, c, s, r, tol2, 100) > loose2:
+        if _tikhonov(K, t, lower, upper, lo, nu, c, s, r, tol2, 100) > loose2:
             if lo < 1e-9 * kk:  # the ball is not binding: c(hi) is within rounding of the answer
                 c[:] = c_hi
                 return True
@@ -228,7 +245,7 @@ def closest_reachable(K, t, u, rho, c):
         mid = math.sqrt(lo * hi)
         for i in range(3):
             nu[i] = nu_hi[i] * (hi / mid)
-        if _tikhonov(K, t, u, mid, nu, c, s, r, tol2, 100) > loose2:
+        if _tikhonov(K, t, lower, upper, mid, nu, c, s, r, tol2, 100) > loose2:
             return False
         if math.sqrt(np.dot(c, c)) > rho:
             lo = mid
@@ -238,3 +255,29 @@ def closest_reachable(K, t, u, rho, c):
             c_hi[:] = c
     c[:] = c_hi
     return True
+
+
+@njit(cache=True)
+def voltage_box(K, w, previous, bound, volts, slew, lower, upper):
+    """The servo's per-coil current bounds (per unit) for one period, into ``lower``/``upper (N,)``: the current
+    bound ``±bound``, the supply against the back-EMF, ``|c_k + e_k| ≤ volts`` with ``e_k = K_k·ω`` already in
+    per-unit volts (the caller scales ``K`` or ``ω`` by ``1/(R I_n²)``), and, when ``slew > 0``, the coil's slew
+    from the ``previous`` command: ``c_k`` within ``(1 − slew)`` of the way from ``previous_k`` to the ends the
+    full supply drives it to, ``c_∞± = ±volts − e_k`` (``slew = e^{−h/T}`` of one period ``h``, ``T = L/R``).
+    A box need not hold 0: a coil whose back-EMF exceeds the supply, ``|e_k| > volts``, carries a current of the
+    sign that brakes the motion whatever the bridge does, and the allocation counts its torque. Where the
+    voltage box misses the current bound (``|e_k| > volts + bound``) the coil is pinned at the bound nearest."""
+    for k in range(K.shape[1]):
+        e = K[0, k] * w[0] + K[1, k] * w[1] + K[2, k] * w[2]
+        hi = volts - e
+        lo = -volts - e
+        if slew > 0.0:
+            p = previous[k]
+            hi = hi + (p - hi) * slew
+            lo = lo + (p - lo) * slew
+        hi = min(bound, hi)
+        lo = max(-bound, lo)
+        if hi < lo:  # pinned: the bound nearest the box
+            hi = lo = bound if lo > 0.0 else -bound
+        upper[k] = hi
+        lower[k] = lo

@@ -115,19 +115,23 @@ def _solve3(A: np.ndarray, r: np.ndarray) -> np.ndarray | None:
 
 
 def least_power_box(K: np.ndarray, t: np.ndarray, u: np.ndarray, lam0: np.ndarray | None = None,
-                    max_iter: int = 40) -> tuple[np.ndarray, np.ndarray, bool]:
-    """``argmin ½‖c‖²`` s.t. ``K c = t``, ``|c| ≤ u`` by semismooth Newton on the dual (see the module).
+                    max_iter: int = 40, lower: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, bool]:
+    """``argmin ½‖c‖²`` s.t. ``K c = t``, ``|c| ≤ u`` by semismooth Newton on the dual (see the module); with
+    ``lower (N,)`` the box ``lower ≤ c ≤ u`` instead (``lower ≤ u``: per-coil asymmetric bounds, the servo's
+    supply voltage against the back-EMF, which need not hold 0), ``φ_k(s) = s c_k − ½c_k²`` at ``c_k = clip(s, lower_k, u_k)``.
 
     Returns ``(c, λ, converged)``; ``converged`` means ``‖K c − t‖ ≤ 1e-11 (‖K‖ ‖u‖ + ‖t‖)``, which with
     ``c = clip(Kᵀλ, −u, u)`` is the exact KKT condition of the problem.
     """
-    tol = 1e-11 * (math.sqrt(float(np.vdot(K, K)) * float(u @ u)) + math.sqrt(float(t @ t))) + 1e-300
+    lo = -u if lower is None else lower
+    big = np.maximum(np.abs(lo), np.abs(u))
+    tol = 1e-11 * (math.sqrt(float(np.vdot(K, K)) * float(big @ big)) + math.sqrt(float(t @ t))) + 1e-300
     tol2 = tol * tol
 
     def dual(lm):
         s = K.T @ lm
-        a = np.abs(s)
-        return float(lm @ t) - float(np.where(a <= u, 0.5 * s * s, u * a - 0.5 * u * u).sum())
+        c = np.clip(s, lo, u)
+        return float(lm @ t) - float((s * c - 0.5 * c * c).sum())
 
     lam = _solve3(K @ K.T, t) if lam0 is None else np.array(lam0, dtype=float)
     if lam is None:
@@ -135,11 +139,11 @@ def least_power_box(K: np.ndarray, t: np.ndarray, u: np.ndarray, lam0: np.ndarra
     g = None
     for _ in range(max_iter):
         s = K.T @ lam
-        c = np.clip(s, -u, u)
+        c = np.clip(s, lo, u)
         r = t - K @ c
         if float(r @ r) <= tol2:
             return c, lam, True
-        free = np.abs(s) < u
+        free = (lo < s) & (s < u)
         Kf = K[:, free]
         d = _solve3(Kf @ Kf.T, r)
         if d is None:
@@ -155,24 +159,34 @@ def least_power_box(K: np.ndarray, t: np.ndarray, u: np.ndarray, lam0: np.ndarra
         else:
             return c, lam, False
         lam, g = trial, gt
-    c = np.clip(K.T @ lam, -u, u)
+    c = np.clip(K.T @ lam, lo, u)
     r = t - K @ c
     return c, lam, bool(float(r @ r) <= tol2)
 
 
 def least_power_box_compiled(K: np.ndarray, t: np.ndarray, u: np.ndarray, lam0: np.ndarray | None = None,
-                             max_iter: int = 40) -> tuple[np.ndarray, np.ndarray, bool]:
+                             max_iter: int = 40, lower: np.ndarray | None = None
+                             ) -> tuple[np.ndarray, np.ndarray, bool]:
     """:func:`least_power_box` compiled (:func:`spherestep._fast.allocation.least_power_box`, the same iteration;
-    equal to it to rounding): what :func:`allocate_matrix` runs. ``K (3, N)``, ``t (3,)``, ``u (N,)`` float
-    arrays (trusted)."""
+    equal to it to rounding): what :func:`allocate_matrix` runs. ``K (3, N)``, ``t (3,)``, ``u (N,)`` and
+    ``lower (N,)`` (default ``−u``) float arrays (trusted)."""
     from .._fast.allocation import least_power_box as compiled
 
     _warm()
     c, lam = np.empty(K.shape[1]), np.empty(3)
     warm = lam0 is not None
-    ok = compiled(K if K.flags.c_contiguous else np.ascontiguousarray(K), t, u, lam0 if warm else _NO_LAM, warm,
-                  max_iter, c, lam)
+    ok = compiled(K if K.flags.c_contiguous else np.ascontiguousarray(K), t, _lower(u, lower), u,
+                  lam0 if warm else _NO_LAM, warm, max_iter, c, lam)
     return c, lam, bool(ok)
+
+
+def _lower(u: np.ndarray, lower: np.ndarray | None) -> np.ndarray:
+    """``lower``, or ``−u`` with ``u``'s writeability (the compiled kernels' signature: both alike)."""
+    if lower is not None:
+        return lower
+    lo = -u
+    lo.flags.writeable = u.flags.writeable
+    return lo
 
 
 _NO_LAM = np.zeros(3)
@@ -194,27 +208,34 @@ def _warm() -> None:
             least_power_box_compiled(K, t, bounds)
             least_power_box_compiled(K, t, bounds, np.zeros(3))
             closest_reachable_compiled(K, t, bounds, 1.0)
+        lower = -0.5 * u  # the servo's per-period asymmetric box
+        least_power_box_compiled(K, t, u, np.zeros(3), lower=lower)
+        closest_reachable_compiled(K, t, u, 1.0, lower=lower)
     closest_reachable(K, np.array([9.0, 0.0, 0.0]), u, 1.0)  # the fallback's imports (Clarabel, SciPy)
 
 
-def closest_reachable_compiled(K: np.ndarray, t: np.ndarray, u: np.ndarray, rho: float) -> np.ndarray | None:
+def closest_reachable_compiled(K: np.ndarray, t: np.ndarray, u: np.ndarray, rho: float,
+                               lower: np.ndarray | None = None) -> np.ndarray | None:
     """:func:`closest_reachable` by a compiled bisection on the power ball's multiplier
     (:func:`spherestep._fast.allocation.closest_reachable`: the same KKT point to ~1e-9 of the torque, in
     ~0.1 ms where Clarabel takes 1.5–4 ms); ``None`` when it does not converge (then Clarabel decides)."""
     from .._fast.allocation import closest_reachable as compiled
 
     c = np.empty(K.shape[1])
-    ok = compiled(K if K.flags.c_contiguous else np.ascontiguousarray(K), t, u, float(rho), c)
+    ok = compiled(K if K.flags.c_contiguous else np.ascontiguousarray(K), t, _lower(u, lower), u, float(rho), c)
     return c if ok else None
 
 
-def closest_reachable(K: np.ndarray, t: np.ndarray, u: np.ndarray, rho: float) -> np.ndarray:
-    """``argmin ‖K c − t‖²`` over ``|c| ≤ u``, ``‖c‖ ≤ ρ`` (a second-order cone program, Clarabel); coils with
-    ``u_k = 0`` are left out of the program and get ``c_k = 0``."""
+def closest_reachable(K: np.ndarray, t: np.ndarray, u: np.ndarray, rho: float, lower: np.ndarray | None = None
+                      ) -> np.ndarray:
+    """``argmin ‖K c − t‖²`` over ``|c| ≤ u`` (``lower ≤ c ≤ u`` with ``lower``), ``‖c‖ ≤ ρ`` (a second-order
+    cone program, Clarabel); coils with ``u_k = 0`` and ``lower_k = 0`` are left out of the program and get
+    ``c_k = 0``."""
     import clarabel
     from scipy import sparse
 
-    live = np.flatnonzero(u > 0)
+    lo = -u if lower is None else lower
+    live = np.flatnonzero((u > 0) | (lo < 0))
     n = len(live)
     c = np.zeros(K.shape[1])
     if n == 0:
@@ -224,7 +245,7 @@ def closest_reachable(K: np.ndarray, t: np.ndarray, u: np.ndarray, rho: float) -
     q = -(Kl.T @ t)
     eye = sparse.identity(n, format="csc")
     A = sparse.vstack([eye, -eye, sparse.csc_matrix((1, n)), -eye], format="csc")
-    b = np.concatenate([u[live], u[live], [rho], np.zeros(n)])
+    b = np.concatenate([u[live], -lo[live], [rho], np.zeros(n)])
     settings = clarabel.DefaultSettings()
     settings.verbose = False
     settings.tol_gap_abs = settings.tol_gap_rel = settings.tol_feas = 1e-10
@@ -233,7 +254,7 @@ def closest_reachable(K: np.ndarray, t: np.ndarray, u: np.ndarray, rho: float) -
     sol = solver.solve()
     x = np.asarray(sol.x, dtype=float)
     # Clarabel stops a hair outside the constraints; pull back into the feasible set exactly
-    x = np.clip(x, -u[live], u[live])
+    x = np.clip(x, lo[live], u[live])
     norm = np.linalg.norm(x)
     if norm > rho:
         x *= rho / norm
@@ -242,26 +263,32 @@ def closest_reachable(K: np.ndarray, t: np.ndarray, u: np.ndarray, rho: float) -
 
 
 def allocate_matrix(K, torque, limits: DriveLimits | None = None, *, bias=None, failed=(),
-                    lam0: np.ndarray | None = None) -> tuple[Allocation, np.ndarray]:
+                    lam0: np.ndarray | None = None, bounds=None) -> tuple[Allocation, np.ndarray]:
     """:func:`allocate` given the torque matrix ``K (3, N)`` (N·m per unit current) and the bias torque ``bias``
     (N·m, default 0): returns the :class:`Allocation` and the dual ``λ`` (pass it back as ``lam0`` to warm-start
-    the next call of a control loop)."""
+    the next call of a control loop). ``bounds``: per-coil ``(lower, upper)`` per-unit float arrays ``(N,)``
+    (``lower ≤ upper``, trusted: the servo law's supply-voltage box of the period) in place of the limits'
+    ``±u`` and ``failed``."""
     limits = _check_limits(limits)
     K = np.asarray(K, dtype=float)
     target = _check_torque(torque)
     b = np.zeros(3) if bias is None else np.asarray(bias, dtype=float)
     t = target - b
-    u = _bounds(K.shape[1], failed, limits)
+    if bounds is None:
+        u, lower = _bounds(K.shape[1], failed, limits), None
+    else:
+        lower, u = bounds
     rho = limits.per_unit_power_radius
-    c, lam, ok = least_power_box_compiled(K, t, u, None if lam0 is None else np.asarray(lam0, dtype=float))
+    c, lam, ok = least_power_box_compiled(K, t, u, None if lam0 is None else np.asarray(lam0, dtype=float),
+                                          lower=lower)
     method, reachable = "newton", True
     if not ok or float(c @ c) > rho * rho * (1 + 1e-12):
-        c_far = closest_reachable_compiled(K, t, u, rho)
+        c_far = closest_reachable_compiled(K, t, u, rho, lower)
         if c_far is None:  # the compiled bisection did not converge: the conic solver
-            c_far = closest_reachable(K, t, u, rho)
+            c_far = closest_reachable(K, t, u, rho, lower)
         t_r = K @ c_far
         reachable = bool(np.linalg.norm(t_r - t) <= 1e-7 * (np.linalg.norm(K) * rho + np.linalg.norm(t)))
-        c2, lam2, ok2 = least_power_box_compiled(K, t_r, u)
+        c2, lam2, ok2 = least_power_box_compiled(K, t_r, u, lower=lower)
         if ok2 and c2 @ c2 <= c_far @ c_far * (1 + 1e-12):
             c, lam = c2, lam2
         else:

@@ -166,7 +166,8 @@ class ServoLaw:
     def __init__(self, model: TorqueModel, trajectory: Trajectory, controller: GeometricPD, *,
                  limits: DriveLimits | None = None, sensor_rate: float | None = None,
                  observer_bandwidth: float | None = None, disturbance_bandwidth: float | None = None,
-                 motion_bandwidth: float | None = None, reuse: float = K_REUSE, delay: int = 0):
+                 motion_bandwidth: float | None = None, reuse: float = K_REUSE, delay: int = 0,
+                 voltage: bool = True, slew: bool = False):
         if not isinstance(trajectory, Trajectory):
             raise bad_value("trajectory", "a spherestep.control.Trajectory", type(trajectory).__name__)
         if not isinstance(controller, GeometricPD):
@@ -190,9 +191,24 @@ class ServoLaw:
         self._lam = None
         self.delay = checks.count(delay, "delay", 0, 8)
         self._promised = deque([np.zeros(3)] * (self.delay + 1), maxlen=self.delay + 1)
+        self.voltage = bool(voltage)
+        lim = self.limits
+        N = model.coil_count
+        self._box = (np.zeros(N), np.zeros(N))
+        self._failed_idx = np.array(self._failed, dtype=np.int64)
+        self._emf = 1.0 / (lim.resistance * lim.nominal_current ** 2)  # K·ω (N·m·rad/s) → per-unit volts
+        self._u = lim.per_unit_bound
+        self._uv = lim.supply_voltage / (lim.resistance * lim.nominal_current)
+        period = 1.0 / controller.rate
+        self._slew = math.exp(-period / lim.time_constant) if slew else 0.0
+        self._last = np.zeros(N)
+        from .._fast.allocation import voltage_box  # compiled: imported with the law, not with the room
+
+        self._voltage_box = voltage_box
         # first calls (model set-up, imports, caches) here rather than in the first period
         self._allocate(np.zeros(3), self.observer.R)
         self._lam = None
+        self._last = np.zeros(N)
 
     def amperes(self, currents) -> np.ndarray:
         """Per-unit ``currents`` in amperes: ``I_n c`` (the drive's wire unit)."""
@@ -229,8 +245,18 @@ class ServoLaw:
         return ServoCommand(alloc.currents, alloc.torque, tau, alloc.reachable, obs.R, obs.w, obs.d)
 
     def _allocate(self, tau: np.ndarray, R: np.ndarray):
-        """Steps 4 and 5 of the module: ``K``/bias at ``R`` and the warm-started allocation of ``tau``."""
+        """Steps 4 and 5 of the module: ``K``/bias at ``R``, the period's current box and the warm-started
+        allocation of ``tau``."""
         K, b = self.cache.at(R)
+        bounds = None
+        if self.voltage:
+            lower, upper = self._box
+            self._voltage_box(K, self.observer.w * self._emf, self._last, self._u, self._uv, self._slew, lower, upper)
+            if self._failed:
+                lower[self._failed_idx] = 0.0
+                upper[self._failed_idx] = 0.0
+            bounds = self._box
         alloc, self._lam = allocate_matrix(K, tau, self.limits, bias=b if self.cache.has_bias else None,
-                                           failed=self._failed, lam0=self._lam)
+                                           failed=self._failed, lam0=self._lam, bounds=bounds)
+        self._last = alloc.currents
         return alloc

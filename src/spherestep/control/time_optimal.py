@@ -82,15 +82,18 @@ def current_box(K, direction, limits: DriveLimits, *, failed=(), speed: float = 
     ``direction`` at orientations with torque matrices ``K (M, 3, N)``, within ``scale`` of the limits: ``|c_k| ≤
     scale·u`` and the supply voltage against the whole back-EMF, ``|R I_n c_k + e_k| ≤ scale·V`` with
     ``e_k = (K_k·n) ṡ / I_n`` (steady state), i.e. ``−scale·V/(R I_n) + max(0, −g_k) v ≤ c_k ≤ scale·V/(R I_n) −
-    max(0, g_k) v``, ``g_k = K_k·n/(R I_n²)``; each box keeps 0 (a coil whose back-EMF exceeds that voltage is
-    given none of the feed-forward); failed coils 0. The rest, ``(1 − scale)`` of the current and of the voltage,
-    is the feedback's (and the inductance's, ``L di/dt``)."""
+    max(0, g_k) v``, ``g_k = K_k·n/(R I_n²)`` (the intersection of the boxes of every speed up to ``v``). A box
+    need not hold 0: a coil whose back-EMF exceeds ``scale·V`` must carry a current that brakes the motion (what
+    the H-bridge's coil does at ``|e_k| > V`` whatever its switches), and its torque is counted; where the box is
+    empty (``|g_k| v > 2·scale·V/(R I_n)``) ``lower > upper``: no current serves every speed of the band. Failed
+    coils 0. The rest, ``(1 − scale)`` of the current and of the voltage, is the feedback's (and the
+    inductance's, ``L di/dt``)."""
     n = checks.axis(direction, "direction")
     g = np.einsum("man,a->mn", np.asarray(K, dtype=float), n) / (limits.resistance * limits.nominal_current ** 2)
     u = scale * limits.per_unit_bound
     uv = scale * limits.supply_voltage / (limits.resistance * limits.nominal_current)
-    upper = np.clip(np.minimum(u, uv - np.maximum(g, 0.0) * speed), 0.0, None)
-    lower = np.clip(np.maximum(-u, -uv + np.maximum(-g, 0.0) * speed), None, 0.0)
+    upper = np.minimum(u, uv - np.maximum(g, 0.0) * speed)
+    lower = np.maximum(-u, -uv + np.maximum(-g, 0.0) * speed)
     if len(failed):
         upper[:, list(failed)] = 0.0
         lower[:, list(failed)] = 0.0
@@ -130,6 +133,8 @@ def reachable_interval(K, bias, direction, limits: DriveLimits | None = None, *,
     ok = (clarabel.SolverStatus.Solved, clarabel.SolverStatus.AlmostSolved)
     tail = np.tile([1.0, -1.0, -1.0], N)
     for m in range(len(K)):
+        if np.any(lower[m] > upper[m]):  # a coil no current serves at every speed of the band
+            continue
         data = np.concatenate([np.concatenate([K[m].T, tail.reshape(N, 3)], 1).ravel(), -d])
         A = sparse.csc_matrix((data, indices, indptr), shape=shape)
         rhs = np.concatenate([-b[m], upper[m], -lower[m], [rho], np.zeros(N)])
