@@ -292,7 +292,7 @@ BAD = [
     (mutate(coil__fill_factor="0.6"), "coil.fill_factor", "valid number"),
     (mutate(coil__wire_diameter=0.0003), "coil.wire_diameter", "with its unit, like '12 in'"),
     (mutate(coil__wall_thickness="-1 mm"), "coil.wall_thickness", "non-negative length"),
-    (mutate(coil__supply_voltage="24 A"), "coil.supply_voltage", "a voltage in V, mV or kV"),
+    (mutate(coil__supply_voltage="24 A"), "coil.supply_voltage", "a voltage with unit one of V, mV, kV"),
     (mutate(coil__supply_power="-5 W"), "coil.supply_power", "finite positive power"),
     (mutate(coil__coils_on=0), "coil.coils_on", "greater than or equal to 1"),
     (mutate(coil__ampere_turns=0), "coil.ampere_turns", "greater than 0"),
@@ -306,7 +306,7 @@ BAD = [
     (mutate(failed_coils=[40]), "failed_coils", "coil indices 0..28"),
     (mutate(name=5), "name", "valid string"),
     (mutate(name="two\nlines"), "name", "printable text on one line"),
-    (mutate(remanence="1.3 G"), "remanence", "T or mT"),
+    (mutate(remanence="1.3 G"), "remanence", "with unit one of T, mT"),
     (mutate(coil_ampere_turns=float("inf")), "coil_ampere_turns", "finite number"),
     (mutate(overrides={"max_coils": "many"}), "overrides.max_coils", "valid integer"),
 ]

@@ -3,7 +3,9 @@ and back.
 
 Reading lengths and angles requires the unit (a bare number is refused, so a file never mixes metres and inches
 silently); the length units are :data:`spherestep.units.METRES_PER_UNIT`. A flux density, voltage or power may be
-a bare number in its SI unit (T, V, W), which no other unit of the file could be mistaken for. Writing gives the
+a bare number in its SI unit (T, V, W), which no other unit of the file could be mistaken for. :func:`parse_scaled`
+is the one reader of a quantity in a table of units, with the rules as options (a builder's specification,
+:mod:`spherestep.synthesis.spec`, requires the unit for torques, times and masses). Writing gives the
 shortest decimal that converts back to the same float, so a saved design loads back bit for bit. The parsers raise ``ValueError`` with a
 message saying what was expected (the schema turns it into a :class:`DesignFileError` naming the field).
 """
@@ -11,6 +13,8 @@ message saying what was expected (the schema turns it into a :class:`DesignFileE
 from __future__ import annotations
 
 import math
+import re
+from collections.abc import Mapping, Sequence
 from typing import Any
 
 from .. import units
@@ -66,35 +70,49 @@ def parse_angle(value: Any) -> float:
     return radians
 
 
-def _parse_scaled(value: Any, what: str, scales: dict[str, float], example: str) -> float:
-    """SI value of a number (already SI) or of ``"<number> <unit>"`` with a unit of ``scales``; positive."""
-    if isinstance(value, (int, float)) and not isinstance(value, bool):
+# a number, then a unit that starts with no digit and may hold spaces ("0.5 N m")
+_SCALED = re.compile(r"^\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*([^\d\s.].*?)\s*$")
+
+
+def parse_scaled(value: Any, what: str, scales: Mapping[str, float], example: str, *, unit_required: bool = False,
+                 allow_zero: bool = False, fold_case: bool = False, names: Sequence[str] | None = None) -> float:
+    """SI value ``number × scales[unit]`` of ``"<number> <unit>"`` (``what`` a noun, e.g. ``"voltage"``;
+    ``example`` shown in the message), or of a bare number already in SI unless ``unit_required``. The unit is
+    matched with its spaces collapsed and ``⋅`` read as ``·``, lower-cased first with ``fold_case`` (then the
+    keys of ``scales`` are lower case); ``names`` are the units the message lists (default the keys). The result
+    is finite and positive (or zero with ``allow_zero``); ValueError saying what was expected otherwise."""
+    if not unit_required and isinstance(value, (int, float)) and not isinstance(value, bool):
         result = float(value)
     else:
-        number, unit = split_quantity(value, f"a {what}", example)
-        if unit not in scales:
-            *rest, last = scales
-            raise ValueError(f"must be a {what} in {', '.join(rest)} or {last}, like {example!r}; instead received "
+        match = _SCALED.match(value) if isinstance(value, str) else None
+        if match is None:
+            raise ValueError(f"must be a {what} with its unit, like {example!r}; instead received {show(value)}")
+        unit = match.group(2).lower() if fold_case else match.group(2)
+        key = " ".join(unit.replace("⋅", "·").split())
+        if key not in scales:
+            listed = ", ".join(names if names is not None else scales)
+            raise ValueError(f"must be a {what} with unit one of {listed}, like {example!r}; instead received "
                              f"{show(value)}")
-        result = number * scales[unit]
-    if not (math.isfinite(result) and result > 0):
-        raise ValueError(f"must be a finite positive {what}, like {example!r}; instead received {show(value)}")
+        result = float(match.group(1)) * scales[key]
+    if not math.isfinite(result) or result < 0 or (result == 0 and not allow_zero):
+        raise ValueError(f"must be a finite {'non-negative' if allow_zero else 'positive'} {what}, like "
+                         f"{example!r}; instead received {show(value)}")
     return result
 
 
 def parse_tesla(value: Any) -> float:
     """Tesla of a number or of ``"<number> T"`` / ``"<number> mT"``; positive."""
-    return _parse_scaled(value, "flux density", TESLA_UNITS, "1.32 T")
+    return parse_scaled(value, "flux density", TESLA_UNITS, "1.32 T")
 
 
 def parse_volts(value: Any) -> float:
     """Volts of a number or of ``"<number> V"`` (``mV``, ``kV``); positive."""
-    return _parse_scaled(value, "voltage", VOLT_UNITS, "24 V")
+    return parse_scaled(value, "voltage", VOLT_UNITS, "24 V")
 
 
 def parse_watts(value: Any) -> float:
     """Watts of a number or of ``"<number> W"`` (``mW``, ``kW``); positive."""
-    return _parse_scaled(value, "power", WATT_UNITS, "100 W")
+    return parse_scaled(value, "power", WATT_UNITS, "100 W")
 
 
 def _shortest(guess: float, target: float, back) -> str | None:

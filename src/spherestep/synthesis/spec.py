@@ -3,7 +3,8 @@
 Every quantity carries its unit (``"12 in"``, ``"30 deg"``, ``"0.5 N m"``, ``"0.4 s"``, ``"2 kg"``, ``"24 V"``,
 ``"100 W"``), converted once to SI (metres, radians, N·m, s, kg, V, W). A mistake raises :class:`SpecError` (an
 :class:`~spherestep.errors.InputError`) with one line that names the file and the field path, the way design files
-do (:mod:`spherestep.design_file`, whose syntax reader and quantity parsers this module reuses). Every field is
+do (:mod:`spherestep.design_file`, whose syntax reader and quantity parsers, ``parse_scaled`` among them, this
+module reuses). Every field is
 described in docs/synthesis.md.
 """
 
@@ -21,15 +22,16 @@ import numpy as np
 from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, ValidationError, model_validator
 
 from ..design_file.load import parse_data, read_text
-from ..design_file.quantities import parse_angle, parse_length, parse_volts, parse_watts, show
+from ..design_file.quantities import parse_angle, parse_length, parse_scaled, parse_volts, parse_watts, show
 from ..design_file.schema import Direction, DirectionIn
 from ..errors import InputError
 
 SPEC_VERSION = 1
+# units as matched (lower case: a spec's units are read case-folded), and the ones a message lists
 TORQUE_UNITS = {"n m": 1.0, "nm": 1.0, "n·m": 1.0, "n*m": 1.0, "mn m": 1e-3, "mn·m": 1e-3, "mnm": 1e-3}
 TIME_UNITS = {"s": 1.0, "ms": 1e-3, "min": 60.0}
 MASS_UNITS = {"kg": 1.0, "g": 1e-3}
-UNIT_NAMES = {"a torque": ("N m", "N·m", "Nm", "mN m"), "a time": ("s", "ms", "min"), "a mass": ("kg", "g")}
+TORQUE_NAMES = ("N m", "N·m", "Nm", "mN m")
 
 
 class SpecError(InputError):
@@ -41,37 +43,20 @@ class SpecError(InputError):
         super().__init__(re.sub(r"\s*\n\s*", " ", f"{source}: {message}"))
 
 
-_QUANTITY = re.compile(r"^\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*(\S.*?)\s*$")
-
-
-def _scaled(value: Any, what: str, scales: dict[str, float], example: str, *, zero: bool = False) -> float:
-    match = _QUANTITY.match(value) if isinstance(value, str) else None
-    if match is None:
-        raise ValueError(f"must be {what} with its unit, like {example!r}; instead received {show(value)}")
-    number, unit = float(match.group(1)), match.group(2)
-    key = " ".join(unit.lower().replace("⋅", "·").split())
-    if key not in scales:
-        raise ValueError(f"must be {what} with unit one of {', '.join(UNIT_NAMES[what])}, like {example!r}; "
-                         f"instead received {show(value)}")
-    out = number * scales[key]
-    if not math.isfinite(out) or out < 0 or (out == 0 and not zero):
-        raise ValueError(f"must be a finite positive {what.split(' ', 1)[1]}; instead received {show(value)}")
-    return out
-
-
 def parse_torque(value: Any) -> float:
-    """N·m of ``"0.5 N m"`` (also ``N·m``, ``Nm``, ``mN m``)."""
-    return _scaled(value, "a torque", TORQUE_UNITS, "0.5 N m")
+    """N·m of ``"0.5 N m"`` (also ``N·m``, ``Nm``, ``mN m``); the unit required, case-folded; positive."""
+    return parse_scaled(value, "torque", TORQUE_UNITS, "0.5 N m", unit_required=True, fold_case=True,
+                        names=TORQUE_NAMES)
 
 
 def parse_seconds(value: Any) -> float:
-    """Seconds of ``"0.4 s"`` (also ``ms``, ``min``)."""
-    return _scaled(value, "a time", TIME_UNITS, "0.4 s")
+    """Seconds of ``"0.4 s"`` (also ``ms``, ``min``); the unit required, case-folded; positive."""
+    return parse_scaled(value, "time", TIME_UNITS, "0.4 s", unit_required=True, fold_case=True)
 
 
 def parse_mass(value: Any) -> float:
-    """Kilograms of ``"2 kg"`` (also ``g``)."""
-    return _scaled(value, "a mass", MASS_UNITS, "2 kg")
+    """Kilograms of ``"2 kg"`` (also ``g``); the unit required, case-folded; positive."""
+    return parse_scaled(value, "mass", MASS_UNITS, "2 kg", unit_required=True, fold_case=True)
 
 
 Length = Annotated[float, BeforeValidator(parse_length)]
