@@ -32,7 +32,7 @@ def test_demo_writes_plan_figures_simulation_and_report(tmp_path, capsys):
     assert (out / "commutation_steps.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     # the design's own model drives the turn and says so; air is the comparison
     assert info["torque_model"] == info["drives"]["model"] == info["capability"]["model"] == \
-        "iron (pairwise, FEM table)"
+        "iron (coupled, FEM table)"
     assert info["drives_other"]["model"] == info["capability_other"]["model"] == "air (magnets' torque map)"
     assert info["capability"]["samples"] == QUICK_CAPABILITY_SAMPLES
     for drives in (info["drives"], info["drives_other"]):

@@ -2,11 +2,14 @@
 
 import csv
 import json
+import math
 
 import numpy as np
 import pytest
 
 from spherestep.cli import main
+from spherestep.commutation.turn import turn_targets
+from spherestep.motor import prototype
 
 
 @pytest.mark.slow
@@ -29,8 +32,17 @@ def test_closed_loop_with_failed_coil_and_missed_steps(tmp_path, capsys):
                  "--noise", "0.1", "--failed-coils", "2", "--seed", "1", "--out", str(tmp_path), "--json"]) == 0
     summary = json.loads(capsys.readouterr().out)
     assert summary["closed_loop"] and summary["failed_coils"] == [2]
-    assert summary["final_error_deg"] < 10
-    assert (tmp_path / "closed_loop.csv").exists()
+    # the loop stops once the measured state is the one nearest the target, so the rotor rests at that state's
+    # equilibrium: its final error is the state's distance to the target (1.754°: the stepper resolution) to
+    # within the rest pose's offset from the geometric state (≤ 0.21° on the air core: docs/magnetics.md's state
+    # table; measured 1.9496–1.9503° over seeds 0–3, with 1–4 steps missed)
+    design = prototype().without_coils([2])
+    target = turn_targets(design, np.array([0.0, 0.0, 1.0]), math.radians(30.0), 4)[-1]
+    nearest = math.degrees(float(design.states().nearest(target[None])[0].ravel()[0]))
+    assert abs(summary["final_error_deg"] - nearest) <= 0.3
+    rows = list(csv.DictReader((tmp_path / "closed_loop.csv").open()))
+    assert len(rows) == summary["steps_taken"] >= 4
+    assert sum(int(r["missed"]) for r in rows) == summary["missed_steps"]
 
 
 def test_bad_input_exits_2(tmp_path, capsys):
@@ -53,4 +65,4 @@ def test_the_design_own_model_by_default(tmp_path, capsys):
     assert main(["simulate", "--axis", "1,0.5,2", "--angle", "20", "--steps", "3", "--out", str(tmp_path),
                  "--json"]) == 0
     summary = json.loads(capsys.readouterr().out)
-    assert summary["model"] == "iron (pairwise, FEM table)" and summary["steps"] >= 3
+    assert summary["model"] == "iron (coupled, FEM table)" and summary["steps"] >= 3

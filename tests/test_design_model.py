@@ -15,7 +15,7 @@ def test_prototype_is_iron_with_its_own_winding():
     assert design.coil.core == "iron"
     dm = design_model(design)
     assert isinstance(dm.model, IronTorqueMap) and dm.core == "iron"
-    assert dm.label == "iron (pairwise, FEM table)"
+    assert dm.label == "iron (coupled, FEM table)"
     assert dm.limits == DriveLimits.from_spec(design.coil, design)
     assert dm.limits.nominal_current == pytest.approx(0.2893, abs=1e-4)  # not the 1 A of the air-core default
     R = so3.random(5, 1)

@@ -4,7 +4,8 @@ of the prototype under the rotor magnets within reach, NGSolve 3-D (``scripts/fe
 
 The model is evaluated live on the stored cases (the same magnets, cores, polarities and currents) and held at
 the error measured today, as a regression bound; the issue's target, 5 % of the FEM's largest torque in every
-case, is not met yet and is stated as an expected failure."""
+linear case, is met by the design's own model (coupled, tabulated: ``design_model``), evaluated as the drives use
+it — every rotor pole, the patch's cores."""
 
 from __future__ import annotations
 
@@ -16,7 +17,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from spherestep.magnetics import iron_model
+from spherestep.magnetics import design_model, iron_model
 from spherestep.motor import prototype
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -26,8 +27,9 @@ sys.modules.setdefault("fem_patch", fem_patch)  # its dataclasses look their mod
 _spec.loader.exec_module(fem_patch)  # the script imports NGSolve only inside its solver
 
 # Measured 2026-11-25 on the 24 linear rows at 2.5 mm (error = |T_model − T_FEM| / the FEM's largest |T| over the
-# rows, 7.86 N m; vector norms): pairwise max 6.4 % (median 2.5 %), coupled max 3.2 % (median 1.5 %); the bounds
-# are those rounded up. The B–H rows were not solved yet when this was written: they are held to the same bounds
+# rows, 7.86 N m; vector norms): pairwise max 6.4 % (median 2.5 %), coupled max 3.2 % (median 1.5 %), 3.3 % (1.5 %)
+# with the reach's taper (the sums over the meshed magnets); the bounds are those rounded up. The design's own model
+# (coupled, its tables, every pole): max 3.4 %, median 1.25 %. The B–H rows were not solved yet when this was written: they are held to the same bounds
 # (the model is linear), provisionally — a failure there says saturation matters (docs/magnetics.md).
 BOUND = {("linear", "pairwise"): 0.07, ("linear", "coupled"): 0.035, ("bh", "pairwise"): 0.07,
          ("bh", "coupled"): 0.035}
@@ -62,32 +64,50 @@ def test_cases_are_the_scripts(rows, design):
 
 
 def test_restriction_is_the_models(design):
-    """The model restricted to every pole and the patch's cores is ``torque_on`` of the full model (pairwise and
-    coupled), so the comparison uses the model's own pairs and polarities."""
+    """The model restricted to every pole and the patch's cores is the full model's sums over those cores
+    (pairwise and coupled), so the comparison uses the model's own pairs and polarities; the coupled model's tables
+    (what ``torque_on`` evaluates) agree with those sums to 0.5 % of the pair table's peak torque."""
     c = fem_patch.all_cases(design)[1]
     full = np.zeros(design.stator.centers.shape[0])
     full[list(c.coils)] = c.currents
     for coupling in (False, True):
         m = iron_model(design, coupling=coupling)
         got = fem_patch.model_torque(m, c.R, c.coils, c.currents, np.arange(len(design.rotor.centers)))
-        assert np.allclose(got, m.torque_on(c.R, full, c.coils), rtol=0, atol=1e-12)
+        assert np.allclose(got, m.subset(c.coils).exact_torque(c.R, full[list(c.coils)]), rtol=0, atol=1e-12)
+        tol = 1e-12 if not coupling else 5e-3 * np.max(np.abs(m.detent.tau))
+        assert np.allclose(got, m.torque_on(c.R, full, c.coils), rtol=0, atol=tol)
 
 
 @pytest.mark.parametrize("material", ["linear", "bh"])
 def test_model_against_patch_fem(rows, design, material):
-    """Pairwise and coupled model within today's measured error of the FEM (regression bound, not the target)."""
+    """Pairwise and coupled model within today's measured error of the FEM (regression bound), as a share of the
+    FEM's largest torque over the linear cases (the issue's measure: the B–H rows are few and small, 1.2 N m, and
+    their own largest torque would make a 0.1 N m miss read as 9 %)."""
     cmp_ = fem_patch.compare(rows, material, design=design)
     if cmp_ is None:
         pytest.skip(f"no {material} rows stored yet")
-    assert cmp_.pairwise.max() <= BOUND[material, "pairwise"]
-    assert cmp_.coupled.max() <= BOUND[material, "coupled"]
+    peak = fem_patch.compare(rows, "linear", design=design).peak
+    for model, got in (("pairwise", cmp_.model_pairwise), ("coupled", cmp_.model_coupled)):
+        assert np.linalg.norm(got - cmp_.fem, axis=1).max() <= BOUND[material, model] * peak
 
 
-@pytest.mark.xfail(strict=True, reason="issue 28 §2: the pairwise model (the default) misses the patch FEM by up to "
-                   "6.4 % of its largest torque (the coupling through the cores)")
-def test_pairwise_model_within_target(rows, design):
+def test_default_model_within_target(rows, design):
+    """Issue 28 §2: the design's own model (coupled, tabulated, compiled; every rotor pole, the patch's cores on,
+    as the drives evaluate it) within 5 % of the FEM's largest torque in every linear case; the pairwise model
+    (its opt-out, ``coupling=False``) is not."""
     cmp_ = fem_patch.compare(rows, "linear", design=design)
-    assert cmp_ is not None and cmp_.pairwise.max() <= TARGET
+    if cmp_ is None:
+        pytest.skip("no linear rows stored yet")
+    own = design_model(design)
+    assert own.label == "iron (coupled, FEM table)"
+    got = []
+    for r in cmp_.rows:
+        full = np.zeros(len(design.stator.centers))
+        full[list(r["coils"])] = r["currents"]
+        got.append(own.model.torque_on(r["R"], full, r["coils"]))
+    err = np.linalg.norm(np.array(got) - cmp_.fem, axis=1) / cmp_.peak
+    assert err.max() <= TARGET
+    assert cmp_.pairwise.max() > TARGET  # what the coupling buys: 6.4 % pairwise
 
 
 def test_coupled_model_within_target_linear(rows, design):
