@@ -13,8 +13,10 @@ import csv
 import io
 import json
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any, ClassVar
 
 import numpy as np
 
@@ -25,8 +27,41 @@ def _angle(degrees: bool):
     return ("deg", math.degrees) if degrees else ("rad", float)
 
 
+ANGLE = "angle"
+"""A key's conversion in a :data:`Keys` table: an angle, written ``<key>_deg`` (or ``_rad``), None kept."""
+
+Keys = tuple[tuple[str, str] | tuple[str, str, Callable[[Any], Any] | str], ...]
+"""``(json key, attribute[, conversion])`` rows: the value as is, :data:`ANGLE`, or a function of the value."""
+
+
+def keyed_dict(obj, keys: Keys, degrees: bool = True) -> dict:
+    """The JSON-ready dict of ``obj`` by a :data:`Keys` table, in its order; angles in degrees (or radians)."""
+    unit, conv = _angle(degrees)
+    out = {}
+    for key, name, *how in keys:
+        value = getattr(obj, name)
+        if how and how[0] == ANGLE:
+            out[f"{key}_{unit}"] = None if value is None else conv(value)
+        else:
+            out[key] = how[0](value) if how else value
+    return out
+
+
+class _Details:
+    """A mode's details: :meth:`to_dict` from the class's :attr:`KEYS` table (one shape for every mode)."""
+
+    KEYS: ClassVar[Keys] = ()
+
+    def to_dict(self, degrees: bool = True) -> dict:
+        return keyed_dict(self, self.KEYS, degrees)
+
+
+def _ms(seconds: float) -> float:
+    return 1e3 * seconds
+
+
 @dataclass(frozen=True)
-class SettledDetails:
+class SettledDetails(_Details):
     """The paper's relay steps, each settled: ``steps``, ``dwell`` (s), the rotor's tuned ``damping``
     (N·m·s/rad), whether every step settled within ``plan_tolerance`` (rad) of the plan (``executed``) and how many
     did (``steps_settled_on_plan``, of ``steps``)."""
@@ -38,15 +73,13 @@ class SettledDetails:
     steps_settled_on_plan: int
     plan_tolerance: float
 
-    def to_dict(self, degrees: bool = True) -> dict:
-        unit, conv = _angle(degrees)
-        return {"steps": self.steps, "dwell_s": self.dwell, "damping_N_m_s_per_rad": self.damping,
-                "executed": self.executed, "steps_settled_on_plan": self.steps_settled_on_plan,
-                f"plan_tolerance_{unit}": conv(self.plan_tolerance)}
+    KEYS: ClassVar[Keys] = (("steps", "steps"), ("dwell_s", "dwell"), ("damping_N_m_s_per_rad", "damping"),
+                            ("executed", "executed"), ("steps_settled_on_plan", "steps_settled_on_plan"),
+                            ("plan_tolerance", "plan_tolerance", ANGLE))
 
 
 @dataclass(frozen=True)
-class RampedDetails:
+class RampedDetails(_Details):
     """The relay steps ramped: the ``pull_out_rate`` (steps/s; 0 when every rate lost a step, the run shown is then
     the slowest rate's), when the ``last_step`` was energised (s), and every cruise rate ``tried`` with whether it
     lost a step."""
@@ -55,13 +88,13 @@ class RampedDetails:
     last_step: float
     tried: tuple[tuple[float, bool], ...]
 
-    def to_dict(self, degrees: bool = True) -> dict:
-        return {"pull_out_rate_steps_per_s": self.pull_out_rate, "last_step_s": self.last_step,
-                "tried": [{"rate_steps_per_s": r, "lost_a_step": lost} for r, lost in self.tried]}
+    KEYS: ClassVar[Keys] = (
+        ("pull_out_rate_steps_per_s", "pull_out_rate"), ("last_step_s", "last_step"),
+        ("tried", "tried", lambda tried: [{"rate_steps_per_s": r, "lost_a_step": lost} for r, lost in tried]))
 
 
 @dataclass(frozen=True)
-class ServoDetails:
+class ServoDetails(_Details):
     """The simulated servo: ``trajectory`` how its time was chosen (``"fastest"``: :func:`~spherestep.control.
     plan_turn`; ``"given"``: the caller's ``duration``; ``"fixed"``: ``plan_turn`` refused this model, the turn
     takes the fixed time, ``note`` says why), ``motion_time`` (s), the ``sensor`` and its ``sensor_noise`` and
@@ -79,17 +112,15 @@ class ServoDetails:
     peak_current: float
     reachable_fraction: float
 
-    def to_dict(self, degrees: bool = True) -> dict:
-        unit, conv = _angle(degrees)
-        return {"trajectory": self.trajectory, "trajectory_note": self.note, "motion_time_s": self.motion_time,
-                "sensor": self.sensor, f"sensor_noise_{unit}": conv(self.sensor_noise),
-                f"sensor_error_max_{unit}": conv(self.sensor_error), "damping_N_m_s_per_rad": self.damping,
-                "mean_copper_power_W": self.mean_copper_power, "peak_current_A": self.peak_current,
-                "reachable_fraction": self.reachable_fraction}
+    KEYS: ClassVar[Keys] = (
+        ("trajectory", "trajectory"), ("trajectory_note", "note"), ("motion_time_s", "motion_time"),
+        ("sensor", "sensor"), ("sensor_noise", "sensor_noise", ANGLE), ("sensor_error_max", "sensor_error", ANGLE),
+        ("damping_N_m_s_per_rad", "damping"), ("mean_copper_power_W", "mean_copper_power"),
+        ("peak_current_A", "peak_current"), ("reachable_fraction", "reachable_fraction"))
 
 
 @dataclass(frozen=True)
-class HardwareDetails:
+class HardwareDetails(_Details):
     """The servo on a coil controller (``port``) or the emulated motor: the loop's ``outcome`` (``"done"`` or the
     fault code) and ``message``, ``cycles``, achieved ``rate`` and requested ``loop_rate`` (Hz), ``missed``
     deadlines, whether the device acknowledged all off (``off_acknowledged``), ``trajectory``/``note``/
@@ -123,17 +154,14 @@ class HardwareDetails:
     end_error: float | None = None
     drift_after_off: float | None = None
 
-    def to_dict(self, degrees: bool = True) -> dict:
-        unit, f = ("deg", math.degrees) if degrees else ("rad", float)
-        return {"outcome": self.outcome, "message": self.message, "cycles": self.cycles, "rate_Hz": self.rate,
-                "loop_rate_Hz": self.loop_rate, "missed": self.missed, "cpu_per_cycle_ms": 1e3 * self.cpu_mean,
-                "cpu_max_ms": 1e3 * self.cpu_max, "realtime": self.realtime, "time_scale": self.time_scale,
-                "slowed": self.slowed,
-                f"loop_end_error_{unit}": None if self.end_error is None else f(self.end_error),
-                f"drift_after_off_{unit}": None if self.drift_after_off is None else f(self.drift_after_off),
-                "off_acknowledged": self.off_acknowledged,
-                "trajectory": self.trajectory, "trajectory_note": self.note, "motion_time_s": self.motion_time,
-                "log": self.log, "errors_against": "emulated rotor" if self.truth else "the loop's estimate"}
+    KEYS: ClassVar[Keys] = (
+        ("outcome", "outcome"), ("message", "message"), ("cycles", "cycles"), ("rate_Hz", "rate"),
+        ("loop_rate_Hz", "loop_rate"), ("missed", "missed"), ("cpu_per_cycle_ms", "cpu_mean", _ms),
+        ("cpu_max_ms", "cpu_max", _ms), ("realtime", "realtime"), ("time_scale", "time_scale"), ("slowed", "slowed"),
+        ("loop_end_error", "end_error", ANGLE), ("drift_after_off", "drift_after_off", ANGLE),
+        ("off_acknowledged", "off_acknowledged"), ("trajectory", "trajectory"), ("trajectory_note", "note"),
+        ("motion_time_s", "motion_time"), ("log", "log"),
+        ("errors_against", "truth", lambda truth: "emulated rotor" if truth else "the loop's estimate"))
 
 
 Details = SettledDetails | RampedDetails | ServoDetails | HardwareDetails
@@ -197,15 +225,16 @@ class DriveResult:
                 f"end, more than the tolerance {math.degrees(self.tolerance):.3g}° (--tolerance to judge it "
                 f"otherwise)")
 
+    KEYS: ClassVar[Keys] = (
+        ("mode", "mode"), ("backend", "backend"), ("model", "model"), ("axis", "axis", np.ndarray.tolist),
+        ("angle", "angle", ANGLE), ("time_s", "time", lambda t: t if math.isfinite(t) else None),
+        ("arrival_note", "arrival_note"), ("final_error", "final_error", ANGLE),
+        ("max_tracking_error", "max_tracking_error", ANGLE), ("peak_power_W", "peak_power"),
+        ("mean_power_W", "mean_power"), ("tolerance", "tolerance", ANGLE), ("within_tolerance", "ok"))
+
     def to_dict(self, degrees: bool = True) -> dict:
         """JSON-ready (no ``inf``/``NaN``): angles in degrees, or radians with ``degrees=False``."""
-        unit, conv = _angle(degrees)
-        return {"mode": self.mode, "backend": self.backend, "model": self.model, "axis": self.axis.tolist(),
-                f"angle_{unit}": conv(self.angle), "time_s": self.time if self.arrived else None,
-                "arrival_note": self.arrival_note, f"final_error_{unit}": conv(self.final_error),
-                f"max_tracking_error_{unit}": conv(self.max_tracking_error), "peak_power_W": self.peak_power,
-                "mean_power_W": self.mean_power, f"tolerance_{unit}": conv(self.tolerance),
-                "within_tolerance": self.ok, "details": self.details.to_dict(degrees)}
+        return {**keyed_dict(self, self.KEYS, degrees), "details": self.details.to_dict(degrees)}
 
     def summary_line(self) -> str:
         """The console line: mode, backend, model, turn, time, errors, power."""
