@@ -144,3 +144,30 @@ def test_relay_board_switches_polarity_only_with_enables_open():
 def test_relay_board_rejects_bad_configuration(kwargs, field):
     with pytest.raises(InputError, match=f"^{field} must be"):
         CurrentDevice.relay_board(**kwargs)
+
+
+def test_the_relay_board_is_the_device_without_bridges():
+    """One device class: the relay board speaks protocol 1 only (no DRIVE, no version 2), with 80-byte frames,
+    no current limit (every relay may close) and no CRCS trip; the same class with bridges speaks both."""
+    board = CurrentDevice.relay_board(channels=8, watchdog_ms=500, name="relays")
+    assert (board.channels, board.versions, board.bridges) == (8, (1,), None)
+    assert board.receive(encode(1, "HELLO", 2), 0) == encode(1, "NAK", "VERSION")
+    assert board.receive(encode(2, "DRIVE", "0"), 0) == encode(2, "NAK", "VERB")  # an unknown verb, not SESSION
+    assert board.receive(encode(3, "HELLO", 1), 0) == encode(3, "ACK", "HELLO", 1, 8, 500, "relays")
+    assert board.receive(encode(4, "SET", "FF", "F0"), 0) == encode(4, "ACK", "SET", "FF", "F0")
+    assert board.receive(encode(5, "READ"), 0) == encode(5, "NAK", "VERB")
+    for k in range(12):  # a storm of damaged frames: NAK each, the session and the relays kept
+        assert board.receive(b"$06,PING*0000\n", 1000 * k) == encode(None, "NAK", "CRC")
+    assert board.session and (board.enable, board.polarity) == (0xFF, 0xF0) and board.trips == []
+    assert board.receive(encode(7, "PING"), 600_000) == encode(7, "NAK", "WDOG")  # 500 ms without a command
+    assert [code for code, _, _ in board.trips] == ["WDOG"] and (board.enable, board.polarity) == (0, 0)
+    assert board.off_us == 600_000  # the relays went from driven to off then
+
+
+@pytest.mark.parametrize("args, kwargs, field", [((None, 3, 1), {}, "bridges"),
+                                                 ((object(), 0, 0), {"relays": 8}, "relays"),
+                                                 ((None, 2, 0), {"relays": 8}, "relays"),
+                                                 ((None, 0, 0), {"relays": 65}, "channels")])
+def test_a_device_is_bridges_or_relays(args, kwargs, field):
+    with pytest.raises(InputError, match=f"^{field} must be"):
+        CurrentDevice(*args, **kwargs)

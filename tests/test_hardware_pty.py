@@ -21,7 +21,8 @@ import pytest
 
 from spherestep.commutation import Plan, Step, default_channel_map
 from spherestep.errors import InputError
-from spherestep.hardware import CoilDriver, Faults, LinkError, NakError, PtyDevice, Serial, coil_masks, play
+from spherestep.hardware import CoilDriver, CurrentDevice, Faults, LinkError, NakError, PtyDevice, Serial, coil_masks, \
+    play
 
 I3 = np.eye(3)
 WATCHDOG_MS = 200
@@ -255,3 +256,23 @@ def test_wall_clock_promises(device_factory):
         assert time.monotonic() - t < 1.0
     finally:
         nobody.stop()
+
+
+def test_one_server_refuses_what_it_cannot_run():
+    """A device with bridges is served only with the emulated motor that they are (nothing else moves their
+    currents); the truth is a motor's; the relay board is served by default, in a thread, its state read live."""
+    class Bridges:
+        def drive(self, duty, enabled):
+            pass
+
+    with pytest.raises(InputError, match="^motor must be the device's bridges"):
+        PtyDevice(CurrentDevice(Bridges(), 3, 0))
+    with PtyDevice(channels=8, watchdog_ms=300, name="board") as dev:
+        assert dev.device.channels == 8 and dev.device.name == "board" and dev.motor is None
+        with pytest.raises(InputError, match="^motor must be an emulated motor"):
+            dev.truth()
+        with CoilDriver(host(dev), default_channel_map(4)) as driver:
+            assert (driver.info.name, driver.info.channels) == ("board", 8)
+            driver.apply({0: 1, 1: -1}, duration=0.05)
+            assert dev.state() == (0b11, 0b10 << 4)
+    assert dev.state() == (0, 0) and dev.device.trips == []

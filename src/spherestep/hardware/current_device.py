@@ -137,11 +137,6 @@ class CurrentDevice:
         ``watchdog_ms`` (1–65535), ``name`` in the handshake; protocol 1 only (see the module)."""
         return cls(None, 0, 0, relays=channels, watchdog_ms=watchdog_ms, name=name)
 
-    @property
-    def relays_only(self) -> bool:
-        """True for a relay board (no bridges: protocol 1 only, masks driven as they are)."""
-        return self.bridges is None
-
     # -- outputs and trips --------------------------------------------------------------------------------------
     @property
     def session(self) -> bool:

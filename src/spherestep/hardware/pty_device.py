@@ -100,7 +100,8 @@ class Truth:
 
 class PtyDevice:
     """``device`` (default: :meth:`CurrentDevice.relay_board` of ``channels``, ``watchdog_ms``, ``name``) on a
-    pseudo-terminal, with line ``faults``; the host opens :attr:`port`. With ``motor`` (the device's bridges) it
+    pseudo-terminal, with line ``faults``; the host opens :attr:`port`. A device with bridges needs them to be the
+    emulated ``motor`` (nothing else would move its currents). With ``motor`` it
     runs in a forked process, asking with ``realtime`` for ``SCHED_FIFO`` scheduling (``DEVICE_RT_PRIORITY``,
     where the OS permits it) with its garbage collector paused, as the firmware runs on its own core; see the
     module. The device's time runs from :meth:`start` (:attr:`started`, ``time.monotonic()`` at device time 0).
@@ -120,8 +121,9 @@ class PtyDevice:
             if motor is not None:
                 raise bad_value("device", "the CurrentDevice whose bridges are the motor", device)
             device = CurrentDevice.relay_board(channels, watchdog_ms, name)
-        if motor is not None and device.bridges is not motor:
-            raise bad_value("motor", "the device's bridges (the motor it drives)", type(motor).__name__)
+        if device.bridges is not motor:  # what would advance bridges that are not an emulated motor's?
+            raise bad_value("motor", "the device's bridges (an EmulatedMotor), or None with a relay board",
+                            type(motor).__name__)
         self.device, self.motor = device, motor
         self.faults = faults if faults is not None else Faults()
         self.realtime = bool(realtime)
