@@ -244,17 +244,38 @@ def test_moment_method_against_fem(design):
     assert max(err_d.max(), err_l.max()) > 0.2  # the near-axis miss the FEM table replaces
 
 
-@pytest.mark.xfail(strict=True, reason="pairwise superposition misses the two-core full solve by a median 32 % "
-                   "(docs/magnetics.md); the opt-in coupling term brings it to 8 % "
-                   "(test_coupled_model_against_the_full_solve), not 5 %")
-def test_pairwise_against_full_multibody_solve():
-    """The issue's target: the sum of pair tables within 5 % of the full solve of two cores under the whole rotor
-    (data/iron_multibody.csv, same mesh level, 4 orientations × 3 drives)."""
+def _multibody(design):
+    """The two-core study's orientations, coil drives, cores and full-solve torques (data/iron_multibody.csv)."""
     mb = _csv("iron_multibody.csv")
-    full = np.c_[mb["full_x"], mb["full_y"], mb["full_z"]]
-    pair = np.c_[mb["pair_x"], mb["pair_y"], mb["pair_z"]]
-    err = np.linalg.norm(full - pair, axis=1) / np.linalg.norm(full, axis=1)
-    assert np.median(err) < 0.05
+    R = np.load(DATA / "iron_multibody_R.npy")[mb["orientation"].astype(int)]
+    v = design.stator.centers
+    k0 = int(np.argmin(v[:, 2]))
+    cores = [k0, int(np.argsort(v @ v[k0])[-2])]
+    c = np.zeros((len(R), len(v)))
+    c[:, cores] = np.c_[mb["c0"], mb["c1"]]
+    return mb, R, c, cores, np.c_[mb["full_x"], mb["full_y"], mb["full_z"]]
+
+
+def _mom_model(design, coupling=None):
+    """The live superposition on the moment method's own pair table (the full solve's mesh level)."""
+    from spherestep.magnetics._ironmap import read_table
+
+    mom = read_table(DATA / "iron_pair_table_mom.csv")
+    return IronTorqueMap.from_tables(design, iron_coil(), np.radians(mom[:, 0]), mom[:, 1], mom[:, 2],
+                                     coupling=coupling)
+
+
+def test_pairwise_against_full_multibody_solve(design):
+    """The live pairwise superposition (``IronTorqueMap.torque_on`` on the moment method's table, the full solve's
+    mesh level) against the full solve of two cores under the whole rotor (data/iron_multibody.csv, 4 orientations
+    × 3 drives): it reproduces the file's pair sums (1e-6 N·m: the study used this code) and misses the full solve by
+    a median 32 % (0.25–0.40 allowed), up to 155 % (< 1.7): the issue's 5 % target is not met by superposition, and
+    the coupling term narrows the gap (test_coupled_model_against_the_full_solve)."""
+    mb, R, c, cores, full = _multibody(design)
+    got = _mom_model(design).torque_on(R, c, cores)
+    assert np.abs(got - np.c_[mb["pair_x"], mb["pair_y"], mb["pair_z"]]).max() <= 1e-6
+    err = np.linalg.norm(full - got, axis=1) / np.linalg.norm(full, axis=1)
+    assert 0.25 < np.median(err) < 0.40 and err.max() < 1.7
 
 
 @pytest.mark.slow
@@ -287,20 +308,28 @@ def test_coupling_energy_is_the_joint_solve_less_the_self_terms(design):
     assert abs(got - want) <= 1e-9 * abs(want) and abs(want) > 0
 
 
-def test_coupling_brings_pairwise_toward_the_full_solve():
-    """The stored coupling study (data/iron_coupling.csv, ``scripts/iron_tables.py coupling``): with the coils off,
-    the pair tables plus the coupling energy's torque (magnets in the iron other magnets magnetise, the two cores
-    solved together) are closer to the full solve at every orientation than the pair tables alone, and within
-    31 % (median 10 %) where the pair tables miss by up to 155 % (median 39 %): the coupling is most of the gap.
-    It is not yet part of the torque model (the 5 % target above stays an expected failure)."""
-    c = _csv("iron_coupling.csv")
-    full = np.c_[c["full_x"], c["full_y"], c["full_z"]]
-    pair = np.c_[c["pair_x"], c["pair_y"], c["pair_z"]]
-    coupled = pair + np.c_[c["coupling_x"], c["coupling_y"], c["coupling_z"]]
+def test_coupling_brings_pairwise_toward_the_full_solve(design):
+    """The live coupling term (``iron_model(design, coupling=True)``, its table of the core's coupling energy) on the
+    two cores of the coupling study, coils off, against the direct coupling solve stored there
+    (data/iron_coupling.csv, ``scripts/iron_tables.py coupling``): within 0.08 N·m at every orientation (the table's
+    interpolation in three angles, differentiated; measured 0.023–0.063 N·m, up to 13 % of the largest coupling
+    torque, 0.47 N·m); and the live pair
+    superposition plus that term is closer to the stored full solve than the pair tables alone at every
+    orientation — the coupling is most of the gap."""
+    cp = _csv("iron_coupling.csv")
+    R = np.load(DATA / "iron_multibody_R.npy")[cp["orientation"].astype(int)]
+    _, _, _, cores, _ = _multibody(design)
+    coupled = iron_model(design, coupling=True).coupling
+    live = iron_model(design, coupling=True).subset(cores).coupling.torque(R)
+    stored = np.c_[cp["coupling_x"], cp["coupling_y"], cp["coupling_z"]]
+    assert len(R) == 4 and np.linalg.norm(live - stored, axis=1).max() <= 0.08
+    full = np.c_[cp["full_x"], cp["full_y"], cp["full_z"]]
+    off = np.zeros((len(R), len(design.stator)))
+    pair = _mom_model(design).torque_on(R, off, cores)
+    with_term = _mom_model(design, coupled).torque_on(R, off, cores)
     before = np.linalg.norm(full - pair, axis=1) / np.linalg.norm(full, axis=1)
-    after = np.linalg.norm(full - coupled, axis=1) / np.linalg.norm(full, axis=1)
-    assert len(after) == 4 and np.all(after < before)
-    assert after.max() < 0.31 and np.median(after) < 0.11 and np.median(before) > 0.35
+    after = np.linalg.norm(full - with_term, axis=1) / np.linalg.norm(full, axis=1)
+    assert np.all(after < before) and np.median(before) > 0.35
 
 
 @pytest.mark.slow
@@ -320,23 +349,35 @@ def test_saturating_solve_without_saturation_is_the_linear_one(design):
     assert iterations == 1 and abs(tau - (det[0] + lin[0])) <= 1e-9 * abs(det[0] + lin[0])
 
 
-def test_saturation_study():
-    """The stored saturating solves (data/iron_saturation.csv, ``scripts/iron_tables.py saturation``; MoM level 0,
-    one pole and one coil): converged, the largest flux density in a cell stays below 2.1 T (the linear solve
-    reaches 2.9 T at the motor's rest poses); where no cell saturates (20°) the solve is the linear one; at the
-    detent's peak (12°) saturation weakens the detent; the torque per unit current ``(τ(+1) − τ(−1))/2`` moves by
-    under 3 % of the linear table's peak at every angle — saturation acts on the detent, not on the winding."""
+@pytest.mark.slow
+def test_saturation_study(design):
+    """The live saturating solve (``_ironforce.saturated_pair_torque``, MoM level 0, one pole and one coil) against
+    the stored study (data/iron_saturation.csv, ``scripts/iron_tables.py saturation``): at the detent's peak (12°,
+    coil off) and near the axis with the coil on (2°, +1) it reproduces the stored torque, largest |B| and iteration
+    count (the iteration is deterministic: 1e-6 relative; measured equal to the file's 9 digits), and the live
+    linear tables (``pair_tables``) the file's linear column; at 20° no cell saturates (one iteration, the linear
+    torque). What the study shows, on the live numbers: saturation weakens the detent at its peak by more than 5 %
+    and keeps every cell below 2.1 T (the linear solve reaches 2.9 T at the motor's rest poses); and over the
+    stored angles the torque per unit current ``(τ(+1) − τ(−1))/2`` moves by under 3 % of the linear peak —
+    saturation acts on the detent, not on the winding."""
     s = _csv("iron_saturation.csv")
-    assert np.all(s["max_B_T"] < 2.1) and np.all(s["iterations"] < 300)
-    at = {(a, c): (lin, sat) for a, c, lin, sat in zip(s["alpha_deg"], s["current"], s["linear_Nm"], s["saturated_Nm"])}
-    for c in (0.0, 1.0, -1.0):
-        lin, sat = at[(20.0, c)]
-        assert abs(sat - lin) <= 1e-9
-    lin, sat = at[(12.0, 0.0)]
-    assert abs(sat) < 0.95 * abs(lin)
-    peak = max(abs(v[0]) for v in at.values())
+    at = {(a, c): row for row in zip(*(s[k] for k in ("alpha_deg", "current", "linear_Nm", "saturated_Nm", "max_B_T",
+                                                          "iterations"))) for a, c in [row[:2]]}
+    coil = iron_coil()
+    for a, c in ((12.0, 0.0), (2.0, 1.0), (20.0, 1.0)):
+        tau, b_max, iterations = ironforce.saturated_pair_torque(design, coil, math.radians(a), c)
+        _, _, lin, sat, b_stored, it_stored = at[(a, c)]
+        assert tau == pytest.approx(sat, rel=1e-6) and b_max == pytest.approx(b_stored, rel=1e-6)
+        assert iterations == it_stored and b_max < 2.1
+    det, lin = ironforce.pair_tables(design, coil, np.radians([2.0, 12.0, 20.0]))
+    for k, a in enumerate((2.0, 12.0, 20.0)):
+        assert det[k] == pytest.approx(at[(a, 0.0)][2], rel=1e-6)
+        assert det[k] + lin[k] == pytest.approx(at[(a, 1.0)][2], rel=1e-6, abs=1e-9)
+    assert at[(20.0, 1.0)][5] == 1 and at[(20.0, 1.0)][3] == at[(20.0, 1.0)][2]
+    assert abs(at[(12.0, 0.0)][3]) < 0.95 * abs(det[1])
+    peak = max(abs(v[2]) for v in at.values())
     for a in np.unique(s["alpha_deg"]):
-        per_current = [0.5 * (at[(a, 1.0)][i] - at[(a, -1.0)][i]) for i in (0, 1)]
+        per_current = [0.5 * (at[(a, 1.0)][i] - at[(a, -1.0)][i]) for i in (2, 3)]
         assert abs(per_current[1] - per_current[0]) <= 0.03 * peak
 
 
@@ -406,28 +447,50 @@ def test_coupled_model_against_the_full_solve(design):
     assert np.all(after < before) and after.max() < 0.36 and np.median(after) < 0.10
 
 
-def test_coupling_effects_study():
+def test_coupling_effects_study(model, design):
     """The stored study of what the coupling changes (data/iron_coupling_effects.csv, ``scripts/iron_tables.py
-    coupling-effects``): the pairwise rows are the pairwise model's rest poses (12 of 12 minima, as iron_summary
-    finds), and the coupled model's unpowered rest poses stay within 2° of them — a fraction of a degree."""
+    coupling-effects``) against the live pairwise model: iron_summary's samples (seed 0: 12 random unpowered starts,
+    12 stepper states with their coils) brought to rest by ``statics.equilibrium`` on ``iron_model(design)`` are
+    the file's pairwise rows — every one a minimum, the rest pose's distance from its start to 1e-5° and the
+    softest stiffness to 1e-5 relative (measured 5e-8° and 4e-7: the descent's tolerance) — and the coupled model's
+    unpowered rest poses stored beside them stay within 2° of those (a fraction of a degree)."""
+    from spherestep.magnetics import state_currents
+    from spherestep.statics import equilibrium
+
     t = _csv("iron_coupling_effects.csv")
-    pairwise, coupled = t["coupled"] == 0, t["coupled"] == 1
-    assert np.count_nonzero(pairwise & (t["minimum"] == 1)) == 24 and np.all(t["from_pairwise_deg"][pairwise] == 0)
-    unpowered = coupled & (t["state"] == 0) & (t["minimum"] == 1)
+    rng = np.random.default_rng(0)
+    starts = so3.random(12, rng)
+    states = design.states()
+    idx = np.sort(rng.choice(len(states), 12, replace=False))
+    runs = {0: (starts, np.zeros((12, len(design.stator)))),
+            1: (states.rotations[idx], np.array([state_currents(design, i) for i in idx]))}
+    for kind, (start, c) in runs.items():
+        rows = (t["coupled"] == 0) & (t["state"] == kind)
+        eq = equilibrium(model, start, c, gtol=1e-9, max_step=np.radians(2.0))
+        assert np.all(eq.is_minimum) and np.all(t["minimum"][rows] == 1)
+        assert np.degrees(so3.distance(eq.rotation, start)) == pytest.approx(t["moved_deg"][rows], abs=1e-5)
+        assert eq.stiffness[:, 0] == pytest.approx(t["stiffness_Nm_per_rad"][rows], rel=1e-5)
+    unpowered = (t["coupled"] == 1) & (t["state"] == 0) & (t["minimum"] == 1)
     assert np.count_nonzero(unpowered) >= 9 and np.all(t["from_pairwise_deg"][unpowered] < 2.0)
 
 
-def test_fem_mesh_convergence():
-    """The FEM reference converges: at 2°, 8° and 12° the pair torques on successively finer face meshes (2 mm,
-    1.4 mm) change by less than 2 % of the peak pair torque between the last two sizes (data/iron_fem.csv,
-    ``scripts/fem_iron.py --quick`` and ``--maxh 0.0014 --angles 12 2``)."""
+def test_fem_mesh_convergence(model):
+    """The FEM reference converges and the live model meets its finest mesh: at 2°, 8° and 12° the pair torques on
+    successively finer face meshes (2 mm, 1.4 mm) change by less than 1 % of the peak pair torque (measured ≤ 0.7 %;
+    data/iron_fem.csv, ``scripts/fem_iron.py --quick`` and ``--maxh 0.0014 --angles 12 2``), and the live model
+    (``iron_model(prototype())``, its table built from the 2-mm FEM nodes, none at a reference angle) is within
+    1.5 % of the peak of the finest solve at every reference angle (measured ≤ 1.1 %, at 5°): the model's error is
+    of the order of the FEM's own mesh error, not the 5 % the issue allowed."""
     fem = _csv("iron_fem.csv")
     peak = max(np.abs(fem["detent_Nm"]).max(), np.abs(fem["linear_Nm"]).max())
     refined = [a for a in np.unique(fem["alpha_deg"]) if np.count_nonzero(fem["alpha_deg"] == a) >= 2]
     assert {2.0, 8.0, 12.0} <= set(refined)  # near the axis, mid-way, the detent's peak
-    for a in refined:
+    for a in np.unique(fem["alpha_deg"]):
         at = np.flatnonzero(fem["alpha_deg"] == a)
         at = at[np.argsort(-fem["maxh_face_m"][at])]  # coarse to fine
-        assert fem["elements"][at[-1]] > 2 * fem["elements"][at[0]]
+        live = {"detent_Nm": model.detent.pair(np.radians([a]))[0], "linear_Nm": model.linear.pair(np.radians([a]))[0]}
         for column in ("detent_Nm", "linear_Nm"):
-            assert abs(fem[column][at[-1]] - fem[column][at[-2]]) <= 0.02 * peak
+            assert abs(live[column] - fem[column][at[-1]]) <= 0.015 * peak, (a, column)
+            if a in refined:
+                assert fem["elements"][at[-1]] > 2 * fem["elements"][at[0]]
+                assert abs(fem[column][at[-1]] - fem[column][at[-2]]) <= 0.01 * peak

@@ -238,8 +238,11 @@ def test_ramped_relay_stepping_keeps_or_loses_steps_and_finds_a_pull_out_rate(de
     fast = run_ramped(design, plan, tmap, 300.0, rotor=tuning.rotor, dt=tuning.dt, settle=2.0)
     assert fast.lost  # 300 steps/s: the rotor cannot follow and is left behind
     assert so3.distance(fast.orientations[-1], plan.achieved[-1]) > math.radians(10)
-    pull = pull_out_rate(design, plan, tmap, rotor=tuning.rotor, rates=(3.0, 300.0), iterations=2, dt=tuning.dt,
+    pull = pull_out_rate(design, plan, tmap, rotor=tuning.rotor, rates=(3.0, 300.0), iterations=6, dt=tuning.dt,
                          settle=2.0)
-    assert 3.0 <= pull.rate < 300.0 and not pull.run.lost
-    assert [r for r, _ in pull.tried][:2] == [3.0, 300.0] and len(pull.tried) == 4
+    # a sweep of run_ramped on this plan (2026-11-25) keeps every step at 8–19 steps/s and loses one at 19.5–25 (and
+    # at 6: success is not monotone); six geometric bisections of 3–300 end in their last interval below that edge
+    # (measured 18.13, the next 19.48 lost)
+    assert 17.0 <= pull.rate <= 19.5 and not pull.run.lost
+    assert [r for r, _ in pull.tried][:2] == [3.0, 300.0] and len(pull.tried) == 8
     assert slow.summary().peak_power == 24.0 * max(len(s.coils) for s in plan.steps)  # 24 W a coil
