@@ -8,8 +8,8 @@ import pytest
 
 from spherestep import so3
 from spherestep.control import DriveLimits, TimeLaw, Trajectory, allocate_matrix
-from spherestep.control.time_optimal import (MARGIN, banded_phase_plane, current_box, fastest_turn, phase_plane,
-                                            reachable_interval)
+from spherestep.control.time_optimal import (TURN_MARGIN, banded_phase_plane, current_box, fastest_turn,
+                                            phase_plane, reachable_interval)
 
 
 def _law(pp, axis=(0.0, 0.0, 1.0), start=np.eye(3)):
@@ -121,15 +121,25 @@ def test_reachable_interval_matches_the_allocation():
             assert alloc.reachable, (k, y)
         for y in (hi[k] + 1e-4, lo[k] - 1e-4):
             assert not allocate_matrix(K[k], y * n - b[k], limits)[0].reachable
-    # the back-EMF box: at speed v the motoring coils lose what their EMF takes
+    # the back-EMF box: at speed v the motoring coils lose what their EMF takes; beyond the supply a coil must
+    # brake (its box no longer holds 0), and where no current serves every speed of the band the box is empty
     lower, upper = current_box(K, n, limits, speed=2.0)
     g = np.einsum("man,a->mn", K, n) / (limits.resistance * limits.nominal_current ** 2)
-    np.testing.assert_allclose(upper, np.clip(1.0 - np.maximum(g, 0) * 2.0, 0, None))
+    np.testing.assert_allclose(upper, 1.0 - np.maximum(g, 0) * 2.0)
+    fast = 1.5 / np.abs(g).max()  # the best-aligned coil's EMF 1.5 × the supply: it brakes, within its bound
+    lower, upper = current_box(K, n, limits, speed=fast)
+    assert np.any(upper < 0) and np.all(lower <= upper) and np.all((upper >= 0) | (lower < 0))
     lower7, upper7 = current_box(K, n, limits, speed=2.0, scale=0.7)  # the whole EMF against 70 % of the supply
-    np.testing.assert_allclose(upper7, np.clip(0.7 - np.maximum(g, 0) * 2.0, 0, None))
-    np.testing.assert_allclose(lower7, np.clip(-0.7 + np.maximum(-g, 0) * 2.0, None, 0))
-    lo2, hi2 = reachable_interval(K, b, d, limits, speed=2.0)
-    assert np.all(hi2 <= hi + 1e-9) and np.all(lo2 >= lo - 1e-9)
+    np.testing.assert_allclose(upper7, 0.7 - np.maximum(g, 0) * 2.0)
+    np.testing.assert_allclose(lower7, -0.7 + np.maximum(-g, 0) * 2.0)
+    lower3, upper3 = current_box(K, n, limits, speed=2 * fast)  # 3 × the supply: no current serves every speed
+    empty = np.any(lower3 > upper3, axis=1)
+    assert np.any(empty)
+    lo2, hi2 = reachable_interval(K, b, d, limits, speed=2 * fast)
+    assert np.all(np.isnan(lo2[empty]))
+    slow = 0.5 / np.abs(g).max()  # every coil's EMF within half the supply: the interval shrinks, not empty
+    lo3, hi3 = reachable_interval(K, b, d, limits, speed=slow)
+    assert np.all(hi3 <= hi + 1e-9) and np.all(lo3 >= lo - 1e-9) and not np.any(np.isnan(lo3))
 
 
 @pytest.fixture(scope="module")
@@ -155,9 +165,11 @@ def test_iron_turn_is_found_and_its_feed_forward_is_within_the_margin(iron_turn)
     R_end, w_end, _ = tr.sample(np.array([tr.duration]))
     np.testing.assert_allclose(R_end[0], so3.exp(2 * math.pi * n) @ R0, atol=1e-9)
     assert np.linalg.norm(w_end) <= 1e-12
-    assert tr.duration < 3.0  # beats the demo's fixed 3.0 s
+    assert tr.duration <= 1.5  # issue 25 §3's target (beats the demo's fixed 3.0 s)
     model, limits = dm.model, dm.limits
-    scaled = limits.replace(max_current=MARGIN * limits.max_current, supply_power=MARGIN ** 2 * limits.supply_power)
+    m = ft.margin
+    assert m == TURN_MARGIN
+    scaled = limits.replace(max_current=m * limits.max_current, supply_power=m ** 2 * limits.supply_power)
     knots = np.concatenate([seg.t0 + seg.times for seg in tr.segments])
     rng = np.random.default_rng(0)
     for t, lim in ((rng.choice(knots, 60, replace=False), scaled), (rng.uniform(0, tr.duration, 60), limits)):
@@ -176,7 +188,7 @@ def test_servo_tracks_the_iron_turn(iron_turn):
     design, dm, inertia, R0, ft = iron_turn
     run = simulate_servo(design, ft.trajectory, dm.model, limits=dm.limits,
                          sensor=NoisySensor(math.radians(0.02), rng=0), settle=0.3)
-    assert run.reachable.all()
+    assert run.reachable.mean() >= 0.85  # the feedback has 10 % of the drive: it saturates now and then
     assert math.degrees(run.tracking_error.max()) <= 0.5
     assert math.degrees(run.final_error) <= 0.05  # issue 25's targets: ≤ 0.5° on the way, ≤ 0.05° at the end
 

@@ -21,20 +21,24 @@ the inertial one, each stage is one interval in ``y`` — no need for TOPP-RA's 
 Speed bands. ``B`` shrinks as ``ṡ`` grows (each coil loses, on the side its back-EMF opposes, ``|g_k| ṡ`` with
 ``g_k = K_k·n/(R I_n²)``), so the interval computed with the box at ``v_j`` holds for every speed up to ``v_j``.
 The phase plane uses ``SPEED_BANDS`` levels ``v_j`` (equal steps up to ``TOP_SPEED × v₀``, :func:`speed_levels`;
-``v₀`` the speed at which the best-aligned coil's back-EMF equals the supply; ``TOP_SPEED`` = 0.8 because the
-servo's least-power allocation does not know the back-EMF — measured on the prototype's iron turn, the servo
-tracks within 0.21° at 0.6 (2.91 s), 0.33° at 0.8 (2.35 s), 0.42° at 0.9, 0.55° at 1.0 (2.05 s) and loses the
-rotor by 11° at 2.0 (1.67 s)):
-a piece whose larger end speed is in ``(v_{j−1}, v_j]`` uses band ``j`` (conservative by one band's width);
+``v₀`` the speed at which the best-aligned coil's back-EMF equals the supply; ``TOP_SPEED`` = 2, the bound's: the
+box itself caps the speed, and the servo's allocation keeps the same supply box each period from its estimated
+``ω``, :class:`~spherestep.control.ServoLaw`); a piece whose larger end speed is in ``(v_{j−1}, v_j]`` uses band ``j`` (conservative by one band's width);
 damping conservatively as ``D_j ≤ s̈ ≤ A_j − β v_j``, ``β = b_d/I``. The intervals are computed lazily, only in
 the bands the passes visit.
 
-Margin. The feed-forward may use ``margin`` (``MARGIN`` = 0.7) of the current bound, of the supply voltage (the
+Margin. The feed-forward may use ``margin`` (``TURN_MARGIN`` = 0.9; the other planners' ``MARGIN`` is 0.7) of
+the current bound, of the supply voltage (the
 *whole* back-EMF counted against it) and of the power radius: ``|c_k| ≤ m u``, ``|R I_n c_k + e_k| ≤ m V``,
 ``‖c‖ ≤ m ρ``. Feedback currents within ``(1 − m)`` of the current, voltage and power bounds then add to the
 feed-forward's without leaving the limits (triangle inequalities): the feedback, and the inductance's ``L di/dt``,
 keep ``1 − m`` of the drive whatever the detent and the speed cost the feed-forward. ``margin = 1`` gives
-the bound (:func:`fastest_time`, :func:`~spherestep.control.bang_bang_time`).
+the bound (:func:`fastest_time`, :func:`~spherestep.control.bang_bang_time`). Why 0.9: on the iron prototype
+holding the rotor against the detent takes more than 80 % of a coil's current along the demo's turn (184–224°),
+so at 0.7 only a detour resting at three waypoints is feasible (2.05 s); at 0.9 the geodesic is (1.34–1.46 s,
+tracked within 0.15° on the design's model). The price is robustness: a plant whose winding gives 15 % less
+torque cannot follow a plan that uses 90 % of the model's, so a turn on a motor not yet calibrated should be
+planned with ``margin = MARGIN`` (docs/control.md, the table of §2).
 
 Phase plane. With ``x = ṡ²`` (``dx/ds = 2 s̈``) on a grid ``s_0 … s_K`` (step ≤ ``GRID_STEP``), each piece has a
 constant ``s̈_i = (x_{i+1} − x_i)/(2Δ)`` (``s`` quadratic in ``t``, ``ṡ`` linear, exact), which must lie in the
@@ -66,7 +70,7 @@ import numpy as np
 from .. import checks, so3
 from ..errors import InputError, bad_value
 from .limits import DriveLimits
-from .trajectory import MARGIN, TimeLaw, Trajectory
+from .trajectory import TimeLaw, Trajectory
 
 GRID_STEP = math.radians(0.5)  # the phase plane's largest step along the path (rad)
 MIN_PIECES = 16
@@ -400,16 +404,15 @@ def _check(model, limits, inertia, damping, margin) -> tuple[float, float, float
 
 
 def fastest_turn(model, start, axis, angle: float, inertia: float, limits: DriveLimits | None = None, *,
-                 margin: float = MARGIN, damping: float = 0.0, speed: float | None = None,
+                 margin: float | None = None, damping: float = 0.0, speed: float | None = None,
                  step: float = GRID_STEP, pieces: int = MIN_PIECES, detours: bool = True,
                  top_speed: float | None = None) -> FastestTurn:
     """The fastest rest-to-rest turn of ``angle`` (rad) about the fixed ``axis`` from ``start`` whose feed-forward
-    torque ``I α + b_d ω − b(R)`` the coils give within ``margin`` of their limits all along (see the module): the
-    turn itself if feasible, else the fastest detour found; :class:`FastestTurn`. Speeds up to ``top_speed × v₀``
-    (default ``TOP_SPEED`` = 0.8: the servo's allocation does not know the back-EMF, so the plan keeps the
-    best-aligned coil's back-EMF within 80 % of ``V``; :func:`speed_levels`) and ``speed`` if given. Raises an
-    ``InputError`` naming ``axis`` when no path tried is feasible."""
-    I, bd, margin = _check(model, limits, inertia, damping, margin)
+    torque ``I α + b_d ω − b(R)`` the coils give within ``margin`` (default ``TURN_MARGIN`` = 0.9) of their limits
+    all along (see the module): the turn itself if feasible, else the fastest detour found; :class:`FastestTurn`.
+    Speeds up to ``top_speed × v₀`` (default ``TOP_SPEED`` = 2; :func:`speed_levels`) and ``speed`` if given.
+    Raises an ``InputError`` naming ``axis`` when no path tried is feasible."""
+    I, bd, margin = _check(model, limits, inertia, damping, TURN_MARGIN if margin is None else margin)
     n = checks.axis(axis)
     theta = checks.number(angle, "angle", expected="a finite angle in radians")
     if speed is not None:
@@ -439,7 +442,8 @@ def fastest_turn(model, start, axis, angle: float, inertia: float, limits: Drive
 
 
 SPEED_BANDS = 24  # speed levels of the phase plane's bands
-TOP_SPEED = 0.8  # × v₀: the planner's fastest band (the best-aligned coil's back-EMF is 80 % of V there)
+TOP_SPEED = 2.0  # × v₀: the planner's fastest band (the honest box caps the speed before it)
+TURN_MARGIN = 0.9  # the time-optimal turn's feed-forward share of the drive (module docstring: why not MARGIN)
 BOUND_SPEED = 2.0  # × v₀: the bound's fastest band (that coil's back-EMF twice the supply)
 
 

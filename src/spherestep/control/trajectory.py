@@ -249,11 +249,12 @@ def path_capability(model, start, axis, angle: float, limits: DriveLimits | None
 
 
 def plan_turn(model, start, axis, angle: float, inertia: float, limits: DriveLimits | None = None, *,
-              margin: float = MARGIN, damping: float = 0.0, speed: float | None = None, samples: int = 48
+              margin: float | None = None, damping: float = 0.0, speed: float | None = None, samples: int = 48
               ) -> Trajectory:
     """The fastest rest-to-rest turn whose feed-forward torque ``I α + b ω − b(R)`` the coils give within
-    ``margin`` of their limits all along the path, on any core (the iron's detent included): the turn about
-    ``axis`` itself, or a detour through waypoints where the coils cannot hold against the detent
+    ``margin`` (default :data:`~spherestep.control.time_optimal.TURN_MARGIN`, 0.9; ``MARGIN`` for a plan robust
+    to a model error of ~15 %) of their limits all along the path, on any core (the iron's detent included): the
+    turn about ``axis`` itself, or a detour through waypoints where the coils cannot hold against the detent
     (:func:`spherestep.control.time_optimal.fastest_turn`, whose :class:`FastestTurn` says which path and what
     was tried; at least ``samples`` grid pieces, ``speed`` caps ``|ω|``). Raises an ``InputError`` naming
     ``axis`` when no path tried is feasible."""

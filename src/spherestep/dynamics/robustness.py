@@ -80,13 +80,15 @@ def hold_errors(design, plant, model, limits, rotor, *, holds: int = 20, seed: i
 
 
 def turn_run(design, plant, model, limits, rotor, *, axis=TURN_AXIS, angle: float = TURN_ANGLE, seed: int = 0,
-             settle: float = 0.5, noise: float = NOISE, disturbance_bandwidth: float | None = None):
-    """``(trajectory, run)``: the turn of the module planned on ``model`` and driven on ``plant``."""
+             settle: float = 0.5, noise: float = NOISE, disturbance_bandwidth: float | None = None,
+             margin: float | None = None):
+    """``(trajectory, run)``: the turn of the module planned on ``model`` (within ``margin``, default
+    ``plan_turn``'s) and driven on ``plant``."""
     from ..commutation.turn import turn_targets
     from ..control import plan_turn
 
     start = turn_targets(design, axis, angle, steps=1)[0]
-    traj = plan_turn(model, start, axis, angle, rotor.inertia, limits, damping=rotor.damping)
+    traj = plan_turn(model, start, axis, angle, rotor.inertia, limits, damping=rotor.damping, margin=margin)
     run = simulate_servo(design, traj, plant, limits=limits, rotor=rotor, sensor=_sensor(noise, seed),
                          settle=settle, controller_model=model, disturbance_bandwidth=disturbance_bandwidth)
     return traj, run
@@ -94,9 +96,10 @@ def turn_run(design, plant, model, limits, rotor, *, axis=TURN_AXIS, angle: floa
 
 def robustness_row(design, case, *, holds: int = 20, seed: int = 0, hold_time: float = 1.0, axis=TURN_AXIS,
                    angle: float = TURN_ANGLE, settle: float = 0.5, noise: float = NOISE,
-                   disturbance_bandwidth: float | None = None, rotor=None) -> RobustnessRow:
+                   disturbance_bandwidth: float | None = None, rotor=None, margin: float | None = None
+                   ) -> RobustnessRow:
     """The :class:`RobustnessRow` of ``case`` (a :class:`~spherestep.magnetics.mismatch.MismatchCase`) on
-    ``design`` (module docstring)."""
+    ``design`` (module docstring); ``margin`` the turn's plan's (default ``plan_turn``'s)."""
     from ..magnetics import design_model
     from .rotor import Rotor
 
@@ -106,7 +109,7 @@ def robustness_row(design, case, *, holds: int = 20, seed: int = 0, hold_time: f
     errors = hold_errors(design, plant, model, limits, rotor, holds=holds, seed=seed, hold_time=hold_time,
                          noise=noise, disturbance_bandwidth=disturbance_bandwidth)
     traj, run = turn_run(design, plant, model, limits, rotor, axis=axis, angle=angle, seed=seed, settle=settle,
-                         noise=noise, disturbance_bandwidth=disturbance_bandwidth)
+                         noise=noise, disturbance_bandwidth=disturbance_bandwidth, margin=margin)
     s = run.summary()
     return RobustnessRow(case.name, errors, float(traj.duration), s.final_error, s.max_tracking_error, s.mean_power,
                          s.reachable_fraction, disturbance_bandwidth)
