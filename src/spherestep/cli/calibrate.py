@@ -43,7 +43,7 @@ def calibrate(
     emulate: bool = typer.Option(False, "--emulate", help="Calibrate the emulated motor (a plant built with "
                                                           "--plant-error), on the lockstep link."),
     port: str = typer.Option(None, "--port", help="Calibrate the motor on this coil controller's serial device."),
-    orientations: int = typer.Option(30, "--orientations", callback=number("a whole number of holds from 2 to "
+    orientations: int = typer.Option(60, "--orientations", callback=number("a whole number of holds from 2 to "
                                                                            "200", 2, 200),
                                      help="How many holds (a random walk of 25° moves)."),
     error: str = typer.Option("detent=1.2,winding=0.85", "--plant-error",
