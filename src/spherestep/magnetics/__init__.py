@@ -25,9 +25,11 @@ from ._curve import ForceCurve, force_curve
 from ._figures import figure_comparison, figure_force_curve
 from ._direct import MESHING, coil_wrenches, force, force_torque, reaction, torque
 from ._inductance import coil_inductance
+from ._iron import IRON_LEVEL, CoreGeometry, CoreSolver, core_solver, magnet_face_radius  # for sensing (the cores' field)
 from ._ironforce import fig6_forces as iron_force_curve
 from ._ironforce import pair_tables as iron_pair_torques
 from ._ironmap import IronTorqueMap, iron_model
+from ._ironscale import iron_source, scaled_design
 from .design_model import DesignModel, design_model
 from ._ironsummary import IronSummary, iron_summary
 from ._model import coil_polarization, model_summary, rotor_collection, rotor_magnets, stator_coils
@@ -35,6 +37,8 @@ from ._statics import StateTorque, equilibrium, state_currents, state_torques
 from ._table import TABLE_MESHING, TorqueMap, pair_torque, table_nodes, torque_function, torque_map
 
 __all__ = [
+    "iron_source", "scaled_design",
+    "IRON_LEVEL", "CoreGeometry", "CoreSolver", "core_solver", "magnet_face_radius",
     "DesignModel", "MESHING", "StateTorque", "design_model", "TABLE_MESHING", "Calibration", "Comparison", "ForceCurve", "IronSummary", "IronTorqueMap",
     "coil_inductance", "iron_force_curve", "iron_model", "iron_pair_torques", "iron_summary",
     "TorqueMap", "calibrate", "coil_polarization", "coil_wrenches", "compare_models", "equilibrium",

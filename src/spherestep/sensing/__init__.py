@@ -4,6 +4,9 @@
 * :mod:`.array`: :class:`SensorArray` (positions, axes, part), candidate positions clear of the coils.
 * :mod:`.field`: :class:`FieldTable`, the rotor's field at the sensors from one 1-D table per radius, with
   its Jacobian on SO(3); :class:`CoilField` and the :class:`KnownField` protocol for subtracted fields.
+* :mod:`.iron`: the iron stator's cores magnetised by the rotor (:class:`CoreField`, a table per sensor over the
+  magnet's direction; :class:`IronFieldTable` = rotor + cores) and by the coils (:class:`IronCoilField`);
+  :func:`iron_fields` (stored for the prototype's default array, else built on first use).
 * :mod:`.readings`: simulated readings (magpylib, noise, saturation, LSB, current-sense error).
 * :mod:`.estimate`: :class:`Estimator` (Gauss–Newton / Levenberg–Marquardt on SO(3), global start).
 * :mod:`.calibration`: :func:`calibrate` (positions, gains, offsets from readings at unknown poses).
@@ -21,6 +24,7 @@ from .calibration import Calibration, calibrate, field_gradient
 from .estimate import Estimate, Estimator, super_fibonacci
 from .figures import figure_layout
 from .field import CoilField, FieldTable, KnownField, axial_field_table, rotor_field
+from .iron import CoreField, IronCoilField, IronFieldTable, core_response, iron_fields
 from .imu import FusedSensor, Imu, ImuSensor, Mekf, triad
 from .parts import BMI270_BMM150, TMAG5273A2, ImuPart, MagnetometerPart
 from .placement import Accuracy, Placement, accuracy, default_array, greedy_placement, smallest_eigenvalue
@@ -29,7 +33,8 @@ from .sensor import HallSensor, IdealSensor, NoisySensor, OrientationSensor, Sam
 from .symmetry import MarkerEffect, marked_design, marker_effect, symmetry_group
 
 __all__ = [
-    "Accuracy", "BMI270_BMM150", "Calibration", "CoilField", "Estimate", "Estimator", "FieldTable", "FusedSensor", "HallSensor",
+    "Accuracy", "BMI270_BMM150", "Calibration", "CoilField", "CoreField", "IronCoilField", "IronFieldTable",
+    "core_response", "iron_fields", "Estimate", "Estimator", "FieldTable", "FusedSensor", "HallSensor",
     "IdealSensor", "Imu", "ImuPart", "ImuSensor", "KnownField", "MagnetometerPart", "MarkerEffect", "Mekf", "NoisySensor",
     "OrientationSensor", "Placement", "SampledSensor",
     "SensorArray", "TMAG5273A2", "accuracy", "actual_currents", "axial_field_table", "calibrate", "field_gradient", "candidate_positions",

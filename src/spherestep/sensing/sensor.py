@@ -34,6 +34,7 @@ from ..errors import bad_value
 from .array import SensorArray
 from .estimate import Estimate, Estimator
 from .field import CoilField, FieldTable, rotor_field
+from .iron import IronFieldTable, iron_fields
 from .placement import default_array
 from .readings import actual_currents, sense
 from .symmetry import symmetry_group
@@ -113,25 +114,39 @@ class HallSensor(SampledSensor):
     rotor's field with the estimator's table (max error 1e-7 T, fast for loops) or ``"magpylib"``;
     ``iterations``: Gauss–Newton steps per update; ``noise_T``: RMS noise per axis in place of the part's;
     ``start_readings``: readings averaged for the global start
-    (the rotor at rest at power-up); ``seed``: noise. A rotor whose field has a symmetry group (the unmarked
+    (the rotor at rest at power-up); ``seed``: noise; ``cores``: whether the estimator models the iron cores'
+    field (:mod:`.iron`: the cores magnetised by the rotor and the coils; default: when the design's coil is
+    iron; ``False`` on an iron design estimates as if the stator were air while the readings still hold the
+    cores' field — the cost of ignoring them). A rotor whose field has a symmetry group (the unmarked
     prototype's 60 rotations) is found only up to that group from no prior; a marked rotor is found exactly,
     the marker's near-symmetry resolved by :meth:`Estimator.initialise`."""
 
     def __init__(self, design, array: SensorArray | None = None, known=(), current_error: float = 0.0,
                  truth: str = "table", iterations: int = 1, start_readings: int = 32, noise_T: float | None = None,
-                 seed=None, *, rate: float = SENSOR_RATE, latency: float = 0.0, start=None):
+                 seed=None, *, rate: float = SENSOR_RATE, latency: float = 0.0, start=None, cores: bool | None = None):
         super().__init__(rate, latency, start)
         if truth not in ("table", "magpylib"):
             raise bad_value("truth", "'table' or 'magpylib'", truth)
+        iron = design.coil.core == "iron"
+        cores = iron if cores is None else cores
+        if cores not in (True, False) or (cores and not iron):
+            raise bad_value("cores", "True or False (True only for an iron-core design)", cores)
         self.design = design
         self.array = array if array is not None else default_array(design)
         if noise_T is not None:  # the same part with another noise (MagnetometerPart checks the value)
             self.array = replace(self.array, part=replace(self.array.part, noise_T=noise_T))
         self.array.check_fits(design)
-        self.coils = CoilField.build(design, self.array.positions)
-        self.table = FieldTable.build(design, self.array.positions)
+        self.rotor_table = FieldTable.build(design, self.array.positions)
+        if iron:  # the readings hold the cores' field whatever the estimator models
+            self.core_field, self.coils = iron_fields(design, self.array.positions)
+        else:
+            self.core_field, self.coils = None, CoilField.build(design, self.array.positions)
+        self.cores = bool(cores)
         self.known = tuple(known)
-        self.estimator = Estimator(self.table, self.array.axes, self.array.part, (self.coils, *self.known))
+        # what the estimator models: the rotor (+ the cores), and the coils (iron or air-core)
+        self.table = IronFieldTable(self.rotor_table, self.core_field) if cores else self.rotor_table
+        coils = self.coils if cores or not iron else CoilField.build(design, self.array.positions)
+        self.estimator = Estimator(self.table, self.array.axes, self.array.part, (coils, *self.known))
         self.current_error = current_error
         self.truth = truth
         self.iterations = int(iterations)
@@ -147,9 +162,11 @@ class HallSensor(SampledSensor):
         if R.shape != (3, 3):
             raise bad_value("R_true", "one rotation matrix (3, 3)", f"shape {R.shape}")
         if self.truth == "table":
-            B = self.table.field(R)
+            B = self.rotor_table.field(R)
         else:
             B = rotor_field(self.design, self.array.positions, R)[0]
+        if self.core_field is not None:
+            B = B + self.core_field.field(R)
         if currents is not None:
             B = B + self.coils.field(actual_currents(currents, self.current_error, self.rng))
             for source in self.known:  # the extra known fields are really there too

@@ -1,0 +1,403 @@
+"""The iron cores' field at the sensors: the stator cores magnetised by the rotor's magnets and by the coils.
+
+Linear soft iron makes every core's polarization linear in its sources, so the cores' field at sensor ``s`` is a
+sum over the rotor's magnets of one function of the magnet's direction:
+
+    B_core,s(R) = Σ_j p_j H_s(w_j),    w_j = R u_j ,
+
+``H_s(w)`` the field at ``x_s`` of all the cores magnetised by one ``+1`` magnet whose axis is ``w`` (at the iron
+model's radius, :func:`spherestep.magnetics.magnet_face_radius`). ``H_s`` is one smooth function on the sphere per
+sensor; it is tabulated on an equiangular ``(ϑ, φ)`` grid of ``step`` (1°) in a frame whose poles lie between
+the cores, and interpolated by the tensor cubic B-spline that interpolates the nodes (periodic in ``φ``; in ``ϑ``
+the grid continues over the pole, ``(−ϑ, φ) ≡ (ϑ, φ + π)``). With ``t = δ × w`` for a small turn
+``R → exp(δ̂) R``,
+
+    ∂B_core,s/∂δ = −Σ_j p_j (∂H_s/∂w)(w_j) [w_j]× ,    ∂H/∂w = H_ϑ ê_ϑᵀ + (H_φ / sin ϑ) ê_φᵀ .
+
+Building ``H_s`` (:func:`core_response`). Each core is the iron room's pot core (:class:`magnetics.CoreGeometry`,
+its method-of-moments mesh and factorised solve :func:`magnetics.core_solver`), solved on its own: the cores are
+independent (their mutual magnetisation is left out; its size is measured in docs/sensing.md). For one core the
+field at a point ``y`` is ``G(y) J`` and ``J = (I − χT)⁻¹ χ b`` for the source ``b`` at the cells' centroids, so
+the field at all the sensors is ``A b`` with the adjoint ``A = χ G (I − χT)⁻¹``, one transposed back-substitution
+for every sensor seen from every core. The magnet's field at the cells, for every grid direction, comes from one
+1-D table in the angle between the magnet's axis and the cell per distinct cell radius (the magnet is
+axisymmetric, as in :mod:`.field`): the build is a table look-up and one matrix product per core.
+
+The coils (:class:`IronCoilField`): coil ``k`` at unit current magnetises its own core; the sensors see the
+winding (the iron room's current loops) plus that core, ``B = Σ_k c_k G_k``, a known field.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import astuple, dataclass
+from functools import lru_cache
+from importlib import resources
+
+import magpylib as magpy
+import numpy as np
+import scipy.linalg
+from numba import njit
+from scipy.interpolate import CubicSpline
+from scipy.ndimage import spline_filter1d
+
+from .. import checks
+from ..errors import bad_value
+from ..magnetics import IRON_LEVEL, CoreGeometry, core_solver, magnet_face_radius
+from .field import FieldTable
+
+DATA_FILE = "sensing_iron_cores.npz"  # the prototype's default array (scripts/sensing_iron_table.py)
+GRID_STEP_DEG = 1.0  # the H_s grid (interpolation error measured in docs/sensing.md)
+MAGNET_NODES = 1801  # nodes in the angle α ∈ [0, π] of the magnet's field table at each cell radius (0.1°)
+CHUNK = 4096  # grid directions per block in the build
+POLE_CLIP = 1e-6  # sin ϑ is clipped here in H_φ / sin ϑ (the grid's poles lie between the cores)
+
+
+def core_frames(design) -> np.ndarray:
+    """``Q (N, 3, 3)``: rotation taking each core's own frame (axis ``+z``, face at the origin) to the fixed frame,
+    the core's axis ``v_k`` as third column (any turn about the axis: the core is axisymmetric)."""
+    v = design.stator.centers
+    e = np.eye(3)[np.argmin(np.abs(v), axis=1)]
+    x = np.cross(e, v)
+    x /= np.linalg.norm(x, axis=1, keepdims=True)
+    return np.stack([x, np.cross(v, x), v], axis=2)
+
+
+def grid_frame(design) -> np.ndarray:
+    """``E (3, 3)``: the table's frame; its polar axis (third column) is the direction perpendicular to the stator
+    axis farthest, with its antipode, from every core's axis (the interpolant's ``1/sin ϑ`` lies where ``H`` is
+    small and smooth)."""
+    a = np.asarray(design.stator_axis, dtype=float)
+    e = np.eye(3)[np.argmin(np.abs(a))]
+    b1 = np.cross(a, e)
+    b1 /= np.linalg.norm(b1)
+    b2 = np.cross(a, b1)
+    psi = np.linspace(0.0, math.pi, 181)[:-1]
+    cand = np.cos(psi)[:, None] * b1 + np.sin(psi)[:, None] * b2
+    score = np.abs(cand @ design.stator.centers.T).max(axis=1)  # cos of the nearest core to ±p
+    p = cand[np.argmin(score)]
+    x = np.cross(a, p)
+    return np.stack([x / np.linalg.norm(x), a - (a @ p) * p, p], axis=1)
+
+
+def _magnet_centre(design) -> float:
+    """Distance (m) from the sphere's centre to a rotor magnet's centre in the iron model."""
+    return magnet_face_radius(design) - 0.5 * design.magnet_length
+
+
+def _magnet_table(design, radii: np.ndarray, nodes: int = MAGNET_NODES):
+    """Cubic pieces ``(n, nodes − 1, 4, 2)`` (highest power first) of ``(B_∥, B_⊥)`` (T) of one ``+1`` iron-model
+    magnet on the ``z`` axis seen at ``r_i (sin α, 0, cos α)`` (``B_∥`` along the magnet's axis, ``B_⊥`` along
+    ``x``), in ``α`` on ``nodes`` even steps over ``[0, π]``; and the step (rad)."""
+    alpha = np.linspace(0.0, math.pi, nodes)
+    magnet = magpy.magnet.Cylinder(dimension=(design.magnet_diameter, design.magnet_length),
+                                   polarization=(0.0, 0.0, design.remanence),
+                                   position=(0.0, 0.0, _magnet_centre(design)))
+    pts = radii[None, :, None] * np.stack([np.sin(alpha), np.zeros_like(alpha), np.cos(alpha)], axis=1)[:, None, :]
+    B = np.asarray(magnet.getB(pts.reshape(-1, 3))).reshape(nodes, len(radii), 3)
+    c = CubicSpline(alpha, np.stack([B[..., 2], B[..., 0]], axis=-1), axis=0).c  # (4, nodes − 1, n, 2)
+    return np.ascontiguousarray(np.transpose(c, (2, 1, 0, 3))), float(alpha[1] - alpha[0])
+
+
+@njit(cache=True)
+def _source_fields(coef, h, cells, W, Q):  # pragma: no cover - compiled
+    """``b (D, 3n)``: the field (T, core frame ``Q``, layout ``x1..xn, y1..yn, z1..zn``) at ``cells (n, 3)``
+    (fixed frame) of a ``+1`` magnet along each of ``W (D, 3)``, from :func:`_magnet_table`."""
+    n = cells.shape[0]
+    last = coef.shape[1] - 1
+    out = np.empty((W.shape[0], 3 * n))
+    for i in range(n):
+        r = math.sqrt(cells[i, 0] ** 2 + cells[i, 1] ** 2 + cells[i, 2] ** 2)
+        x0, x1, x2 = cells[i, 0] / r, cells[i, 1] / r, cells[i, 2] / r
+        for d in range(W.shape[0]):
+            w0, w1, w2 = W[d, 0], W[d, 1], W[d, 2]
+            c = min(1.0, max(-1.0, x0 * w0 + x1 * w1 + x2 * w2))
+            a = math.acos(c)
+            k = min(int(a / h), last)
+            t = a - k * h
+            q = coef[i, k]
+            par = ((q[0, 0] * t + q[1, 0]) * t + q[2, 0]) * t + q[3, 0]
+            perp = ((q[0, 1] * t + q[1, 1]) * t + q[2, 1]) * t + q[3, 1]
+            e0, e1, e2 = x0 - c * w0, x1 - c * w1, x2 - c * w2
+            m = math.sqrt(e0 * e0 + e1 * e1 + e2 * e2)
+            if m > 1e-300:
+                perp = perp / m
+            b0, b1, b2 = par * w0 + perp * e0, par * w1 + perp * e1, par * w2 + perp * e2
+            for a3 in range(3):
+                out[d, a3 * n + i] = Q[0, a3] * b0 + Q[1, a3] * b1 + Q[2, a3] * b2
+    return out
+
+
+def _adjoint(solver, points: np.ndarray) -> np.ndarray:
+    """``A (3P, 3n)``: the solved core's field (T) at ``points (P, 3)`` (core frame, components in rows
+    ``3p + i``) per unit source field at its centroids (the solver's layout: ``x1..xn, y1..yn, z1..zn``)."""
+    n = len(solver.cells)
+    G = np.empty((len(points), 3, 3 * n))
+    for a in range(3):
+        for cell in solver.cells:
+            cell.polarization = cell.orientation.inv().apply(np.eye(3)[a])
+        Ga = np.asarray(magpy.getB(solver.cells, points, sumup=False)).reshape(n, len(points), 3)
+        G[:, :, a * n:(a + 1) * n] = Ga.transpose(1, 2, 0)
+    G = G.reshape(3 * len(points), 3 * n)
+    X = scipy.linalg.solve((np.eye(3 * n) - solver.chi * solver.T).T, G.T, check_finite=False)  # (I − χT)ᵀ X = Gᵀ
+    return solver.chi * X.T
+
+
+def grid_directions(step_deg: float, frame: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The table's nodes: ``ϑ`` in ``[0, π]`` and ``φ`` in ``[0, 2π)`` at ``step_deg``, and their unit vectors
+    ``(nϑ, nφ, 3)`` in the fixed frame (``frame`` columns: the grid's x, y and polar axis)."""
+    n = round(180.0 / step_deg)
+    th = np.linspace(0.0, math.pi, n + 1)
+    ph = np.arange(2 * n) * (math.pi / n)
+    local = np.stack([np.outer(np.sin(th), np.cos(ph)), np.outer(np.sin(th), np.sin(ph)),
+                      np.outer(np.cos(th), np.ones_like(ph))], axis=-1)
+    return th, local @ frame.T
+
+
+def core_response(design, positions, step_deg: float = GRID_STEP_DEG, level: int = IRON_LEVEL, cores=None,
+                  progress=None) -> np.ndarray:
+    """``H (nϑ, nφ, S, 3)`` (T): the field at ``positions (S, 3)`` of the cores ``cores`` (indices, default all)
+    magnetised by one ``+1`` magnet along each grid direction (:func:`grid_directions` of :func:`grid_frame`),
+    each core solved on its own (module doc). ``progress(done, total)`` is called after each core."""
+    p = np.asarray(positions, dtype=float).reshape(-1, 3)
+    geom = CoreGeometry.of(design, design.coil)
+    solver = core_solver(geom, level)
+    face = design.radius + design.air_gap
+    Q = core_frames(design)
+    idx = np.arange(len(design.stator)) if cores is None else np.asarray(cores, dtype=int)
+    Y = np.einsum("kji,ksj->ksi", Q[idx], p[None] - face * design.stator.centers[idx][:, None])  # (K, S, 3)
+    A = _adjoint(solver, Y.reshape(-1, 3)).reshape(len(idx), len(p) * 3, -1)
+    radii = np.linalg.norm(solver.centroids + [0.0, 0.0, face], axis=1)
+    coef, h = _magnet_table(design, radii)
+    _, W = grid_directions(step_deg, grid_frame(design))
+    shape = W.shape[:2]
+    W = W.reshape(-1, 3)
+    H = np.zeros((len(W), len(p), 3))
+    for done, (k, Ak) in enumerate(zip(idx, A)):
+        cells = solver.centroids @ Q[k].T + face * design.stator.centers[k]  # fixed frame
+        for s in range(0, len(W), CHUNK):
+            F = _source_fields(coef, h, cells, W[s:s + CHUNK], Q[k]) @ Ak.T  # (D, 3S), core frame
+            H[s:s + CHUNK] += F.reshape(len(F), len(p), 3) @ Q[k].T
+        if progress is not None:
+            progress(done + 1, len(idx))
+    return H.reshape(*shape, len(p), 3)
+
+
+def _prefilter(values: np.ndarray, axis: int) -> np.ndarray:
+    """Periodic cubic B-spline coefficients along ``axis``: ``(c_{i−1} + 4 c_i + c_{i+1}) / 6 = v_i``."""
+    return spline_filter1d(values, 3, axis=axis, mode="grid-wrap", output=np.float32)
+
+
+@dataclass(frozen=True, eq=False)
+class CoreField:
+    """The cores' field at the sensors for any orientation (module doc): ``field(R)``, ``field_and_jacobian(R)``.
+
+    ``coefficients (nϑ + 3, nφ + 3, S, 3)``: B-spline coefficients with one ghost row before and two after in
+    ``ϑ`` (continued over the poles) and the same in ``φ`` (wrapped); ``frame (3, 3)`` the grid's frame;
+    ``step`` (rad); ``poles (M, 3)``, ``polarity (M,)`` the rotor's."""
+
+    coefficients: np.ndarray
+    frame: np.ndarray
+    step: float
+    poles: np.ndarray
+    polarity: np.ndarray
+
+    @classmethod
+    def from_nodes(cls, design, H: np.ndarray, step_deg: float = GRID_STEP_DEG) -> CoreField:
+        """From node values ``H (nϑ, nφ, S, 3)`` of :func:`core_response`."""
+        nt, nphi = H.shape[:2]
+        if nphi != 2 * (nt - 1):
+            raise bad_value("H", "node values on the (ϑ, φ) grid of core_response, shape (n + 1, 2n, S, 3)",
+                            f"shape {H.shape}")
+        half = nphi // 2
+        back = np.roll(H[-2:0:-1], -half, axis=1)  # ϑ = π + i h  ≡  (π − i h, φ + π)
+        ring = _prefilter(_prefilter(np.concatenate([H, back], axis=0).astype(np.float32), 0), 1)  # (2(nt − 1), nφ, S, 3)
+        rows = np.arange(-1, nt + 2) % len(ring)
+        cols = np.arange(-1, nphi + 2) % nphi
+        coef = np.ascontiguousarray(ring[rows][:, cols], dtype=np.float32)
+        return cls(coef, grid_frame(design), math.radians(step_deg), design.rotor.centers.copy(),
+                   design.polarity.astype(float))
+
+    def field(self, R) -> np.ndarray:
+        """The cores' field ``(..., S, 3)`` (T, fixed frame) for rotations ``R (..., 3, 3)``."""
+        R = np.asarray(R, dtype=float)
+        W = np.ascontiguousarray(np.swapaxes(R.reshape(-1, 3, 3) @ self.poles.T, 1, 2))  # (K, M, 3)
+        B, _ = _evaluate(self.coefficients, self.frame, self.step, W, self.polarity, False)
+        return B.reshape(R.shape[:-2] + B.shape[1:])
+
+    def field_and_jacobian(self, R):
+        """``(B (S, 3), J (S, 3, 3))`` for one rotation, ``J = ∂B_core/∂δ`` (module doc)."""
+        W = np.ascontiguousarray((np.asarray(R, dtype=float).reshape(3, 3) @ self.poles.T).T)[None]
+        B, J = _evaluate(self.coefficients, self.frame, self.step, W, self.polarity, True)
+        return B[0], J[0]
+
+
+@njit(cache=True)
+def _weights(t, out, derivative):  # pragma: no cover - compiled
+    """Uniform cubic B-spline weights at fraction ``t`` (or their ``d/dt``) into ``out (4,)``."""
+    s = 1.0 - t
+    if derivative:
+        out[0], out[1], out[2], out[3] = -0.5 * s * s, 1.5 * t * t - 2.0 * t, -1.5 * t * t + t + 0.5, 0.5 * t * t
+    else:
+        t2, t3 = t * t, t * t * t
+        out[0], out[1] = s * s * s / 6.0, (3.0 * t3 - 6.0 * t2 + 4.0) / 6.0
+        out[2], out[3] = (-3.0 * t3 + 3.0 * t2 + 3.0 * t + 1.0) / 6.0, t3 / 6.0
+
+
+@njit(cache=True)
+def _evaluate(coef, frame, step, W, polarity, jacobian):  # pragma: no cover - compiled
+    """``B (K, S, 3)`` and (``jacobian``) ``J (K, S, 3, 3)`` of :class:`CoreField` for pole directions
+    ``W (K, M, 3)`` (module doc: ``J = Σ_j p_j (H_ϑ ê_φ − H_φ / sin ϑ ê_ϑ)_c`` row by row, ``= −Σ p ∂H/∂w [w]×``)."""
+    K, M = W.shape[0], W.shape[1]
+    S = coef.shape[2]
+    last_i, last_j = coef.shape[0] - 4, coef.shape[1] - 4
+    B = np.zeros((K, S, 3))
+    J = np.zeros((K if jacobian else 1, S, 3, 3))
+    wu, wv, du, dv = np.empty(4), np.empty(4), np.empty(4), np.empty(4)
+    HT, HP = np.zeros((S, 3)), np.zeros((S, 3))  # Σ p H_ϑ and Σ p H_φ / sin ϑ over one pole's nodes
+    et, ep = np.empty(3), np.empty(3)  # ê_ϑ and ê_φ in the fixed frame (frame columns: the grid's axes)
+    two_pi = 2.0 * math.pi
+    for k in range(K):
+        for m in range(M):
+            w0, w1, w2 = W[k, m, 0], W[k, m, 1], W[k, m, 2]
+            l0 = w0 * frame[0, 0] + w1 * frame[1, 0] + w2 * frame[2, 0]
+            l1 = w0 * frame[0, 1] + w1 * frame[1, 1] + w2 * frame[2, 1]
+            l2 = w0 * frame[0, 2] + w1 * frame[1, 2] + w2 * frame[2, 2]
+            th = math.acos(min(1.0, max(-1.0, l2)))
+            ph = math.atan2(l1, l0)
+            if ph < 0.0:
+                ph += two_pi
+            u, v = th / step, ph / step
+            i, j = min(int(u), last_i), min(int(v), last_j)
+            _weights(u - i, wu, False)
+            _weights(v - j, wv, False)
+            if jacobian:
+                _weights(u - i, du, True)
+                _weights(v - j, dv, True)
+            p = polarity[m]
+            st, ct, sp, cp = math.sin(th), math.cos(th), math.sin(ph), math.cos(ph)
+            inv = 1.0 / max(st, POLE_CLIP)
+            for a in range(3):
+                et[a] = ct * cp * frame[a, 0] + ct * sp * frame[a, 1] - st * frame[a, 2]
+                ep[a] = -sp * frame[a, 0] + cp * frame[a, 1]
+            for a in range(4):
+                for b in range(4):
+                    wab = p * wu[a] * wv[b]
+                    if not jacobian:
+                        for s in range(S):
+                            for c in range(3):
+                                B[k, s, c] += wab * coef[i + a, j + b, s, c]
+                        continue
+                    tab, pab = p * du[a] * wv[b] / step, p * wu[a] * dv[b] / step * inv
+                    for s in range(S):
+                        for c in range(3):
+                            x = coef[i + a, j + b, s, c]
+                            B[k, s, c] += wab * x
+                            HT[s, c] += tab * x
+                            HP[s, c] += pab * x
+            if jacobian:
+                for s in range(S):
+                    for c in range(3):
+                        for e in range(3):
+                            J[k, s, c, e] += HT[s, c] * ep[e] - HP[s, c] * et[e]
+                        HT[s, c], HP[s, c] = 0.0, 0.0
+    return B, J
+
+
+@dataclass(frozen=True, eq=False)
+class IronFieldTable:
+    """What the sensors see of the rotor on the iron motor: its own field (:class:`FieldTable`) plus the cores it
+    magnetises (:class:`CoreField`); the same ``field`` / ``field_and_jacobian`` / ``positions`` as a table."""
+
+    rotor: FieldTable
+    cores: CoreField
+
+    @property
+    def positions(self) -> np.ndarray:
+        return self.rotor.positions
+
+    def field(self, R) -> np.ndarray:
+        return self.rotor.field(R) + self.cores.field(R)
+
+    def field_and_jacobian(self, R):
+        B, J = self.rotor.field_and_jacobian(R)
+        Bc, Jc = self.cores.field_and_jacobian(R)
+        return B + Bc, J + Jc
+
+
+@dataclass(frozen=True, eq=False)
+class IronCoilField:
+    """The iron-cored coils' field at the sensors, linear in the currents: ``B = Σ_k c_k G_k``, ``G_k`` coil
+    ``k``'s winding (the iron room's loops) plus its own core magnetised by it, at unit (nominal) current."""
+
+    per_coil: np.ndarray
+
+    @classmethod
+    def build(cls, design, positions, level: int = IRON_LEVEL) -> IronCoilField:
+        p = np.asarray(positions, dtype=float).reshape(-1, 3)
+        solver = core_solver(CoreGeometry.of(design, design.coil), level)
+        loops = solver.loops[0]
+        J = solver.polarization(magpy.getB(loops, solver.centroids, sumup=True))
+        Q = core_frames(design)
+        face = design.radius + design.air_gap
+        Y = np.einsum("kji,ksj->ksi", Q, p[None] - face * design.stator.centers[:, None]).reshape(-1, 3)
+        B = solver.field(J, Y) + np.asarray(magpy.getB(loops, Y, sumup=True)).reshape(-1, 3)
+        G = np.einsum("kij,ksj->ksi", Q, B.reshape(len(Q), len(p), 3))
+        return cls(G)
+
+    def field(self, currents) -> np.ndarray:
+        c = np.asarray(currents, dtype=float)
+        if c.shape[-1:] != (self.per_coil.shape[0],):
+            raise bad_value("currents", f"one current per coil ({self.per_coil.shape[0]})", f"shape {c.shape}")
+        return np.einsum("...k,ksi->...si", c, self.per_coil)
+
+
+def design_key(design, level: int = IRON_LEVEL) -> bytes:
+    """What the cores' response depends on (the rotor, the stator, the core, the mesh), as bytes."""
+    parts = [np.array([design.radius, design.air_gap, design.rotor_shell, design.magnet_diameter,
+                       design.magnet_length, design.remanence, level]).round(12),
+             design.stator.centers.round(12), design.rotor.centers.round(12), np.asarray(design.polarity, dtype=float),
+             np.array(astuple(CoreGeometry.of(design, design.coil)), dtype=float).round(12)]
+    return b"".join(np.ascontiguousarray(a, dtype=float).tobytes() for a in parts)
+
+
+def _stored(key: bytes, positions: np.ndarray, step_deg: float):
+    """The stored node values and coils' field for ``key`` at ``positions`` (:data:`DATA_FILE`), else ``None``."""
+    path = resources.files("spherestep.data") / DATA_FILE
+    if not path.is_file():
+        return None
+    with path.open("rb") as f, np.load(f) as z:
+        if (z["key"].tobytes() != key or float(z["step_deg"]) != step_deg or z["positions"].shape != positions.shape
+                or np.abs(z["positions"] - positions).max() > 1e-12):
+            return None
+        return z["H"] * z["scale"].astype(np.float32), z["coils"]
+
+
+@lru_cache(maxsize=4)
+def _cached(key: bytes, design, positions_bytes: bytes, step_deg: float, level: int):
+    p = np.frombuffer(positions_bytes).reshape(-1, 3)
+    stored = _stored(key, p, step_deg) if level == IRON_LEVEL else None
+    if stored is None:
+        stored = (core_response(design, p, step_deg, level), IronCoilField.build(design, p, level).per_coil)
+    return CoreField.from_nodes(design, stored[0], step_deg), IronCoilField(stored[1])
+
+
+def iron_fields(design, positions, step_deg: float = GRID_STEP_DEG,
+                level: int = IRON_LEVEL) -> tuple[CoreField, IronCoilField]:
+    """``(CoreField, IronCoilField)`` of ``design``'s cores at ``positions (S, 3)``: read from
+    :data:`DATA_FILE` for the prototype's default array, else built on first use (about a minute) and kept for
+    the process."""
+    checks.positive(step_deg, "step_deg", "a grid step in degrees dividing 180")
+    if abs(180.0 / step_deg - round(180.0 / step_deg)) > 1e-9:
+        raise bad_value("step_deg", "a grid step in degrees dividing 180", step_deg)
+    p = np.ascontiguousarray(np.asarray(positions, dtype=float).reshape(-1, 3))
+    return _cached(design_key(design, level), design, p.tobytes(), float(step_deg), int(level))
+
+
+def rotor_and_cores(design, positions, step_deg: float = GRID_STEP_DEG) -> IronFieldTable:
+    """:class:`IronFieldTable` of ``design`` at ``positions``."""
+    return IronFieldTable(FieldTable.build(design, positions), iron_fields(design, positions, step_deg)[0])
+
+
+__all__ = ["CoreField", "DATA_FILE", "IronCoilField", "IronFieldTable", "core_frames", "core_response", "design_key",
+           "grid_directions", "grid_frame", "iron_fields", "rotor_and_cores"]
