@@ -1,15 +1,21 @@
-"""Iron-cored coils, one run: time to build the iron torque map (method of moments: factorising a core and the
-pair table), time per orientation of the map against the air-core map, and the FEM time per solve (read from
-data/iron_fem.csv, written by scripts/fem_iron.py on the same machine: a FEM solve takes minutes and is not
-repeated here).
+"""Iron-cored coils, one run. First the motor model (issue 28 §2), today's against the new side by side: energy +
+torque per orientation of the pairwise model (compiled zonal sums), the coupled model's NumPy sums (pair splines
++ the coupling's series) and its tables (compiled, the design's own model now; the model's call and the packed
+compiled call the integrator makes), the tables' cold build, the iron model's dynamics in multiples of real time
+at its tuned step (``dynamics.tune``; Yoshida, 3 torque calls a step, 2 s simulated), and the capability map of
+400 orientations (``control.torque_capability``). Then (unless ``--no-mom``) the time to build the iron torque
+map by the method of moments (factorising a core and the pair table), time per orientation of the map against the
+air-core map, and the FEM time per solve (read from data/iron_fem.csv, written by scripts/fem_iron.py on the same
+machine: a FEM solve takes minutes and is not repeated here).
 
-Run: ``OPENBLAS_NUM_THREADS=1 nice -n 5 .venv/bin/python benchmarks/bench_iron.py [--level 0]`` (level 0 keeps the
-factorisation to a few minutes on a loaded machine; the default map uses level 1).
+Run: ``OPENBLAS_NUM_THREADS=1 nice -n 5 .venv/bin/python benchmarks/bench_iron.py [--level 0] [--no-mom]`` (level 0
+keeps the factorisation to a few minutes on a loaded machine; the default map uses level 1).
 """
 
 from __future__ import annotations
 
 import datetime
+import os
 import sys
 import time
 from pathlib import Path
@@ -26,7 +32,85 @@ from spherestep.motor import prototype
 from spherestep.motor.coil import iron_coil
 
 
+def model_timings() -> None:
+    """The pairwise and the coupled model, side by side (module docstring)."""
+    from bench_dynamics import speed
+
+    from spherestep._fast.terms import terms_evaluate, workspace
+    from spherestep.control import torque_capability
+    from spherestep.dynamics import tune
+    from spherestep.magnetics import _coupling, design_model
+    from spherestep.motor import coil_currents
+
+    design = prototype()
+    states = design.states()
+    c = coil_currents(states.coils(0), len(design.stator))
+    rng = np.random.default_rng(0)
+    R = so3.random(20, rng)
+    pair = design_model(design, coupling=False)
+    own = design_model(design)  # the coupled model: its tables are built on first use
+    own.model.torque(R[0], c)  # (numba's functions loaded)
+    _coupling._TABLES.clear()
+    t0 = time.perf_counter()
+    own = design_model(design)
+    own.model.torque(R[0], c)
+    build = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    own.model.coupling._coupling_table()
+    rebuild = time.perf_counter() - t0
+    k = iter(range(10 ** 9))
+
+    def one(model):
+        i = next(k) % len(R)
+        model.evaluate(R[i], c, 1)
+
+    def exact(model):
+        i = next(k) % len(R)
+        model.exact_energy(R[i], c), model.exact_torque(R[i], c)
+
+    packed = own.model.packed_terms(c)
+    tau, H = np.empty(3), np.empty((3, 3))
+    work, near = workspace(packed.poles)
+    C = np.ascontiguousarray(packed.C)
+
+    def compiled():
+        i = next(k) % len(R)
+        terms_evaluate(packed.params, packed.offsets, R[i], packed.coils, C, packed.poles, packed.P, packed.signs, 1,
+                       tau, H, work, near)
+
+    t_pair = median_seconds(200, one, pair.model)
+    t_exact = median_seconds(10, exact, own.model)
+    t_own = median_seconds(200, one, own.model)
+    t_packed = median_seconds(2000, compiled)
+    R0 = so3.exp(np.radians([3.0, 0.0, 0.0])) @ states.rotations[0]
+    rows = []
+    for name, dm in (("pairwise", pair), ("coupled (tables)", own)):
+        tuning = tune(design, dm.model)
+        factor = speed(dm.model, tuning.rotor, tuning.dt, R0, c)
+        t0 = time.perf_counter()
+        torque_capability(design, dm.model, dm.limits, samples=400, seed=0)
+        rows.append((name, tuning.dt, factor, time.perf_counter() - t0))
+    print(f"# bench_iron (model) {datetime.datetime.now().isoformat(timespec='minutes')} "
+          f"load {os.getloadavg()[0]:.1f} ({own.label})")
+    print("| what | time | ratio |")
+    print("|---|---|---|")
+    print(f"| E + τ, one orientation, pairwise (compiled sums) | {1e6 * t_pair:.0f} µs | 1 |")
+    print(f"| E + τ, one orientation, coupled, NumPy sums | {1e6 * t_exact:.0f} µs | {t_exact / t_pair:.0f} × |")
+    print(f"| E + τ, one orientation, coupled, tables (model call) | {1e6 * t_own:.0f} µs | "
+          f"{t_own / t_pair:.2f} × |")
+    print(f"| E + τ, one orientation, coupled, tables (packed compiled call) | {1e6 * t_packed:.1f} µs | "
+          f"{t_packed / t_pair:.3f} × |")
+    print(f"| coupled tables: cold build (first use; of which G on its grid) | {build:.1f} s ({rebuild:.1f} s) | |")
+    for name, dt, factor, _ in rows:
+        print(f"| dynamics, {name}, tuned dt {1e3 * dt:.2f} ms | {factor:.1f} × real time | |")
+    for name, *_, cap in rows:
+        print(f"| capability map, 400 orientations, {name} | {cap:.1f} s | |")
+
+
 def main() -> None:
+    model_timings()
+    if "--no-mom" in sys.argv:
+        return
     level = int(sys.argv[sys.argv.index("--level") + 1]) if "--level" in sys.argv else 0
     design, coil = prototype(), iron_coil()
     geom = iron.CoreGeometry.of(design, coil)

@@ -389,7 +389,7 @@ def coupled(design):
 @pytest.mark.slow
 def test_coupled_model_is_a_torque_model(coupled, design):
     """With the coupling the iron model is still a torque model: torque = −∂E/∂θ (central differences, 1e-6 of
-    the largest torque), no zonal terms (the compiled paths step aside), equilibria by the NumPy descent."""
+    the largest torque), compiled terms (its tables), equilibria by the compiled descent."""
     from spherestep.statics import equilibrium
 
     R = so3.random(6, np.random.default_rng(2))
@@ -400,7 +400,7 @@ def test_coupled_model_is_a_torque_model(coupled, design):
                    for e in np.eye(3)], axis=1)
     tau = coupled.torque(R, c)
     assert np.max(np.abs(fd - tau)) <= 1e-6 * np.max(np.abs(tau))
-    assert coupled.zonal_terms(c[0]) is None and coupled.packed_terms(c[0]) is None
+    assert coupled.packed_terms(c[0]) is not None  # its tables: the compiled paths take it (issue 28 §2)
     assert np.max(np.abs(coupled.coupling.torque(R))) > 0.05  # N·m: not negligible
     states = design.states()
     eq = equilibrium(coupled, states.rotations[0], design.coil_currents(states.coils(0)))
@@ -444,7 +444,9 @@ def test_coupled_model_against_the_full_solve(design):
         R, c[:, cores]), pair, atol=1e-6)  # the file's pair sum is these tables'
     before = np.linalg.norm(full - pair, axis=1) / np.linalg.norm(full, axis=1)
     after = np.linalg.norm(full - got, axis=1) / np.linalg.norm(full, axis=1)
-    assert np.all(after < before) and after.max() < 0.36 and np.median(after) < 0.10
+    # max 0.356 before the reach's taper (issue 28 §2: the coupling fades out over 50–60°, which its tables need),
+    # 0.369 with it (the case of 0.36 N m; the median 0.082 → 0.093)
+    assert np.all(after < before) and after.max() < 0.375 and np.median(after) < 0.10
 
 
 def test_coupling_effects_study(model, design):

@@ -227,8 +227,9 @@ def iron_model(design, coil: CoilSpec | None = None, level: int = _iron.IRON_LEV
     """The torque model of ``design`` with coils built as ``coil`` (default ``design.coil``): an
     :class:`IronTorqueMap` for an iron core, today's air-core :class:`TorqueMap` for ``core="air"`` (at the
     coil's nominal ampere-turns; ``air_coil(design.coil_ampere_turns)`` reproduces it exactly). ``coupling=True``
-    adds the coupling through the cores (:mod:`._coupling`, moment method; ~10 ms per orientation, and the
-    compiled integrator and equilibria step aside for the NumPy ones)."""
+    adds the coupling through the cores (:mod:`._coupling`, moment method) and evaluates the whole model from
+    its cubed-sphere tables, compiled on every fast path (built on first use, a few seconds; the design's own
+    model, :func:`~spherestep.magnetics.design_model`, is this one)."""
     coil = design.coil if coil is None else coil
     if not isinstance(coil, CoilSpec):
         raise bad_value("coil", "a spherestep.motor.coil.CoilSpec", type(coil).__name__)
