@@ -12,6 +12,10 @@ What is where:
 * :mod:`.kernels` — a zonal kernel ``h`` as one flat array (quintic table, angle spline), its sums over the
   rotor's poles at a point (``F``, ``g``, ``Hess F``): :func:`~.kernels.kernel_params`,
   :func:`~.kernels.zonal_fields`;
+* :mod:`.spheretable` — a whole rotor function tabulated on a cubed sphere (cubic B-splines per face), the
+  kernels' ``"sphere_table"`` kind: the coupled iron model's form (:mod:`spherestep.magnetics._coupling`);
+* :mod:`.coupling` — the iron model's rotor functions at many points (pair splines, the coupling through a core
+  as a quadratic form per harmonic), which its tables are built from;
 * :mod:`.packed` — :class:`Packed`, the arrays a model's energy is handed over in (the terms' kernels, poles,
   coils, currents and constant);
 * :mod:`.terms` — a sum of zonal terms evaluated at one orientation or a batch (energy,

@@ -19,6 +19,10 @@ type, so that a call costs one array's unboxing and numba's on-disk cache holds 
   :meth:`spherestep.magnetics.TorqueMap._zonal`. An interval is found from a uniform look-up table over
   ``[0, π]`` finer than the shortest interval, then at most a step or two (no search).
 
+* ``SPHERE_TABLE`` (``coef (6, m, m), n, halo``): not a zonal kernel but ``F`` itself on a cubed sphere
+  (:mod:`.spheretable`; the coupled iron model), ``S`` and ``M`` those of its 0-homogeneous extension; the poles
+  are not visited.
+
 ``cut``: poles with ``t < cut`` are left out of the sums — the kernel's tail beyond the cut-off angle, below a
 stated bound (:func:`spherestep.rotor_field.cutoff`; ``cut = −2`` keeps every pole). The poles inside are found
 by one pass of dot products, compacted without branches, then evaluated.
