@@ -1,0 +1,100 @@
+"""Every generated block of README and docs/ is what ``scripts/docs_numbers.py`` renders from the stored
+measurements (``data/demo_summary.json``, ``data/forces_states.json``, ``data/servo_robust.json``), so the docs
+cannot drift from them; and the stored measurements' cheap numbers are held against the live code (issue 27 §4)."""
+
+import importlib.util
+import math
+import re
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def _script():
+    spec = importlib.util.spec_from_file_location("docs_numbers", ROOT / "scripts" / "docs_numbers.py")
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[spec.name] = module  # its dataclass looks its module up
+    spec.loader.exec_module(module)
+    return module
+
+
+SCRIPT = _script()
+
+
+@pytest.mark.parametrize("block", SCRIPT.BLOCKS, ids=lambda b: b.name)
+def test_every_block_is_its_stored_measurement_rendered(block):
+    text = (ROOT / block.path).read_text(encoding="utf-8")
+    have = SCRIPT.current(text, block.name)
+    assert have is not None, f"{block.path} lost the markers of {block.name}"
+    assert SCRIPT.STORES[block.source].exists(), f"{SCRIPT.STORES[block.source]} missing"
+    assert have == block.text(SCRIPT.stored(block.source)), (
+        f"{block.path}: the block {block.name} differs from {SCRIPT.STORES[block.source].name}: run "
+        "`python scripts/docs_numbers.py` (after `make demo && python scripts/docs_numbers.py demo` for new numbers)")
+
+
+def test_every_marker_is_registered_and_paired():
+    """A marker the generator does not know would be a block nobody rewrites; each pair exactly once, in order."""
+    names = {b.name: b.path for b in SCRIPT.BLOCKS}
+    seen = set()
+    for path in SCRIPT.marked_files():
+        rel = str(path.relative_to(ROOT))
+        marks = SCRIPT.MARKER.findall(path.read_text(encoding="utf-8"))
+        for (name, kind), nxt in zip(marks[::2], marks[1::2] + [("", "")] * (len(marks) % 2)):
+            assert names.get(name) == rel, f"{rel}: marker {name!r} is not a block of scripts/docs_numbers.py"
+            assert (kind, nxt) == ("start", (name, "end")), f"{rel}: {name} is not a start/end pair"
+            assert name not in seen, f"{name} appears twice"
+            seen.add(name)
+    assert seen == set(names), f"blocks without markers: {sorted(set(names) - seen)}"
+
+
+def test_the_generator_rewrites_a_stale_block(tmp_path, monkeypatch):
+    """Rewriting is what the test above demands: a block with a stale number is put back, the rest untouched."""
+    block = next(b for b in SCRIPT.BLOCKS if b.name == "move-servo")
+    doc = tmp_path / "docs" / "control.md"
+    doc.parent.mkdir()
+    good = block.text(SCRIPT.stored("demo"))
+    doc.write_text(f"before {re.sub(r'in [0-9.]+ s', 'in 9.99 s', good)} after\n", encoding="utf-8")
+    monkeypatch.setattr(SCRIPT, "ROOT", tmp_path)
+    monkeypatch.setattr(SCRIPT, "BLOCKS", (block,))
+    assert SCRIPT.write() == 1
+    assert doc.read_text(encoding="utf-8") == f"before {good} after\n"
+    assert SCRIPT.differing() == []
+
+
+def test_the_stored_demo_agrees_with_the_code(proto, proto_metrics):
+    """States exactly; the resolution within its sampling noise (the stored run used seed 0, the fixture seed 7:
+    two 20,000-sample medians differ by ~0.01°); the plan's step count; the coil as built."""
+    from spherestep.commutation import turn
+    from spherestep.magnetics import design_model
+
+    s = SCRIPT.stored("demo")
+    assert s["states"] == proto_metrics.states == 101_640
+    assert s["resolution_median_deg"] == pytest.approx(math.degrees(proto_metrics.resolution_median_rad), abs=0.03)
+    assert s["plan"]["steps"] == len(turn(proto, s["plan"]["axis"], math.radians(s["plan"]["angle_deg"])).steps) - 1
+    assert s["iron"]["electrics"]["nominal_current_A"] == pytest.approx(design_model(proto).limits.nominal_current,
+                                                                        rel=1e-12)
+    assert s["torque_model"] == design_model(proto).label
+    assert s["drives"]["model"] == design_model(proto).label
+
+
+def test_the_stored_forces_agree_with_the_code(proto):
+    """The stored sample is ``rng(0)``'s 20 states of the live enumeration, with the live coils and polarities;
+    two of its rows are recomputed (holding and stepping torques; deterministic, so to 1e-6 relative)."""
+    from spherestep.magnetics import state_torques, torque_map
+
+    f = SCRIPT.stored("forces")
+    states = proto.states()
+    idx = np.sort(np.random.default_rng(SCRIPT.FORCES_SEED).choice(len(states), SCRIPT.FORCES_STATES, replace=False))
+    assert [r["state"] for r in f["states"]] == idx.tolist()
+    picked = [f["states"][i] for i in (0, 5)]
+    live = [r.to_dict(degrees=True) for r in state_torques(proto, torque_map(proto), [r["state"] for r in picked])]
+    for want, got in zip(picked, live):
+        assert {str(k): v for k, v in got["coils"].items()} == want["coils"]
+        for key in ("holding_torque_Nm", "strongest_axis_Nm", "equilibrium_offset_deg", "step_peak_torque_Nm"):
+            assert got[key] == pytest.approx(want[key], rel=1e-6, abs=1e-9), key
+        assert got["stiffness_Nm_per_rad"] == pytest.approx(want["stiffness_Nm_per_rad"], rel=1e-6)
+        assert (got["downhill_steps"], got["steps"]) == (want["downhill_steps"], want["steps"])
