@@ -180,6 +180,11 @@ def move_servo(s: dict) -> str:
             f"{m['max_tracking_error_deg']:.2f}°")
 
 
+def run_frames(s: dict) -> str:
+    """docs/errors.md: what ``run`` says of the demo's plan."""
+    return f"{s['plan']['steps'] + 1} frames (the start and {s['plan']['steps']} steps)"
+
+
 def motor_metrics(s: dict) -> str:
     """docs/motor.md: the prototype's metrics."""
     return (f"Prototype ({s['samples']:,} samples): resolution median {s['resolution_median_deg']:.2f}°, 95 % "
@@ -371,6 +376,7 @@ BLOCKS = (
     Block("drives-table", "docs/control.md", "demo", drives_table),
     Block("move-servo", "docs/control.md", "demo", move_servo, inline=True),
     Block("robust-table", "docs/control.md", "robust", robust_table),
+    Block("run-frames", "docs/errors.md", "demo", run_frames, inline=True),
     Block("motor-metrics", "docs/motor.md", "demo", motor_metrics, inline=True),
     Block("motor-states", "docs/motor.md", "demo", motor_states, inline=True),
     Block("motor-violations", "docs/motor.md", "demo", motor_violations, inline=True),
