@@ -59,7 +59,7 @@ def reference_allocation():
     """The allocation's NumPy Newton and Clarabel fallback in place of the compiled ones."""
     saved = alloc_module.least_power_box_compiled, alloc_module.closest_reachable_compiled
     alloc_module.least_power_box_compiled = alloc_module.least_power_box
-    alloc_module.closest_reachable_compiled = lambda K, t, u, rho: None
+    alloc_module.closest_reachable_compiled = lambda K, t, u, rho, lower=None: None
     try:
         yield
     finally:
@@ -104,6 +104,18 @@ def law_parts(model, trajectory, measured) -> dict:
     def allocate(k):
         a, lam[0] = alloc_module.allocate_matrix(K, tau * (1 + 1e-3 * k), law.limits, bias=b, lam0=lam[0])
     out["allocation"] = cpu_us(allocate, PERIODS)
+    from spherestep._fast.allocation import voltage_box
+
+    lim = law.limits
+    box = (np.zeros(model.coil_count), np.zeros(model.coil_count))
+    w = np.array([1.0, 0.5, 2.0]) * (1.5 / (lim.resistance * lim.nominal_current ** 2))  # 3.4 rad/s, per-unit volts
+    lam2 = [None]
+
+    def allocate_box(k):  # the law's: the supply box from ω, then the allocation within it
+        voltage_box(K, w * (1 + 1e-3 * k), np.zeros(model.coil_count), lim.per_unit_bound,
+                    lim.supply_voltage / (lim.resistance * lim.nominal_current), 0.0, box[0], box[1])
+        a, lam2[0] = alloc_module.allocate_matrix(K, tau * (1 + 1e-3 * k), lim, bias=b, lam0=lam2[0], bounds=box)
+    out["supply box + allocation"] = cpu_us(allocate_box, PERIODS)
     far = tau * 40.0  # out of reach
     out["closest reachable"] = cpu_us(lambda k: alloc_module.allocate_matrix(K, far * (1 + 1e-3 * k), law.limits,
                                                                             bias=b), 30)

@@ -48,6 +48,10 @@ from .limits import DriveLimits
 from .trajectory import Trajectory
 
 K_REUSE = 2e-3  # rad: K(R) and b(R) are re-evaluated when the orientation has turned further than this
+ADAPT_MEMORY = 1.0  # s: the scale regression's memory
+ADAPT_RIDGE = 0.05  # its ridge, relative to the regressors' energy (damps the common scale, which holds leave unexcited)
+ADAPT_LIMIT = 0.5  # the largest |θ| (a plant within ±50 % of the model's bias and winding)
+ADAPT_SPEED = 0.2  # rad/s: the scales learn only in motion (|ω_d| above this); at rest d̂ alone serves
 
 
 class ModelCache:
@@ -167,7 +171,7 @@ class ServoLaw:
                  limits: DriveLimits | None = None, sensor_rate: float | None = None,
                  observer_bandwidth: float | None = None, disturbance_bandwidth: float | None = None,
                  motion_bandwidth: float | None = None, reuse: float = K_REUSE, delay: int = 0,
-                 voltage: bool = True, slew: bool = False):
+                 voltage: bool = True, slew: bool = False, adapt: bool | None = None):
         if not isinstance(trajectory, Trajectory):
             raise bad_value("trajectory", "a spherestep.control.Trajectory", type(trajectory).__name__)
         if not isinstance(controller, GeometricPD):
@@ -202,6 +206,10 @@ class ServoLaw:
         period = 1.0 / controller.rate
         self._slew = math.exp(-period / lim.time_constant) if slew else 0.0
         self._last = np.zeros(N)
+        self.adapt = bool(model.has_bias and self.observer.l3) if adapt is None else bool(adapt)
+        self._theta = (0.0, 0.0)  # (θ_b, θ_K): the plant's bias ≈ (1 + θ_b) b̂, its coils' torque ≈ (1 + θ_K) K̂ c
+        self._normal = (0.0,) * 5  # the regression's discounted normal equations (A₀₀, A₀₁, A₁₁, y₀, y₁)
+        self._parts = deque([((0.0,) * 3, (0.0,) * 3)] * (self.delay + 1), maxlen=self.delay + 1)
         from .._fast.allocation import voltage_box  # compiled: imported with the law, not with the room
 
         self._voltage_box = voltage_box
@@ -209,6 +217,13 @@ class ServoLaw:
         self._allocate(np.zeros(3), self.observer.R)
         self._lam = None
         self._last = np.zeros(N)
+        self._parts.extend([((0.0,) * 3, (0.0,) * 3)] * (self.delay + 1))
+
+    @property
+    def scales(self) -> tuple[float, float]:
+        """``(θ_b, θ_K)``: the law's estimate that the plant's bias is ``(1 + θ_b) b̂`` and its coils' torque
+        ``(1 + θ_K) K̂ c`` (0, 0 when it does not adapt; see :meth:`_adapt`)."""
+        return self._theta
 
     def amperes(self, currents) -> np.ndarray:
         """Per-unit ``currents`` in amperes: ``I_n c`` (the drive's wire unit)."""
@@ -237,6 +252,8 @@ class ServoLaw:
                 self.started = True
             else:
                 obs.correct(measurement, measured_at, self._speed)
+        if self.adapt and measurement is not None and h > 0 and float(wd @ wd) > ADAPT_SPEED * ADAPT_SPEED:
+            self._adapt(h)
         tau = self.controller.torque(obs.R, obs.w, Rd, wd, ad)
         if obs.l3:
             tau = tau - obs.d
@@ -248,6 +265,11 @@ class ServoLaw:
         """Steps 4 and 5 of the module: ``K``/bias at ``R``, the period's current box and the warm-started
         allocation of ``tau``."""
         K, b = self.cache.at(R)
+        if self.adapt:
+            b_nominal = b
+            kb, kk = 1.0 + self._theta[0], 1.0 + self._theta[1]
+            b = b * kb
+            K = K * kk
         bounds = None
         if self.voltage:
             lower, upper = self._box
@@ -259,4 +281,31 @@ class ServoLaw:
         alloc, self._lam = allocate_matrix(K, tau, self.limits, bias=b if self.cache.has_bias else None,
                                            failed=self._failed, lam0=self._lam, bounds=bounds)
         self._last = alloc.currents
+        if self.adapt:  # the nominal model's parts of the promise, for the regression (``delay`` periods on)
+            self._parts.append((b_nominal.tolist(), ((alloc.torque - b) / kk).tolist()))
         return alloc
+
+    def _adapt(self, h: float) -> None:
+        """The scales ``θ = (θ_b, θ_K)`` by exponentially weighted least squares (memory ``ADAPT_MEMORY`` s) on
+        the plant's departure from the nominal model, ``z = d̂ + θ_b b̂ + θ_K K̂ c ≈ [b̂, K̂ c] θ`` (the torque the
+        estimate ``d̂`` and the scaled model together attribute to the plant, regressed on the nominal model's bias
+        and coil torque of the command applied), ridge ``ADAPT_RIDGE``, each scale within ``±ADAPT_LIMIT``."""
+        (b0, b1, b2), (u0, u1, u2) = self._parts[0]
+        d0, d1, d2 = self.observer.d.tolist()
+        sb, sk = self._theta
+        z0, z1, z2 = d0 + sb * b0 + sk * u0, d1 + sb * b1 + sk * u1, d2 + sb * b2 + sk * u2
+        f = math.exp(-h / ADAPT_MEMORY)
+        a00, a01, a11, y0, y1 = self._normal
+        a00 = f * a00 + b0 * b0 + b1 * b1 + b2 * b2
+        a01 = f * a01 + b0 * u0 + b1 * u1 + b2 * u2
+        a11 = f * a11 + u0 * u0 + u1 * u1 + u2 * u2
+        y0 = f * y0 + b0 * z0 + b1 * z1 + b2 * z2
+        y1 = f * y1 + u0 * z0 + u1 * z1 + u2 * z2
+        self._normal = (a00, a01, a11, y0, y1)
+        r = ADAPT_RIDGE * (a00 + a11) + 1e-12
+        p00, p11 = a00 + r, a11 + r
+        det = p00 * p11 - a01 * a01
+        if det > 0:
+            t0 = (p11 * y0 - a01 * y1) / det
+            t1 = (p00 * y1 - a01 * y0) / det
+            self._theta = (min(max(t0, -ADAPT_LIMIT), ADAPT_LIMIT), min(max(t1, -ADAPT_LIMIT), ADAPT_LIMIT))
