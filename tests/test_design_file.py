@@ -476,7 +476,8 @@ def test_design_new_validate_show(tmp_path, capsys):
     assert_same(MotorDesign.load(copy_path), prototype())
     capsys.readouterr()
     assert main(["design", "validate", str(path)]) == 0
-    assert capsys.readouterr().out == "valid: 92 poles, 29 coils\n"
+    assert capsys.readouterr().out == ("valid: 92 poles, 29 coils\niron: rotor shell 1.5875 mm; model from the "
+                                       "prototype's FEM tables scaled by the law (s = 1): ready at once\n")
     assert main(["design", "show", str(path), "--json"]) == 0
     assert json.loads(capsys.readouterr().out) == json.loads(json.dumps(prototype().summary()))
     assert main(["design", "show", str(path)]) == 0

@@ -16,6 +16,7 @@ from spherestep.errors import InputError
 from spherestep.magnetics import iron_model
 from spherestep.magnetics import _iron
 from spherestep.magnetics._ironmap import TABLE_FILE, read_table
+from spherestep.magnetics import _ironscale
 from spherestep.magnetics._ironscale import prototype_scale, scale_between, scaled_design, shape
 from spherestep.motor import MotorDesign, prototype
 
@@ -123,3 +124,69 @@ def test_shape_is_scale_free(design):
     assert mu == mu_b and np.allclose(a, b, rtol=1e-14, atol=0)
     other = replace(design, air_gap=2 * design.air_gap)
     assert scale_between(other, other.coil, design, design.coil) is None
+
+
+# --- the shape table: other magnets, interpolated ----------------------------------------------------------------
+
+# Table vs solve at the held-out points, max over angles / the solve's peak: measured 2026-11-25 detent 7.8–18.8 %
+# (the level-0 moment method's detent is jagged near the axis, ±20 % between neighbouring angles, so the grid of
+# 3 × 3 cannot follow it), the winding's part 1.0–3.5 % (docs/magnetics.md); the bounds are those rounded up.
+HELD_OUT_BOUND = {"detent": 0.20, "linear": 0.04}
+
+
+def _held_out():
+    """``{(d_m/R, l_m/d_m): (detent, linear)}`` of ``data/iron_shape_heldout.csv`` (moment-method solves)."""
+    from pathlib import Path
+
+    arr = read_table(Path(__file__).resolve().parents[1] / "data" / "iron_shape_heldout.csv")
+    out = {}
+    for x, a in sorted({(r[0], r[1]) for r in arr}):
+        rows = arr[(arr[:, 0] == x) & (arr[:, 1] == a)]
+        out[(x, a)] = (rows[:, 3], rows[:, 4])
+    return out
+
+
+def _with_magnet(design, x, aspect):
+    return replace(design, magnet_diameter=x * design.radius, magnet_length=aspect * x * design.radius)
+
+
+def test_held_out_magnets_from_the_table(design):
+    """Five magnets not in the table: its interpolation (moment method, no FEM correction) against their own
+    moment-method solves, every angle, as a fraction of the solve's peak."""
+    held = _held_out()
+    assert len(held) == 5
+    for (x, a), (det, lin) in held.items():
+        d = _with_magnet(design, x, a)
+        got = _ironscale.shape_table_tables(d, d.coil, with_fem=False)
+        assert got is not None
+        assert np.abs(got[1] - det).max() <= HELD_OUT_BOUND["detent"] * np.abs(det).max()
+        assert np.abs(got[2] - lin).max() <= HELD_OUT_BOUND["linear"] * np.abs(lin).max()
+
+
+def test_a_new_magnet_is_ready_at_once_and_said(design, rotations):
+    """0.8-in magnets (the issue's 45-s case) on a scaled ball: from the table, scaled, in well under 10 s cold;
+    ``iron_source`` says so; outside the table's range it says why and that it solves."""
+    d = scaled_design(_with_magnet(design, 0.8 / 6.0, 0.625), 1.3)
+    assert "shape table" in _ironscale.iron_source(d, d.coil)
+    t = time.perf_counter()
+    m = iron_model(d)
+    m.torque(rotations, np.zeros(len(d.stator)))
+    assert time.perf_counter() - t < 10.0
+    far = _with_magnet(design, 0.4 / 6.0, 0.5)
+    assert _ironscale.shape_table_tables(far, far.coil) is None
+    said = _ironscale.iron_source(far, far.coil)
+    assert "solve on first use" in said and "magnet_diameter / rotor radius" in said
+    other = replace(design, coil_length=1.1 * design.coil_length)
+    assert "coil_length" in _ironscale.iron_source(other, other.coil)
+
+
+def test_table_at_the_prototype_is_its_fem_table(design):
+    """With the FEM correction, the table at the prototype's own ratios is the FEM-based table (at the table's
+    angles, through its spline)."""
+    from scipy.interpolate import CubicSpline
+
+    nodes, det, lin = _ironscale.shape_table_tables(design, design.coil)
+    fem = read_table(resources.files("spherestep.data") / TABLE_FILE)
+    a = np.radians(fem[:, 0])
+    assert np.allclose(det, CubicSpline(a, fem[:, 1])(nodes), rtol=0, atol=1e-9)
+    assert np.allclose(lin, CubicSpline(a, fem[:, 2])(nodes), rtol=0, atol=1e-9)

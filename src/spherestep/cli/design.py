@@ -62,15 +62,20 @@ def new(
 
 @design_app.command("validate")
 def validate(file: Path = typer.Argument(..., help="Design file (.yaml, .yml or .toml).")) -> None:
-    """Check a design file: 'valid: N poles, M coils' (exit 0), or one line naming the field
-    and the fix (exit 2). Every check a command runs on a design is run here, stepper states included.
+    """Check a design file: 'valid: N poles, M coils' and, for iron cores, the rotor shell and where the iron
+    model comes from (the stored tables' ranges) (exit 0), or one line naming the field and the fix (exit 2).
+    Every check a command runs on a design is run here, stepper states included.
 
     Example: [bold]spherestep design validate mymotor.yaml[/bold]
     """
     from ..motor import MotorDesign
 
+    from ..magnetics import iron_source
+
     design = usable(MotorDesign.load(input_file(file, "FILE")), "FILE", file)
     print(f"valid: {len(design.rotor)} poles, {len(design.stator)} coils")
+    if design.coil.core == "iron":
+        print(f"iron: rotor shell {design.rotor_shell * 1e3:.5g} mm; model from {iron_source(design, design.coil)}")
 
 
 def _cell(value) -> str:

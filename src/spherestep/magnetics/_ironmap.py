@@ -82,6 +82,9 @@ def _tables(key: tuple, design, coil: CoilSpec, level: int):
         if path.is_file():
             arr = read_table(path)
             return np.radians(arr[:, 0]), scale.detent * arr[:, 1], scale.linear * arr[:, 2]
+    shaped = _ironscale.shape_table_tables(design, coil, level)  # another magnet: the shape table, scaled
+    if shaped is not None:
+        return shaped
     det, lin = pair_table(design, coil, level)
     return np.radians(TABLE_NODES_DEG), det, lin
 

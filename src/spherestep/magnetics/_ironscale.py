@@ -17,13 +17,18 @@ radius, and the core's ``μr``.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
+from functools import lru_cache
+from importlib import resources
 
 import numpy as np
 
 from ._iron import IRON_LEVEL, CoreGeometry
 
 SHAPE_RTOL = 1e-9  # shapes equal to this (relative, per ratio): the same geometry up to a scale
+SHAPE_FILE = "iron_shape_table.csv"
+SHAPE_GRID = (tuple(round(d / 6.0, 12) for d in (0.7, 1.0, 1.3)), (0.3, 0.5, 0.8))  # d_m/R, l_m/d_m
 SHAPE_NAMES = ("magnet_diameter", "magnet_length", "coil_diameter", "coil_length", "air_gap", "rotor_shell",
                "pole_radius", "groove_radius", "groove_depth")
 
@@ -90,3 +95,162 @@ def scaled_design(design, s: float, name: str | None = None):
                    coil_length=s * design.coil_length, air_gap=s * design.air_gap,
                    rotor_shell=s * design.rotor_shell, coil=coil,
                    name=f"{design.name} x{s:g}" if name is None else name)
+
+
+# --- the shape table: the ratios the law leaves --------------------------------------------------------------
+
+FREE = (0, 1)  # the ratios the table spans: d_m / R and (through it) l_m / d_m; the rest must be the prototype's
+
+
+def _prototype():
+    from ..motor import prototype
+    from ..motor.coil import iron_coil
+
+    return prototype(), iron_coil()
+
+
+@lru_cache(maxsize=1)
+def _shape_table() -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray] | None:
+    """``(x, aspect, nodes (rad), detent (X, A, n), linear (X, A, n))`` of the stored shape table, or None."""
+    from ._ironmap import read_table
+
+    path = resources.files("spherestep.data") / SHAPE_FILE
+    if not path.is_file():
+        return None
+    arr = read_table(path)
+    xs, asp, nodes = np.unique(arr[:, 0]), np.unique(arr[:, 1]), np.unique(arr[:, 2])
+    shape_ = (len(xs), len(asp), len(nodes))
+    order = np.lexsort((arr[:, 2], arr[:, 1], arr[:, 0]))
+    return xs, asp, np.radians(nodes), arr[order, 3].reshape(shape_), arr[order, 4].reshape(shape_)
+
+
+@lru_cache(maxsize=1)
+def _fem_correction() -> tuple[np.ndarray, np.ndarray] | None:
+    """The stored FEM-based tables minus the moment method's at the prototype's ratios, at the shape table's
+    nodes: ``(Δτ_d, Δτ_1)`` (N·m), or None."""
+    from scipy.interpolate import CubicSpline
+
+    from ._ironmap import TABLE_FILE, read_table
+
+    table = _shape_table()
+    path = resources.files("spherestep.data") / TABLE_FILE
+    if table is None or not path.is_file():
+        return None
+    xs, asp, nodes, det, lin = table
+    p, _ = _prototype()
+    i = np.flatnonzero(np.isclose(xs, p.magnet_diameter / p.radius, rtol=1e-9))
+    j = np.flatnonzero(np.isclose(asp, p.magnet_length / p.magnet_diameter, rtol=1e-9))
+    if len(i) != 1 or len(j) != 1:
+        return None
+    fem = read_table(path)
+    a = np.radians(fem[:, 0])
+    return (CubicSpline(a, fem[:, 1])(nodes) - det[i[0], j[0]], CubicSpline(a, fem[:, 2])(nodes) - lin[i[0], j[0]])
+
+
+def shape_ratios(design) -> tuple[float, float]:
+    """The table's coordinates of ``design``: ``(d_m / R, l_m / d_m)``."""
+    return design.magnet_diameter / design.radius, design.magnet_length / design.magnet_diameter
+
+
+def in_shape_table(design, coil, level: int = IRON_LEVEL) -> str | None:
+    """None when the shape table covers ``design`` with ``coil``; else why not (for people)."""
+    if level != IRON_LEVEL or coil.core != "iron":
+        return "not an iron core at the tables' mesh level"
+    table = _shape_table()
+    if table is None:
+        return f"no shape table stored ({SHAPE_FILE}; python scripts/iron_shape_table.py)"
+    p, pc = _prototype()
+    a, mu = shape(design, coil)
+    b, mu0 = shape(p, pc)
+    fixed = [k for k in range(len(a)) if k not in FREE]
+    off = [SHAPE_NAMES[k] for k in fixed if not np.isclose(a[k], b[k], rtol=SHAPE_RTOL, atol=0.0)]
+    if mu != mu0:
+        off.append("relative_permeability")
+    if off:
+        return "its " + ", ".join(off) + " (over the rotor radius) differ from the prototype's"
+    x, asp = shape_ratios(design)
+    xs, asps = table[0], table[1]
+    if not (xs[0] * (1 - 1e-9) <= x <= xs[-1] * (1 + 1e-9)):
+        return f"magnet_diameter / rotor radius {x:.4g} outside the table's {xs[0]:.4g}-{xs[-1]:.4g}"
+    if not (asps[0] * (1 - 1e-9) <= asp <= asps[-1] * (1 + 1e-9)):
+        return f"magnet_length / magnet_diameter {asp:.4g} outside the table's {asps[0]:.4g}-{asps[-1]:.4g}"
+    return None
+
+
+def _weights(grid: np.ndarray, x: float, quadratic: bool) -> np.ndarray:
+    """Interpolation weights on ``grid`` at ``x``: Lagrange through all (three) points, or linear between two."""
+    if quadratic:
+        return np.array([np.prod([(x - grid[m]) / (grid[n] - grid[m]) for m in range(len(grid)) if m != n])
+                         for n in range(len(grid))])
+    w = np.zeros(len(grid))
+    i = int(np.clip(np.searchsorted(grid, x) - 1, 0, len(grid) - 2))
+    t = (x - grid[i]) / (grid[i + 1] - grid[i])
+    w[i], w[i + 1] = 1.0 - t, t
+    return w
+
+
+def _interpolate(table: np.ndarray, xs, asps, nodes, x: float, asp: float, stretch: bool, quadratic: bool):
+    """``τ`` at ``(x, asp)`` from the grid ``table (X, A, n)``: ``τ / x²`` weighted over the grid (linear or
+    quadratic in each ratio); with ``stretch`` each grid table is read at the angle scaled by
+    ``(θ_m + θ_c) / (θ_m' + θ_c)`` (``θ_m = atan(x/2)`` the magnet's angular radius, ``θ_c`` the core's), so that
+    the near-axis structure, which widens with the magnet, lines up."""
+    from scipy.interpolate import CubicSpline
+
+    p, _ = _prototype()
+    th_c = math.atan(0.5 * p.coil_diameter / (p.radius + p.air_gap))
+    th = math.atan(0.5 * x)
+    wx, wa = _weights(xs, x, quadratic), _weights(asps, asp, quadratic)
+    out = np.zeros(len(nodes))
+    for i, xi in enumerate(xs):
+        alpha = nodes * (math.atan(0.5 * xi) + th_c) / (th + th_c) if stretch else nodes
+        for j in range(len(asps)):
+            if wx[i] * wa[j] != 0.0:
+                spline = CubicSpline(nodes, table[i, j] / xi ** 2)
+                out += wx[i] * wa[j] * spline(np.clip(alpha, 0.0, math.pi))
+    return out * x ** 2
+
+
+def shape_table_tables(design, coil, level: int = IRON_LEVEL, with_fem: bool = True):
+    """``(nodes (rad), τ_d, τ_1)`` of ``design`` with ``coil`` from the shape table, then scaled by the law
+    (``s = R/R_0``, ``B_r``, ``NI``). Interpolation of ``τ / (d_m/R)²``: the detent linear in ``d_m/R`` × ``l_m/d_m``
+    with the angle stretched by the magnet's angular size, the winding's part quadratic through the grid at fixed
+    angle (the choices that fit the held-out solves best, docs/magnetics.md). ``with_fem`` adds the prototype's
+    FEM correction (FEM − moment method at its ratios) scaled by the interpolated peak over the prototype's. None
+    when the table does not cover the design (:func:`in_shape_table`)."""
+    if in_shape_table(design, coil, level) is not None:
+        return None
+    xs, asps, nodes, det, lin = _shape_table()
+    x, asp = shape_ratios(design)
+    x, asp = float(np.clip(x, xs[0], xs[-1])), float(np.clip(asp, asps[0], asps[-1]))
+    d = _interpolate(det, xs, asps, nodes, x, asp, stretch=True, quadratic=False)
+    li = _interpolate(lin, xs, asps, nodes, x, asp, stretch=False, quadratic=True)
+    p, pc = _prototype()
+    if with_fem:
+        corr = _fem_correction()
+        if corr is not None:
+            i = int(np.argmin(np.abs(xs - p.magnet_diameter / p.radius)))
+            j = int(np.argmin(np.abs(asps - p.magnet_length / p.magnet_diameter)))
+            d = d + corr[0] * np.abs(d).max() / np.abs(det[i, j]).max()
+            li = li + corr[1] * np.abs(li).max() / np.abs(lin[i, j]).max()
+    s = design.radius / p.radius
+    br = design.remanence / p.remanence
+    ni = CoreGeometry.of(design, coil).NI / CoreGeometry.of(p, pc).NI
+    ends = np.isclose(nodes, 0.0) | np.isclose(nodes, np.pi)
+    d, li = np.where(ends, 0.0, d), np.where(ends, 0.0, li)
+    return nodes, s ** 3 * br ** 2 * d, s ** 2 * ni * br * li
+
+
+def iron_source(design, coil, level: int = IRON_LEVEL) -> str:
+    """Where the iron model of ``design`` with ``coil`` comes from, for people: the prototype's FEM tables
+    (scaled), the shape table, or a solve on first use (and why)."""
+    if coil.core != "iron":
+        return "air cores: no iron"
+    sc = prototype_scale(design, coil, level)
+    if sc is not None:
+        return f"the prototype's FEM tables scaled by the law (s = {sc.s:.6g}): ready at once"
+    why = in_shape_table(design, coil, level)
+    if why is None:
+        x, asp = shape_ratios(design)
+        return (f"the shape table (d_m/R {x:.4g}, l_m/d_m {asp:.4g}; moment method + the prototype's FEM "
+                "correction), scaled by the law: ready at once")
+    return f"a moment-method solve on first use (about 1-2 min): {why}"

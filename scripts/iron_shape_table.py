@@ -1,0 +1,148 @@
+"""The iron pair tables over the shape ratios the scaling law leaves (issue 28 §3 c), by the moment method.
+
+    OPENBLAS_NUM_THREADS=1 nohup nice -n 10 python scripts/iron_shape_table.py > shape.log 2>&1 &
+        # every grid and held-out point missing from data/iron_shape_solves.csv, appended point by point;
+        # then writes src/spherestep/data/iron_shape_table.csv (the grid) and data/iron_shape_heldout.csv
+    python scripts/iron_shape_table.py --write     # only assemble the two files from the stored solves
+    python scripts/iron_shape_table.py --check     # the table's interpolation against the held-out solves
+
+What varies. By the scaling law (:mod:`spherestep.magnetics._ironscale`) only ratios matter. The table spans the
+magnet: its diameter over the rotor radius ``d_m / R`` (0.7 to 1.3 in on the 12-in prototype) and its aspect
+``l_m / d_m`` (0.3 to 0.8), with every other ratio the prototype's (the pot core, its groove, the coil's size,
+the gap and the shell over ``R``; ``μr``). Each point is :func:`spherestep.magnetics._ironmap.pair_table` of the
+prototype with that magnet (level 0, the moment method: one core factorisation serves every point, ~0.5–1 min a
+point here). The prototype's own point is ``data/iron_pair_table_mom.csv``. FEM (``scripts/fem_iron.py``) would
+take ~10 min and ~7 GB a point on this shared machine, so the table is the moment method's; the run-time model
+adds the prototype's FEM correction (:mod:`._ironscale`), exact at the prototype's ratios.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+
+from spherestep.magnetics import _ironscale
+from spherestep.magnetics._ironmap import TABLE_NODES_DEG, pair_table, read_table
+from spherestep.motor import prototype
+
+ROOT = Path(__file__).resolve().parents[1]
+SOLVES = ROOT / "data" / "iron_shape_solves.csv"
+HELD = ROOT / "data" / "iron_shape_heldout.csv"
+TABLE = ROOT / "src" / "spherestep" / "data" / _ironscale.SHAPE_FILE
+MOM = ROOT / "data" / "iron_pair_table_mom.csv"
+INCH = 0.0254
+HELD_OUT = ((0.8, 0.625), (0.85, 0.4), (0.9, 0.65), (1.1, 0.4), (1.2, 0.7))  # (d_m in inches, l_m / d_m)
+COLUMNS = "dm_over_R,lm_over_dm,alpha_deg,detent_Nm,linear_Nm"
+
+
+def points() -> list[tuple[float, float, str]]:
+    """``(d_m / R, l_m / d_m, "grid" | "held-out")``: the grid of :data:`_ironscale.SHAPE_GRID`, then the held-out
+    points."""
+    R = prototype().radius
+    grid = [(x, a, "grid") for x in _ironscale.SHAPE_GRID[0] for a in _ironscale.SHAPE_GRID[1]]
+    return grid + [(round(d * INCH / R, 12), a, "held-out") for d, a in HELD_OUT]
+
+
+def design_at(x: float, aspect: float):
+    """The prototype with a magnet of diameter ``x R`` and length ``aspect`` × that."""
+    p = prototype()
+    return replace(p, magnet_diameter=x * p.radius, magnet_length=aspect * x * p.radius,
+                   name=f"prototype d_m/R {x:g} l_m/d_m {aspect:g}")
+
+
+def stored() -> dict:
+    """``{(d_m/R, l_m/d_m): (detent, linear)}`` at :data:`TABLE_NODES_DEG` from the solves file."""
+    out = {}
+    if SOLVES.exists():
+        arr = read_table(SOLVES)
+        for x, a in {(r[0], r[1]) for r in arr}:
+            rows = arr[(arr[:, 0] == x) & (arr[:, 1] == a)]
+            if len(rows) == len(TABLE_NODES_DEG):
+                out[(float(x), float(a))] = (rows[:, 3], rows[:, 4])
+    return out
+
+
+def solve(todo) -> None:
+    if not SOLVES.exists():
+        SOLVES.write_text("# Moment-method pair tables (level 0) of the prototype with other magnets "
+                          "(scripts/iron_shape_table.py); torque about the centre (N m) on one +1 magnet at alpha "
+                          "from one core's axis, linear per nominal current.\n" + COLUMNS + "\n")
+    for x, a, kind in todo:
+        t = time.perf_counter()
+        if abs(x - 1.0 / 6.0) < 1e-12 and a == 0.5 and MOM.exists():  # the prototype: its stored moment table
+            arr = read_table(MOM)
+            det, lin = arr[:, 1], arr[:, 2]
+        else:
+            d = design_at(x, a)
+            det, lin = pair_table(d, d.coil)
+        lines = "".join(f"{x:.12g},{a:.12g},{al:g},{dv:.9g},{lv:.9g}\n"
+                        for al, dv, lv in zip(TABLE_NODES_DEG, det, lin))
+        with open(SOLVES, "a") as fh:
+            fh.write(lines)
+        print(f"{kind} d_m/R {x:.4f} l_m/d_m {a:.3f}: peak detent {np.abs(det).max():.3f}, linear "
+              f"{np.abs(lin).max():.3f} N m, {time.perf_counter() - t:.0f} s", flush=True)
+
+
+def write() -> None:
+    """The package's table (the grid) and the held-out file, from the solves; atomic."""
+    have = stored()
+    for path, kind, head in ((TABLE, "grid", "the grid"), (HELD, "held-out", "held-out points (not in the table)")):
+        rows = [(x, a) for x, a, k in points() if k == kind]
+        missing = [p for p in rows if p not in have]
+        if missing:
+            print(f"{path.name}: {len(missing)} of {len(rows)} points not solved yet; not written")
+            continue
+        text = (f"# Iron pair tables over the magnet's shape, {head}: moment method level 0 "
+                "(scripts/iron_shape_table.py), the prototype with magnet diameter d_m = dm_over_R * R and length "
+                "lm_over_dm * d_m, every other ratio the prototype's.\n# Torque (N m) about the centre on one +1 "
+                "magnet at alpha_deg from one core's axis, for the prototype's R, B_r and nominal ampere-turns "
+                "(scale by the law of spherestep.magnetics._ironscale).\n" + COLUMNS + "\n")
+        for x, a in rows:
+            det, lin = have[(x, a)]
+            text += "".join(f"{x:.12g},{a:.12g},{al:g},{dv:.9g},{lv:.9g}\n"
+                            for al, dv, lv in zip(TABLE_NODES_DEG, det, lin))
+        tmp = path.with_suffix(".tmp")
+        tmp.write_text(text)
+        tmp.replace(path)
+        print(f"wrote {path} ({len(rows)} points)")
+
+
+def check() -> None:
+    """The table interpolated at the held-out points against their solves (moment method both)."""
+    have = stored()
+    for x, a, kind in points():
+        if kind != "held-out" or (x, a) not in have:
+            continue
+        det, lin = have[(x, a)]
+        d = design_at(x, a)
+        got = _ironscale.shape_table_tables(d, d.coil, with_fem=False)
+        if got is None:
+            print(f"d_m/R {x:.4f} l_m/d_m {a:.3f}: outside the table")
+            continue
+        e_d = np.abs(got[1] - det).max() / np.abs(det).max()
+        e_l = np.abs(got[2] - lin).max() / np.abs(lin).max()
+        print(f"held-out d_m/R {x:.4f} ({x * prototype().radius / INCH:.2f} in) l_m/d_m {a:.3f}: table vs solve, "
+              f"max |d tau| / peak: detent {100 * e_d:.2f} %, linear {100 * e_l:.2f} %")
+
+
+def main(argv=None) -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--write", action="store_true", help="only assemble the table and held-out files")
+    ap.add_argument("--check", action="store_true", help="the table against the held-out solves")
+    args = ap.parse_args(argv)
+    if args.check:
+        check()
+        return
+    if not args.write:
+        have = stored()
+        solve([p for p in points() if (p[0], p[1]) not in have])
+    write()
+
+
+if __name__ == "__main__":
+    main(sys.argv[1:])
