@@ -22,6 +22,22 @@ One period, at loop time ``t`` (s):
    ``b + K c = τ*`` within the limits, warm-started from the last period's dual; the command is ``c``, the
    torque it promises ``τ_p = b + K c`` (what step 1 uses next period) and whether ``τ*`` was reachable.
 
+The limits of step 5 are the period's *supply box* (``voltage=True``, the default): per coil the supply voltage
+against the back-EMF of the estimated motion, ``|R I_n c_k + K_k·ω̂/I_n| ≤ V``, with ``|c_k| ≤ u``
+(:func:`spherestep._fast.allocation.voltage_box`, asymmetric per coil and not always holding 0: a coil whose
+back-EMF exceeds the supply brakes whatever the bridge does, and its torque is counted) — the box the planner of
+:mod:`.time_optimal` plans within. ``slew=True`` also keeps each coil within what one period of full supply
+moves its current from the last command (``e^{−h/T}``, ``T = L/R``; off by default: on the iron prototype with
+the honest 0.65 H it tracked worse, 1.96° against 1.31°).
+
+Scales (``adapt``, default on for a model with a bias and a disturbance estimate): the plant's bias taken as
+``(1 + θ_b) b̂`` (and, with ``ADAPT_WINDING``, its coils' torque as ``(1 + θ_K) K̂ c``), the step-5 model scaled
+so; ``θ`` learnt in motion (``|ω_d| > ADAPT_SPEED``) by exponentially weighted least squares on what ``d̂`` and
+the scales attribute to the plant (:meth:`ServoLaw._adapt`). A detent wrong by a factor is a position-dependent
+torque the estimate ``d̂`` follows with lag; as a scale it is a constant. The winding's scale is off by default:
+the coils' current lags the command by ``L/R``, which the regression reads as a weaker winding (θ_K ≈ −0.14 on
+the exact model), and the fastest turn leaves the feedback only 10 % of the drive.
+
 The observer's state is ``(R̂, ω̂, d̂)``: ``d̂`` the torque the model gets wrong (N·m, fixed frame), carried in the
 prediction ``ω̂ ← ω̂ + h (τ_p + d̂)/I`` and corrected by the residual with the gain of the extended observer
 (:func:`~spherestep.control.controller.observer_gains`, bandwidth ``disturbance_bandwidth``, 0 turns it off).
@@ -51,6 +67,7 @@ K_REUSE = 2e-3  # rad: K(R) and b(R) are re-evaluated when the orientation has t
 ADAPT_MEMORY = 1.0  # s: the scale regression's memory
 ADAPT_RIDGE = 0.05  # its ridge, relative to the regressors' energy (damps the common scale, which holds leave unexcited)
 ADAPT_LIMIT = 0.5  # the largest |θ| (a plant within ±50 % of the model's bias and winding)
+ADAPT_WINDING = False  # learn the winding's scale θ_K too (measured worse: the coils' L/R lag reads as a weaker winding)
 ADAPT_SPEED = 0.2  # rad/s: the scales learn only in motion (|ω_d| above this); at rest d̂ alone serves
 
 
@@ -164,7 +181,9 @@ class ServoLaw:
     rad (see :class:`ModelCache`);
     ``delay`` the control periods between a command and the drive applying it (0 in simulation; 1 on hardware,
     where the currents computed in a cycle are sent at the next cycle's start): the observer predicts with the
-    torque promised ``delay`` periods before.
+    torque promised ``delay`` periods before. ``voltage`` (default on): the allocation within the period's supply
+    box at ``ω̂``; ``slew`` (default off): also within the coil's slew; ``adapt`` (default: with a bias and a
+    disturbance estimate) the scales :attr:`scales` (see the module).
     """
 
     def __init__(self, model: TorqueModel, trajectory: Trajectory, controller: GeometricPD, *,
@@ -289,7 +308,8 @@ class ServoLaw:
         """The scales ``θ = (θ_b, θ_K)`` by exponentially weighted least squares (memory ``ADAPT_MEMORY`` s) on
         the plant's departure from the nominal model, ``z = d̂ + θ_b b̂ + θ_K K̂ c ≈ [b̂, K̂ c] θ`` (the torque the
         estimate ``d̂`` and the scaled model together attribute to the plant, regressed on the nominal model's bias
-        and coil torque of the command applied), ridge ``ADAPT_RIDGE``, each scale within ``±ADAPT_LIMIT``."""
+        and coil torque of the command applied), ridge ``ADAPT_RIDGE``, each scale within ``±ADAPT_LIMIT``;
+        without ``ADAPT_WINDING``, ``θ_K = 0`` and ``θ_b = Σ b̂·z / (Σ b̂·b̂ + ridge (Σ b̂·b̂ + Σ |K̂c|²))``."""
         (b0, b1, b2), (u0, u1, u2) = self._parts[0]
         d0, d1, d2 = self.observer.d.tolist()
         sb, sk = self._theta
@@ -303,6 +323,11 @@ class ServoLaw:
         y1 = f * y1 + u0 * z0 + u1 * z1 + u2 * z2
         self._normal = (a00, a01, a11, y0, y1)
         r = ADAPT_RIDGE * (a00 + a11) + 1e-12
+        if not ADAPT_WINDING:  # the bias's scale alone
+            if a00 > 0:
+                t0 = y0 / (a00 + r)
+                self._theta = (min(max(t0, -ADAPT_LIMIT), ADAPT_LIMIT), 0.0)
+            return
         p00, p11 = a00 + r, a11 + r
         det = p00 * p11 - a01 * a01
         if det > 0:
