@@ -167,7 +167,8 @@ def in_shape_table(design, coil, level: int = IRON_LEVEL) -> str | None:
     if mu != mu0:
         off.append("relative_permeability")
     if off:
-        return "its " + ", ".join(off) + " (over the rotor radius) differ from the prototype's"
+        verb = "differ" if len(off) > 1 else "differs"
+        return f"its {', '.join(off)} over the rotor radius {verb} from the prototype's"
     x, asp = shape_ratios(design)
     xs, asps = table[0], table[1]
     if not (xs[0] * (1 - 1e-9) <= x <= xs[-1] * (1 + 1e-9)):
@@ -251,6 +252,8 @@ def iron_source(design, coil, level: int = IRON_LEVEL) -> str:
     why = in_shape_table(design, coil, level)
     if why is None:
         x, asp = shape_ratios(design)
-        return (f"the shape table (d_m/R {x:.4g}, l_m/d_m {asp:.4g}; moment method + the prototype's FEM "
-                "correction), scaled by the law: ready at once")
+        xs, asps = _shape_table()[:2]
+        return (f"the shape table (d_m/R {x:.4g} in {xs[0]:.4g}-{xs[-1]:.4g}, l_m/d_m {asp:.4g} in "
+                f"{asps[0]:.4g}-{asps[-1]:.4g}; moment method + the prototype's FEM correction), scaled by the law: "
+                "ready at once")
     return f"a moment-method solve on first use (about 1-2 min): {why}"
