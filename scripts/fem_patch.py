@@ -5,8 +5,10 @@
     OPENBLAS_NUM_THREADS=1 nohup nice -n 19 python scripts/fem_patch.py > fem_patch.log 2>&1 &
         # every case missing from data/iron_fem_patch.csv, appended row by row (a stopped run keeps its rows)
     ... scripts/fem_patch.py --cases 0 27   and   ... --cases 27 54     # a range of case indices, to share work
+    ... scripts/fem_patch.py --cases 30 78 --orientations 0 1 2 3       # or the orientations (a mesh each)
     python scripts/fem_patch.py --list          # the cases
     python scripts/fem_patch.py --compare       # the iron model (pairwise, coupled) against the stored rows
+    python scripts/fem_patch.py --scale 1.5     # the scaling law by the FEM (one orientation, printed)
 
 Geometry (the stator frame, sphere's centre at the origin). The patch is coil 0 and its three nearest neighbours
 (coils 0, 1, 8, 28 of ``prototype()``; 24.9°–25.6° apart, 1 and 8 43.9°), each a pot core of
@@ -56,6 +58,8 @@ TILT_DEG = 8.0  # an intermediate orientation: a state turned by this about a ra
 MAXH = 2.5e-3  # m: the face mesh of every case
 MAXH_FINE = 2.0e-3  # m: the convergence check's face mesh (1.8 mm would need ~18 GB)
 OUTER = 0.3  # m: radius of the ψ = 0 sphere about the patch's centre
+MAXH_BH = 4.0e-3  # m: the face mesh of the B–H cases and of their linear twins (1.6 GB, ~1 min a case)
+OUTER_BH = 0.15  # m: their ψ = 0 sphere (the 2.5 mm mesh in the 0.3 m box took ~7 GB per B–H solve)
 COLUMNS = ("case", "orientation", "kind", "qx", "qy", "qz", "qw", "coils", "currents", "magnets", "material",
            "maxh_face_m", "elements", "torque_x_Nm", "torque_y_Nm", "torque_z_Nm", "newton_steps", "mesh_s",
            "solve_s")
@@ -117,15 +121,23 @@ def current_cases(c):
     return [tuple(float(v) + 0.0 for v in a) for a in (0.0 * c, c, rev)]  # + 0.0: no −0
 
 
+def outer_radius(maxh: float) -> float:
+    """The ψ = 0 sphere's radius (m) of the cases at face mesh ``maxh``: ``OUTER_BH`` for ``MAXH_BH``, else
+    ``OUTER``."""
+    return OUTER_BH if math.isclose(maxh, MAXH_BH) else OUTER
+
+
 def all_cases(design=None) -> list[Case]:
     """Linear iron at ``MAXH`` (8 orientations × 3 currents), the convergence check (linear, ``MAXH_FINE``, at
-    orientations 0 and 4: a state and an intermediate one), the B–H curve at ``MAXH`` (8 × 3): 54 cases, grouped
-    so that consecutive cases share a mesh."""
+    orientations 0 and 4: a state and an intermediate one), the B–H curve at ``MAXH_BH`` in the ``OUTER_BH`` box
+    (8 × 3), and the linear iron on that same mesh (8 × 3; the B–H rows' mesh check against the ``MAXH`` rows and
+    their linear twins): 78 cases; the B–H case and its linear twin share a mesh."""
     design = prototype() if design is None else design
     coils = patch_coils(design)
     orient = orientations(design, coils)
     runs = [(o, "linear", MAXH) for o in range(len(orient))] + [(o, "linear", MAXH_FINE) for o in (0, STATES)]
-    runs += [(o, "bh", MAXH) for o in range(len(orient))]
+    runs += [(o, "bh", MAXH_BH) for o in range(len(orient))]
+    runs += [(o, "linear", MAXH_BH) for o in range(len(orient))]
     out = []
     for o, material, h in runs:
         R, kind, c = orient[o]
@@ -145,9 +157,10 @@ def included_magnets(design, R, coils) -> np.ndarray:
 
 
 class PatchSolver:
-    """The mesh of one orientation (cores of ``coils``, magnets ``magnets`` at ``R``) and its solves."""
+    """The mesh of one orientation (cores of ``coils``, magnets ``magnets`` at ``R``) and its solves; face mesh
+    ``maxh``, ψ = 0 at ``outer`` (m), the far mesh 0.04 m × ``scale``."""
 
-    def __init__(self, design, R, coils, magnets, maxh: float):
+    def __init__(self, design, R, coils, magnets, maxh: float, outer: float = OUTER, scale: float = 1.0):
         from netgen.occ import Cylinder, Dir, Glue, OCCGeometry, Pnt, Sphere
         from ngsolve import Mesh
 
@@ -189,14 +202,14 @@ class PatchSolver:
             m.maxh = 1.5 * maxh
             mags.append(m)
         centre = face * self.v.mean(axis=0)
-        outer = Sphere(Pnt(*centre), OUTER)
+        outer = Sphere(Pnt(*centre), outer)
         outer.faces.name = "outer"
         air = outer
         for s in iron_parts + grooves + mags:
             air = air - s
         air.mat("air")
         shape = Glue([air, *iron_parts, *grooves, *mags])
-        self.mesh = Mesh(OCCGeometry(shape).GenerateMesh(maxh=0.04, grading=0.25))
+        self.mesh = Mesh(OCCGeometry(shape).GenerateMesh(maxh=0.04 * scale, grading=0.25))
         self._points()
         self.B_air = self._field(self._linear(1.0, np.zeros(len(coils)))[0])
         self._inverse = None  # the linear iron's factorisation, once made
@@ -311,6 +324,36 @@ class PatchSolver:
         return self.torque(self._field(gfu)), steps, time.perf_counter() - t0
 
 
+def scale_check(s: float) -> None:
+    """The scaling law by the FEM (issue 28 §3): case 0's orientation (coils off, the state's currents) of the
+    prototype and of the prototype with every length ×``s`` (``_ironscale.scaled_design``), each on the mesh of
+    ``MAXH_BH`` × its scale in the ``OUTER_BH`` box × its scale; prints the torque ratios (the law: ``s³`` coils
+    off; ``s² NI'/NI`` for the winding's part)."""
+    from ngsolve import SetNumThreads
+
+    from spherestep.magnetics import scaled_design
+
+    SetNumThreads(1)
+    base = prototype()
+    case = all_cases(base)[1]
+    out = []
+    for k, d in enumerate((base, scaled_design(base, s))):
+        k_s = 1.0 if k == 0 else s
+        mags = included_magnets(d, case.R, case.coils)
+        solver = PatchSolver(d, case.R, case.coils, mags, MAXH_BH * k_s, OUTER_BH * k_s, k_s)
+        (T0, _, _), (T1, _, _) = solver.solve_linear([np.zeros(len(case.coils)), case.currents])
+        ni = iron.CoreGeometry.of(d, d.coil).NI
+        out.append((T0, T1 - T0, ni))
+        print(f"scale {k_s:g}: {solver.mesh.ne} tetrahedra, coils off {np.round(T0, 5)} N m, winding's part "
+              f"{np.round(T1 - T0, 5)} N m, NI {ni:.2f}", flush=True)
+    (a0, w0, n0), (a1, w1, n1) = out
+    law_w = s * s * n1 / n0
+    print(f"coils off: T(s) / T(1) = {np.linalg.norm(a1) / np.linalg.norm(a0):.5f} (law s^3 = {s ** 3:.5f}), "
+          f"|T(s) - s^3 T(1)| / |s^3 T(1)| = {np.linalg.norm(a1 - s ** 3 * a0) / np.linalg.norm(s ** 3 * a0):.2%}; "
+          f"winding's part: ratio {np.linalg.norm(w1) / np.linalg.norm(w0):.5f} (law s^2 NI'/NI = {law_w:.5f}), "
+          f"off by {np.linalg.norm(w1 - law_w * w0) / np.linalg.norm(law_w * w0):.2%}")
+
+
 def _fmt(values) -> str:
     return ";".join(f"{v:g}" for v in values)
 
@@ -325,33 +368,39 @@ def run(cases, out: Path | None = OUT) -> list[str]:
     material = design.coil.material
     rows = []
     groups = {}
-    for c in cases:
-        groups.setdefault((c.orientation, c.material, c.maxh), []).append(c)
+    for c in sorted(cases, key=lambda c: c.material != "linear"):  # on a mesh, the linear cases first
+        groups.setdefault((c.orientation, c.maxh), []).append(c)
     if out is not None and not out.exists():
         out.write_text(HEADER)
-    for (o, mat, h), group in groups.items():
+    for (o, h), group in groups.items():
         mags = included_magnets(design, group[0].R, group[0].coils)
-        solver = PatchSolver(design, group[0].R, group[0].coils, mags, h)
+        solver = PatchSolver(design, group[0].R, group[0].coils, mags, h, outer_radius(h))
         print(f"orientation {o} ({group[0].kind}), {len(mags)} magnets, maxh {h * 1e3:g} mm: "
               f"{solver.mesh.ne} tetrahedra, {solver.mesh_s:.0f} s", flush=True)
-        if mat == "linear":
-            results = solver.solve_linear([c.currents for c in group])
-        else:
-            results = [solver.solve_bh(c.currents, material) for c in group]
-        for c, (T, steps, dt) in zip(group, results):
-            q = Rotation.from_matrix(c.R).as_quat()
-            row = [str(c.index), str(c.orientation), c.kind, *(f"{v:.12g}" for v in q), _fmt(c.coils),
-                   _fmt(c.currents), _fmt(mags), c.material, f"{c.maxh:g}", str(solver.mesh.ne),
-                   *(f"{v:.9g}" for v in T), str(steps), f"{solver.mesh_s:.1f}", f"{dt:.1f}"]
-            line = ",".join(row) + "\n"
-            print(line, end="", flush=True)
-            rows.append(line)
-            if out is not None:
-                with open(out, "a") as fh:
-                    fh.write(line)
-                    fh.flush()
-                    os.fsync(fh.fileno())
+        lin = [c for c in group if c.material == "linear"]
+        for c, result in zip(lin, solver.solve_linear([c.currents for c in lin])):
+            _store(c, mags, solver, result, rows, out)
+        for c in group:
+            if c.material == "bh":
+                _store(c, mags, solver, solver.solve_bh(c.currents, material), rows, out)
     return rows
+
+
+def _store(c: Case, mags, solver: PatchSolver, result, rows: list, out: Path | None) -> None:
+    """Print the row of case ``c`` and append it to ``out`` (one ``write`` of a complete line, synced)."""
+    T, steps, dt = result
+    q = Rotation.from_matrix(c.R).as_quat()
+    row = [str(c.index), str(c.orientation), c.kind, *(f"{v:.12g}" for v in q), _fmt(c.coils),
+           _fmt(c.currents), _fmt(mags), c.material, f"{c.maxh:g}", str(solver.mesh.ne),
+           *(f"{v:.9g}" for v in T), str(steps), f"{solver.mesh_s:.1f}", f"{dt:.1f}"]
+    line = ",".join(row) + "\n"
+    print(line, end="", flush=True)
+    rows.append(line)
+    if out is not None:
+        with open(out, "a") as fh:
+            fh.write(line)
+            fh.flush()
+            os.fsync(fh.fileno())
 
 
 # ---------------------------------------------------------------------------------------------------- the model
@@ -420,15 +469,22 @@ class Comparison:
                 "coupled_max": float(self.coupled.max()), "coupled_median": float(np.median(self.coupled))}
 
 
-def compare(rows, material: str = "linear", maxh: float = MAXH, design=None) -> Comparison | None:
-    """The iron model (pairwise and with coupling) against the stored rows of ``material`` at face mesh
-    ``maxh``; the error of each row as a fraction of the FEM's largest torque over those rows."""
-    rows = [r for r in rows if r["material"] == material and math.isclose(r["maxh"], maxh)]
+def compare(rows, material: str = "linear", maxh: float | None = None, design=None) -> Comparison | None:
+    """The iron model (pairwise and with coupling) against the stored rows of ``material`` at face mesh ``maxh``
+    (default ``MAXH``; for the B–H curve by default its rows carried to the ``MAXH`` mesh,
+    :func:`saturated_reference`); the error of each row as a fraction of the FEM's largest torque over those
+    rows."""
+    if material == "bh" and maxh is None:
+        pairs = saturated_reference(rows)
+        rows, fem = [r for r, _ in pairs], np.array([T for _, T in pairs])
+    else:
+        maxh = MAXH if maxh is None else maxh
+        rows = [r for r in rows if r["material"] == material and math.isclose(r["maxh"], maxh)]
+        fem = np.array([r["torque"] for r in rows])
     if not rows:
         return None
     design = prototype() if design is None else design
     models = iron_model(design), iron_model(design, coupling=True)
-    fem = np.array([r["torque"] for r in rows])
     got = [np.array([model_torque(m, r["R"], r["coils"], r["currents"], r["magnets"]) for r in rows])
            for m in models]
     peak = float(np.linalg.norm(fem, axis=1).max())
@@ -438,11 +494,12 @@ def compare(rows, material: str = "linear", maxh: float = MAXH, design=None) -> 
 
 def report(rows) -> None:
     """Print the comparison table for both materials and the mesh-convergence rows."""
-    for material in ("linear", "bh"):
-        cmp_ = compare(rows, material)
+    for material, maxh in (("linear", MAXH), ("linear", MAXH_BH), ("bh", MAXH_BH), ("bh", None)):
+        cmp_ = compare(rows, material, maxh)
         if cmp_ is None:
             continue
-        print(f"\n{material} iron, face mesh {MAXH * 1e3:g} mm: FEM peak |T| = {cmp_.peak:.3f} N m")
+        mesh = f"face mesh {maxh * 1e3:g} mm" if maxh else f"carried to the {MAXH * 1e3:g} mm rows"
+        print(f"\n{material} iron, {mesh}: FEM peak |T| = {cmp_.peak:.3f} N m")
         print("case orient kind         currents       |T_fem|  T_fem (x, y, z)           "
               "pairwise |dT|/peak (N m)  coupled |dT|/peak (N m)")
         for r, f, e1, e2 in zip(cmp_.rows, cmp_.fem, cmp_.pairwise, cmp_.coupled):
@@ -452,36 +509,72 @@ def report(rows) -> None:
         print(f"error / peak: pairwise max {100 * cmp_.pairwise.max():.1f} %, median "
               f"{100 * np.median(cmp_.pairwise):.1f} %; coupled max {100 * cmp_.coupled.max():.1f} %, median "
               f"{100 * np.median(cmp_.coupled):.1f} %")
-    fine = {(r["orientation"], _fmt(r["currents"])): r for r in rows
-            if r["material"] == "linear" and math.isclose(r["maxh"], MAXH_FINE)}
-    coarse = {(r["orientation"], _fmt(r["currents"])): r for r in rows
-              if r["material"] == "linear" and math.isclose(r["maxh"], MAXH)}
-    both = sorted(set(fine) & set(coarse))
+    def by_case(material, maxh):
+        return {(r["orientation"], _fmt(r["currents"])): r for r in rows
+                if r["material"] == material and math.isclose(r["maxh"], maxh)}
+
+    base = by_case("linear", MAXH)
+    peak = max((np.linalg.norm(r["torque"]) for r in base.values()), default=0.0)
+    for other, label in ((by_case("linear", MAXH_FINE), "finer"), (by_case("linear", MAXH_BH), "the B-H rows'")):
+        both = sorted(set(other) & set(base))
+        if not both:
+            continue
+        h = other[both[0]]["maxh"]
+        d = [np.linalg.norm(other[k]["torque"] - base[k]["torque"]) / peak for k in both]
+        print(f"\nmesh check, {label} mesh ({MAXH * 1e3:g} -> {h * 1e3:g} mm, box {outer_radius(h):g} m), "
+              f"|dT| / peak: max {100 * max(d):.2f} %, median {100 * np.median(d):.2f} % over {len(both)} cases")
+        for k, dk in zip(both, d):
+            print(f"  orientation {k[0]}, currents {k[1]}: {base[k]['elements']} -> {other[k]['elements']} "
+                  f"tetrahedra, {100 * dk:.2f} %")
+    sat, twin = by_case("bh", MAXH_BH), by_case("linear", MAXH_BH)
+    both = sorted(set(sat) & set(twin))
     if both:
-        peak = max(np.linalg.norm(r["torque"]) for r in coarse.values())
-        print(f"\nmesh convergence ({MAXH * 1e3:g} -> {MAXH_FINE * 1e3:g} mm), |dT| / peak:")
-        for k in both:
-            d = np.linalg.norm(fine[k]["torque"] - coarse[k]["torque"]) / peak
-            print(f"  orientation {k[0]}, currents {k[1]}: {coarse[k]['elements']} -> {fine[k]['elements']} "
-                  f"tetrahedra, {100 * d:.2f} %")
-    sat = {(r["orientation"], _fmt(r["currents"])): r for r in rows if r["material"] == "bh"}
-    both = sorted(set(sat) & set(coarse))
-    if both:
-        peak = max(np.linalg.norm(r["torque"]) for r in coarse.values())
-        worst = max(np.linalg.norm(sat[k]["torque"] - coarse[k]["torque"]) / peak for k in both)
-        print(f"\nB-H against linear (same mesh), largest |dT| / peak: {100 * worst:.1f} % over {len(both)} cases")
+        d = [np.linalg.norm(sat[k]["torque"] - twin[k]["torque"]) / peak for k in both]
+        print(f"\nB-H against linear (same {MAXH_BH * 1e3:g} mm mesh), |dT| / peak: max {100 * max(d):.2f} %, "
+              f"median {100 * np.median(d):.2f} % over {len(both)} cases")
+        for k, dk in zip(both, d):
+            print(f"  orientation {k[0]}, currents {k[1]}: |T_lin| {np.linalg.norm(twin[k]['torque']):.3f}, "
+                  f"|T_bh| {np.linalg.norm(sat[k]['torque']):.3f} N m, {100 * dk:.2f} %")
+    ref = saturated_reference(rows)
+    if ref:
+        design = prototype()
+        models = iron_model(design), iron_model(design, coupling=True)
+        errs = {name: [np.linalg.norm(model_torque(m, r["R"], r["coils"], r["currents"], r["magnets"]) - T) / peak
+                       for r, T in ref] for name, m in zip(("pairwise", "coupled"), models)}
+        print(f"\nthe model against the B-H reference on the {MAXH * 1e3:g} mm rows (T_lin({MAXH * 1e3:g} mm) + "
+              f"T_bh - T_lin on the B-H mesh), |dT| / {peak:.2f} N m: " + "; ".join(
+                  f"{k} max {100 * max(v):.1f} %, median {100 * np.median(v):.1f} %" for k, v in errs.items())
+              + f" over {len(ref)} cases")
+
+
+def saturated_reference(rows) -> list:
+    """``[(row, T)]``: each B–H row with its torque carried to the ``MAXH`` mesh, ``T = T_lin(MAXH) + T_bh −
+    T_lin(MAXH_BH)`` (the saturation's change on the fine linear solve: the coarse mesh's error cancels in the
+    difference), for the cases whose three rows are stored."""
+    def key(r):
+        return r["orientation"], _fmt(r["currents"])
+
+    fine = {key(r): r for r in rows if r["material"] == "linear" and math.isclose(r["maxh"], MAXH)}
+    twin = {key(r): r for r in rows if r["material"] == "linear" and math.isclose(r["maxh"], MAXH_BH)}
+    return [(r, fine[key(r)]["torque"] + r["torque"] - twin[key(r)]["torque"]) for r in rows
+            if r["material"] == "bh" and key(r) in fine and key(r) in twin]
 
 
 def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="one coarse case (4 mm face mesh), printed, not stored")
     ap.add_argument("--cases", nargs=2, type=int, metavar=("FIRST", "STOP"), help="case indices FIRST..STOP-1")
+    ap.add_argument("--orientations", nargs="+", type=int, metavar="O", help="only the cases at these orientations")
+    ap.add_argument("--scale", type=float, metavar="S", help="the scaling law by the FEM: the prototype x S")
     ap.add_argument("--list", action="store_true", help="print the cases")
     ap.add_argument("--compare", action="store_true", help="the iron model against the stored rows")
     ap.add_argument("--redo", action="store_true", help="solve cases already stored too")
     args = ap.parse_args(argv)
     if args.compare:
         report(read_rows())
+        return
+    if args.scale:
+        scale_check(args.scale)
         return
     cases = all_cases()
     if args.list:
@@ -494,6 +587,8 @@ def main(argv=None) -> None:
         return
     if args.cases:
         cases = cases[args.cases[0]:args.cases[1]]
+    if args.orientations:
+        cases = [c for c in cases if c.orientation in args.orientations]
     if not args.redo:
         done = {int(r["case"]) for r in read_rows()}
         cases = [c for c in cases if c.index not in done]
