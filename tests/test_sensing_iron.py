@@ -29,7 +29,7 @@ def reference():
     path = resources.files("spherestep.data") / "sensing_iron_reference.csv"
     rows = np.array([[float(v) for v in line.split(",")] for line in
                      [ln for ln in path.read_text().splitlines() if ln and not ln.startswith("#")][1:]])
-    return rows[:, 2:].reshape(3, 24, 9)
+    return rows[:, 2:].reshape(3, 24, 15)  # independent, first_order, cluster: independent, first order, joint
 
 
 def test_the_prototype_reads_its_stored_table(design, fields):
@@ -40,23 +40,26 @@ def test_the_prototype_reads_its_stored_table(design, fields):
 
 
 def test_cores_field_matches_the_direct_solve(design, fields):
-    """The table against the whole rotor magnetising every core (each solved on its own, magpylib at every cell,
-    scripts/sensing_iron_table.py reference) at 3 orientations: relative RMS ≤ 1e-3 (measured 2e-4), max
-    |ΔB| ≤ 30 µT (measured ≈ 10 µT; the part's noise is 100 µT)."""
-    ref = reference()[..., :3]
+    """The stored table against the whole rotor magnetising every core directly (magpylib at every cell, each core
+    solved, its neighbours to first order; scripts/sensing_iron_table.py reference) at 3 orientations: relative
+    RMS ≤ 1e-3 (measured 3e-4), max |ΔB| ≤ 50 µT (measured 28 µT; the part's noise is 100 µT)."""
+    ref = reference()[..., 3:6]
     model = fields[0].field(so3.random(3, 26))
     err = model - ref
     assert np.sqrt(np.sum(err ** 2) / np.sum(ref ** 2)) < 1e-3
-    assert np.abs(err).max() < 30e-6
+    assert np.abs(err).max() < 50e-6
     assert np.abs(ref).max() > 5e-3  # the cores' field is real: millitesla at the sensors
 
 
-def test_core_coupling_is_small_against_the_cores_field(design):
-    """What the model leaves out — the two cores nearest sensor 8 magnetising each other — against their field
-    solved one by one: stated in docs/sensing.md; here it must stay below 5 % of that field (RMS)."""
+def test_first_order_coupling_against_one_moment_system(design):
+    """The two cores nearest sensor 8 solved together (every order of their coupling) against the model's
+    physics, each solved alone plus the first order of the other: the first order takes out ≥ 80 % of the
+    coupling (measured 94 %) and leaves ≤ 0.5 % of their field (RMS; measured 0.16 %)."""
     ref = reference()
-    ind, joint = ref[..., 3:6], ref[..., 6:9]
-    assert np.sqrt(np.sum((joint - ind) ** 2) / np.sum(joint ** 2)) < 0.05
+    ind, first, joint = ref[..., 6:9], ref[..., 9:12], ref[..., 12:15]
+    left = np.sqrt(np.sum((joint - first) ** 2))
+    assert left < 0.2 * np.sqrt(np.sum((joint - ind) ** 2))
+    assert left < 5e-3 * np.sqrt(np.sum(joint ** 2))
 
 
 def test_jacobian_matches_central_differences(fields):

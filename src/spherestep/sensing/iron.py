@@ -50,6 +50,7 @@ DATA_FILE = "sensing_iron_cores.npz"  # the prototype's default array (scripts/s
 GRID_STEP_DEG = 1.0  # the H_s grid (interpolation error measured in docs/sensing.md)
 MAGNET_NODES = 1801  # nodes in the angle α ∈ [0, π] of the magnet's field table at each cell radius (0.1°)
 CHUNK = 4096  # grid directions per block in the build
+COUPLING_REACH_DEG = 50.0  # neighbours (angle between core axes) whose first-order coupling is included
 POLE_CLIP = 1e-6  # sin ϑ is clipped here in H_φ / sin ϑ (the grid's poles lie between the cores)
 
 
@@ -128,9 +129,9 @@ def _source_fields(coef, h, cells, W, Q):  # pragma: no cover - compiled
     return out
 
 
-def _adjoint(solver, points: np.ndarray) -> np.ndarray:
-    """``A (3P, 3n)``: the solved core's field (T) at ``points (P, 3)`` (core frame, components in rows
-    ``3p + i``) per unit source field at its centroids (the solver's layout: ``x1..xn, y1..yn, z1..zn``)."""
+def _unit_fields(solver, points: np.ndarray) -> np.ndarray:
+    """``G (P, 3, 3n)``: the field (T, core frame) at ``points (P, 3)`` (core frame) of each cell polarised 1 T
+    along ``x``, ``y``, ``z`` (columns in the solver's layout ``x1..xn, y1..yn, z1..zn``)."""
     n = len(solver.cells)
     G = np.empty((len(points), 3, 3 * n))
     for a in range(3):
@@ -138,9 +139,18 @@ def _adjoint(solver, points: np.ndarray) -> np.ndarray:
             cell.polarization = cell.orientation.inv().apply(np.eye(3)[a])
         Ga = np.asarray(magpy.getB(solver.cells, points, sumup=False)).reshape(n, len(points), 3)
         G[:, :, a * n:(a + 1) * n] = Ga.transpose(1, 2, 0)
-    G = G.reshape(3 * len(points), 3 * n)
-    X = scipy.linalg.solve((np.eye(3 * n) - solver.chi * solver.T).T, G.T, check_finite=False)  # (I − χT)ᵀ X = Gᵀ
-    return solver.chi * X.T
+    return G
+
+
+def _dipole_coupling(centroids: np.ndarray, volumes: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """``C (P, 3, 3n)``: the field (T) at ``points (P, 3)`` of cells at ``centroids (n, 3)`` (same frame) polarised
+    1 T along ``x``, ``y``, ``z`` (solver layout), each cell a point dipole of moment ``J ΔV / μ0``:
+    ``B = ΔV (3 r̂ r̂ᵀ − I) J / (4π r³)``."""
+    r = points[:, None, :] - centroids[None]  # (P, n, 3)
+    d = np.linalg.norm(r, axis=-1)
+    u = r / d[..., None]
+    K = (3.0 * u[..., :, None] * u[..., None, :] - np.eye(3)) * (volumes / (4.0 * math.pi * d ** 3))[..., None, None]
+    return np.transpose(K, (0, 2, 3, 1)).reshape(len(points), 3, -1)  # [p, i, a·n + j]
 
 
 def grid_directions(step_deg: float, frame: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -155,29 +165,50 @@ def grid_directions(step_deg: float, frame: np.ndarray) -> tuple[np.ndarray, np.
 
 
 def core_response(design, positions, step_deg: float = GRID_STEP_DEG, level: int = IRON_LEVEL, cores=None,
-                  progress=None) -> np.ndarray:
+                  coupling: bool = True, progress=None) -> np.ndarray:
     """``H (nϑ, nφ, S, 3)`` (T): the field at ``positions (S, 3)`` of the cores ``cores`` (indices, default all)
-    magnetised by one ``+1`` magnet along each grid direction (:func:`grid_directions` of :func:`grid_frame`),
-    each core solved on its own (module doc). ``progress(done, total)`` is called after each core."""
+    magnetised by one ``+1`` magnet along each grid direction (:func:`grid_directions` of :func:`grid_frame`):
+    each core solved on its own, plus (``coupling``) the first-order response of its neighbours within
+    :data:`COUPLING_REACH_DEG` among ``cores`` (module doc). ``progress(done, total)`` is called after each core."""
     p = np.asarray(positions, dtype=float).reshape(-1, 3)
-    geom = CoreGeometry.of(design, design.coil)
-    solver = core_solver(geom, level)
+    solver = core_solver(CoreGeometry.of(design, design.coil), level)
+    n = len(solver.cells)
+    lu = scipy.linalg.lu_factor(np.eye(3 * n) - solver.chi * solver.T, check_finite=False)
+
+    def respond(X):  # X M, M = (I − χT)⁻¹ χ: per unit source field at the centroids, through the core's solve
+        return solver.chi * scipy.linalg.lu_solve(lu, X.T, trans=1, check_finite=False).T
+
     face = design.radius + design.air_gap
     Q = core_frames(design)
-    idx = np.arange(len(design.stator)) if cores is None else np.asarray(cores, dtype=int)
-    Y = np.einsum("kji,ksj->ksi", Q[idx], p[None] - face * design.stator.centers[idx][:, None])  # (K, S, 3)
-    A = _adjoint(solver, Y.reshape(-1, 3)).reshape(len(idx), len(p) * 3, -1)
+    v = design.stator.centers
+    idx = np.arange(len(v)) if cores is None else np.asarray(cores, dtype=int)
+    Y = np.einsum("kji,ksj->ksi", Q[idx], p[None] - face * v[idx][:, None])  # sensors in each core's frame
+    A = respond(_unit_fields(solver, Y.reshape(-1, 3)).reshape(-1, 3 * n)).reshape(len(idx), len(p), 3, 3 * n)
+    A = np.einsum("kij,ksjc->ksic", Q[idx], A).reshape(len(idx), 3 * len(p), 3 * n)  # fixed-frame components
     radii = np.linalg.norm(solver.centroids + [0.0, 0.0, face], axis=1)
     coef, h = _magnet_table(design, radii)
     _, W = grid_directions(step_deg, grid_frame(design))
     shape = W.shape[:2]
     W = W.reshape(-1, 3)
     H = np.zeros((len(W), len(p), 3))
-    for done, (k, Ak) in enumerate(zip(idx, A)):
-        cells = solver.centroids @ Q[k].T + face * design.stator.centers[k]  # fixed frame
+    reach = math.cos(math.radians(COUPLING_REACH_DEG))
+    volumes = np.array([cell.volume for cell in solver.cells])
+    for done, k in enumerate(idx):
+        Ak = A[done]
+        if coupling:  # + Σ_l A_l C_lk M: the neighbours magnetised by core k's polarization
+            X = np.zeros_like(Ak)
+            for m, l in enumerate(idx):
+                if l == k or v[l] @ v[k] < reach:
+                    continue
+                Z = (solver.centroids @ Q[l].T + face * (v[l] - v[k])) @ Q[k]  # l's centroids, k's frame
+                C = _dipole_coupling(solver.centroids, volumes, Z)
+                C = np.einsum("ij,pjc->ipc", Q[l].T @ Q[k], C).reshape(3 * n, 3 * n)
+                X += A[m] @ C
+            Ak = Ak + respond(X)
+        cells = solver.centroids @ Q[k].T + face * v[k]  # fixed frame
         for s in range(0, len(W), CHUNK):
-            F = _source_fields(coef, h, cells, W[s:s + CHUNK], Q[k]) @ Ak.T  # (D, 3S), core frame
-            H[s:s + CHUNK] += F.reshape(len(F), len(p), 3) @ Q[k].T
+            F = _source_fields(coef, h, cells, W[s:s + CHUNK], Q[k]) @ Ak.T  # (D, 3S), fixed frame
+            H[s:s + CHUNK] += F.reshape(len(F), len(p), 3)
         if progress is not None:
             progress(done + 1, len(idx))
     return H.reshape(*shape, len(p), 3)
