@@ -27,18 +27,19 @@ box itself caps the speed, and the servo's allocation keeps the same supply box 
 damping conservatively as ``D_j ≤ s̈ ≤ A_j − β v_j``, ``β = b_d/I``. The intervals are computed lazily, only in
 the bands the passes visit.
 
-Margin. The feed-forward may use ``margin`` (``TURN_MARGIN`` = 0.9; the other planners' ``MARGIN`` is 0.7) of
-the current bound, of the supply voltage (the
-*whole* back-EMF counted against it) and of the power radius: ``|c_k| ≤ m u``, ``|R I_n c_k + e_k| ≤ m V``,
-``‖c‖ ≤ m ρ``. Feedback currents within ``(1 − m)`` of the current, voltage and power bounds then add to the
-feed-forward's without leaving the limits (triangle inequalities): the feedback, and the inductance's ``L di/dt``,
-keep ``1 − m`` of the drive whatever the detent and the speed cost the feed-forward. ``margin = 1`` gives
-the bound (:func:`fastest_time`, :func:`~spherestep.control.bang_bang_time`). Why 0.9: on the iron prototype
-holding the rotor against the detent takes more than 80 % of a coil's current along the demo's turn (184–224°),
-so at 0.7 only a detour resting at three waypoints is feasible (2.05 s); at 0.9 the geodesic is (1.34–1.46 s,
-tracked within 0.15° on the design's model). The price is robustness: a plant whose winding gives 15 % less
-torque cannot follow a plan that uses 90 % of the model's, so a turn on a motor not yet calibrated should be
-planned with ``margin = MARGIN`` (docs/control.md, the table of §2).
+Margin. The feed-forward may use ``margin`` of the current bound, of the supply voltage (the *whole* back-EMF
+counted against it) and of the power radius: ``|c_k| ≤ m u``, ``|R I_n c_k + e_k| ≤ m V``, ``‖c‖ ≤ m ρ``.
+Feedback currents within ``(1 − m)`` of the current, voltage and power bounds then add to the feed-forward's
+without leaving the limits (triangle inequalities): the feedback, and the inductance's ``L di/dt``, keep ``1 − m``
+of the drive whatever the detent and the speed cost the feed-forward. ``margin = 1`` gives the bound
+(:func:`fastest_time`, :func:`~spherestep.control.bang_bang_time`). The default is ``MARGIN`` = 0.7 where the turn
+itself is feasible within it, else the turn itself within ``TURN_MARGIN`` = 0.9, else detours (0.7, then 0.9): on
+the iron prototype holding the rotor against the detent takes more than 80 % of a coil's current from 184° to
+224° of the demo's turn, so within 0.7 only a detour resting at three waypoints is feasible (2.05 s), within 0.9
+the turn itself (1.34 s, tracked within 0.15° on the design's model). The price is robustness: a plant whose
+winding gives 15 % less torque cannot follow a plan that uses 90 % of the model's, so a turn on a motor not yet
+calibrated should be planned with ``margin = MARGIN`` (docs/control.md, the table of §2). On the air-core map
+the turn itself is feasible within 0.7, which its feedback needs (0.9 tracked 0.73°).
 
 Phase plane. With ``x = ṡ²`` (``dx/ds = 2 s̈``) on a grid ``s_0 … s_K`` (step ≤ ``GRID_STEP``), each piece has a
 constant ``s̈_i = (x_{i+1} − x_i)/(2Δ)`` (``s`` quadratic in ``t``, ``ṡ`` linear, exact), which must lie in the
@@ -70,7 +71,7 @@ import numpy as np
 from .. import checks, so3
 from ..errors import InputError, bad_value
 from .limits import DriveLimits
-from .trajectory import TimeLaw, Trajectory
+from .trajectory import MARGIN, TimeLaw, Trajectory
 
 GRID_STEP = math.radians(0.5)  # the phase plane's largest step along the path (rad)
 MIN_PIECES = 16
@@ -408,11 +409,15 @@ def fastest_turn(model, start, axis, angle: float, inertia: float, limits: Drive
                  step: float = GRID_STEP, pieces: int = MIN_PIECES, detours: bool = True,
                  top_speed: float | None = None) -> FastestTurn:
     """The fastest rest-to-rest turn of ``angle`` (rad) about the fixed ``axis`` from ``start`` whose feed-forward
-    torque ``I α + b_d ω − b(R)`` the coils give within ``margin`` (default ``TURN_MARGIN`` = 0.9) of their limits
-    all along (see the module): the turn itself if feasible, else the fastest detour found; :class:`FastestTurn`.
+    torque ``I α + b_d ω − b(R)`` the coils give within ``margin`` of their limits all along (see the module): the
+    turn itself if feasible, else the fastest detour found; :class:`FastestTurn`. Default margin: ``MARGIN`` (0.7)
+    if the turn itself is feasible within it, else the turn itself within ``TURN_MARGIN`` (0.9), else the detours
+    within 0.7, then 0.9 (``FastestTurn.margin`` says which).
     Speeds up to ``top_speed × v₀`` (default ``TOP_SPEED`` = 2; :func:`speed_levels`) and ``speed`` if given.
     Raises an ``InputError`` naming ``axis`` when no path tried is feasible."""
-    I, bd, margin = _check(model, limits, inertia, damping, TURN_MARGIN if margin is None else margin)
+    I, bd, fixed = _check(model, limits, inertia, damping, MARGIN if margin is None else margin)
+    margins = (fixed,) if margin is not None else (MARGIN, TURN_MARGIN)
+    margin = fixed
     n = checks.axis(axis)
     theta = checks.number(angle, "angle", expected="a finite angle in radians")
     if speed is not None:
@@ -430,10 +435,18 @@ def fastest_turn(model, start, axis, angle: float, inertia: float, limits: Drive
     top = TOP_SPEED if top_speed is None else checks.positive(top_speed, "top_speed")
     levels = speed_levels(model, R0, n, theta, limits, top, speed)
     tried: list = []
-    cache: dict = {}
-    best = _fastest_at(model, R0, n, theta, end, limits, I, bd, margin, step, pieces, levels, False, tried, cache)
-    if best is None and detours:
-        best = _fastest_at(model, R0, n, theta, end, limits, I, bd, margin, step, pieces, levels, True, tried, cache)
+    caches: dict = {m: {} for m in margins}
+    best = None
+    # the geodesic at each margin, then the detours at each: a margin above MARGIN only where the detent forces it
+    for around in (False, True) if detours else (False,):
+        for m in margins:
+            if best is None:
+                mark = len(tried)
+                best = _fastest_at(model, R0, n, theta, end, limits, I, bd, m, step, pieces, levels, around,
+                                   tried, caches[m])
+                if len(margins) > 1:
+                    tried[mark:] = [(f"{p} (margin {m:g})", T, r) for p, T, r in tried[mark:]]
+                margin = m
     if best is None:
         reason = tried[0][2] if tried else ""
         raise bad_value("axis", "a turn whose torque the coils can give along the path" +
@@ -443,7 +456,7 @@ def fastest_turn(model, start, axis, angle: float, inertia: float, limits: Drive
 
 SPEED_BANDS = 24  # speed levels of the phase plane's bands
 TOP_SPEED = 2.0  # × v₀: the planner's fastest band (the honest box caps the speed before it)
-TURN_MARGIN = 0.9  # the time-optimal turn's feed-forward share of the drive (module docstring: why not MARGIN)
+TURN_MARGIN = 0.9  # the feed-forward's share where the detent forbids the turn itself at MARGIN (module docstring)
 BOUND_SPEED = 2.0  # × v₀: the bound's fastest band (that coil's back-EMF twice the supply)
 
 
