@@ -19,9 +19,10 @@ Pairwise superposition leaves out a magnet acting on another through a core and 
 coupling=True)`` adds the first (:mod:`._coupling`).
 
 The prototype's tables (``spherestep/data/iron_pair_table.csv``: NGSolve FEM nodes below 21°, the moment method
-from 21° on; ``python scripts/iron_tables.py fem-table``) are read when the design and coil match it; any other
-geometry is solved by the moment method on first use (minutes) and cached — its error near the axis is up to
-~30 % of the peak (docs/magnetics.md).
+from 21° on; ``python scripts/iron_tables.py fem-table``) are read, scaled by the law of :mod:`._ironscale`, for
+the prototype and every scaled copy of its geometry; another magnet within the shape table's range is interpolated
+from it (:func:`._ironscale.shape_table_tables`); any other geometry is solved by the moment method on first use
+(minutes) and cached — its error near the axis is up to ~30 % of the peak (docs/magnetics.md).
 """
 
 from __future__ import annotations
