@@ -41,12 +41,12 @@ def model_accuracy(design, array):
     total = rotor.field(R) + ref
     print("| compared | max |ΔB| (µT) | RMS ΔB (µT) | relative RMS (of the cores' field) | of the total field |")
     print("|---|---|---|---|---|")
-    print(f"| stored table vs direct (29 cores, first-order coupling) | {np.abs(err).max() * 1e6:.2f} | "
+    print(f"| stored table vs direct (29 cores, coupled) | {np.abs(err).max() * 1e6:.2f} | "
           f"{np.sqrt(np.mean(err ** 2)) * 1e6:.2f} | {np.sqrt(np.sum(err ** 2) / np.sum(ref ** 2)):.2e} | "
           f"{np.sqrt(np.sum(err ** 2) / np.sum(total ** 2)):.2e} |")
-    for name, d, base in (("direct, first-order coupling vs none (its size)", ref - alone, ref),
+    for name, d, base in (("direct: coupled vs each core alone (the coupling's size)", ref - alone, ref),
                           ("2 cores nearest sensor 8: one moment system vs each alone", joint - ind, joint),
-                          ("2 cores nearest sensor 8: one moment system vs first order", joint - first, joint)):
+                          ("2 cores nearest sensor 8: one moment system vs dipole coupling", joint - first, joint)):
         print(f"| {name} | {np.abs(d).max() * 1e6:.2f} | {np.sqrt(np.mean(d ** 2)) * 1e6:.2f} | "
               f"{np.sqrt(np.sum(d ** 2) / np.sum(base ** 2)):.2e} | — |")
     hall = HallSensor(design, array, noise_T=1e-12)

@@ -8,11 +8,11 @@ per unit current ``(29, S, 3)``. About a minute plus the core's factorisation.
 
 ``python scripts/sensing_iron_table.py reference`` writes ``src/spherestep/data/sensing_iron_reference.csv``: the
 cores' field at the 24 sensors at 3 orientations (``so3.random(3, 26)``) by direct solves with the whole rotor
-(92 magnets, magpylib at every cell): (i) every core solved on its own (all 29 cores), (ii) the same plus the
-first-order coupling of neighbours (the model's physics: each core's polarization, as point dipoles per cell,
-magnetises the cores within 50°, each solved again), and (iii) the two cores nearest sensor 8 solved together
-(one moment system: every order of their coupling), beside the same two cores solved one by one and to first
-order. Minutes (one 2-core factorisation).
+(92 magnets, magpylib at every cell): (i) every core solved on its own (all 29 cores), (ii) the same with the
+cores magnetising each other (the model's physics: each core's polarization, as point dipoles per cell,
+magnetises the cores within 50°, to convergence), and (iii) the two cores nearest sensor 8 solved together (one
+moment system), beside the same two cores solved one by one and coupled as in (ii). Minutes (one 2-core
+factorisation).
 """
 
 from __future__ import annotations
@@ -81,30 +81,34 @@ def independent(design, R, p, cores) -> np.ndarray:
     return out
 
 
-def first_order(design, R, p, cores) -> np.ndarray:
-    """:func:`independent` plus the first-order coupling of neighbours (:func:`spherestep.sensing.iron.core_response`'s
-    physics, evaluated directly: no table)."""
+def coupled(design, R, p, cores, sweeps: int | None = None) -> np.ndarray:
+    """Field ``(K, S, 3)`` at ``p`` of ``cores`` with the whole rotor at each of ``R (K, 3, 3)``: each core solved,
+    then the cores magnetising each other through :func:`spherestep.sensing.iron.coupling_matrix` (the model's
+    physics, evaluated on the polarizations directly, no table), ``J_l = J0_l + M Σ_k C_lk J_k`` to convergence
+    (``sweeps``: that many, 1 = the first order)."""
     solver = core_solver(CoreGeometry.of(design, design.coil))
     n = len(solver.cells)
-    volumes = np.array([c.volume for c in solver.cells])
     Q = iron.core_frames(design)
     face = design.radius + design.air_gap
     v = design.stator.centers
-    mags = rotor_magnets(design, R)
-    J0 = {k: solver.polarization(magpy.getB(mags, solver.centroids @ Q[k].T + face * v[k], sumup=True) @ Q[k])
-          for k in cores}
-    J1 = {k: np.zeros((n, 3)) for k in cores}
-    reach = np.cos(np.radians(iron.COUPLING_REACH_DEG))
+    J0 = {k: np.array([solver.polarization(magpy.getB(rotor_magnets(design, Rk), solver.centroids @ Q[k].T
+                                                      + face * v[k], sumup=True) @ Q[k]) for Rk in R])
+          for k in cores}  # (K, n, 3) in k's frame
+    C = {(l, k): iron.coupling_matrix(design, solver, l, k) for l, k in iron.coupled_pairs(design, cores)}
+    J = J0
+    for _ in range(sweeps or iron.COUPLING_SWEEPS):
+        B = {k: np.zeros((len(R), 3 * n)) for k in cores}
+        for (l, k), Clk in C.items():
+            B[l] += np.swapaxes(J[k], 1, 2).reshape(len(R), 3 * n) @ Clk.T
+        new = {k: J0[k] + solver.polarization(np.swapaxes(B[k].reshape(len(R), 3, n), 1, 2)) for k in cores}
+        change = max(np.abs(new[k] - J[k]).max() for k in cores) / max(np.abs(J0[k]).max() for k in cores)
+        J = new
+        if change < 1e-7:
+            break
+    out = np.zeros((len(R), len(p), 3))
     for k in cores:
-        for m in cores:
-            if m == k or v[m] @ v[k] < reach:
-                continue
-            Z = (solver.centroids @ Q[m].T + face * (v[m] - v[k])) @ Q[k]
-            B = iron._dipole_coupling(solver.centroids, volumes, Z) @ J0[k].T.reshape(3 * n)  # (n, 3), k's frame
-            J1[m] += solver.polarization(B @ (Q[m].T @ Q[k]).T)
-    out = np.zeros((len(p), 3))
-    for k in cores:
-        out += solver.field(J0[k] + J1[k], (p - face * v[k]) @ Q[k]) @ Q[k].T
+        for i in range(len(R)):
+            out[i] += solver.field(J[k][i], (p - face * v[k]) @ Q[k]) @ Q[k].T
     return out
 
 
@@ -129,15 +133,15 @@ def reference() -> None:
     t0 = time.perf_counter()
     allc = np.arange(len(design.stator))
     ind = np.array([independent(design, Rk, p, allc) for Rk in R])
-    first = np.array([first_order(design, Rk, p, allc) for Rk in R])
-    print(f"independent and first order, all cores: {time.perf_counter() - t0:.0f} s", flush=True)
+    first = coupled(design, R, p, allc)
+    print(f"independent and coupled, all cores: {time.perf_counter() - t0:.0f} s", flush=True)
     x = p[CLUSTER_SENSOR] / np.linalg.norm(p[CLUSTER_SENSOR])
     cluster = np.argsort(-(design.stator.centers @ x))[:2]
     ind_c = np.array([independent(design, Rk, p, cluster) for Rk in R])
-    first_c = np.array([first_order(design, Rk, p, cluster) for Rk in R])
+    first_c = coupled(design, R, p, cluster)
     jnt = joint(design, R, p, cluster)
     print(f"joint, cores {cluster.tolist()}: {time.perf_counter() - t0:.0f} s", flush=True)
-    cols = ["independent", "first_order", "cluster_independent", "cluster_first_order", "cluster_joint"]
+    cols = ["independent", "coupled", "cluster_independent", "cluster_coupled", "cluster_joint"]
     lines = [f"# cores' field (T) at the default array's 24 sensors, prototype, R = so3.random(3, {SEED}); "
              "scripts/sensing_iron_table.py reference",
              f"# cluster (cores solved together): {' '.join(map(str, cluster.tolist()))}",
@@ -148,7 +152,7 @@ def reference() -> None:
             lines.append(f"{k},{s}," + ",".join(f"{v:.9e}" for v in vals))
     with atomic_path(DATA / "sensing_iron_reference.csv") as tmp:
         Path(tmp).write_text("\n".join(lines) + "\n")
-    for name, d in (("coupling left out", jnt - ind_c), ("after the first order", jnt - first_c)):
+    for name, d in (("coupling left out", jnt - ind_c), ("left by the dipole coupling", jnt - first_c)):
         print(f"{name}: max {np.abs(d).max() * 1e3:.3f} mT, RMS {np.sqrt(np.mean(d ** 2)) * 1e3:.3f} mT; "
               f"cluster field RMS {np.sqrt(np.mean(jnt ** 2)) * 1e3:.3f} mT")
 

@@ -9,19 +9,22 @@ sum over the rotor's magnets of one function of the magnet's direction:
 model's radius, :func:`spherestep.magnetics.magnet_face_radius`). ``H_s`` is one smooth function on the sphere per
 sensor; it is tabulated on an equiangular ``(ϑ, φ)`` grid of ``step`` (1°) in a frame whose poles lie between
 the cores, and interpolated by the tensor cubic B-spline that interpolates the nodes (periodic in ``φ``; in ``ϑ``
-the grid continues over the pole, ``(−ϑ, φ) ≡ (ϑ, φ + π)``). With ``t = δ × w`` for a small turn
-``R → exp(δ̂) R``,
+the grid continues over the pole, ``(−ϑ, φ) ≡ (ϑ, φ + π)``). A small turn ``R → exp(δ̂) R`` moves a pole by
+``dw = δ × w = −[w]× δ``, so
 
     ∂B_core,s/∂δ = −Σ_j p_j (∂H_s/∂w)(w_j) [w_j]× ,    ∂H/∂w = H_ϑ ê_ϑᵀ + (H_φ / sin ϑ) ê_φᵀ .
 
 Building ``H_s`` (:func:`core_response`). Each core is the iron room's pot core (:class:`magnetics.CoreGeometry`,
-its method-of-moments mesh and factorised solve :func:`magnetics.core_solver`), solved on its own: the cores are
-independent (their mutual magnetisation is left out; its size is measured in docs/sensing.md). For one core the
-field at a point ``y`` is ``G(y) J`` and ``J = (I − χT)⁻¹ χ b`` for the source ``b`` at the cells' centroids, so
-the field at all the sensors is ``A b`` with the adjoint ``A = χ G (I − χT)⁻¹``, one transposed back-substitution
-for every sensor seen from every core. The magnet's field at the cells, for every grid direction, comes from one
-1-D table in the angle between the magnet's axis and the cell per distinct cell radius (the magnet is
-axisymmetric, as in :mod:`.field`): the build is a table look-up and one matrix product per core.
+its method-of-moments mesh and factorised solve :func:`magnetics.core_solver`), solved on its own, and the cores
+magnetise each other: core ``k``'s polarization, its cells taken as point dipoles ``J ΔV/μ0``, magnetises the
+cores within :data:`COUPLING_REACH_DEG`, whose response magnetises their neighbours in turn, to convergence
+(block Jacobi; what is left against one moment system of two cores is in docs/sensing.md). For one core the field at a point ``y`` is ``G(y) J`` and
+``J = (I − χT)⁻¹ χ b`` for the source ``b`` at the cells' centroids, so the field at all the sensors is ``A b``
+with the adjoint ``A = χ G (I − χT)⁻¹``, one transposed back-substitution for every sensor seen from every core;
+with the coupling core ``k``'s adjoint solves ``Â_k = A_k + Σ_l Â_l C_lk (I − χT)⁻¹ χ`` (``C_lk`` the dipoles'
+field at core ``l``'s centroids). The magnet's field at the cells, for every grid direction, comes from one 1-D table in the angle
+between the magnet's axis and the cell per distinct cell radius (the magnet is axisymmetric, as in
+:mod:`.field`): the build is a table look-up and one matrix product per core.
 
 The coils (:class:`IronCoilField`): coil ``k`` at unit current magnetises its own core; the sensors see the
 winding (the iron room's current loops) plus that core, ``B = Σ_k c_k G_k``, a known field.
@@ -42,7 +45,7 @@ from scipy.interpolate import CubicSpline
 from scipy.ndimage import spline_filter1d
 
 from .. import checks
-from ..errors import bad_value
+from ..errors import ComputationError, bad_value
 from ..magnetics import IRON_LEVEL, CoreGeometry, core_solver, magnet_face_radius
 from .field import FieldTable
 
@@ -50,7 +53,9 @@ DATA_FILE = "sensing_iron_cores.npz"  # the prototype's default array (scripts/s
 GRID_STEP_DEG = 1.0  # the H_s grid (interpolation error measured in docs/sensing.md)
 MAGNET_NODES = 1801  # nodes in the angle α ∈ [0, π] of the magnet's field table at each cell radius (0.1°)
 CHUNK = 4096  # grid directions per block in the build
-COUPLING_REACH_DEG = 50.0  # neighbours (angle between core axes) whose first-order coupling is included
+COUPLING_REACH_DEG = 50.0  # neighbours (angle between core axes) whose coupling is included
+COUPLING_SWEEPS = 30  # block-Jacobi sweeps at most
+COUPLING_TOL = 1e-5  # ... until no adjoint entry moves by this much of the largest
 POLE_CLIP = 1e-6  # sin ϑ is clipped here in H_φ / sin ϑ (the grid's poles lie between the cores)
 
 
@@ -153,6 +158,41 @@ def _dipole_coupling(centroids: np.ndarray, volumes: np.ndarray, points: np.ndar
     return np.transpose(K, (0, 2, 3, 1)).reshape(len(points), 3, -1)  # [p, i, a·n + j]
 
 
+def coupling_matrix(design, solver, l: int, k: int) -> np.ndarray:
+    """``C_lk (3n, 3n)``: the field (T) at core ``l``'s centroids (its frame, solver layout) per unit polarization of
+    core ``k``'s cells (its frame), the cells as point dipoles (:func:`_dipole_coupling`)."""
+    Q, v, face = core_frames(design), design.stator.centers, design.radius + design.air_gap
+    volumes = np.array([cell.volume for cell in solver.cells])
+    Z = (solver.centroids @ Q[l].T + face * (v[l] - v[k])) @ Q[k]  # l's centroids in k's frame
+    C = np.einsum("ij,pjc->ipc", Q[l].T @ Q[k], _dipole_coupling(solver.centroids, volumes, Z))
+    return C.reshape(3 * len(volumes), 3 * len(volumes))
+
+
+def coupled_pairs(design, cores) -> list[tuple[int, int]]:
+    """Ordered pairs ``(l, k)`` of ``cores`` whose axes are within :data:`COUPLING_REACH_DEG` (``l ≠ k``)."""
+    v, reach = design.stator.centers, math.cos(math.radians(COUPLING_REACH_DEG))
+    return [(int(l), int(k)) for l in cores for k in cores if l != k and v[l] @ v[k] >= reach]
+
+
+def _coupled(design, solver, A: np.ndarray, idx, respond) -> np.ndarray:
+    """The cores' adjoints with their coupling (module doc), ``Â_k = A_k + Σ_l Â_l C_lk (I − χT)⁻¹ χ`` for the
+    pairs of :func:`coupled_pairs`, by block Jacobi from ``Â = A`` (the first sweep is the first order) until no
+    entry moves by :data:`COUPLING_TOL` of ``max |A|``."""
+    where = {int(k): i for i, k in enumerate(idx)}
+    pairs = coupled_pairs(design, idx)
+    hat = A
+    for _ in range(COUPLING_SWEEPS):
+        X = np.zeros_like(A)
+        for l, k in pairs:
+            X[where[k]] += hat[where[l]] @ coupling_matrix(design, solver, l, k)
+        new = A + np.array([respond(x) for x in X])
+        change = np.abs(new - hat).max() / np.abs(A).max()
+        hat = new
+        if change < COUPLING_TOL:
+            return hat
+    raise ComputationError(f"the cores' coupling did not settle in {COUPLING_SWEEPS} sweeps (change {change:.2g})")
+
+
 def grid_directions(step_deg: float, frame: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The table's nodes: ``ϑ`` in ``[0, π]`` and ``φ`` in ``[0, 2π)`` at ``step_deg``, and their unit vectors
     ``(nϑ, nφ, 3)`` in the fixed frame (``frame`` columns: the grid's x, y and polar axis)."""
@@ -168,8 +208,8 @@ def core_response(design, positions, step_deg: float = GRID_STEP_DEG, level: int
                   coupling: bool = True, progress=None) -> np.ndarray:
     """``H (nϑ, nφ, S, 3)`` (T): the field at ``positions (S, 3)`` of the cores ``cores`` (indices, default all)
     magnetised by one ``+1`` magnet along each grid direction (:func:`grid_directions` of :func:`grid_frame`):
-    each core solved on its own, plus (``coupling``) the first-order response of its neighbours within
-    :data:`COUPLING_REACH_DEG` among ``cores`` (module doc). ``progress(done, total)`` is called after each core."""
+    each core solved on its own and (``coupling``) the cores within :data:`COUPLING_REACH_DEG` of each other
+    among ``cores`` magnetising each other (module doc). ``progress(done, total)`` is called after each core."""
     p = np.asarray(positions, dtype=float).reshape(-1, 3)
     solver = core_solver(CoreGeometry.of(design, design.coil), level)
     n = len(solver.cells)
@@ -191,20 +231,10 @@ def core_response(design, positions, step_deg: float = GRID_STEP_DEG, level: int
     shape = W.shape[:2]
     W = W.reshape(-1, 3)
     H = np.zeros((len(W), len(p), 3))
-    reach = math.cos(math.radians(COUPLING_REACH_DEG))
-    volumes = np.array([cell.volume for cell in solver.cells])
+    if coupling:
+        A = _coupled(design, solver, A, idx, respond)
     for done, k in enumerate(idx):
         Ak = A[done]
-        if coupling:  # + Σ_l A_l C_lk M: the neighbours magnetised by core k's polarization
-            X = np.zeros_like(Ak)
-            for m, l in enumerate(idx):
-                if l == k or v[l] @ v[k] < reach:
-                    continue
-                Z = (solver.centroids @ Q[l].T + face * (v[l] - v[k])) @ Q[k]  # l's centroids, k's frame
-                C = _dipole_coupling(solver.centroids, volumes, Z)
-                C = np.einsum("ij,pjc->ipc", Q[l].T @ Q[k], C).reshape(3 * n, 3 * n)
-                X += A[m] @ C
-            Ak = Ak + respond(X)
         cells = solver.centroids @ Q[k].T + face * v[k]  # fixed frame
         for s in range(0, len(W), CHUNK):
             F = _source_fields(coef, h, cells, W[s:s + CHUNK], Q[k]) @ Ak.T  # (D, 3S), fixed frame
