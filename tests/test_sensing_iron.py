@@ -107,3 +107,17 @@ def test_cores_refused_on_an_air_design(design):
     with pytest.raises(InputError, match="cores"):
         HallSensor(air, cores=True)
     assert HallSensor(air).core_field is None
+
+
+@pytest.mark.slow
+def test_servo_on_the_iron_model_with_the_array_in_the_loop(design):
+    """``move --sensor hall`` on the iron prototype (its own model, the cores modelled by default): the array's
+    estimate stays within 0.05° (issue 26 §2's RMS target, held here as the worst; measured 0.008° on a 90° turn
+    in bench_sensing_iron.py)."""
+    import math
+
+    from spherestep.drive import drive_turn
+
+    move = drive_turn(design, [1, 0.5, 2], math.radians(20), sensor="hall").to_dict()
+    assert move["details"]["sensor"] == "hall" and move["details"]["sensor_error_max_deg"] < 0.05
+    assert move["final_error_deg"] < 0.05
