@@ -53,6 +53,28 @@ def coupled_surrogate_error(design, offsets_deg=(0.5, 1.0, 1.5), count: int = 3,
     return {"max_coupling_torque_Nm": scale, "error_Nm_at_deg": out}
 
 
+def hold_reach(design, cases, holds: int, seed: int = 0) -> None:
+    """Which of the table's hold orientations the *plant* can hold at all within the limits (``allocate_matrix``
+    on the plant's own ``K`` and bias for zero torque): the holds no controller can meet."""
+    from spherestep.control import allocate_matrix
+    from spherestep.magnetics import design_model
+
+    limits = design_model(design).limits
+    targets = so3.random(holds, seed)
+    print("# holds the plant itself can reach (zero torque within the limits)")
+    for case in cases:
+        plant, _ = case.build(design)
+        missing = []
+        for k, R in enumerate(targets):
+            K = np.asarray(plant.torque_matrix(R), dtype=float)
+            b = np.asarray(plant.torque(R, np.zeros(plant.coil_count)), dtype=float)
+            a, _ = allocate_matrix(K, np.zeros(3), limits, bias=b, failed=plant.failed)
+            if not a.reachable:
+                missing.append(f"#{k} ({a.error:.3f} N·m unmet, |b| {np.linalg.norm(b):.1f} N·m)")
+        print(f"{case.name:>28} | {holds - len(missing)}/{holds} reachable" +
+              (f"; not: {', '.join(missing)}" if missing else ""), flush=True)
+
+
 def fast_plan(design, cases) -> None:
     """The same turn planned with ``plan_turn``'s default margin (``TURN_MARGIN`` = 0.9, the fastest turn of §3)
     on each case, the observer on: what the speed costs in robustness (printed; the ``--json`` rows are the
@@ -79,6 +101,7 @@ def main() -> None:
     ap.add_argument("--quick", action="store_true", help="4 holds, no coupled plant")
     ap.add_argument("--json", default="")
     ap.add_argument("--no-fast", action="store_true", help="skip the turns planned with plan_turn's default margin")
+    ap.add_argument("--reach-only", action="store_true", help="only which holds the plants can reach (no runs)")
     args = ap.parse_args()
     print(f"# bench_servo_robust  {datetime.datetime.now().isoformat(timespec='minutes')}  {platform.platform()}  "
           f"cpus={os.cpu_count()}  OPENBLAS_NUM_THREADS={os.environ.get('OPENBLAS_NUM_THREADS', 'unset')}", flush=True)
@@ -90,6 +113,9 @@ def main() -> None:
         cases = [c for c in cases if c.name in wanted]
     if args.quick:
         cases = [c for c in cases if not c.coupling]
+    if args.reach_only:
+        hold_reach(design, cases, holds)
+        return
     head = (f"{'case':>28} | {'observer':>8} {'holds ok':>8} {'worst hold°':>11} {'T s':>6} {'final°':>8} "
             f"{'max track°':>10} {'P W':>6} {'reach':>6} {'pass':>5} {'CPU s':>6}")
     print(head)
@@ -106,6 +132,7 @@ def main() -> None:
                   f"{d['turn_time_s']:>6.3f} {d['final_error_deg']:>8.4f} {d['max_tracking_error_deg']:>10.3f} "
                   f"{d['mean_power_W']:>6.1f} {d['reachable_fraction']:>6.3f} {'yes' if row.passed else 'NO':>5} "
                   f"{cpu:>6.0f}", flush=True)
+    hold_reach(design, cases, holds)
     if not args.no_fast:
         fast_plan(design, cases)
     if not args.quick and not args.cases:
