@@ -34,7 +34,6 @@ from __future__ import annotations
 
 import math
 from dataclasses import astuple, dataclass
-from functools import lru_cache
 from importlib import resources
 
 import magpylib as magpy
@@ -434,13 +433,8 @@ def _stored(key: bytes, positions: np.ndarray, step_deg: float):
         return z["H"] * z["scale"].astype(np.float32), z["coils"]
 
 
-@lru_cache(maxsize=4)
-def _cached(key: bytes, design, positions_bytes: bytes, step_deg: float, level: int):
-    p = np.frombuffer(positions_bytes).reshape(-1, 3)
-    stored = _stored(key, p, step_deg) if level == IRON_LEVEL else None
-    if stored is None:
-        stored = (core_response(design, p, step_deg, level), IronCoilField.build(design, p, level).per_coil)
-    return CoreField.from_nodes(design, stored[0], step_deg), IronCoilField(stored[1])
+_CACHE: dict = {}  # (design key, positions, step, level) -> (CoreField, IronCoilField), for the process
+CACHE_SIZE = 4
 
 
 def iron_fields(design, positions, step_deg: float = GRID_STEP_DEG,
@@ -452,7 +446,16 @@ def iron_fields(design, positions, step_deg: float = GRID_STEP_DEG,
     if abs(180.0 / step_deg - round(180.0 / step_deg)) > 1e-9:
         raise bad_value("step_deg", "a grid step in degrees dividing 180", step_deg)
     p = np.ascontiguousarray(np.asarray(positions, dtype=float).reshape(-1, 3))
-    return _cached(design_key(design, level), design, p.tobytes(), float(step_deg), int(level))
+    level = checks.count(level, "level", minimum=0, maximum=6, expected="a mesh level from 0 to 6")
+    key = (design_key(design, level), p.tobytes(), float(step_deg), level)
+    if key not in _CACHE:
+        stored = _stored(key[0], p, step_deg) if level == IRON_LEVEL else None
+        if stored is None:
+            stored = (core_response(design, p, step_deg, level), IronCoilField.build(design, p, level).per_coil)
+        if len(_CACHE) >= CACHE_SIZE:
+            _CACHE.pop(next(iter(_CACHE)))
+        _CACHE[key] = (CoreField.from_nodes(design, stored[0], step_deg), IronCoilField(stored[1]))
+    return _CACHE[key]
 
 
 def rotor_and_cores(design, positions, step_deg: float = GRID_STEP_DEG) -> IronFieldTable:
