@@ -167,3 +167,59 @@ def test_the_one_missed_hold_is_beyond_the_plant():
         unmet.append(allocate_matrix(K, np.zeros(3), limits, bias=b)[0].error)
     assert np.flatnonzero(np.array(unmet) > 1e-6).tolist() == [4]
     assert 0.4 < unmet[4] < 0.7  # measured 0.518 N·m at the full 100 W
+
+
+def test_supply_power_ball_bounds_copper_and_back_emf_power():
+    """``emf``: Σ R i² + Σ e_k i_k ≤ P (per unit ‖c‖² + ê·c ≤ ρ²), the least-copper currents where that holds;
+    with ``previous``/``period`` also the inductance's ``L I_n² (c² − c_prev²)/(2h)``."""
+    rng = np.random.default_rng(21)
+    rho2 = LIMITS.per_unit_power_radius ** 2
+    same = bound = 0
+    for _ in range(60):
+        K = rng.normal(scale=0.3, size=(3, 12))
+        emf = rng.normal(scale=2.0, size=3) @ K  # ê_k = K_k·ω/(R I_n²): ê·c = ω·K c/(R I_n²)
+        t = rng.normal(scale=1.0, size=3)
+        a, _ = allocate_matrix(K, t, LIMITS, emf=emf)
+        c = a.currents
+        assert c @ c <= rho2 * (1 + 1e-9) and np.all(np.abs(c) <= LIMITS.per_unit_bound + 1e-12)
+        if emf @ c > 0:  # motoring: the supply's power within P (braking: the copper's, the device's bound)
+            assert c @ c + emf @ c <= rho2 * (1 + 1e-9)
+        plain, _ = allocate_matrix(K, t, LIMITS)
+        p = plain.currents
+        if plain.reachable and p @ p + emf @ p <= rho2:  # the supply's bound does not bind: the same currents
+            same += 1
+            assert a.reachable and np.abs(c - p).max() <= 1e-8
+        elif plain.reachable:  # within the copper's bound, beyond the supply's: out of reach now
+            bound += 1
+            assert not a.reachable
+        prev = rng.uniform(-1.0, 1.0, size=12)
+        q = 0.5 * LIMITS.time_constant / 1e-3
+        b, _ = allocate_matrix(K, t, LIMITS, emf=emf, previous=prev, period=1e-3)
+        cb = b.currents
+        assert cb @ cb <= rho2 * (1 + 1e-9)
+        if emf @ cb > 0 and cb @ cb <= rho2 * (1 - 1e-6):
+            assert (1 + q) * (cb @ cb) + emf @ cb <= (rho2 + q * (prev @ prev)) * (1 + 1e-9)
+    assert same >= 10 and bound >= 1, (same, bound)
+
+
+def test_iron_coil_limits_carry_its_own_inductance():
+    from dataclasses import replace
+
+    from spherestep.control.limits import core_key, iron_inductance, wheeler_inductance
+    from spherestep.motor import prototype
+    from spherestep.motor.coil import iron_coil
+
+    design = prototype()
+    spec = iron_coil()
+    D, L = design.coil_diameter, design.coil_length
+    iron = DriveLimits.from_spec(spec, design)
+    assert iron.inductance == pytest.approx(0.6502, rel=1e-3)  # magnetics.coil_inductance, stored (no solve)
+    air = DriveLimits.from_spec(replace(spec, core="air"), design)
+    r_p, r_w, depth = spec.groove(D, L)
+    assert air.inductance == pytest.approx(wheeler_inductance(spec.turns(D, L), r_w, depth, r_p))
+    assert iron.inductance > 4 * air.inductance
+    thin = iron_coil(fill_factor=0.3)  # the same core, fewer turns: L ∝ N²
+    assert core_key(thin, design) == core_key(spec, design)
+    assert iron_inductance(thin, design) == pytest.approx(
+        iron.inductance * (thin.turns(D, L) / spec.turns(D, L)) ** 2, rel=1e-12)
+    assert DriveLimits.from_spec(spec, design, inductance=0.3).inductance == 0.3

@@ -189,7 +189,9 @@ def test_servo_tracks_the_iron_turn(iron_turn):
     design, dm, inertia, R0, ft = iron_turn
     run = simulate_servo(design, ft.trajectory, dm.model, limits=dm.limits,
                          sensor=NoisySensor(math.radians(0.02), rng=0), settle=0.3)
-    assert run.reachable.mean() >= 0.85  # the feedback has 10 % of the drive: it saturates now and then
+    # the feedback has 10 % of the drive and the supply's power (with the coils' L i di/dt) bounds the change of
+    # the currents each period: the request is out of reach now and then (0.79)
+    assert run.reachable.mean() >= 0.75
     assert math.degrees(run.tracking_error.max()) <= 0.5
     assert math.degrees(run.final_error) <= 0.05  # issue 25's targets: ≤ 0.5° on the way, ≤ 0.05° at the end
 
@@ -210,3 +212,32 @@ def test_air_core_time_optimal_beats_the_trapezoid_and_respects_the_bound():
     fast = plan_turn(*args)
     assert isinstance(fast.segments[0], TimeLaw)
     assert bang_bang_time(*args) < fast.duration < plan_trapezoid(*args).duration
+
+
+def test_headroom_and_smoothing():
+    """The feed-forward's box keeps ``headroom × |g_k| ṡ`` of each coil's voltage for ``L di/dt``; the smoothed
+    law is the moving average of the position: rest to rest, ``w`` longer, its acceleration continuous."""
+    from spherestep.control.time_optimal import smoothed
+
+    rng = np.random.default_rng(3)
+    K = rng.normal(scale=0.2, size=(2, 3, 9))
+    d = np.array([0.0, 0.6, 0.8])
+    limits = DriveLimits()
+    g = np.einsum("man,a->mn", K, d) / (limits.resistance * limits.nominal_current ** 2)
+    lo0, hi0 = current_box(K, d, limits, speed=1.0)
+    lo1, hi1 = current_box(K, d, limits, speed=1.0, headroom=0.1)
+    inner = (hi0 < limits.per_unit_bound) & (lo0 > -limits.per_unit_bound)
+    np.testing.assert_allclose((hi0 - hi1)[inner], 0.1 * np.abs(g)[inner])
+    np.testing.assert_allclose((lo1 - lo0)[inner], 0.1 * np.abs(g)[inner])
+    s = np.linspace(0, 1.5, 151)
+    law = _law(phase_plane(s, np.full(151, -3.0), np.full(151, 3.0)), (1.0, 0.5, 2.0))
+    w = 0.02
+    sm = smoothed(law, w)
+    assert sm.duration == pytest.approx(law.duration + w)
+    assert sm.positions[-1] == pytest.approx(1.5) and sm.speeds[0] == sm.speeds[-1] == 0.0
+    assert np.abs(sm.accelerations).max() <= 3.0 + 1e-6
+    assert np.abs(np.diff(sm.accelerations)).max() <= 6.0 / w * 2.5e-4 * 1.01  # |Δs̈| ≤ 2A/w per step
+    for t in (0.3, law.duration / 2, law.duration):  # the moving average of the position
+        u = np.linspace(t - w, t, 2001)
+        mean = np.trapezoid(np.where(u >= 0, law.profile(u)[0], 0.0), u) / w
+        assert sm.profile_at(t)[0] == pytest.approx(mean, abs=1e-6)

@@ -263,12 +263,21 @@ def closest_reachable(K: np.ndarray, t: np.ndarray, u: np.ndarray, rho: float, l
 
 
 def allocate_matrix(K, torque, limits: DriveLimits | None = None, *, bias=None, failed=(),
-                    lam0: np.ndarray | None = None, bounds=None) -> tuple[Allocation, np.ndarray]:
+                    lam0: np.ndarray | None = None, bounds=None, emf=None, previous=None, period: float = 0.0
+                    ) -> tuple[Allocation, np.ndarray]:
     """:func:`allocate` given the torque matrix ``K (3, N)`` (N·m per unit current) and the bias torque ``bias``
     (N·m, default 0): returns the :class:`Allocation` and the dual ``λ`` (pass it back as ``lam0`` to warm-start
     the next call of a control loop). ``bounds``: per-coil ``(lower, upper)`` per-unit float arrays ``(N,)``
     (``lower ≤ upper``, trusted: the servo law's supply-voltage box of the period) in place of the limits'
-    ``±u`` and ``failed``."""
+    ``±u`` and ``failed``. ``emf``: the coils' back-EMF ``(N,)`` in per-unit volts, ``ê_k = e_k/(R I_n)``
+    (trusted); the power ball then bounds the *supply* power ``Σ R i² + Σ e_k i_k ≤ P`` instead of the copper
+    loss: ``‖c + ê/2‖² ≤ ρ² + ‖ê‖²/4``, solved as the same problem in ``z = c + ê/2`` (box and torque shifted);
+    the least-norm ``z`` is the least-copper ``c`` (``Σ ê_k c_k = ω·K c/(R I_n²)`` is fixed by the torque).
+    ``previous (N,)`` and ``period`` (s, > 0): also the power into the coils' inductance over one period from the
+    ``previous`` currents, ``L I_n² (c² − c_prev²)/(2h)`` each: with ``a = 1 + T/(2h)`` (``T = L/R``),
+    ``a‖c‖² + ê·c ≤ ρ² + (a − 1)‖c_prev‖²``, the ball ``‖c + ê/(2a)‖² ≤ (ρ² + (a − 1)‖c_prev‖²)/a + ‖ê‖²/(4a²)``.
+    Currents over the copper's own bound ``‖c‖ ≤ ρ`` (braking: ``ê·c < 0``; the device refuses them) are
+    allocated again within it, without ``emf``."""
     limits = _check_limits(limits)
     K = np.asarray(K, dtype=float)
     target = _check_torque(torque)
@@ -279,6 +288,17 @@ def allocate_matrix(K, torque, limits: DriveLimits | None = None, *, bias=None, 
     else:
         lower, u = bounds
     rho = limits.per_unit_power_radius
+    shift = None
+    if emf is not None:  # the supply's power: the ball centred at −ê/(2a), in z = c + ê/(2a)
+        a, r2 = 1.0, rho * rho
+        if previous is not None and period > 0:
+            q = 0.5 * limits.time_constant / period
+            a, r2 = 1.0 + q, (r2 + q * float(previous @ previous)) / (1.0 + q)
+        shift = np.asarray(emf, dtype=float) / (2.0 * a)
+        t = t + K @ shift
+        lower = (-u if lower is None else lower) + shift
+        u = u + shift
+        rho = math.sqrt(r2 + float(shift @ shift))
     c, lam, ok = least_power_box_compiled(K, t, u, None if lam0 is None else np.asarray(lam0, dtype=float),
                                           lower=lower)
     method, reachable = "newton", True
@@ -294,6 +314,10 @@ def allocate_matrix(K, torque, limits: DriveLimits | None = None, *, bias=None, 
         else:
             c = c_far
         method = "conic"
+    if shift is not None:
+        c = c - shift
+        if float(c @ c) > limits.per_unit_power_radius ** 2 * (1 + 1e-12):  # the copper's own bound (the device's)
+            return allocate_matrix(K, torque, limits, bias=bias, failed=failed, lam0=lam0, bounds=bounds)
     achieved = b + K @ c
     power = limits.resistance * limits.nominal_current ** 2 * float(c @ c)
     return Allocation(c, achieved, target, reachable, power, method), lam

@@ -12,7 +12,8 @@ supply feeds four coils at nominal current, as many as the relay plans energise.
 on 24 V can hold in a coil is ``V / R`` = 1 A. The inductance is Wheeler's multilayer formula
 ``L = 31.6 µH · N² r̄² / (6 r̄ + 9 l + 10 d)`` (metres) for 1000 turns wound from half the coil's radius to its
 outer radius (``r̄`` the mean radius, ``d`` the winding depth, ``l`` the coil's length): 18.7 mH for the
-prototype's 2 in × 1.625 in coil, an electrical time constant ``L/R`` of 0.78 ms.
+prototype's 2 in × 1.625 in coil, an electrical time constant ``L/R`` of 0.78 ms. An iron-cored coil's own
+inductance (:func:`iron_inductance`, stored per core) is the default of :meth:`DriveLimits.from_spec` for it.
 :meth:`DriveLimits.from_coil` takes the numbers from a coil specification instead (``spherestep.motor.coil``).
 """
 
@@ -30,6 +31,37 @@ SUPPLY_POWER = 100.0  # W, Sec. IV-B
 NOMINAL_CURRENT = 1.0  # A: 1000 turns at 1 A give the torque map's 1000 ampere-turns
 COIL_RESISTANCE = SUPPLY_VOLTAGE / NOMINAL_CURRENT  # Ω: a relay at 24 V drives the nominal current
 TURNS = 1000
+
+
+# An iron-cored coil's own inductance per turn squared, ``L / N²`` (H), solved by
+# :func:`spherestep.magnetics.coil_inductance` (linear iron, method of moments at the default mesh level, rotor
+# absent; ~17 s), keyed by :func:`core_key`: the prototype's coil (2824 turns: 0.6502 H, 4.1× Wheeler's 0.158 H).
+# ``L ∝ N²`` for a given core (the iron is linear), so any winding of a stored core finds its value here.
+IRON_PERMEANCE = {
+    (0.0508, 0.041275, 0.0127, 0.022225, 0.03175, 1000.0): 8.153331960424327e-08,
+}
+_SOLVED: dict = {}
+
+
+def core_key(spec, design) -> tuple:
+    """What an iron coil's ``L / N²`` depends on, rounded to 1 nm: the design's coil diameter and length, the
+    spec's groove ``(r_p, r_w, depth)`` (m) and the core's relative permeability."""
+    d, length = design.coil_diameter, design.coil_length
+    return tuple(round(float(v), 9) for v in (d, length, *spec.groove(d, length))) + \
+        (round(float(spec.material.relative_permeability), 6),)
+
+
+def iron_inductance(spec, design) -> float:
+    """The iron-cored coil's own inductance (H) for ``design`` wound as ``spec``: ``N² · IRON_PERMEANCE[core]``
+    for a stored core, else :func:`spherestep.magnetics.coil_inductance` solved once per core in the process
+    (~17 s)."""
+    key = core_key(spec, design)
+    turns = spec.turns(design.coil_diameter, design.coil_length)
+    if key not in IRON_PERMEANCE and key not in _SOLVED:
+        from ..magnetics import coil_inductance
+
+        _SOLVED[key] = coil_inductance(design, spec) / turns ** 2
+    return turns ** 2 * IRON_PERMEANCE.get(key, _SOLVED.get(key, 0.0))
 
 
 def wheeler_inductance(turns: float, outer_radius: float, length: float, inner_radius: float) -> float:
@@ -79,10 +111,13 @@ class DriveLimits:
         """Limits for the coils of ``design`` wound as ``spec`` (a coil-as-built specification such as
         ``spherestep.motor.coil.CoilSpec``: its ``resistance``, ``nominal_current`` and ``turns`` for the design's
         coil diameter and length, its ``supply_voltage`` and ``supply_power``). ``inductance`` (H) defaults to
-        Wheeler's air-core value for the spec's turns and groove (:func:`wheeler_inductance`); give the iron
-        core's when it has one. The torque model must then be built at ``N I_n`` ampere-turns."""
+        the coil's own: for an iron core (``spec.core == "iron"``) :func:`iron_inductance` (stored for the
+        prototype's core), else Wheeler's air-core value for the spec's turns and groove
+        (:func:`wheeler_inductance`). The torque model must then be built at ``N I_n`` ampere-turns."""
         d, length = design.coil_diameter, design.coil_length
-        if inductance is None:
+        if inductance is None and spec.core == "iron":
+            inductance = iron_inductance(spec, design)
+        elif inductance is None:
             r_p, r_w, depth = spec.groove(d, length)
             inductance = wheeler_inductance(spec.turns(d, length), r_w, depth, r_p)
         return cls.from_coil(spec.resistance(d, length), inductance, spec.nominal_current(d, length),

@@ -30,6 +30,11 @@ back-EMF exceeds the supply brakes whatever the bridge does, and its torque is c
 moves its current from the last command (``e^{−h/T}``, ``T = L/R``; off by default: on the iron prototype with
 the honest 0.65 H it tracked worse, 1.96° against 1.31°).
 
+The power ball (``supply=True``, the default) bounds the supply's power, ``Σ R i² + Σ e_k i_k`` and, with
+``inductive=True`` (default), the inductance's ``L I_n² (c² − c_prev²)/(2h)`` over the period from the last
+command: one ball centred at ``−ê/(2a)``, ``a = 1 + T/(2h)`` (:func:`~spherestep.control.allocation.
+allocate_matrix`'s ``emf``/``previous``/``period``; the copper's own ``‖c‖ ≤ ρ`` kept too).
+
 Scales (``adapt``, default on for a model with a bias and a disturbance estimate): the plant's bias taken as
 ``(1 + θ_b) b̂`` (and, with ``ADAPT_WINDING``, its coils' torque as ``(1 + θ_K) K̂ c``), the step-5 model scaled
 so; ``θ`` learnt in motion (``|ω_d| > ADAPT_SPEED``) by exponentially weighted least squares on what ``d̂`` and
@@ -183,14 +188,18 @@ class ServoLaw:
     where the currents computed in a cycle are sent at the next cycle's start): the observer predicts with the
     torque promised ``delay`` periods before. ``voltage`` (default on): the allocation within the period's supply
     box at ``ω̂``; ``slew`` (default off): also within the coil's slew; ``adapt`` (default: with a bias and a
-    disturbance estimate) the scales :attr:`scales` (see the module).
+    disturbance estimate) the scales :attr:`scales` (see the module); ``supply`` (default on): the power ball
+    bounds the supply's power ``Σ R i² + Σ e_k i_k ≤ P`` at ``ω̂`` rather than the copper loss alone
+    (:func:`~spherestep.control.allocation.allocate_matrix`'s ``emf``); ``inductive`` (default on): with it the
+    power the coils' inductance takes over the period from the last command (see the module).
     """
 
     def __init__(self, model: TorqueModel, trajectory: Trajectory, controller: GeometricPD, *,
                  limits: DriveLimits | None = None, sensor_rate: float | None = None,
                  observer_bandwidth: float | None = None, disturbance_bandwidth: float | None = None,
                  motion_bandwidth: float | None = None, reuse: float = K_REUSE, delay: int = 0,
-                 voltage: bool = True, slew: bool = False, adapt: bool | None = None):
+                 voltage: bool = True, slew: bool = False, adapt: bool | None = None, supply: bool = True,
+                 inductive: bool = True):
         if not isinstance(trajectory, Trajectory):
             raise bad_value("trajectory", "a spherestep.control.Trajectory", type(trajectory).__name__)
         if not isinstance(controller, GeometricPD):
@@ -215,6 +224,8 @@ class ServoLaw:
         self.delay = checks.count(delay, "delay", 0, 8)
         self._promised = deque([np.zeros(3)] * (self.delay + 1), maxlen=self.delay + 1)
         self.voltage = bool(voltage)
+        self.supply = bool(supply)
+        self._period = 1.0 / controller.rate if inductive else 0.0
         lim = self.limits
         N = model.coil_count
         self._box = (np.zeros(N), np.zeros(N))
@@ -289,7 +300,9 @@ class ServoLaw:
             kb, kk = 1.0 + self._theta[0], 1.0 + self._theta[1]
             b = b * kb
             K = K * kk
-        bounds = None
+        bounds = emf = None
+        if self.supply:  # the supply's power Σ R i² + Σ e_k i_k ≤ P at the estimated motion
+            emf = (self.observer.w * self._emf) @ K
         if self.voltage:
             lower, upper = self._box
             self._voltage_box(K, self.observer.w * self._emf, self._last, self._u, self._uv, self._slew, lower, upper)
@@ -298,7 +311,8 @@ class ServoLaw:
                 upper[self._failed_idx] = 0.0
             bounds = self._box
         alloc, self._lam = allocate_matrix(K, tau, self.limits, bias=b if self.cache.has_bias else None,
-                                           failed=self._failed, lam0=self._lam, bounds=bounds)
+                                           failed=self._failed, lam0=self._lam, bounds=bounds, emf=emf,
+                                           previous=self._last, period=self._period)
         self._last = alloc.currents
         if self.adapt:  # the nominal model's parts of the promise, for the regression (``delay`` periods on)
             self._parts.append((b_nominal.tolist(), ((alloc.torque - b) / kk).tolist()))

@@ -8,9 +8,9 @@ the iron another magnetises, all tabulated and compiled, :mod:`._coupling`; line
 6.4 % pairwise: docs/magnetics.md); for ``core="air"`` the
 magnets' :class:`~spherestep.magnetics.TorqueMap` at the coil's own nominal ampere-turns. Currents are per unit of
 the coil's nominal current ``I_n`` in both, and the limits are :meth:`DriveLimits.from_spec` of the coil as built
-(its winding's resistance and nominal current, the supply; Wheeler's air-core inductance — the iron core's own
-inductance, :func:`~spherestep.magnetics.coil_inductance`, is about 4× larger for the prototype and costs 17 s to
-solve, so it is not the default).
+(its winding's resistance and nominal current, the supply, and the coil's own inductance: for an iron core
+:func:`~spherestep.magnetics.coil_inductance`'s value, 4× Wheeler's for the prototype, stored per core by
+:func:`spherestep.control.limits.iron_inductance`).
 
 ``core`` overrides the design's choice where a comparison is wanted (``--core air|iron``): the same winding
 either way, so the two differ only by the iron.
