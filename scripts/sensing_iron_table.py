@@ -69,7 +69,7 @@ def rotor_magnets(design, R):
 
 def independent(design, R, p, cores) -> np.ndarray:
     """Field ``(S, 3)`` at ``p`` of ``cores`` each solved on its own with the whole rotor at ``R``."""
-    solver = core_solver(CoreGeometry.of(design, design.coil))
+    solver = core_solver(CoreGeometry.of(design, design.coil), iron.SENSING_LEVEL)
     Q = iron.core_frames(design)
     face = design.radius + design.air_gap
     mags = rotor_magnets(design, R)
@@ -86,7 +86,7 @@ def coupled(design, R, p, cores, sweeps: int | None = None) -> np.ndarray:
     then the cores magnetising each other through :func:`spherestep.sensing.iron.coupling_matrix` (the model's
     physics, evaluated on the polarizations directly, no table), ``J_l = J0_l + M Σ_k C_lk J_k`` to convergence
     (``sweeps``: that many, 1 = the first order)."""
-    solver = core_solver(CoreGeometry.of(design, design.coil))
+    solver = core_solver(CoreGeometry.of(design, design.coil), iron.SENSING_LEVEL)
     n = len(solver.cells)
     Q = iron.core_frames(design)
     face = design.radius + design.air_gap
@@ -117,7 +117,7 @@ def joint(design, R, p, cores) -> np.ndarray:
     geom = CoreGeometry.of(design, design.coil)
     Q = iron.core_frames(design)
     face = design.radius + design.air_gap
-    solver = CoreSolver(geom, placements=[(Rotation.from_matrix(Q[k]), face * design.stator.centers[k])
+    solver = CoreSolver(geom, iron.SENSING_LEVEL, placements=[(Rotation.from_matrix(Q[k]), face * design.stator.centers[k])
                                           for k in cores])
     out = []
     for Rk in R:

@@ -45,10 +45,11 @@ from scipy.ndimage import spline_filter1d
 
 from .. import checks
 from ..errors import ComputationError, bad_value
-from ..magnetics import IRON_LEVEL, CoreGeometry, core_solver, magnet_face_radius
+from ..magnetics import CoreGeometry, core_solver, magnet_face_radius
 from .field import FieldTable
 
 DATA_FILE = "sensing_iron_cores.npz"  # the prototype's default array (scripts/sensing_iron_table.py)
+SENSING_LEVEL = 2  # the moment mesh (562 cells per core; level 0, the torque tables', is 5.5 % off: docs/sensing.md)
 GRID_STEP_DEG = 1.0  # the H_s grid (interpolation error measured in docs/sensing.md)
 MAGNET_NODES = 1801  # nodes in the angle α ∈ [0, π] of the magnet's field table at each cell radius (0.1°)
 CHUNK = 4096  # grid directions per block in the build
@@ -203,7 +204,7 @@ def grid_directions(step_deg: float, frame: np.ndarray) -> tuple[np.ndarray, np.
     return th, local @ frame.T
 
 
-def core_response(design, positions, step_deg: float = GRID_STEP_DEG, level: int = IRON_LEVEL, cores=None,
+def core_response(design, positions, step_deg: float = GRID_STEP_DEG, level: int = SENSING_LEVEL, cores=None,
                   coupling: bool = True, progress=None) -> np.ndarray:
     """``H (nϑ, nφ, S, 3)`` (T): the field at ``positions (S, 3)`` of the cores ``cores`` (indices, default all)
     magnetised by one ``+1`` magnet along each grid direction (:func:`grid_directions` of :func:`grid_frame`):
@@ -393,7 +394,7 @@ class IronCoilField:
     per_coil: np.ndarray
 
     @classmethod
-    def build(cls, design, positions, level: int = IRON_LEVEL) -> IronCoilField:
+    def build(cls, design, positions, level: int = SENSING_LEVEL) -> IronCoilField:
         p = np.asarray(positions, dtype=float).reshape(-1, 3)
         solver = core_solver(CoreGeometry.of(design, design.coil), level)
         loops = solver.loops[0]
@@ -412,7 +413,7 @@ class IronCoilField:
         return np.einsum("...k,ksi->...si", c, self.per_coil)
 
 
-def design_key(design, level: int = IRON_LEVEL) -> bytes:
+def design_key(design, level: int = SENSING_LEVEL) -> bytes:
     """What the cores' response depends on (the rotor, the stator, the core, the mesh), as bytes."""
     parts = [np.array([design.radius, design.air_gap, design.rotor_shell, design.magnet_diameter,
                        design.magnet_length, design.remanence, level]).round(12),
@@ -438,7 +439,7 @@ CACHE_SIZE = 4
 
 
 def iron_fields(design, positions, step_deg: float = GRID_STEP_DEG,
-                level: int = IRON_LEVEL) -> tuple[CoreField, IronCoilField]:
+                level: int = SENSING_LEVEL) -> tuple[CoreField, IronCoilField]:
     """``(CoreField, IronCoilField)`` of ``design``'s cores at ``positions (S, 3)``: read from
     :data:`DATA_FILE` for the prototype's default array, else built on first use (about a minute) and kept for
     the process."""
@@ -449,7 +450,7 @@ def iron_fields(design, positions, step_deg: float = GRID_STEP_DEG,
     level = checks.count(level, "level", minimum=0, maximum=6, expected="a mesh level from 0 to 6")
     key = (design_key(design, level), p.tobytes(), float(step_deg), level)
     if key not in _CACHE:
-        stored = _stored(key[0], p, step_deg) if level == IRON_LEVEL else None
+        stored = _stored(key[0], p, step_deg) if level == SENSING_LEVEL else None
         if stored is None:
             stored = (core_response(design, p, step_deg, level), IronCoilField.build(design, p, level).per_coil)
         if len(_CACHE) >= CACHE_SIZE:
