@@ -6,13 +6,17 @@ Prints per core: the trapezoid of today (``plan_trapezoid``, refused on iron), t
 (``bang_bang_time``: the time-optimal law at margin 1 on the turn's own path) and the ratio; with ``--servo`` the
 servo's tracking of both (``simulate_servo`` with 0.02° sensor noise, the design's model as plant and belief).
 
-    python benchmarks/bench_time_optimal.py [--repeat 3] [--servo]
+``--headroom`` and ``--smooth`` override the planner's budget for the coils' ``L di/dt`` (``fastest_turn``'s
+``HEADROOM``, ``SMOOTH``); the iron core's limits carry its own inductance (0.65 H).
+
+    python benchmarks/bench_time_optimal.py [--repeat 3] [--servo] [--headroom 0.08] [--smooth 2]
 """
 
 from __future__ import annotations
 
 import argparse
 import math
+import os
 import statistics
 import time
 
@@ -23,6 +27,8 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeat", type=int, default=3)
     parser.add_argument("--servo", action="store_true")
+    parser.add_argument("--headroom", type=float, default=None)
+    parser.add_argument("--smooth", type=float, default=None)
     args = parser.parse_args()
 
     from spherestep.commutation import turn
@@ -38,6 +44,7 @@ def main() -> None:
     axis = np.array([1.0, 0.5, 2.0])
     R0 = turn(design, axis, 360.0).targets[0]
     inertia = Rotor.from_design(design).inertia
+    print(f"# {time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}, load {os.getloadavg()[0]:.1f}")
     print(f"{'core':5} {'planner':13} {'time (s)':>9} {'plan (s)':>9} {'bound (s)':>9} {'ratio':>6}  path")
     for core in ("iron", "air"):
         dm = design_model(design, core)
@@ -49,7 +56,8 @@ def main() -> None:
         times, ft = [], None
         for _ in range(args.repeat):
             t = time.perf_counter()
-            ft = fastest_turn(dm.model, R0, axis, 2 * math.pi, inertia, dm.limits)
+            ft = fastest_turn(dm.model, R0, axis, 2 * math.pi, inertia, dm.limits, headroom=args.headroom,
+                              smooth=args.smooth)
             times.append(time.perf_counter() - t)
         t = time.perf_counter()
         bound = bang_bang_time(dm.model, R0, axis, 2 * math.pi, inertia, dm.limits)
@@ -67,7 +75,8 @@ def main() -> None:
                                      sensor=NoisySensor(math.radians(0.02), rng=0))
                 err = np.degrees(run.tracking_error)
                 print(f"      servo on the {name}: max tracking {err.max():.3f}°, final {err[-1]:.4f}°, "
-                      f"peak power {run.power.max():.0f} W, mean {run.power.mean():.1f} W, "
+                      f"peak power {run.power.max():.1f} W (copper {run.copper_power.max():.1f} W), "
+                      f"mean {run.power.mean():.1f} W, "
                       f"reachable {run.reachable.mean():.3f}")
 
 
