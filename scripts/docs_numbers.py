@@ -261,8 +261,10 @@ def iron_drives(s: dict) -> str:
         + ". *Relay steps planned on the iron model*: the potential planner, choosing each relay activation (≤ 4 coils "
         "at nominal current, polarity switched) by the equilibrium it leads to on the iron model, finds activations "
         f"that move the rotor in only **{pp['moves']} of its {pp['steps']} steps; the plan ends "
-        f"{pp['final_error_deg']:.1f}° from the target** — the detent of all the cores holds the rotor where four coils "
-        "cannot pull it out. The servo (all coils, continuous currents, the bias `b(R) = τ(R, 0)` allocated against; "
+        f"{pp['final_error_deg']:.1f}° from the target**"
+        + (" — the detent of all the cores holds the rotor where four coils cannot pull it out"
+           if pp["final_error_deg"] > 10 else "")
+        + ". The servo (all coils, continuous currents, the bias `b(R) = τ(R, 0)` allocated against; "
         f"the {sv['trajectory']} turn, {sv['sensor_noise_deg']:g}° sensor noise) turns it in "
         f"**{servo['time_s']:.2f} s** (bang-bang bound {d['bang_bang_bound_s']:.2f} s), final error "
         f"{servo['final_error_deg']:.3f}°, max tracking error {servo['max_tracking_error_deg']:.2f}°, peak "

@@ -184,20 +184,27 @@ def drive_lines(d: dict) -> list[str]:
 def robustness(design, axis, angle: float, holds: int = ROBUSTNESS_HOLDS) -> dict:
     """The servo on a plant that differs from the design's model by the worst case of docs/control.md's table
     (:data:`ROBUSTNESS_CASE`, :mod:`spherestep.magnetics.mismatch`): ``holds`` random holds and the turn of
-    ``angle`` rad about ``axis``, the controller on the design's own model (:mod:`spherestep.dynamics.robustness`)."""
+    ``angle`` rad about ``axis``, the controller on the design's own model (:mod:`spherestep.dynamics.robustness`),
+    the turn planned within the robust margin (:data:`spherestep.control.trajectory.MARGIN`, as the table: the
+    fastest plan's 0.9 leaves no torque for a model error of this size)."""
+    from .control.trajectory import MARGIN
     from .dynamics.robustness import robustness_row
     from .magnetics.mismatch import MISMATCH_CASES
 
     case = next(c for c in MISMATCH_CASES if c.name == ROBUSTNESS_CASE)
-    return robustness_row(design, case, holds=holds, axis=axis, angle=angle).to_dict() | {"plant": case.to_dict()}
+    return robustness_row(design, case, holds=holds, axis=axis, angle=angle,
+                          margin=MARGIN).to_dict() | {"plant": case.to_dict()}
 
 
 def robustness_line(r: dict) -> str:
     """The servo against the model's known error (:func:`robustness`), in one sentence."""
+    from .control.trajectory import MARGIN
+
     return (f"against a motor that differs from its model by {r['case']} (the worst case of docs/control.md's "
             f"table), the servo on the "
             f"design's model holds {r['holds_within']} of {r['holds']} random orientations within 0.05° (worst "
-            f"{r['worst_hold_deg']:.3f}°) and turns in {r['turn_time_s']:.2f} s, final error "
+            f"{r['worst_hold_deg']:.3f}°) and, planned within {MARGIN:.0%} of the torque, turns in {r['turn_time_s']:.2f} s, "
+            f"final error "
             f"{r['final_error_deg']:.3f}°, max tracking error {r['max_tracking_error_deg']:.2f}°, mean "
             f"{r['mean_power_W']:.0f} W")
 
