@@ -84,8 +84,8 @@ class ServoReport:
     ``missed`` deadlines, ``outcome`` (``"done"`` or the fault code: a device trip code, ``SENSOR``, ``SLOW``,
     ``LIMIT``, ``LINK``, ``INTERRUPT``), ``message``, ``off_acknowledged`` (the device confirmed all off),
     ``ended_at`` s (loop time of the end), ``realtime`` whether the loop ran with real-time scheduling,
-    ``cpu_mean``/``cpu_max`` s of the host's CPU per cycle (this thread's
-    time from the cycle's start to its end: the link's frames, estimate, law, log), ``time_scale`` the pace the
+    ``cpu_mean``/``cpu_p99``/``cpu_max`` s of the host's CPU per cycle (mean, 99th percentile, worst; this
+    thread's time from the cycle's start to its end: the link's frames, estimate, law, log), ``time_scale`` the pace the
     trajectory was followed at in the end (1: as planned; see the module), ``slowed`` how often it was halved,
     ``end_error`` rad from the last estimate to the trajectory's end (``None`` before a first cycle), and per
     cycle ``times`` (s), ``reference_times`` (s, the trajectory time the law followed), ``orientations (T, 3,
@@ -102,6 +102,7 @@ class ServoReport:
     nominal_rate: float = 0.0
     realtime: bool = False
     cpu_mean: float = 0.0
+    cpu_p99: float = 0.0
     cpu_max: float = 0.0
     time_scale: float = 1.0
     slowed: int = 0
@@ -121,7 +122,7 @@ class ServoReport:
         unit, f = ("deg", math.degrees) if degrees else ("rad", float)
         return {"cycles": self.cycles, "duration_s": self.duration, "rate_Hz": self.rate,
                 "nominal_rate_Hz": self.nominal_rate, "missed": self.missed, "realtime": self.realtime,
-                "cpu_mean_ms": 1e3 * self.cpu_mean,
+                "cpu_mean_ms": 1e3 * self.cpu_mean, "cpu_p99_ms": 1e3 * self.cpu_p99,
                 "cpu_max_ms": 1e3 * self.cpu_max, "time_scale": self.time_scale, "slowed": self.slowed,
                 f"end_error_{unit}": None if self.end_error is None else f(self.end_error),
                 "outcome": self.outcome, "message": self.message, "off_acknowledged": self.off_acknowledged,
@@ -364,7 +365,8 @@ def run_servo(link: DriveLink, estimate, law, *, duration: float, rate: float = 
         report.duration = host[-1] - host[0] if host else 0.0
         report.time_scale = paced.scale
         if cpu:
-            report.cpu_mean, report.cpu_max = float(np.mean(cpu)), float(np.max(cpu))
+            report.cpu_mean, report.cpu_p99, report.cpu_max = (float(np.mean(cpu)), float(np.percentile(cpu, 99)),
+                                                               float(np.max(cpu)))
         if report.orientations:
             report.end_error = float(so3.distance(report.orientations[-1], planned.end))
         try:
