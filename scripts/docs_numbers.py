@@ -8,6 +8,7 @@ Blocks on their own lines hold tables; inline blocks hold a sentence's numbers. 
     make demo && python scripts/docs_numbers.py demo     # data/demo_summary.json from spherestep-out/summary.json
     python scripts/docs_numbers.py forces                # data/forces_states.json: `spherestep forces`, 20 states
     python scripts/docs_numbers.py robust [BENCH.json]   # data/servo_robust.json: benchmarks/bench_servo_robust.py
+    python scripts/docs_numbers.py iron                  # data/iron_compare.json: scripts/iron_compare.py
     python scripts/docs_numbers.py all                   # demo + forces (the end-of-session run)
     python scripts/docs_numbers.py                       # rewrite every block from the stored files
     python scripts/docs_numbers.py --check               # list the blocks that differ, exit 1 if any
@@ -37,6 +38,7 @@ STORES = {
     "demo": DATA / "demo_summary.json",
     "forces": DATA / "forces_states.json",
     "robust": DATA / "servo_robust.json",
+    "iron": DATA / "iron_compare.json",
 }
 # the demo summary's keys not stored: file lists and per-state lists (their counts are the numbers)
 DROP = ("escape_violation_states", "escape_violation_states_note", "files")
@@ -355,6 +357,29 @@ def robust_table(stored_run: dict) -> str:
     return "\n".join(lines)
 
 
+# ------------------------------------------------------------------------------------------- the iron models
+
+IRON_ROWS = (("unpowered: minima of 12 starts", "{unpowered_minima:d}"),
+             ("unpowered: median holding torque (N·m)", "{unpowered_holding_median_Nm:.2f}"),
+             ("stepper states: minima of 12", "{state_minima:d}"),
+             ("stepper states: rest from the geometric state, median / max (°)",
+              "{state_offset_median_deg:.2f} / {state_offset_max_deg:.2f}"),
+             ("stepper states: median holding torque (N·m)", "{state_holding_median_Nm:.2f}"),
+             ("capability, 400 orientations: median / 5th percentile (N·m)",
+              "{capability_median_Nm:.2f} / {capability_p5_Nm:.2f}"),
+             ("servo turn 360° about (1, 0.5, 2): time (s)", "{servo_time_s:.2f}"),
+             ("servo turn: final / max tracking error (°)", "{servo_final_deg:.3f} / {servo_tracking_deg:.2f}"),
+             ("servo turn: mean power (W)", "{servo_mean_W:.1f}"))
+
+
+def iron_compare_table(rows: dict) -> str:
+    """docs/magnetics.md: ``scripts/iron_compare.py``'s pairwise and coupled models side by side."""
+    a, b = rows["pairwise"], rows["coupled"]
+    lines = [f"| the prototype, iron-cored | {a['model']} | {b['model']} |", "|---|---|---|"]
+    lines += [f"| {label} | {fmt.format(**a)} | {fmt.format(**b)} |" for label, fmt in IRON_ROWS]
+    return "\n".join(lines)
+
+
 # ------------------------------------------------------------------------------------------------------ blocks
 
 @dataclass(frozen=True)
@@ -388,6 +413,7 @@ BLOCKS = (
     Block("forces-summary", "docs/magnetics.md", "forces", forces_summary, inline=True),
     Block("forces-soft", "docs/magnetics.md", "forces", forces_soft, inline=True),
     Block("forces-steps", "docs/magnetics.md", "forces", forces_steps, inline=True),
+    Block("iron-compare", "docs/magnetics.md", "iron", iron_compare_table),
 )
 
 
@@ -473,8 +499,11 @@ def main(argv: list[str]) -> int:
         _store("forces", measure_forces())
     if cmd == "robust":
         store_robust(arg)
-    if cmd not in ("demo", "forces", "robust", "all", "write"):
-        print(f"unknown command {cmd!r}: demo [SUMMARY], forces, robust [BENCH.json], all [SUMMARY], --check",
+    if cmd == "iron":
+        subprocess.run([sys.executable, str(ROOT / "scripts" / "iron_compare.py"), "--json", str(STORES["iron"])],
+                       check=True, cwd=ROOT)
+    if cmd not in ("demo", "forces", "robust", "iron", "all", "write"):
+        print(f"unknown command {cmd!r}: demo [SUMMARY], forces, robust [BENCH.json], iron, all [SUMMARY], --check",
               file=sys.stderr)
         return 2
     print(f"{write()} blocks rewritten")
