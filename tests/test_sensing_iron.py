@@ -39,6 +39,24 @@ def test_the_prototype_reads_its_stored_table(design, fields):
     assert coils.per_coil.shape == (len(design.stator), 24, 3)
 
 
+def test_a_remarked_rotor_shares_the_stators_table_with_its_own_polarities(design, fields):
+    """The table is the stator's response to one magnet: a rotor with one pole reversed (sensing.marked_design)
+    reads the same stored table, weighted by its own polarities — its cores' field is the prototype's minus twice
+    the marked pole's share — and asking for it leaves the prototype's own fields as they were."""
+    from spherestep.sensing import marked_design
+
+    marked = marked_design(design)
+    pole = int(np.flatnonzero(marked.polarity != design.polarity)[0])
+    mine = iron.iron_fields(marked, default_array(design).positions)[0]
+    again = iron.iron_fields(design, default_array(design).positions)[0]
+    assert mine.coefficients is again.coefficients  # one table, read once
+    R = so3.random(2, 4)
+    alone = type(again)(again.coefficients, again.frame, again.step, again.poles[pole:pole + 1],
+                        again.polarity[pole:pole + 1])
+    np.testing.assert_allclose(mine.field(R), fields[0].field(R) - 2.0 * alone.field(R), atol=1e-9)
+    np.testing.assert_array_equal(again.polarity, design.polarity)
+
+
 def test_cores_field_matches_the_direct_solve(design, fields):
     """The stored table against the whole rotor magnetising every core directly (magpylib at every cell, each core
     solved, the cores magnetising each other through the same dipole coupling, iterated on the polarizations;

@@ -33,7 +33,7 @@ winding (the iron room's current loops) plus that core, ``B = Σ_k c_k G_k``, a 
 from __future__ import annotations
 
 import math
-from dataclasses import astuple, dataclass
+from dataclasses import astuple, dataclass, replace
 from importlib import resources
 
 import magpylib as magpy
@@ -414,10 +414,12 @@ class IronCoilField:
 
 
 def design_key(design, level: int = SENSING_LEVEL) -> bytes:
-    """What the cores' response depends on (the rotor, the stator, the core, the mesh), as bytes."""
+    """What the cores' response to one magnet depends on (the magnet and where it sits, the stator, the core, the
+    mesh), as bytes; not the rotor's layout or polarities, which only weight the table's values
+    (:meth:`CoreField.from_nodes`), so a rotor re-marked or re-laid over the same stator shares the table."""
     parts = [np.array([design.radius, design.air_gap, design.rotor_shell, design.magnet_diameter,
                        design.magnet_length, design.remanence, level]).round(12),
-             design.stator.centers.round(12), design.rotor.centers.round(12), np.asarray(design.polarity, dtype=float),
+             design.stator.centers.round(12), np.asarray(design.stator_axis, dtype=float).round(12),
              np.array(astuple(CoreGeometry.of(design, design.coil)), dtype=float).round(12)]
     return b"".join(np.ascontiguousarray(a, dtype=float).tobytes() for a in parts)
 
@@ -456,7 +458,8 @@ def iron_fields(design, positions, step_deg: float = GRID_STEP_DEG,
         if len(_CACHE) >= CACHE_SIZE:
             _CACHE.pop(next(iter(_CACHE)))
         _CACHE[key] = (CoreField.from_nodes(design, stored[0], step_deg), IronCoilField(stored[1]))
-    return _CACHE[key]
+    cores, coils = _CACHE[key]  # the table is the stator's; the rotor's poles and polarities are this design's
+    return replace(cores, poles=design.rotor.centers.copy(), polarity=design.polarity.astype(float)), coils
 
 
 def rotor_and_cores(design, positions, step_deg: float = GRID_STEP_DEG) -> IronFieldTable:
