@@ -5,7 +5,8 @@ own model), measured the same way on each:
 * unpowered: equilibria with every coil off from 12 Haar-random starts (seed 0): minima, median holding torque
   (:func:`spherestep.statics.holding_torque`);
 * stepper states: 12 sampled geometric states with their coils on at nominal current, the equilibrium each model
-  rests at: minima, median and largest distance from the geometric state, median holding torque;
+  rests at: minima, median and largest distance (of the minima) from the geometric state, median holding torque
+  (these two from :func:`spherestep.magnetics.iron_summary` with ``model=`` the model compared);
 * capability: the torque available in every direction at 400 random orientations (median, 5th percentile;
   :func:`spherestep.control.torque_capability` with the design's limits);
 * the demo's servo turn (360° about (1, 0.5, 2), the fastest plan on that model, ideal sensor).
@@ -25,40 +26,27 @@ import time
 
 import numpy as np
 
-from spherestep import so3
 from spherestep.control import torque_capability
 from spherestep.drive import drive_turn
-from spherestep.magnetics import design_model, state_currents
+from spherestep.magnetics import design_model, iron_summary
 from spherestep.motor import prototype
-from spherestep.statics import equilibrium, holding_torque
 
 from docs_numbers import iron_compare_table  # scripts/, beside this file
 
 
 def measure(design, coupling: bool, seed: int = 0) -> dict:
     own = design_model(design, coupling=coupling)
-    model, N = own.model, own.model.coil_count
-    rng = np.random.default_rng(seed)
-    R0 = so3.random(12, rng)
-    off = np.zeros((12, N))
-    eq0 = equilibrium(model, R0, off, gtol=1e-9, max_step=math.radians(2.0))
-    mins = np.flatnonzero(eq0.is_minimum)
-    hold0 = holding_torque(model, eq0.rotation[mins], off[mins]).torque if len(mins) else np.zeros(1)
-    st = design.states()
-    idx = np.sort(rng.choice(len(st), 12, replace=False))
-    c = np.array([state_currents(design, i) for i in idx])
-    eq = equilibrium(model, st.rotations[idx], c, gtol=1e-9, max_step=math.radians(2.0))
-    offs = so3.distance(eq.rotation, st.rotations[idx])
-    ok = np.flatnonzero(eq.is_minimum)
-    hold = holding_torque(model, eq.rotation[ok], c[ok]).torque if len(ok) else np.zeros(1)
+    model = own.model
+    iron = iron_summary(design, states=12, starts=12, seed=seed, model=model).to_dict(degrees=True)
     cap = torque_capability(design, model, own.limits, samples=400, seed=seed)
     run = drive_turn(design, (1.0, 0.5, 2.0), 2.0 * math.pi, mode="servo", model=model, limits=own.limits)
-    return {"model": own.label, "unpowered_minima": int(len(mins)), "unpowered_starts": 12,
-            "unpowered_holding_median_Nm": float(np.median(hold0)),
-            "state_minima": int(len(ok)), "states": 12,
-            "state_offset_median_deg": math.degrees(float(np.median(offs))),
-            "state_offset_max_deg": math.degrees(float(np.max(offs))),
-            "state_holding_median_Nm": float(np.median(hold)),
+    return {"model": own.label, "unpowered_minima": iron["unpowered_minima"],
+            "unpowered_starts": iron["unpowered_starts"],
+            "unpowered_holding_median_Nm": iron["unpowered_holding_median_Nm"],
+            "state_minima": iron["iron_states_minima"], "states": iron["states_sampled"],
+            "state_offset_median_deg": iron["iron_offset_median_deg"],
+            "state_offset_max_deg": iron["iron_offset_max_deg"],
+            "state_holding_median_Nm": iron["iron_holding_median_Nm"],
             "capability_median_Nm": float(np.median(cap.radius)),
             "capability_p5_Nm": float(np.percentile(cap.radius, 5)),
             "servo_time_s": float(run.time), "servo_final_deg": math.degrees(run.final_error),

@@ -166,6 +166,8 @@ def test_the_design_states_its_coil(model, design):
                                TorqueMap.build(design).torque(R, c) * ni / design.coil_ampere_turns, rtol=1e-12)
     with pytest.raises(InputError, match="iron-cored"):
         iron_summary(design, air_coil())
+    with pytest.raises(InputError, match="model"):  # the whole motor's model: a TorqueModel of its coils
+        iron_summary(design, model=design)
 
 
 def test_iron_model_is_a_torque_model_with_a_detent(model, design):

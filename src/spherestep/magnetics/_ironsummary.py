@@ -27,7 +27,7 @@ import numpy as np
 from .. import so3
 from ..errors import bad_value
 from ..motor.coil import CoilSpec, air_coil, iron_coil
-from ..statics import equilibrium, holding_torque
+from ..statics import TorqueModel, equilibrium, holding_torque
 from . import _iron
 from ._ironmap import iron_model
 from ._statics import state_currents
@@ -147,17 +147,25 @@ def _iron_cored(design, coil: CoilSpec | None = None) -> CoilSpec:
 
 
 def iron_summary(design, coil: CoilSpec | None = None, *, states: int = 12, starts: int = 12, seed: int = 0,
-                 level: int = _iron.IRON_LEVEL) -> IronSummary:
+                 level: int = _iron.IRON_LEVEL, model: TorqueModel | None = None) -> IronSummary:
     """Measure what iron cores change for ``design`` (see the module docstring) with the coils built as ``coil``
-    (an iron core); default ``design.coil``, on an iron core if it has none (its winding, supply and material)."""
+    (an iron core); default ``design.coil``, on an iron core if it has none (its winding, supply and material).
+    ``model``: the whole motor's iron model for the unpowered and stepper-state equilibria and the rest poses of the
+    saturation check (default: the pairwise ``iron_model(design, coil, level)``; e.g. the coupled one,
+    ``design_model(design).model``); the one-pole pair torques (detent, winding, polarity) are the pair tables'."""
     coil = _iron_cored(design, coil)
     rng = np.random.default_rng(seed)
-    model = iron_model(design, coil, level)
+    pair = iron_model(design, coil, level)
+    if model is None:
+        model = pair
+    elif not isinstance(model, TorqueModel) or model.coil_count != len(design.stator):
+        raise bad_value("model", f"a spherestep.statics.TorqueModel of the design's {len(design.stator)} coils",
+                        f"{model.coil_count} coils" if isinstance(model, TorqueModel) else type(model).__name__)
     air = iron_model(design, air_coil(design.coil_ampere_turns))
     N = model.coil_count
     a = np.radians(np.linspace(0.0, 60.0, 1201))
-    det = model.detent.pair(a)
-    lin = model.linear.pair(a)
+    det = pair.detent.pair(a)
+    lin = pair.linear.pair(a)
     # unpowered
     R0 = so3.random(starts, rng)
     off = np.zeros((starts, N))
@@ -178,7 +186,7 @@ def iron_summary(design, coil: CoilSpec | None = None, *, states: int = 12, star
         rest = eq.rotation  # the last: the iron model's rest poses
     # polarity
     probe = np.radians([2.0, 4.0, 6.0, 8.0])
-    wrong = model.detent.pair(probe) - model.linear.pair(probe)
+    wrong = pair.detent.pair(probe) - pair.linear.pair(probe)
     # saturation: every energised coil of the sampled states with its nearest pole at rest, and the pole on the axis
     W = np.einsum("kab,mb->kma", rest, design.rotor.centers)
     alphas, pcs = [0.0, 0.0], [1.0, 0.0]
