@@ -87,7 +87,7 @@ def turn_reference(start, axis, angle: float, duration: float, delay: float = 0.
 def servo_session(design, trajectory: Trajectory, duration: float, *, port: str | None = None, emulate: bool = False,
                   lockstep: bool = False, rate: float = LOOP_RATE, log=None, status=None, faults=None, sensors=None, model=None, drive=None,
                   R0=None, watchdog_ms: int | None = None, max_late: float | None = None,
-                  truth_every: float = 0.05, plant=None) -> Session:
+                  truth_every: float = 0.05, plant=None, cores: bool | None = None) -> Session:
     """Run the servo for ``duration`` s following ``trajectory`` (a :class:`~spherestep.control.Trajectory`;
     :meth:`~spherestep.control.Trajectory.hold` for a pose) on the controller at
     ``port``, or with ``emulate`` on the emulated motor (``faults`` a
@@ -99,10 +99,14 @@ def servo_session(design, trajectory: Trajectory, duration: float, *, port: str 
     :func:`~spherestep.hardware.servo.run_servo`. With ``lockstep`` (and ``emulate``) the frames go straight to
     the device in this process on a simulated clock (:class:`~spherestep.hardware.motor_emulator.LockstepLink`):
     the same loop, protocol and motor with the rate kept exactly, whatever the machine's load. ``plant`` (with
-    ``emulate``) the torque model the emulated rotor obeys, default ``model`` (a mismatched motor: calibration)."""
+    ``emulate``) the torque model the emulated rotor obeys, default ``model`` (a mismatched motor: calibration).
+    The estimator fits the sensing room's :func:`~spherestep.sensing.field_model` of the design, the one the
+    emulated motor's magnetometers read and the simulated Hall sensor uses: on an iron design the rotor's field
+    plus the cores it magnetises, and the iron coils' (``cores=False``: the rotor and the bare windings, the
+    iron ignored, for comparison)."""
     from ..dynamics import Rotor
     from ..magnetics import design_model
-    from ..sensing import CoilField, Estimator, FieldTable, default_array
+    from ..sensing import default_array, field_model
 
     if not isinstance(trajectory, Trajectory):
         raise bad_value("trajectory", "a spherestep.control.Trajectory (Trajectory.hold(R) for a pose)",
@@ -118,8 +122,7 @@ def servo_session(design, trajectory: Trajectory, duration: float, *, port: str 
         drive = own.limits if drive is None else drive
     R0 = trajectory.start if R0 is None else so3.as_rotations(R0).reshape(3, 3)
     rotor = Rotor.from_design(design, damping=0.01)
-    table = FieldTable.build(design, sensors.positions)
-    estimator = Estimator(table, sensors.axes, sensors.part, (CoilField.build(design, sensors.positions),))
+    estimator = field_model(design, sensors.positions, cores).estimator(sensors)
     estimate = FieldTracker(estimator, R0, drive.nominal_current)
     controller = GeometricPD(rotor.inertia, bandwidth=BANDWIDTH, rate=rate, damping=rotor.damping)
     law = ServoLaw(model, trajectory, controller, limits=wire_limits(drive), sensor_rate=rate, delay=DELAY,

@@ -17,9 +17,10 @@
   :class:`~spherestep.control.ModelCache`, the servo law's cache: re-evaluated when that orientation has turned
   more than ``K_REUSE``) and ``ī`` the coils' mean current over it; in between, the sensors see
   :meth:`EmulatedMotor.orientation`, the last step continued to second order.
-* Magnetometers: the sensing room's :class:`~spherestep.sensing.field.FieldTable` (rotor) plus
-  :class:`~spherestep.sensing.field.CoilField` (coils, at the measured currents), read in each sensor's own
-  axes, with the part's noise, quantised to its LSB and clipped to ±32767 counts.
+* Magnetometers: the sensing room's :func:`~spherestep.sensing.field_model` of the design, the one the
+  simulated Hall sensor reads and the session's estimator fits: the rotor's field table, on an iron design the
+  cores it magnetises, and the coils at the measured currents (on iron each winding with its own core), read in
+  each sensor's own axes, with the part's noise, quantised to its LSB and clipped to ±32767 counts.
 
 :class:`MotorFaults` injects the faults the servo must survive: an open coil, a coil stuck at full current (a
 shorted bridge, which only the supply cut stops), a frozen current reading, a magnetometer that stops (stale)
@@ -88,7 +89,7 @@ class EmulatedMotor:
                  seed: int = 0):
         from ..control import DriveLimits, ModelCache
         from ..dynamics import Rotor
-        from ..sensing.field import CoilField, FieldTable
+        from ..sensing import field_model
 
         self.design, self.model, self.sensors = design, model, sensors
         self.rotor = rotor if rotor is not None else Rotor.from_design(design, damping=0.01)
@@ -98,8 +99,7 @@ class EmulatedMotor:
         self.nominal = self.drive_limits.nominal_current  # A per unit current
         self.period, self.torque_refresh = float(period), float(torque_refresh)
         self.rng = np.random.default_rng(seed)
-        self.field_table = FieldTable.build(design, sensors.positions)
-        self.coil_field = CoilField.build(design, sensors.positions)
+        self.field = field_model(design, sensors.positions)  # rotor (+ the cores on iron) and the coils
         n = len(design.stator)
         self.t = 0.0
         self.R = np.eye(3) if R0 is None else so3.as_rotations(R0).reshape(3, 3).copy()
@@ -142,7 +142,7 @@ class EmulatedMotor:
 
     def sense(self) -> tuple[np.ndarray, int]:
         part = self.sensors.part
-        B = self.field_table.field(self.orientation()) + self.coil_field.field(self.i / self.nominal)  # (S, 3), fixed frame
+        B = self.field.field(self.orientation(), self.i / self.nominal)  # (S, 3), fixed frame
         local = np.einsum("sab,sa->sb", self.sensors.axes, B)  # A_sᵀ B
         local = local + part.noise_T * self.rng.standard_normal(local.shape)
         counts = np.clip(np.rint(local / part.lsb_T), -FULL_SCALE, FULL_SCALE).astype(np.int64)

@@ -7,6 +7,9 @@
 * :mod:`.iron`: the iron stator's cores magnetised by the rotor (:class:`CoreField`, a table per sensor over the
   magnet's direction; :class:`IronFieldTable` = rotor + cores) and by the coils (:class:`IronCoilField`);
   :func:`iron_fields` (stored for the prototype's default array, else built on first use).
+* :mod:`.model`: :func:`field_model` -> :class:`FieldModel`, what the sensors see of a design (rotor, the cores on
+  iron, coils), built one way for the simulated sensor, the emulated motor, the hardware session's estimator,
+  :func:`accuracy` and :func:`calibrate`.
 * :mod:`.readings`: simulated readings (magpylib, noise, saturation, LSB, current-sense error).
 * :mod:`.estimate`: :class:`Estimator` (Gauss–Newton / Levenberg–Marquardt on SO(3), global start).
 * :mod:`.calibration`: :func:`calibrate` (positions, gains, offsets from readings at unknown poses).
@@ -25,6 +28,7 @@ from .estimate import Estimate, Estimator, super_fibonacci
 from .figures import figure_layout
 from .field import CoilField, FieldTable, KnownField, axial_field_table, rotor_field
 from .iron import CoreField, IronCoilField, IronFieldTable, core_response, iron_fields
+from .model import FieldModel, field_model
 from .imu import FusedSensor, Imu, ImuSensor, Mekf, triad
 from .parts import BMI270_BMM150, TMAG5273A2, ImuPart, MagnetometerPart
 from .placement import Accuracy, Placement, accuracy, default_array, greedy_placement, smallest_eigenvalue
@@ -34,11 +38,11 @@ from .symmetry import MarkerEffect, marked_design, marker_effect, symmetry_group
 
 __all__ = [
     "Accuracy", "BMI270_BMM150", "Calibration", "CoilField", "CoreField", "IronCoilField", "IronFieldTable",
-    "core_response", "iron_fields", "Estimate", "Estimator", "FieldTable", "FusedSensor", "HallSensor",
+    "core_response", "iron_fields", "Estimate", "Estimator", "FieldModel", "FieldTable", "FusedSensor", "HallSensor",
     "IdealSensor", "Imu", "ImuPart", "ImuSensor", "KnownField", "MagnetometerPart", "MarkerEffect", "Mekf", "NoisySensor",
     "OrientationSensor", "Placement", "SampledSensor",
     "SensorArray", "TMAG5273A2", "accuracy", "actual_currents", "axial_field_table", "calibrate", "field_gradient", "candidate_positions",
-    "coil_collisions", "default_array", "fibonacci_directions", "figure_layout", "greedy_placement", "marked_design", "marker_effect",
+    "coil_collisions", "default_array", "fibonacci_directions", "field_model", "figure_layout", "greedy_placement", "marked_design", "marker_effect",
     "radial_frames", "rotor_field", "sense", "smallest_eigenvalue", "super_fibonacci", "symmetry_group",
     "triad", "true_field",
 ]

@@ -12,6 +12,11 @@ divergence-free, so ``G`` is symmetric and traceless, and a turn of the rotor is
 way, ``G [x]× = [B]× + J`` (``J = ∂B/∂θ``). That fixes ``G`` on the tangent plane; symmetry gives the mixed
 radial terms and ``tr G = 0`` the radial one.
 
+On an iron design the model's field is the rotor's plus the cores' it magnetises (:func:`.model.field_model`,
+by default): the cores' term is the stored table's at the nominal positions, its own gradient left out of ``G``
+(the rotation identity above holds for the rotor's field, which turns with the rotor, not for the cores', which
+do not; the position step sees the rotor's gradient alone).
+
 What is left undetermined: a common turn of every sensor and every pose about the centre changes nothing the
 readings can see except through the sensors' axes (held at their nominal values), so the calibrated array's
 frame is known only to about the turn of the true array against the nominal one (0.015° for 0.2 mm errors,
@@ -30,6 +35,8 @@ from ..errors import bad_value
 from .array import SensorArray
 from .estimate import Estimator
 from .field import FieldTable
+from .iron import IronFieldTable
+from .model import field_model
 
 
 def field_gradient(B: np.ndarray, J: np.ndarray, positions: np.ndarray) -> np.ndarray:
@@ -56,13 +63,15 @@ def field_gradient(B: np.ndarray, J: np.ndarray, positions: np.ndarray) -> np.nd
 @dataclass(frozen=True)
 class Calibration:
     """Calibrated ``array`` (corrected positions), per-axis ``gains (S, 3)`` and ``offsets (S, 3)`` (T, sensor
-    frame), the estimated ``poses (K, 3, 3)`` and the RMS residual per channel after each round (T)."""
+    frame), the estimated ``poses (K, 3, 3)``, the RMS residual per channel after each round (T) and the
+    ``field_model`` fitted (:attr:`~spherestep.sensing.FieldModel.name`: ``"rotor + cores"`` or ``"rotor only"``)."""
 
     array: SensorArray
     gains: np.ndarray
     offsets: np.ndarray
     poses: np.ndarray
     residual_T: tuple[float, ...]
+    field_model: str
 
     def correct(self, readings) -> np.ndarray:
         """Readings with offsets and gains removed: ``(m − o)/g``."""
@@ -70,30 +79,35 @@ class Calibration:
 
 
 @single_blas_thread
-def calibrate(design, array: SensorArray, readings, poses, rounds: int = 4) -> Calibration:
+def calibrate(design, array: SensorArray, readings, poses, rounds: int = 4, cores: bool | None = None) -> Calibration:
     """Self-calibration (module doc) from ``readings (K, S, 3)`` (sensor frame, coils off) taken at ``K``
-    orientations known roughly as ``poses (K, 3, 3)`` (e.g. the nominal model's estimates)."""
+    orientations known roughly as ``poses (K, 3, 3)`` (e.g. the nominal model's estimates). ``cores``: model the
+    iron cores' field (default: on an iron design; ``False``: the rotor's field alone)."""
     m = np.asarray(readings, dtype=float)
     R = so3.as_rotations(poses, "poses").reshape(-1, 3, 3).copy()
     if m.ndim != 3 or m.shape[1:] != array.positions.shape or len(m) != len(R):
         raise bad_value("readings", f"one ({len(array)}, 3) set per pose, shape ({len(R)}, {len(array)}, 3)",
                         f"shape {m.shape}")
     S, K = len(array), len(R)
+    nominal = field_model(design, array.positions, cores)  # the cores' term stays at the nominal positions
     pos = array.positions.copy()
     gains, offsets = np.ones((S, 3)), np.zeros((S, 3))
     At = np.swapaxes(array.axes, 1, 2)
     history = []
     for _ in range(int(rounds)):
         cur = SensorArray(pos, array.axes, array.part)
-        table = FieldTable.build(design, pos)
+        rotor = FieldTable.build(design, pos)
+        table = rotor if nominal.cores is None else IronFieldTable(rotor, nominal.cores)
         est = Estimator(table, array.axes, array.part)
         corrected = (m - offsets) / gains
         R = np.stack([est.solve(corrected[k], R[k]).R for k in range(K)])
         rows = np.empty((K, S, 3, 9))
         pred = np.empty((K, S, 3))
         for k in range(K):
-            B, J = table.field_and_jacobian(R[k])
-            G = field_gradient(B, J, cur.positions)
+            B, J = rotor.field_and_jacobian(R[k])
+            G = field_gradient(B, J, cur.positions)  # the rotor's
+            if nominal.cores is not None:
+                B = B + nominal.cores.field(R[k])
             AB = np.einsum("sij,sj->si", At, B)
             pred[k] = gains * AB + offsets
             rows[k, :, :, :3] = gains[:, :, None] * (At @ G)  # ∂/∂δx
@@ -107,4 +121,4 @@ def calibrate(design, array: SensorArray, readings, poses, rounds: int = 4) -> C
             pos[s] += step[:3]
             gains[s] += step[3:6]
             offsets[s] += step[6:]
-    return Calibration(SensorArray(pos, array.axes, array.part), gains, offsets, R, tuple(history))
+    return Calibration(SensorArray(pos, array.axes, array.part), gains, offsets, R, tuple(history), nominal.name)

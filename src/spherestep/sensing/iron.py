@@ -425,15 +425,19 @@ def design_key(design, level: int = SENSING_LEVEL) -> bytes:
 
 
 def _stored(key: bytes, positions: np.ndarray, step_deg: float):
-    """The stored node values and coils' field for ``key`` at ``positions`` (:data:`DATA_FILE`), else ``None``."""
+    """The stored node values and coils' field for ``key`` at ``positions`` (:data:`DATA_FILE`; any subset of its
+    sensors, e.g. the first 8 of the default 24 a hardware session reads), else ``None``."""
     path = resources.files("spherestep.data") / DATA_FILE
     if not path.is_file():
         return None
     with path.open("rb") as f, np.load(f) as z:
-        if (z["key"].tobytes() != key or float(z["step_deg"]) != step_deg or z["positions"].shape != positions.shape
-                or np.abs(z["positions"] - positions).max() > 1e-12):
+        if z["key"].tobytes() != key or float(z["step_deg"]) != step_deg:
             return None
-        return z["H"] * z["scale"].astype(np.float32), z["coils"]
+        gap = np.abs(positions[:, None, :] - z["positions"][None]).max(axis=2)  # (S, stored)
+        rows = np.argmin(gap, axis=1)
+        if gap[np.arange(len(rows)), rows].max() > 1e-12:
+            return None
+        return z["H"][:, :, rows] * z["scale"][rows].astype(np.float32), z["coils"][:, rows]
 
 
 _CACHE: dict = {}  # (design key, positions, step, level) -> (CoreField, IronCoilField), for the process
@@ -443,7 +447,7 @@ CACHE_SIZE = 4
 def iron_fields(design, positions, step_deg: float = GRID_STEP_DEG,
                 level: int = SENSING_LEVEL) -> tuple[CoreField, IronCoilField]:
     """``(CoreField, IronCoilField)`` of ``design``'s cores at ``positions (S, 3)``: read from
-    :data:`DATA_FILE` for the prototype's default array, else built on first use (about a minute) and kept for
+    :data:`DATA_FILE` for the prototype's default array (or some of its sensors), else built on first use (about a minute) and kept for
     the process."""
     checks.positive(step_deg, "step_deg", "a grid step in degrees dividing 180")
     if abs(180.0 / step_deg - round(180.0 / step_deg)) > 1e-9:

@@ -22,8 +22,9 @@ from .. import checks, so3
 from .._fast.threads import single_blas_thread
 from ..errors import bad_value
 from .array import SensorArray, candidate_positions
-from .estimate import Estimator, super_fibonacci
-from .field import CoilField, FieldTable
+from .estimate import super_fibonacci
+from .field import FieldTable
+from .model import field_model
 from .parts import TMAG5273A2
 from .readings import actual_currents, sense, true_field
 
@@ -133,8 +134,9 @@ def default_array(design, count: int = DEFAULT_COUNT) -> SensorArray:
 class Accuracy:
     """Orientation error over ``samples`` Haar-random orientations for an array of ``sensors``: ``rms`` and
     ``worst`` (rad), ``predicted_rms`` the Cramér–Rao RMS from the Fisher information (rad), ``coil_residual_T``
-    the RMS coil-field residual at the sensors (tesla) and ``seconds_per_estimate`` the median time per estimate
-    (s)."""
+    the RMS coil-field residual at the sensors (tesla), ``seconds_per_estimate`` the median time per estimate
+    (s) and ``field_model`` the estimator's (:attr:`~spherestep.sensing.FieldModel.name`: ``"rotor + cores"`` or
+    ``"rotor only"``)."""
 
     sensors: int
     samples: int
@@ -143,22 +145,27 @@ class Accuracy:
     predicted_rms: float
     coil_residual_T: float
     seconds_per_estimate: float
+    field_model: str
 
     def to_dict(self, degrees: bool = True) -> dict:
         """JSON-ready: the angles in degrees (``*_deg``) or, with ``degrees=False``, radians (``*_rad``)."""
         unit, f = ("deg", math.degrees) if degrees else ("rad", float)
         return {"sensors": self.sensors, "samples": self.samples, f"rms_{unit}": f(self.rms),
                 f"worst_{unit}": f(self.worst), f"predicted_rms_{unit}": f(self.predicted_rms),
-                "coil_residual_T": self.coil_residual_T, "seconds_per_estimate": self.seconds_per_estimate}
+                "coil_residual_T": self.coil_residual_T, "seconds_per_estimate": self.seconds_per_estimate,
+                "field_model": self.field_model}
 
 
 @single_blas_thread
 def accuracy(design, array: SensorArray, samples: int = 200, coils_on: int = 4, current_error: float = 0.01,
-             start_error: float = math.radians(1.0), seed=0) -> Accuracy:
-    """Monte Carlo accuracy of ``array``: Haar-random orientations, readings by magpylib with ``coils_on``
-    random coils at random ±1 (true currents off by ``current_error`` RMS), the part's noise, saturation and
-    LSB; the estimator subtracts the coils at the commanded currents and runs Levenberg–Marquardt from a start
-    ``start_error`` rad off (a tracking loop's prior)."""
+             start_error: float = math.radians(1.0), seed=0, cores: bool | None = None) -> Accuracy:
+    """Monte Carlo accuracy of ``array``: Haar-random orientations, readings of the rotor by magpylib plus, on an
+    iron design, the cores it magnetises (:func:`~spherestep.sensing.field_model`'s table), with ``coils_on``
+    random coils at random ±1 (true currents off by ``current_error`` RMS; on iron each winding with its core),
+    the part's noise, saturation and LSB; the estimator subtracts the coils at the commanded currents and runs
+    Levenberg–Marquardt from a start ``start_error`` rad off (a tracking loop's prior). ``cores``: what the
+    estimator models (default: the cores on an iron design; ``False``: the air-core model of the motor, rotor and
+    bare windings, against the same readings — the cost of ignoring the iron)."""
     rng = np.random.default_rng(seed)
     R = so3.random(samples, rng)
     N = len(design.stator)
@@ -166,11 +173,15 @@ def accuracy(design, array: SensorArray, samples: int = 200, coils_on: int = 4, 
     for k in range(samples):
         on = rng.choice(N, size=min(coils_on, N), replace=False)
         c[k, on] = rng.choice([-1.0, 1.0], size=len(on))
-    coils = CoilField.build(design, array.positions)
+    motor = field_model(design, array.positions)  # what the sensors see: the rotor, the cores on iron, the coils
+    model = field_model(design, array.positions, cores, rotor=motor.rotor)  # what the estimator fits
+    coils = motor.coils
     c_true = actual_currents(c, current_error, rng)
     B = true_field(design, array, R, c_true, coils)
+    if motor.cores is not None:
+        B = B + motor.cores.field(R)
     m = sense(array, B, rng)
-    est = Estimator(FieldTable.build(design, array.positions), array.axes, array.part, (coils,))
+    est = model.estimator(array)
     err = np.empty(samples)
     pred = np.empty(samples)
     times = np.empty(samples)
@@ -185,4 +196,4 @@ def accuracy(design, array: SensorArray, samples: int = 200, coils_on: int = 4, 
     residual = coils.field(c_true) - coils.field(c)
     return Accuracy(len(array), samples, float(np.sqrt(np.mean(err ** 2))), float(err.max()),
                     float(np.sqrt(np.mean(pred))),
-                    float(np.sqrt(np.mean(residual ** 2))), float(np.median(times)))
+                    float(np.sqrt(np.mean(residual ** 2))), float(np.median(times)), model.name)

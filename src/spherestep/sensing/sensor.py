@@ -32,9 +32,9 @@ import numpy as np
 from .. import checks, so3
 from ..errors import bad_value
 from .array import SensorArray
-from .estimate import Estimate, Estimator
-from .field import CoilField, FieldTable, rotor_field
-from .iron import IronFieldTable, iron_fields
+from .estimate import Estimate
+from .field import rotor_field
+from .model import field_model
 from .placement import default_array
 from .readings import actual_currents, sense
 from .symmetry import symmetry_group
@@ -127,26 +127,22 @@ class HallSensor(SampledSensor):
         super().__init__(rate, latency, start)
         if truth not in ("table", "magpylib"):
             raise bad_value("truth", "'table' or 'magpylib'", truth)
-        iron = design.coil.core == "iron"
-        cores = iron if cores is None else cores
-        if cores not in (True, False) or (cores and not iron):
-            raise bad_value("cores", "True or False (True only for an iron-core design)", cores)
         self.design = design
         self.array = array if array is not None else default_array(design)
         if noise_T is not None:  # the same part with another noise (MagnetometerPart checks the value)
             self.array = replace(self.array, part=replace(self.array.part, noise_T=noise_T))
         self.array.check_fits(design)
-        self.rotor_table = FieldTable.build(design, self.array.positions)
-        if iron:  # the readings hold the cores' field whatever the estimator models
-            self.core_field, self.coils = iron_fields(design, self.array.positions)
-        else:
-            self.core_field, self.coils = None, CoilField.build(design, self.array.positions)
-        self.cores = bool(cores)
+        # what the readings hold (the cores' field on an iron design whatever the estimator models), and what the
+        # estimator models: the same FieldModel, or with cores=False on iron the air-core model of the motor
+        self.motor_field = field_model(design, self.array.positions)
+        model = field_model(design, self.array.positions, cores, rotor=self.motor_field.rotor)  # checks cores
+        self.field_model = self.motor_field if (model.cores is None) == (self.motor_field.cores is None) else model
+        self.rotor_table, self.core_field, self.coils = (self.motor_field.rotor, self.motor_field.cores,
+                                                         self.motor_field.coils)
+        self.cores = self.field_model.cores is not None
         self.known = tuple(known)
-        # what the estimator models: the rotor (+ the cores), and the coils (iron or air-core)
-        self.table = IronFieldTable(self.rotor_table, self.core_field) if cores else self.rotor_table
-        coils = self.coils if cores or not iron else CoilField.build(design, self.array.positions)
-        self.estimator = Estimator(self.table, self.array.axes, self.array.part, (coils, *self.known))
+        self.table = self.field_model.table
+        self.estimator = self.field_model.estimator(self.array, self.known)
         self.current_error = current_error
         self.truth = truth
         self.iterations = int(iterations)
