@@ -10,7 +10,7 @@ import typer
 
 from ..errors import ComputationError, InputError, bad_value
 from .app import app
-from .common import console, number, print_json
+from .common import check_core, console, number, print_json
 
 OPTION_OF = {  # library field -> the option that sets it, so a refusal names what the user typed
     "rotors": "--rotors", "stators": "--stators", "rotor_levels": "--rotor-levels", "stator_levels": "--stator-levels",
@@ -49,8 +49,9 @@ def _names(text: str) -> str:
 
 
 def build_grid(quick: bool, rotors, stators, rotor_levels, stator_levels, caps, tols, primary_ratio, same_family,
-               samples, torque_states):
-    """The grid of the command line: the default or ``--quick`` one, with the given axes replaced."""
+               samples, torque_states, core=None):
+    """The grid of the command line: the default or ``--quick`` one, with the given axes replaced (``core``:
+    every design's coils, default iron as the prototype's)."""
     from ..explore.grid import default_grid, quick_grid
 
     changes = {"same_family": same_family}
@@ -76,6 +77,8 @@ def build_grid(quick: bool, rotors, stators, rotor_levels, stator_levels, caps, 
         changes["samples"] = samples
     if torque_states is not None:
         changes["torque_states"] = torque_states
+    if core is not None:
+        changes["core"] = core
     try:
         return (quick_grid if quick else default_grid)(**changes)
     except InputError as exc:
@@ -134,6 +137,9 @@ def explore(
     torque_states: int = typer.Option(None, "--holding-torque-states",
                                       help="Stepper states per design whose holding torque is computed on the "
                                            "physical model (default 8; 0: none, a faster sweep)."),
+    core: str = typer.Option(None, "--core", callback=check_core,
+                             help="air or iron: the designs' coil cores (default: iron, the prototype's pot-core coil); "
+                                  "the torques are measured on each design's own model."),
     max_rotor_poles: int = typer.Option(300, "--max-rotor-poles", help="Record larger rotors as too large."),
     max_candidates: int = typer.Option(200_000, "--max-candidates",
                                        help="Record designs whose state enumeration starts from more alignments as "
@@ -160,7 +166,7 @@ def explore(
     from ..outputs import output_folder
 
     grid = build_grid(quick, rotors, stators, rotor_levels, stator_levels, caps, tols, primary_ratio, same_family,
-                      samples, torque_states)
+                      samples, torque_states, core)
     try:
         limits = Limits(budget_coils=budget_coils, max_rotor_poles=max_rotor_poles, max_candidates=max_candidates,
                         max_lookup_voxels=max_lookup_voxels)
@@ -204,7 +210,8 @@ def explore(
     info = {
         "designs": summary.total, "stored_before": summary.stored_before, "evaluated": summary.evaluated,
         "lost": len(summary.lost), "seconds": summary.seconds, "status_counts": {k: int(v) for k, v in counts.items()},
-        "budget_coils": budget_coils,
+        "budget_coils": budget_coils, "core": grid.core,
+        "models": {k: int(v) for k, v in table["model"].value_counts().items()} if "model" in table else {},
         "pareto": json.loads(proposal.front.drop(columns=["params"]).to_json(orient="records")),
         "files": {"results": str(proposal.results), "pareto": str(proposal.pareto), "figure": str(proposal.figure),
                   "designs": [str(p) for p in proposal.designs]},
@@ -215,6 +222,11 @@ def explore(
         status = ", ".join(f"{n} {s}" for s, n in sorted(counts.items()))
         console.print(f"{summary.total} designs: {summary.stored_before} stored before, {summary.evaluated} evaluated "
                       f"in {summary.seconds:.0f} s ({status})")
+        if grid.torque_states:
+            models = ", ".join(f"{n} on {m}" for m, n in info["models"].items()) or "none"
+            bare = int(((table["status"] == "ok") & table["model"].isna()).sum())
+            console.print(f"torques on the designs' own models: {models}"
+                          + (f"; {bare} measured designs without them (their reason says why)" if bare else ""))
         if len(proposal.front):
             print_front(proposal.front, budget_coils)
         else:

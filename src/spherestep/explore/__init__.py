@@ -14,8 +14,8 @@ from ..lazy import lazy_names
 
 _MODULES = {
     "build": ("LIMIT_STATUSES", "STATUSES", "Limits", "Unbuildable", "build_design", "candidate_count",
-              "evaluate", "holding_torques", "torque_capability_sample", "lookup_voxels", "motor_fingerprint", "part_sizes"),
-    "grid": ("DesignPoint", "Grid", "default_grid", "distinct_names", "primary_ratio", "quick_grid",
+              "evaluate", "holding_torques", "iron_is_stored", "torque_capability_sample", "unmeasured_iron", "lookup_voxels", "motor_fingerprint", "part_sizes"),
+    "grid": ("CORES", "DesignPoint", "Grid", "default_grid", "distinct_names", "primary_ratio", "quick_grid",
              "symmetry_family"),
     "pareto": ("CAPABILITY", "OBJECTIVES", "TORQUE", "eligible", "figure_pareto", "objectives", "pareto_front",
                "pareto_mask"),

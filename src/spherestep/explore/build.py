@@ -16,6 +16,13 @@ sizes, coil count, fit, lookup grid, candidate count, metrics):
 * ``failed``: the metrics raised an error (its type and message are the reason);
 * ``ok``: measured (when the holding torque could not be, the reason says why and its columns are empty).
 
+The torques (holding and capability) are measured on the design's own model
+(:func:`spherestep.magnetics.design_model`: the point's ``core``, the coil's own ampere-turns and drive limits);
+``model`` names it. An iron core reads stored tables only for the prototype's parts (:func:`iron_is_stored`:
+1-in magnets, 2-in coils, the prototype's gap): other parts would need a moment-method solve of minutes per part
+size, which a sweep does not do, so their torque columns are empty and the reason says why (``--core air``
+measures every design).
+
 The candidate count is the number of (coil pair, ordered pole pair) with arcs within ``2 tol`` of each
 other, exactly the alignments :func:`spherestep.motor.find_states` starts from.
 """
@@ -35,7 +42,8 @@ import numpy as np
 
 from .. import checks
 from ..errors import InputError, SpherestepError
-from ..motor import MotorDesign, PolarityRule, check_fits
+from ..motor import MotorDesign, PolarityRule, check_fits, prototype
+from ..motor.coil import iron_coil
 from ..motor.states import candidate_count
 from ..packing import named
 from ..sphere import NearestPointGrid, shell_voxels
@@ -106,7 +114,7 @@ def build_design(point: DesignPoint, limits: Limits = Limits(), name: str | None
             sphere_diameter=point.sphere_diameter, magnet_diameter=magnet, magnet_length=point.magnet_length,
             coil_diameter=coil, coil_length=point.coil_length, air_gap=point.air_gap,
             tol=math.radians(point.tol_deg), name=name or f"explore {point.key}", max_coils=sys.maxsize,
-            check_fit=False,
+            check_fit=False, coil=replace(iron_coil(), core=point.core),
         )
     except InputError as exc:
         if exc.field == "coils":  # 'fit' found no cap wide enough for a coil
@@ -154,32 +162,99 @@ def lookup_voxels(design: MotorDesign) -> float:
     return float(len(shell_voxels(NearestPointGrid.side(separation, design.state_tol))))
 
 
-def torque_capability_sample(design: MotorDesign, seed: int, samples: int = CAPABILITY_SAMPLES) -> np.ndarray:
+def iron_is_stored(design: MotorDesign) -> bool:
+    """Whether the iron model of ``design`` reads the stored FEM tables (pair and coupling) as they are: magnet,
+    coil, gap, remanence, the pot's groove, the ampere-turns and the permeability all the prototype's (what the
+    tables depend on); any other iron design solves its tables by the moment method first (minutes)."""
+    p = prototype()
+    same = [(design.radius, p.radius), (design.magnet_diameter, p.magnet_diameter),
+            (design.magnet_length, p.magnet_length), (design.coil_diameter, p.coil_diameter),
+            (design.coil_length, p.coil_length), (design.air_gap, p.air_gap), (design.remanence, p.remanence),
+            (design.rotor_shell, p.rotor_shell)]
+    if not all(round(a, 9) == round(b, 9) for a, b in same):
+        return False
+    a, b = design.coil, p.coil
+    groove_a = a.groove(design.coil_diameter, design.coil_length)
+    groove_b = b.groove(p.coil_diameter, p.coil_length)
+    return (all(round(x, 9) == round(y, 9) for x, y in zip(groove_a, groove_b))
+            and round(a.nominal_ampere_turns(design.coil_diameter, design.coil_length), 9)
+            == round(b.nominal_ampere_turns(p.coil_diameter, p.coil_length), 9)
+            and a.material.relative_permeability == b.material.relative_permeability)
+
+
+def unmeasured_iron(design: MotorDesign) -> str | None:
+    """None when the sweep measures ``design``'s torques (an air core, or iron on stored tables,
+    :func:`iron_is_stored`); else why not, for people."""
+    if design.coil.core != "iron" or iron_is_stored(design):
+        return None
+    p = prototype()
+    return (f"the iron model of these parts (magnet {1e3 * design.magnet_diameter:.3g} mm, coil "
+            f"{1e3 * design.coil_diameter:.3g} mm; stored: the prototype's {1e3 * p.magnet_diameter:.3g} and "
+            f"{1e3 * p.coil_diameter:.3g} mm) has no stored tables: a moment-method solve of minutes per part "
+            "size, which a sweep does not do (--core air measures every design)")
+
+
+def torque_capability_sample(design: MotorDesign, seed: int, samples: int = CAPABILITY_SAMPLES,
+                             own=None) -> np.ndarray:
     """The torque (N·m) available in every direction at ``samples`` orientations drawn uniformly (``seed``), on
-    the magnets' torque map with the default drive limits (:func:`spherestep.control.torque_capability`)."""
-    from ..control import DriveLimits, torque_capability
-    from ..magnetics import torque_map
+    the design's own model and drive limits (``own``, default :func:`spherestep.magnetics.design_model`;
+    :func:`spherestep.control.torque_capability`)."""
+    from ..control import torque_capability
+    from ..magnetics import design_model
 
-    return torque_capability(design, torque_map(design), DriveLimits(), samples=samples, seed=seed).radius
+    own = design_model(design) if own is None else own
+    return torque_capability(design, own.model, own.limits, samples=samples, seed=seed).radius
 
 
-def holding_torques(design: MotorDesign, count: int, seed: int) -> np.ndarray:
-    """Holding torques (N·m) of ``count`` stepper states drawn at random (``seed``), on the physical model.
+def holding_torques(design: MotorDesign, count: int, seed: int, own=None) -> np.ndarray:
+    """Holding torques (N·m) of ``count`` stepper states drawn at random (``seed``), on the design's own model
+    (``own``, default :func:`spherestep.magnetics.design_model`).
 
-    Each state's coils are energised at its poles' polarities (nominal ampere-turns), the rotor is settled
-    into the physical equilibrium near the geometric state, and the smallest peak restoring torque over 32
-    axes is its holding torque (:func:`spherestep.statics.holding_torque`). States whose equilibrium search
-    does not converge are left out.
+    Each state's coils are energised at its poles' polarities (the coil's nominal current), the rotor is
+    settled into the equilibrium near the geometric state (:func:`spherestep.statics.equilibrium`; with iron
+    the detent included), and the smallest peak restoring torque over 32 axes is its holding torque
+    (:func:`spherestep.statics.holding_torque`). States whose equilibrium search does not converge are left out.
     """
-    from ..magnetics import equilibrium, torque_map
-    from ..statics import holding_torque
+    from ..magnetics import design_model
+    from ..statics import equilibrium, holding_torque
 
+    model = (design_model(design) if own is None else own).model
     states = design.states()
     idx = np.sort(np.random.default_rng(seed).choice(len(states), size=min(count, len(states)), replace=False))
-    tmap = torque_map(design)
     currents = np.array([design.coil_currents(states.coils(int(i))) for i in idx])
-    eq = equilibrium(tmap, states.rotations[idx], currents)
-    return holding_torque(tmap, eq.rotation, currents).torque[np.asarray(eq.converged, dtype=bool)]
+    eq = equilibrium(model, states.rotations[idx], currents)
+    return holding_torque(model, eq.rotation, currents).torque[np.asarray(eq.converged, dtype=bool)]
+
+
+def _torques(design: MotorDesign, point: DesignPoint, row: dict) -> None:
+    """The holding torque and the capability of ``design`` into ``row`` on its own model (``row["model"]`` its
+    label); the reason says why, when they cannot be measured (the kinematic metrics stand without them)."""
+    from ..magnetics import design_model
+
+    why = unmeasured_iron(design)
+    if why is not None:
+        row["reason"] = f"torques not measured: {why}"
+        return
+    try:
+        own = design_model(design)
+    except Exception as exc:  # noqa: BLE001 (e.g. a winding that does not fit the coil)
+        row["reason"] = f"torques not measured: the design's model: {type(exc).__name__}: {exc}"
+        return
+    row["model"] = own.label
+    try:
+        torques = holding_torques(design, point.torque_states, point.seed, own)
+    except Exception as exc:  # noqa: BLE001
+        row["reason"] = f"holding torque not measured: {type(exc).__name__}: {exc}"
+    else:
+        row["holding_torque_states"] = len(torques)
+        if len(torques):
+            row.update(holding_torque_median_Nm=float(np.median(torques)),
+                       holding_torque_min_Nm=float(torques.min()))
+        else:
+            row["reason"] = "holding torque not measured: no equilibrium search converged"
+    available = torque_capability_sample(design, point.seed, own=own)
+    row.update(capability_median_Nm=float(np.median(available)),
+               capability_p5_Nm=float(np.percentile(available, 5)))
 
 
 def _base_row(point: DesignPoint) -> dict:
@@ -188,7 +263,7 @@ def _base_row(point: DesignPoint) -> dict:
         "rotor_poles": len(named(point.rotor, point.rotor_level)), "stator": point.stator,
         "stator_level": point.stator_level, "stator_family": point.stator_family, "family_rule": point.family_rule,
         "primary_ratio": primary_ratio(point.rotor, point.stator), "cap_half_angle_deg": point.cap_half_angle_deg,
-        "tol_deg": point.tol_deg, "samples": point.samples, "seed": point.seed,
+        "tol_deg": point.tol_deg, "samples": point.samples, "seed": point.seed, "core": point.core,
         "inertia_isotropy": named(point.rotor, point.rotor_level).inertia_isotropy(),
     }
 
@@ -234,20 +309,7 @@ def evaluate(point: DesignPoint, limits: Limits = Limits()) -> dict:
             reaches_all=metrics.reaches_all, escape_violations=len(metrics.escape_violations),
         )
         if point.torque_states:
-            try:
-                torques = holding_torques(design, point.torque_states, point.seed)
-            except Exception as exc:  # noqa: BLE001 (the kinematic metrics stand without the torque)
-                row["reason"] = f"holding torque not measured: {type(exc).__name__}: {exc}"
-            else:
-                row["holding_torque_states"] = len(torques)
-                if len(torques):
-                    row.update(holding_torque_median_Nm=float(np.median(torques)),
-                               holding_torque_min_Nm=float(torques.min()))
-                else:
-                    row["reason"] = "holding torque not measured: no equilibrium search converged"
-            available = torque_capability_sample(design, point.seed)
-            row.update(capability_median_Nm=float(np.median(available)),
-                       capability_p5_Nm=float(np.percentile(available, 5)))
+            _torques(design, point, row)
     except Unbuildable as exc:
         row.update(status=exc.status, reason=exc.reason)
         if exc.coils is not None:

@@ -34,7 +34,9 @@ from ..design_file import MAX_REFINE
 from ..errors import bad_value
 from ..units import length
 
-KEY_VERSION = 1  # bump when the metrics of a design change meaning, so old results are not reused
+KEY_VERSION = 2  # bump when the metrics of a design change meaning, so old results are not reused (2: the torques on
+#                  the design's own model, the core a parameter)
+CORES = ("air", "iron")  # the coils' core (the prototype's pot-core coil, iron_coil(), with this core)
 FAMILY_OF_ORDER = {12: "T", 24: "O", 60: "I"}
 MAX_SAMPLES = 1_000_000
 MAX_TORQUE_STATES = 1000
@@ -73,8 +75,10 @@ class DesignPoint:
     the stator caps within ``cap_half_angle_deg`` of ``stator_axis`` that are wide enough for a coil.
     ``tol_deg``: how close a pole must be to a coil to count as held. ``samples`` random orientations
     (``seed``) measure the resolution; ``torque_states`` stepper states drawn at random (``seed``) measure the
-    holding torque on the physical model (:mod:`spherestep.magnetics`; 0: not measured). The part sizes follow
-    the rule in the module docstring.
+    holding torque on the design's own model (:func:`spherestep.magnetics.design_model`; 0: not measured). The
+    part sizes follow the rule in the module docstring. ``core``: the coils' core, ``"iron"`` (the prototype's
+    pot-core coil, :func:`spherestep.motor.coil.iron_coil`, the default of every design) or ``"air"`` (the same
+    winding without the iron); the torques are measured on that design's own model.
     """
 
     rotor: str
@@ -96,8 +100,11 @@ class DesignPoint:
     coil_diameter_min: float = length("0.5 in")
     coil_length: float = length("1.625 in")
     fill: float = 0.9
+    core: str = "iron"
 
     def __post_init__(self):
+        if self.core not in CORES:
+            raise bad_value("core", "'air' or 'iron'", self.core)
         for label in ("rotor", "stator"):
             name = getattr(self, label)
             if name not in pk.names():
@@ -197,7 +204,8 @@ class Grid:
     Every combination of ``rotors`` × ``rotor_levels`` × ``stators`` × ``stator_levels`` ×
     ``cap_half_angles_deg`` × ``tolerances_deg`` is a design, except pairs whose primary circles differ by
     more than ``primary_ratio_max`` (None: no limit) and, unless ``same_family``, pairs from one family.
-    ``rotors`` and ``stators`` default to the 16 distinct base packings (:func:`distinct_names`).
+    ``rotors`` and ``stators`` default to the 16 distinct base packings (:func:`distinct_names`); ``core`` is
+    every design's (:class:`DesignPoint`).
     """
 
     rotors: tuple[str, ...] | None = None
@@ -211,6 +219,7 @@ class Grid:
     samples: int = 2000
     seed: int = 0
     torque_states: int = 8
+    core: str = "iron"
 
     def __post_init__(self):
         for label in ("rotors", "stators"):
@@ -233,7 +242,7 @@ class Grid:
                           expected="a ratio of at least 1, or None for no limit")
         # samples, seed and torque_states are checked by DesignPoint; here too, so an empty grid refuses them
         DesignPoint(self.rotors[0], 0, self.stators[0], 0, self.cap_half_angles_deg[0], self.tolerances_deg[0],
-                    samples=self.samples, seed=self.seed, torque_states=self.torque_states)
+                    samples=self.samples, seed=self.seed, torque_states=self.torque_states, core=self.core)
 
     def pairs(self) -> list[tuple[str, str]]:
         """The (rotor, stator) packing pairs the rule admits, in grid order."""
@@ -254,7 +263,7 @@ class Grid:
             for rl, sl, cap, tol in itertools.product(self.rotor_levels, self.stator_levels,
                                                       self.cap_half_angles_deg, self.tolerances_deg):
                 out.append(DesignPoint(rotor, rl, stator, sl, cap, tol, samples=self.samples, seed=self.seed,
-                                       torque_states=self.torque_states))
+                                       torque_states=self.torque_states, core=self.core))
         return sorted(out, key=lambda p: (self.rotors.index(p.rotor), p.rotor_level, self.stators.index(p.stator),
                                           p.stator_level, p.cap_half_angle_deg, p.tol_deg))
 

@@ -27,7 +27,7 @@ SCHEMA = pa.schema([
     ("stator", pa.string()), ("stator_level", pa.int32()), ("stator_family", pa.string()),
     ("family_rule", pa.string()), ("primary_ratio", pa.float64()),
     ("cap_half_angle_deg", pa.float64()), ("tol_deg", pa.float64()), ("samples", pa.int32()), ("seed", pa.int64()),
-    ("status", pa.string()), ("reason", pa.string()),
+    ("core", pa.string()), ("status", pa.string()), ("reason", pa.string()),
     ("motor", pa.string()), ("coils", pa.int32()),
     ("magnet_diameter_mm", pa.float64()), ("coil_diameter_mm", pa.float64()),
     ("max_step_deg", pa.float64()), ("lookup_voxels", pa.int64()), ("candidates", pa.int64()), ("states", pa.int64()),
@@ -36,7 +36,7 @@ SCHEMA = pa.schema([
     ("state_graph_components", pa.int64()), ("reaches_all", pa.bool_()), ("escape_violations", pa.int64()),
     ("holding_torque_median_Nm", pa.float64()), ("holding_torque_min_Nm", pa.float64()),
     ("holding_torque_states", pa.int32()),
-    ("capability_median_Nm", pa.float64()), ("capability_p5_Nm", pa.float64()),
+    ("capability_median_Nm", pa.float64()), ("capability_p5_Nm", pa.float64()), ("model", pa.string()),
     ("inertia_isotropy", pa.float64()), ("seconds", pa.float64()), ("worker", pa.string()), ("params", pa.string()),
 ])
 COLUMNS = SCHEMA.names

@@ -114,23 +114,11 @@ def coil_for(design, core: str, spec):
 
 
 def iron_is_stored(design) -> bool:
-    """Whether the iron model of ``design`` reuses the stored FEM table: magnet, coil, gap, remanence, the pot's
-    groove, the ampere-turns and the permeability all the prototype's (what the table depends on)."""
-    from ..motor import prototype
+    """Whether the iron model of ``design`` reuses the stored FEM tables as they are: the prototype's parts
+    (:func:`spherestep.explore.iron_is_stored`, the one check)."""
+    from ..explore import iron_is_stored as stored
 
-    p = prototype()
-    same = [(design.radius, p.radius), (design.magnet_diameter, p.magnet_diameter),
-            (design.magnet_length, p.magnet_length), (design.coil_diameter, p.coil_diameter),
-            (design.coil_length, p.coil_length), (design.air_gap, p.air_gap), (design.remanence, p.remanence)]
-    if not all(round(a, 9) == round(b, 9) for a, b in same):
-        return False
-    a, b = design.coil, p.coil
-    groove_a = a.groove(design.coil_diameter, design.coil_length)
-    groove_b = b.groove(p.coil_diameter, p.coil_length)
-    return (all(round(x, 9) == round(y, 9) for x, y in zip(groove_a, groove_b))
-            and round(a.nominal_ampere_turns(design.coil_diameter, design.coil_length), 9)
-            == round(b.nominal_ampere_turns(p.coil_diameter, p.coil_length), 9)
-            and a.material.relative_permeability == b.material.relative_permeability)
+    return stored(design)
 
 
 def range_orientations(spec, count: int, seed: int) -> np.ndarray:
