@@ -4,7 +4,6 @@ magnetostatics reusing the prototype's stored (FEM-based) tables for any scaled 
 from __future__ import annotations
 
 import math
-import time
 from dataclasses import replace
 from importlib import resources
 
@@ -102,11 +101,16 @@ def test_scaled_prototype_detent_is_s_cubed(design, rotations):
 
 
 def test_scaled_design_is_ready_at_once(design, rotations):
-    """A scaled copy (a scale not used before, so nothing is cached) needs no solve: well under 10 s cold."""
-    t = time.perf_counter()
-    m = iron_model(scaled_design(design, 0.731))
-    m.torque(rotations, np.zeros(len(design.stator)))
-    assert time.perf_counter() - t < 10.0
+    """A scaled copy (a scale not used before, so nothing is cached) needs no solve: no moment-method stage is
+    reported, pairwise or coupled (the cold time is measured in docs/magnetics.md, not asserted)."""
+    from spherestep.progress import listening
+
+    seen = []
+    with listening(lambda text, done=None, total=None: seen.append(text)):
+        for coupling in (False, True):
+            m = iron_model(scaled_design(design, 0.731), coupling=coupling)
+            m.torque(rotations[:4], np.zeros(len(design.stator)))
+    assert seen == []
 
 
 def test_remanence_scales_the_tables(design, rotations):
@@ -164,14 +168,18 @@ def test_held_out_magnets_from_the_table(design):
 
 
 def test_a_new_magnet_is_ready_at_once_and_said(design, rotations):
-    """0.8-in magnets (the issue's 45-s case) on a scaled ball: from the table, scaled, in well under 10 s cold;
-    ``iron_source`` says so; outside the table's range it says why and that it solves."""
+    """0.8-in magnets (the issue's 45-s case) on a scaled ball: from the tables (pairs and coupling), scaled, no
+    solve reported; ``iron_source`` says so; outside the table's range it says why and that it solves."""
+    from spherestep.progress import listening
+
     d = scaled_design(_with_magnet(design, 0.8 / 6.0, 0.625), 1.3)
     assert "shape table" in _ironscale.iron_source(d, d.coil)
-    t = time.perf_counter()
-    m = iron_model(d)
-    m.torque(rotations, np.zeros(len(d.stator)))
-    assert time.perf_counter() - t < 10.0
+    seen = []
+    with listening(lambda text, done=None, total=None: seen.append(text)):
+        for coupling in (False, True):
+            m = iron_model(d, coupling=coupling)
+            m.torque(rotations[:4], np.zeros(len(d.stator)))
+    assert seen == []
     far = _with_magnet(design, 0.4 / 6.0, 0.5)
     assert _ironscale.shape_table_tables(far, far.coil) is None
     said = _ironscale.iron_source(far, far.coil)

@@ -41,8 +41,12 @@ def progress(first: str, *, enabled: bool = True) -> Iterator[Callable[..., None
     if not enabled:
         yield lambda text, done=None, total=None: None
         return
+    from ..progress import listening  # the library's long work (e.g. an iron solve) reports here too
+
     if not sys.stderr.isatty():
-        yield _Plain(first)
+        plain = _Plain(first)
+        with listening(plain):
+            yield plain
         return
     from rich.console import Console
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, SpinnerColumn, TextColumn, TimeElapsedColumn
@@ -55,4 +59,5 @@ def progress(first: str, *, enabled: bool = True) -> Iterator[Callable[..., None
         def say(text: str, done: int | None = None, total: int | None = None) -> None:
             bar.update(task, description=text, completed=done or 0, total=total)
 
-        yield say
+        with listening(say):
+            yield say

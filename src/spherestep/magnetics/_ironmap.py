@@ -86,7 +86,7 @@ def _tables(key: tuple, design, coil: CoilSpec, level: int):
     shaped = _ironscale.shape_table_tables(design, coil, level)  # another magnet: the shape table, scaled
     if shaped is not None:
         return shaped
-    det, lin = pair_table(design, coil, level)
+    det, lin = _ironscale.cached("pair", key, lambda: _ironscale.solve_pair_tables(design, coil, level))
     return np.radians(TABLE_NODES_DEG), det, lin
 
 
@@ -264,4 +264,12 @@ def _coupling_table(key: tuple, design, coil: CoilSpec, level: int):
         path = resources.files("spherestep.data") / COUPLING_FILE
         if path.is_file():
             return alpha, dphi, scale.detent * read_table(path)[:, 3].reshape(len(alpha), len(alpha), len(dphi))
-    return alpha, dphi, _ironcoupling.cross_energy_table(design, coil, alpha, dphi, level)
+    shaped = _ironscale.shape_table_coupling(design, coil, level)  # another magnet: the coupling shape table
+    if shaped is not None:
+        return shaped
+
+    def solve():
+        _ironscale.report("iron: the coupling table by the moment method (about a minute, then cached on disk)")
+        return (_ironcoupling.cross_energy_table(design, coil, alpha, dphi, level),)
+
+    return alpha, dphi, _ironscale.cached("coupling", key, solve)[0]
