@@ -21,29 +21,32 @@ The measurements. ``R(t)``, ``c(t)`` sampled by the servo loop give, with the ro
   rotation the rotor made, so this is absolute and fixes the scale (through the inertia, which a scale can
   weigh). Timing errors of the currents cancel to first order because the move starts and ends near rest.
 
-The fit. Parameters ``x = (s_d, s_1, δ_d, δ_1)``: the fitted tables are
+The fit. Parameters ``x = (s_d, s_1, δ_d, δ_1, g)``: the fitted tables are
 ``θ = (1 + s) θ⁰ + e ⊙ δ`` with ``θ⁰`` the model's tables, ``s`` a global scale per table (the winding's
 ``s_1`` the gain of the copper and the core, the detent's ``s_d`` that of the gap) and ``δ`` a shape
 correction per node in units of the table's local envelope ``e`` (the largest ``|θ⁰|`` within 5°, so a 10 %
-change means the same everywhere; the ends 0° and 180° stay 0 by symmetry). Gaussian prior: ``s`` of
-standard deviation 0.3, ``δ`` 0.3 and its second differences 0.1 (smooth shape changes), so the data must
-speak to move a node. MAP by least squares on ``[X/σ; L] x = [y/σ; 0]`` (``LᵀL`` the prior's precision), with
+change means the same everywhere; the ends 0° and 180° stay 0 by symmetry); ``g`` the gain of the cores'
+coupling (a magnet acting on another through a core: not a sum over pole–core pairs, so no table can take its
+place), whose torque ``g T_c(R)`` (from the coupled model's tables; the design's own coupling at ``g = 0`` for a
+pairwise model, the model's at ``g = 1`` for a coupled one) is a column of its own. Gaussian prior: ``s`` of
+standard deviation 0.3, ``δ`` 0.3 and its second differences 0.1 (smooth shape changes), ``g`` 1.0, so the data
+must speak to move a node. MAP by least squares on ``[X/σ; L] x = [y/σ; 0]`` (``LᵀL`` the prior's precision), with
 ``σ`` the residual RMS (re-estimated twice, from the effective degrees of freedom, floored at 1e-6 of the
 peak detent). Posterior covariance ``(XᵀX/σ² + LᵀL)⁻¹``: a parameter whose posterior variance is more than
 half its prior's is *not seen* by the data and is reported (:attr:`Calibration.unseen`), as is the common
 scale when no move constrains it.
 
-What it cannot fit: a torque that is not a sum over pole–core pairs. The cores' coupling (a magnet acting on
-another through a core) is ~0.35 N·m RMS at the prototype's holds, where the pair terms cancel it; tables alone
-cannot, and least squares then shrinks both tables towards zero. :attr:`Calibration.consistent` (the residual
-after the fit within 5 % of the uncorrected model's; the pairwise plants reach 0.1 %) says when a fit does not
-explain its data, and the summary warns not to use it.
+What it cannot fit: a torque that is neither a sum over pole–core pairs nor the modelled coupling's shape. The
+coupling is ~0.35 N·m RMS at the prototype's holds, where the pair terms cancel it: without its gain
+(``coupling=False`` on a pairwise model) least squares shrinks both tables towards zero.
+:attr:`Calibration.consistent` (the residual after the fit within 5 % of the uncorrected model's; the simulated
+plants reach 0.1 %) says when a fit does not explain its data, and the summary warns not to use it.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -55,7 +58,7 @@ from ..statics import is_torque_model
 from .limits import DriveLimits
 
 CALIBRATION_FILE = "calibration.yaml"  # beside the design file
-PRIOR = {"scale": 0.3, "node": 0.3, "curvature": 0.1}  # prior standard deviations (relative)
+PRIOR = {"scale": 0.3, "node": 0.3, "curvature": 0.1, "coupling": 1.0}  # prior standard deviations (relative)
 ENVELOPE_DEG = 5.0  # the envelope of a table: the largest |τ| within this many degrees of a node
 UNSEEN = 0.5  # a parameter is not seen when its posterior variance exceeds this fraction of its prior's
 SIGMA_FLOOR = 1e-6  # of the peak detent: the least noise assumed
@@ -375,7 +378,8 @@ class Calibration:
     ``scale_std``; the equations' residual RMS (N·m)
     ``residual_before`` (the base model) and ``residual_after``, ``sigma`` the noise it assumed; ``holds`` and
     ``equations`` counted; ``moved`` the nodes moved beyond 2σ; ``unseen`` what the data cannot see;
-    ``coupling`` whether the base model had the cores' coupling; ``backend``; ``label``."""
+    ``coupling`` whether the fitted model has the cores' coupling, ``coupling_gain`` ± ``coupling_std`` its
+    gain against the design's coupling (1: as modelled; 0: none); ``backend``; ``label``."""
 
     model: object
     nodes: np.ndarray
@@ -398,6 +402,8 @@ class Calibration:
     coupling: bool
     backend: str
     label: str = "calibrated"
+    coupling_gain: float = 1.0
+    coupling_std: float = 0.0
 
     @property
     def consistent(self) -> bool:
@@ -417,6 +423,8 @@ class Calibration:
                  f"{self.sigma * 1e3:.2g} mN·m)",
                  f"detent table ×{self.scale_detent:.4f} ± {self.scale_std[0]:.4f}, winding table "
                  f"×{self.scale_winding:.4f} ± {self.scale_std[1]:.4f} (fitted against nominal, θ⁰·θ / θ⁰·θ⁰)",
+                 (f"the cores' coupling ×{self.coupling_gain:.4f} ± {self.coupling_std:.4f}" if self.coupling
+                  else "no coupling through the cores"),
                  f"{len(self.moved)} table nodes moved beyond 2σ"]
         for m in self.moved[:8]:
             lines.append(f"  {m.table} at {math.degrees(m.angle):g}°: {m.nominal:+.4g} -> {m.fitted:+.4g} "
@@ -429,7 +437,8 @@ class Calibration:
     def to_dict(self, degrees: bool = True) -> dict:
         k = 180.0 / math.pi if degrees else 1.0
         return {"label": self.label, "backend": self.backend, "holds": self.holds, "equations": self.equations,
-                "coupling": self.coupling, "consistent": self.consistent,
+                "coupling": self.coupling, "coupling_gain": self.coupling_gain, "coupling_std": self.coupling_std,
+                "consistent": self.consistent,
                 ("nodes_deg" if degrees else "nodes_rad"): [float(x * k) for x in self.nodes],
                 "detent_Nm": [float(x) for x in self.detent], "winding_Nm": [float(x) for x in self.winding],
                 "detent_std_Nm": [float(x) for x in self.detent_std],
@@ -479,13 +488,15 @@ class Calibration:
         if design.coil.core != "iron":
             raise bad_value("calibration", "used with an iron-cored design", design.coil.core)
         coupling = bool(data.get("coupling", False))
-        cross = iron_model(design, coupling=True).coupling if coupling else None
+        gain = float(data.get("coupling_gain", 1.0))
+        cross = scaled_coupling(iron_model(design, coupling=True).coupling, gain) if coupling else None
         model = IronTorqueMap.from_tables(design, design.coil, nodes, det, win, coupling=cross)
         return cls(model, nodes, det, win, *arrays, float(data["scale_detent"]), float(data["scale_winding"]),
                    tuple(float(x) for x in data["scale_std"]), float(data["residual_before_Nm"]),
                    float(data["residual_after_Nm"]), float(data["sigma_Nm"]), int(data["holds"]),
                    int(data["equations"]), moved, tuple(str(u) for u in data["unseen"]), coupling,
-                   str(data["backend"]), str(data.get("label", "calibrated")))
+                   str(data["backend"]), str(data.get("label", "calibrated")), gain,
+                   float(data.get("coupling_std", 0.0)))
 
 
 def calibration_beside(design_path) -> Path | None:
@@ -522,12 +533,14 @@ def _ranges(nodes_deg: np.ndarray, mask: np.ndarray) -> list[str]:
     return out
 
 
-def calibrate(design, model, holds: Holds, *, prior: dict | None = None, scales: bool = True) -> Calibration:
+def calibrate(design, model, holds: Holds, *, prior: dict | None = None, scales: bool = True,
+              coupling: bool = True) -> Calibration:
     """Fit the pair tables of the iron ``model`` (an :class:`~spherestep.magnetics.IronTorqueMap`, the
     controller's) to ``holds`` (:func:`collect_holds`) and return the :class:`Calibration` (module docstring).
-    ``prior`` overrides the prior's standard deviations :data:`PRIOR` (keys ``scale``, ``node``, ``curvature``);
-    ``scales=False`` fits the shape corrections alone."""
-    from ..magnetics import IronTorqueMap
+    ``prior`` overrides the prior's standard deviations :data:`PRIOR` (keys ``scale``, ``node``, ``curvature``,
+    ``coupling``); ``scales=False`` fits the shape corrections alone; ``coupling`` fits the gain of the cores'
+    coupling (the model's, or the design's own for a pairwise model, from gain 0; ``False``: kept as it is)."""
+    from ..magnetics import IronTorqueMap, iron_model
 
     if not isinstance(model, IronTorqueMap):
         raise bad_value("model", "an iron torque model (spherestep.magnetics.IronTorqueMap: the pair tables "
@@ -546,10 +559,16 @@ def calibrate(design, model, holds: Holds, *, prior: dict | None = None, scales:
     d0, l0 = np.asarray(model.detent.tau, dtype=float), np.asarray(model.linear.tau, dtype=float)
     E = len(holds.kinds)
     Ad, Al = regression(model, holds.sample_R, holds.sample_c, holds.sample_w, holds.sample_eq, E)
+    # the cores' coupling: its torque (the model's at gain 1, else the design's own at gain 0) is a column of its own
+    cross, gain0 = model.coupling, 1.0
+    if cross is None and coupling:
+        cross, gain0 = iron_model(design, model.coil, model.linear.meshing, coupling=True).coupling, 0.0
+    fit_gain = coupling and cross is not None
     offset = np.zeros((E, 3))
-    if model.coupling is not None:  # the cores' coupling is kept as it is: its torque moves to the right side
+    if cross is not None:
         pair = IronTorqueMap(model.detent, model.linear, model.coil)
-        tot = np.concatenate([model.torque(holds.sample_R[i:i + 64], holds.sample_c[i:i + 64])
+        whole = replace(pair, coupling=cross)
+        tot = np.concatenate([whole.torque(holds.sample_R[i:i + 64], holds.sample_c[i:i + 64])
                               - pair.torque(holds.sample_R[i:i + 64], holds.sample_c[i:i + 64])
                               for i in range(0, len(holds.sample_R), 64)])  # in blocks: the coupling's memory
         offset = np.stack([np.bincount(holds.sample_eq, holds.sample_w * tot[:, a], minlength=E) for a in range(3)], 1)
@@ -558,8 +577,9 @@ def calibrate(design, model, holds: Holds, *, prior: dict | None = None, scales:
     ed, el = _envelope(nodes, d0), _envelope(nodes, l0)
     cols = [Ad @ d0, Al @ l0] if scales else []
     cols += [Ad[:, :, m] * ed[m] for m in np.nonzero(free)[0]] + [Al[:, :, m] * el[m] for m in np.nonzero(free)[0]]
+    cols += [offset] if fit_gain else []
     X = np.stack(cols, axis=-1).reshape(3 * E, -1)
-    base = Ad @ d0 + Al @ l0 + offset
+    base = Ad @ d0 + Al @ l0 + gain0 * offset
     y = (holds.rhs - base).reshape(-1)
     k = 2 if scales else 0
     nf = int(free.sum())
@@ -570,6 +590,8 @@ def calibrate(design, model, holds: Holds, *, prior: dict | None = None, scales:
     for s0 in (k, k + nf):
         blk = slice(s0, s0 + nf)
         P[blk, blk] = np.eye(nf) / p["node"] ** 2 + D2.T @ D2 / p["curvature"] ** 2
+    if fit_gain:
+        P[-1, -1] = 1.0 / p["coupling"] ** 2
     # the fitted tables and their covariance: θ = (1 + s) θ⁰ + e ⊙ δ
     J = np.zeros((2 * n, X.shape[1]))
     if scales:
@@ -617,6 +639,8 @@ def calibrate(design, model, holds: Holds, *, prior: dict | None = None, scales:
     if scales:
         v = np.zeros(X.shape[1])
         v[0] = v[1] = 1.0  # both tables ×(1 + s): the direction static holds cannot see
+        if fit_gain:
+            v[-1] = gain0  # and the coupling with them
         post = float(v @ cov @ v)
         pri = float(v @ np.linalg.inv(P) @ v)
         if post / pri > UNSEEN:
@@ -631,14 +655,35 @@ def calibrate(design, model, holds: Holds, *, prior: dict | None = None, scales:
             if abs(fit[m] - nom[m]) > 2.0 * sd[m] and abs(fit[m] - nom[m]) > 1e-3 * np.max(np.abs(nom)):
                 moved.append(Moved(name, float(nodes[m]), float(nom[m]), float(fit[m]), float(sd[m])))
     moved.sort(key=lambda m: -abs(m.fitted - m.nominal) / max(m.std, 1e-300))
+    gain, gain_std = (gain0 + float(x[-1]), math.sqrt(float(cov[-1, -1]))) if fit_gain else (gain0, 0.0)
+    if fit_gain and ratio[-1] > UNSEEN:
+        unseen.append(f"the coupling's gain (± {gain_std:.2g})")
+    if fit_gain and gain0 == 0.0 and abs(gain) <= 2.0 * gain_std:
+        cross = None  # a pairwise model whose data show no coupling stays pairwise
     fitted = IronTorqueMap.from_tables(design, model.coil, nodes, det, win, level=model.linear.meshing,
-                                       coupling=model.coupling)
+                                       coupling=None if cross is None else scaled_coupling(cross, gain))
     rms_before = float(np.sqrt(np.mean(y ** 2)))
     rms_after = float(np.sqrt(np.mean((y - X @ x) ** 2)))
     return Calibration(fitted, nodes.copy(), det, win, std[:n], std[n:], d0.copy(), l0.copy(),
                        float(eff[0]), float(eff[1]), (float(eff_std[0]), float(eff_std[1])),
                        rms_before, rms_after, sigma, len(holds), E, tuple(moved), tuple(unseen),
-                       model.coupling is not None, holds.backend)
+                       cross is not None, holds.backend, coupling_gain=gain, coupling_std=gain_std)
+
+
+def scaled_coupling(coupling, gain: float):
+    """The cores' coupling (a :class:`~spherestep.magnetics.IronTorqueMap`'s ``coupling``) with its energy, hence
+    its torque, ×``gain``: its series' spline coefficients scaled (the same splines otherwise)."""
+    import copy
+
+    if gain == 1.0:
+        return coupling
+    series = []
+    for spline in coupling.series:
+        out = copy.copy(spline)
+        tx, ty, c = spline.tck
+        out.tck = (tx, ty, np.asarray(c) * gain)
+        series.append(out)
+    return replace(coupling, series=tuple(series))
 
 
 def torque_error(model, plant, *, count: int = 200, seed=1) -> float:
