@@ -175,9 +175,11 @@ def solve_pairs(runs, out: Path) -> None:
 
 SHAPE_OUT = DATA / "iron_fem_shape.csv"
 SHAPE_PROTO_DEG = (5.0, 12.5, 3.0, 9.0, 14.0, 7.0, 2.0, 11.0)  # the prototype's angles, stretched to each magnet (passes in order)
-SHAPE_HEADER = ("# NGSolve 3-D FEM (as data/iron_fem.csv) of the shape table's held-out magnets: the prototype with "
+SHAPE_GRID_OUT = DATA / "iron_fem_shape_grid.csv"
+SHAPE_GRID_PROTO_DEG = (1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.0, 10.0, 11.0, 12.0, 13.0, 14.0, 15.0, 16.0, 18.0, 20.0)
+SHAPE_HEADER = ("# NGSolve 3-D FEM (as data/iron_fem.csv) of the shape table's {which}: the prototype with "
                 "magnet diameter dm_over_R * R and length lm_over_dm * d_m, every other ratio the prototype's.\n"
-                "# OPENBLAS_NUM_THREADS=1 nice -n 5 python scripts/fem_iron.py --shape [--maxh 0.002]   "
+                "# OPENBLAS_NUM_THREADS=1 nice -n 5 python scripts/fem_iron.py {flag} [--maxh 0.002]   "
                 "(rows appended point by point; a stopped run resumes). The angles are the prototype's {angles} deg "
                 "stretched by (theta_m0 + theta_c) / (theta_m + theta_c) (theta_m = atan(d_m / 2R) the magnet's "
                 "angular radius, theta_c the core's), one pass over the magnets per angle.\n"
@@ -195,33 +197,46 @@ def shape_angle(design, alpha0_deg: float) -> float:
     return round(alpha0_deg * stretch, 1)
 
 
-def shape_heldout(maxh: float = 2.0e-3, angles=SHAPE_PROTO_DEG) -> None:
-    """FEM pair torques of the shape table's held-out magnets (``iron_shape_table.HELD_OUT``) at ``angles`` (the
-    prototype's, stretched), appended to :data:`SHAPE_OUT`; rows already there are skipped."""
+def shape_heldout(maxh: float = 2.0e-3, angles=SHAPE_PROTO_DEG, grid: bool = False) -> None:
+    """FEM pair torques of the shape table's held-out magnets (``iron_shape_table.HELD_OUT``; with ``grid`` its
+    grid nodes but the prototype's, at :data:`SHAPE_GRID_PROTO_DEG` by default) at ``angles`` (the prototype's,
+    stretched), appended to :data:`SHAPE_OUT` (:data:`SHAPE_GRID_OUT`); rows already there are skipped."""
     sys.path.insert(0, str(Path(__file__).resolve().parent))
-    from iron_shape_table import HELD_OUT, INCH, design_at
+    from iron_shape_table import points
 
-    R = prototype().radius
+    out = SHAPE_GRID_OUT if grid else SHAPE_OUT
+    angles = SHAPE_GRID_PROTO_DEG if grid and angles is SHAPE_PROTO_DEG else angles
+    todo = [(x, a) for x, a, kind in points() if kind == ("grid" if grid else "held-out")
+            and not (grid and abs(x - 1.0 / 6.0) < 1e-9 and a == 0.5)]
     done = set()
-    if SHAPE_OUT.exists():
-        for line in SHAPE_OUT.read_text().splitlines():
+    if out.exists():
+        for line in out.read_text().splitlines():
             if line and line[0].isdigit():
                 v = [float(t) for t in line.split(",")[:4]]
                 done.add((round(v[0], 9), round(v[1], 9), v[2], v[3]))
     else:
-        SHAPE_OUT.write_text(SHAPE_HEADER.format(angles=", ".join(f"{a:g}" for a in angles)))
+        out.write_text(SHAPE_HEADER.format(which="grid nodes (but the prototype's)" if grid else "held-out magnets",
+                                           flag="--shape-grid" if grid else "--shape",
+                                           angles=", ".join(f"{a:g}" for a in angles)))
     for a0 in angles:
-        for d_in, asp in HELD_OUT:
-            xr = round(d_in * INCH / R, 12)
-            design = design_at(xr, asp)
+        for xr, asp in todo:
+            design = design_at_ratio(xr, asp)
             a = shape_angle(design, a0)
             if (round(xr, 9), round(asp, 9), a, maxh) in done:
                 continue
             det, lin, ne, tm, ts = pair(design, design.coil, math.radians(a), maxh)
-            print(f"d_m {d_in:g} in, l_m/d_m {asp:g}, alpha {a:g} deg: detent {det:.5g}, linear {lin:.5g} N m; "
+            print(f"d_m/R {xr:.4f}, l_m/d_m {asp:g}, alpha {a:g} deg: detent {det:.5g}, linear {lin:.5g} N m; "
                   f"{ne} elements, mesh {tm:.0f} s, {ts:.0f} s per factorisation", flush=True)
-            with open(SHAPE_OUT, "a") as fh:
+            with open(out, "a") as fh:
                 fh.write(",".join(f"{v:.9g}" for v in (xr, asp, a, maxh, ne, det, lin, tm, ts)) + "\n")
+
+
+def design_at_ratio(x: float, aspect: float):
+    """The prototype with a magnet of diameter ``x R`` and length ``aspect`` × that (``iron_shape_table``)."""
+    sys.path.insert(0, str(Path(__file__).resolve().parent))
+    from iron_shape_table import design_at
+
+    return design_at(x, aspect)
 
 
 def merge():
@@ -254,8 +269,10 @@ def _merge(out: Path, parts: list[Path]) -> None:
 if __name__ == "__main__":
     if "--merge" in sys.argv:
         merge()
-    elif "--shape" in sys.argv:  # [--maxh H (m)]: the shape table's held-out magnets, data/iron_fem_shape.csv
-        shape_heldout(float(sys.argv[sys.argv.index("--maxh") + 1]) if "--maxh" in sys.argv else 2.0e-3)
+    elif "--shape" in sys.argv or "--shape-grid" in sys.argv:  # [--maxh H (m)]: the shape table's held-out
+        # magnets (data/iron_fem_shape.csv) or its grid nodes near the axis (data/iron_fem_shape_grid.csv)
+        shape_heldout(float(sys.argv[sys.argv.index("--maxh") + 1]) if "--maxh" in sys.argv else 2.0e-3,
+                      grid="--shape-grid" in sys.argv)
     elif "--table" in sys.argv:
         at = sys.argv.index("--table")
         share, shares = (int(v) for v in sys.argv[at + 1:at + 3]) if len(sys.argv) > at + 2 else (0, 1)

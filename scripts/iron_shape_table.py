@@ -5,6 +5,9 @@
         # then writes src/spherestep/data/iron_shape_table.csv (the grid) and data/iron_shape_heldout.csv
     python scripts/iron_shape_table.py --write     # only assemble the two files from the stored solves
     python scripts/iron_shape_table.py --check     # the table's interpolation against the held-out solves
+    OPENBLAS_NUM_THREADS=1 python scripts/iron_shape_table.py --coupling   # the coupling tables over the grid and
+        # held out (data/iron_shape_coupling_solves.npz, resumable), then src/spherestep/data/iron_shape_coupling.npz
+        # and its held-out check (3.3 min at load 8: one core factorisation, ~12 s a point)
 
 What varies. By the scaling law (:mod:`spherestep.magnetics._ironscale`) only ratios matter. The table spans the
 magnet: its diameter over the rotor radius ``d_m / R`` (0.7 to 1.3 in on the 12-in prototype) and its aspect
@@ -13,7 +16,11 @@ the gap and the shell over ``R``; ``μr``). Each point is :func:`spherestep.magn
 prototype with that magnet (level 0, the moment method: one core factorisation serves every point, ~0.5–1 min a
 point here). The prototype's own point is ``data/iron_pair_table_mom.csv``. FEM (``scripts/fem_iron.py``) would
 take ~10 min and ~7 GB a point on this shared machine, so the table is the moment method's; the run-time model
-adds the prototype's FEM correction (:mod:`._ironscale`), exact at the prototype's ratios.
+brings in the prototype's FEM table (:func:`spherestep.magnetics._ironscale.shape_table_tables`), exact at the
+prototype's ratios and checked against the FEM at the held-out magnets (``scripts/fem_iron.py --shape``,
+``data/iron_fem_shape.csv``). When ``scripts/fem_iron.py --shape-grid`` has solved every grid node near the axis
+(``data/iron_fem_shape_grid.csv``, 144 FEM points), ``--write`` builds the grid from the FEM below 21° (stretched)
+and the moment method beyond, as the prototype's own table (:func:`fem_grid`).
 """
 
 from __future__ import annotations
@@ -88,8 +95,48 @@ def solve(todo) -> None:
               f"{np.abs(lin).max():.3f} N m, {time.perf_counter() - t:.0f} s", flush=True)
 
 
+FEM_GRID = ROOT / "data" / "iron_fem_shape_grid.csv"  # scripts/fem_iron.py --shape-grid
+
+
+def fem_grid(have: dict) -> dict | None:
+    """The grid's tables with the FEM below the FEM's last angle + 1° (the moment method beyond, as the
+    prototype's own table): ``{(d_m/R, l_m/d_m): (detent, linear)}`` at :data:`TABLE_NODES_DEG`, the prototype's
+    node from its FEM table; None unless :data:`FEM_GRID` holds every other node at every angle of
+    ``fem_iron.SHAPE_GRID_PROTO_DEG``."""
+    from scipy.interpolate import CubicSpline
+
+    from spherestep.magnetics._ironmap import TABLE_FILE
+
+    if not FEM_GRID.exists():
+        return None
+    fem = read_table(FEM_GRID)
+    proto = read_table(ROOT / "src" / "spherestep" / "data" / TABLE_FILE)
+    out = {}
+    for x, a, kind in points():
+        if kind != "grid":
+            continue
+        if abs(x - 1.0 / 6.0) < 1e-9 and a == 0.5:
+            out[(x, a)] = (proto[:, 1], proto[:, 2])
+            continue
+        rows = fem[np.isclose(fem[:, 0], x, rtol=1e-9) & np.isclose(fem[:, 1], a, rtol=1e-9)]
+        if len(np.unique(rows[:, 2])) < 18:  # fem_iron.SHAPE_GRID_PROTO_DEG
+            return None
+        rows = rows[np.argsort(rows[:, 2])]
+        cut = rows[-1, 2] + 1.0
+        det, lin = have[(x, a)]
+        far = TABLE_NODES_DEG >= cut
+        al = np.radians(np.r_[0.0, rows[:, 2], TABLE_NODES_DEG[far]])
+        near = ~far
+        det, lin = det.copy(), lin.copy()
+        det[near] = CubicSpline(al, np.r_[0.0, rows[:, 5], det[far]])(np.radians(TABLE_NODES_DEG[near]))
+        lin[near] = CubicSpline(al, np.r_[0.0, rows[:, 6], lin[far]])(np.radians(TABLE_NODES_DEG[near]))
+        out[(x, a)] = (det, lin)
+    return out
+
+
 def write() -> None:
-    """The package's table (the grid) and the held-out file, from the solves; atomic."""
+    """The package's table (the grid: the FEM near the axis when :func:`fem_grid` has it all, else the moment
+    method) and the held-out file (moment method), from the solves; atomic."""
     have = stored()
     for path, kind, head in ((TABLE, "grid", "the grid"), (HELD, "held-out", "held-out points (not in the table)")):
         rows = [(x, a) for x, a, k in points() if k == kind]
@@ -97,7 +144,12 @@ def write() -> None:
         if missing:
             print(f"{path.name}: {len(missing)} of {len(rows)} points not solved yet; not written")
             continue
-        text = (f"# Iron pair tables over the magnet's shape, {head}: moment method level 0 "
+        method = "moment method level 0"
+        if kind == "grid" and (fem := fem_grid(have)) is not None:
+            have = have | fem
+            method = ("NGSolve FEM near the axis (data/iron_fem_shape_grid.csv, the prototype's from its FEM table) "
+                      "and the moment method level 0 beyond")
+        text = (f"# Iron pair tables over the magnet's shape, {head}: {method} "
                 "(scripts/iron_shape_table.py), the prototype with magnet diameter d_m = dm_over_R * R and length "
                 "lm_over_dm * d_m, every other ratio the prototype's.\n# Torque (N m) about the centre on one +1 "
                 "magnet at alpha_deg from one core's axis, for the prototype's R, B_r and nominal ampere-turns "

@@ -63,7 +63,9 @@ def design_model(design, core: str | None = None, *, coupling: bool | None = Non
     if calibration is not None:
         return _calibrated(design, coil, calibration, limits)
     if coil.core == "iron":
-        source = "FEM table" if _has_fem_table(design, coil) else "method-of-moments table"
+        from ._ironscale import table_label
+
+        source = "FEM table" if _has_fem_table(design, coil) else table_label(design, coil)
         label = f"iron ({'coupled' if coupling else 'pairwise'}, {source})"
     else:
         label = "air (magnets' torque map)"
