@@ -138,6 +138,47 @@ def test_iron_affordability_is_the_prototype_parts(proto):
     assert not iron_is_stored(replace(design, coil=replace(design.coil, supply_voltage=12.0)))  # fewer ampere-turns
 
 
+def test_tasks_are_submitted_longest_first_by_their_cost_estimate():
+    from spherestep.synthesis.run import SOLVE_COST, Ladder, cost_estimate
+
+    relays, gimbal = load_spec(EXAMPLES / "prototype-relays-iron.yaml"), load_spec(EXAMPLES / "camera-gimbal.yaml")
+    ball = 12 * 0.0254
+    big = Candidate("truncated-icosidodecahedron", 1, "truncated-cuboctahedron", 1, 80.0, ball)  # 182 poles
+    proto = Candidate("truncated-icosahedron", 1, "truncated-cuboctahedron", 1, 80.0, ball)  # 92 poles
+    small = Candidate("truncated-icosahedron", 0, "truncated-cuboctahedron", 1, 60.0, ball)
+    assert cost_estimate(big, relays) > cost_estimate(proto, relays) > cost_estimate(small, relays) > 0
+    assert cost_estimate(big, relays) / cost_estimate(proto, relays) == pytest.approx((182 / 92) ** 2)
+    assert cost_estimate(proto, relays) == 2 * cost_estimate(proto, gimbal)  # the relay rung
+    wide = Candidate("truncated-icosahedron", 1, "truncated-cuboctahedron", 1, 80.0, ball, gap_scale=4.0)
+    normal = Ladder(relays, False, None, True)  # the normal budget: the baseline's wider gaps solve their iron
+    assert normal.may_solve(wide) and not normal.may_solve(proto)
+    assert cost_estimate(wide, relays, normal.may_solve(wide)) > SOLVE_COST > cost_estimate(big, relays, True)
+    assert cost_estimate(wide, gimbal, True) < SOLVE_COST  # air cores solve nothing
+
+
+@pytest.mark.slow
+def test_the_relay_rung_reuses_the_states_and_gives_the_same_row():
+    """The task climbs the cheap rungs and the relay rung on the same design (its states found once): the rows are
+    those of the rungs run apart, the relay rung building the design again."""
+    from spherestep.synthesis.ladder import climb, evaluate
+    from spherestep.synthesis.run import Ladder, relay_rung
+
+    spec = load_spec(EXAMPLES / "prototype-relays-iron.yaml")
+    c = Candidate("truncated-icosahedron", 1, "truncated-cuboctahedron", 0, 60.0, 12 * 0.0254, samples=400,
+                  capability_samples=32)
+    rows, designs = climb(c, spec)
+    assert set(designs) == {"iron"} and rows[0]["states"] == len(designs["iron"].states())
+    together = Ladder(spec, False, None)(c)
+    apart = evaluate(c, spec)
+    for row in apart:
+        if row["status"] == "ok":
+            relay_rung(c, row, spec)
+    drop = {"seconds", "worker"}
+    assert [{k: v for k, v in r.items() if k not in drop} for r in together] == \
+        [{k: v for k, v in r.items() if k not in drop} for r in apart]
+    assert together[0]["stage"] == "relays" and together[0]["relay_steps"] > 0
+
+
 # --- §2–3 a quick search end to end, and every finalist re-measured --------------------------------------------
 
 @pytest.fixture(scope="module")

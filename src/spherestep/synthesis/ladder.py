@@ -248,6 +248,13 @@ def _row(candidate: Candidate, core: str, spec, baseline) -> dict:
 def evaluate(candidate: Candidate, spec, allow_costly: bool = False, baseline: dict | None = None) -> list[dict]:
     """The ladder's cheap rungs for ``candidate``: one row per core of the spec (module docstring). Never raises
     for a design that cannot be built or measured: the row says where it stopped (``stage``) and why."""
+    return climb(candidate, spec, allow_costly, baseline)[0]
+
+
+def climb(candidate: Candidate, spec, allow_costly: bool = False, baseline: dict | None = None
+          ) -> tuple[list[dict], dict]:
+    """:func:`evaluate`'s rows and the designs it built, by core: the first live core's carries its stepper
+    states (computed once, by the states rung), so a later rung on it does not enumerate them again."""
     from ..explore import Unbuildable
 
     start = time.perf_counter()
@@ -351,7 +358,7 @@ def evaluate(candidate: Candidate, spec, allow_costly: bool = False, baseline: d
     seconds = time.perf_counter() - start
     for row in rows.values():
         row["seconds"] = seconds
-    return list(rows.values())
+    return list(rows.values()), designs
 
 
 def baseline_layout(spec) -> dict | None:

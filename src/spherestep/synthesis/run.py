@@ -23,7 +23,7 @@ import numpy as np
 
 from .. import checks
 from ..errors import InputError, bad_value
-from .ladder import PROTOTYPE, Candidate, baseline_layout, build, evaluate
+from .ladder import PROTOTYPE, Candidate, baseline_layout, build, climb
 
 STORE = "results"
 GAP_SCALES = (2.0, 4.0, 8.0)  # the baseline's air gap widened (iron: a table solve each, thorough budget)
@@ -187,31 +187,57 @@ def _submit_all(client, fn, items: list, *, say, what: str, retries: int = 2, pr
 
 class Ladder:
     """The cheap rungs for one spec as a picklable callable, ``Ladder(spec, allow_costly, baseline)(candidate)`` →
-    rows (:func:`~spherestep.synthesis.ladder.evaluate`, then :func:`relay_rung` for relay specs): what each Dask
+    rows (:func:`~spherestep.synthesis.ladder.climb`, then :func:`relay_rung` for relay specs on the same designs,
+    their stepper states found once): what each Dask
     task runs."""
 
     def __init__(self, spec, allow_costly: bool, baseline: dict | None, costly_neighbourhood: bool = False):
         self.spec, self.allow_costly, self.baseline = spec, allow_costly, baseline
         self.neighbourhood = costly_neighbourhood
 
+    def may_solve(self, candidate: Candidate) -> bool:
+        """Whether the task may solve an iron table (the budget allows costly iron, or the baseline's wider gaps)."""
+        return self.allow_costly or (self.neighbourhood and candidate.gap_scale != 1.0)
+
     def __call__(self, candidate: Candidate) -> list[dict]:
-        costly = self.allow_costly or (self.neighbourhood and candidate.gap_scale != 1.0)
-        rows = evaluate(candidate, self.spec, costly, self.baseline)
+        rows, designs = climb(candidate, self.spec, self.may_solve(candidate), self.baseline)
         if self.spec.relays:
             for row in rows:
                 if row.get("status") == "ok":
-                    relay_rung(candidate, row, self.spec)
+                    relay_rung(candidate, row, self.spec, designs.get(row["core"]))
         return rows
 
 
-def relay_rung(candidate: Candidate, row: dict, spec) -> None:
+SOLVE_COST = 1e15  # cost_estimate of a task that solves an iron table (minutes): above any enumeration's
+
+
+def cost_estimate(c: Candidate, spec, costly: bool = False) -> float:
+    """A task's relative cost, for submitting the longest first (Dask ``priority``): the state enumeration's,
+    ``(M N)²`` for ``M`` rotor poles and ``N`` stator caps within the cap (its candidate alignments grow so;
+    measured: the 182-pole layout on 29 coils 247 s, the 92-pole one 68 s, ratio 3.6 against 3.9), twice that
+    with a relay rung; a task that may solve an iron table (``costly``, and its ball or gap not the prototype's)
+    :data:`SOLVE_COST` more. Only the order matters."""
+    from ..packing import named
+
+    poles = len(named(c.rotor, c.rotor_level))
+    caps = named(c.stator, c.stator_level).centers
+    coils = int(np.count_nonzero(-caps[:, 2] >= math.cos(math.radians(c.cap_deg)) - 1e-12))
+    cost = float(poles * coils) ** 2 * (2.0 if spec.relays else 1.0)
+    scaled = c.gap_scale != 1.0 or not math.isclose(c.sphere_diameter, PROTOTYPE["sphere_diameter"], rel_tol=1e-9)
+    if costly and "iron" in spec.cores and scaled:
+        cost += SOLVE_COST
+    return cost
+
+
+def relay_rung(candidate: Candidate, row: dict, spec, design=None) -> None:
     """The ladder's relay rung, for relay specs: the settled relay plan of the stated turn (30° about z without
     one) on the design's own model (:func:`spherestep.drive.drive_turn`, ``mode="settled"``); prunes the row unless
-    every step lands within 0.5° of the plan."""
+    every step lands within 0.5° of the plan. ``design``: the row's design as the cheap rungs built it (its stepper
+    states already found), else built again."""
     from ..drive import drive_turn
 
     start = time.perf_counter()
-    design = build(candidate, row["core"], spec)
+    design = build(candidate, row["core"], spec) if design is None else design
     axis = spec.speed.axis.vector if spec.speed is not None else np.array([0.0, 0.0, 1.0])
     angle = spec.speed.turn if spec.speed is not None else math.radians(30.0)
     try:
@@ -395,8 +421,9 @@ def _climb(client, runner, spec, store, todo, say, label: str) -> None:
     fresh = [c for c in todo if any(c.key(spec.digest, core) not in done for core in spec.cores)]
     if not fresh:
         return
-    futures = {client.submit(runner, c, pure=False, retries=2, priority=c.rotor_level + c.stator_level): c
-               for c in fresh}
+    cost = {c: cost_estimate(c, spec, runner.may_solve(c)) for c in fresh}  # the longest first
+    futures = {client.submit(runner, c, pure=False, retries=2, priority=cost[c]): c
+               for c in sorted(fresh, key=lambda c: -cost[c])}
     bar = Progress(len(fresh))
     batch: list = []
     last = time.perf_counter()
