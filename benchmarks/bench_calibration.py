@@ -127,7 +127,8 @@ def main() -> None:
         row = {"plant": name, "holds": len(holds), "collect_s": None if math.isnan(collect) else collect, "fit_s": fit,
                "torque_error_before": e0, "torque_error_after": e1, "ratio": e0 / e1,
                "scale_detent": cal.scale_detent, "scale_winding": cal.scale_winding,
-               "scale_std": list(cal.scale_std), "consistent": cal.consistent,
+               "scale_std": list(cal.scale_std), "coupling_gain": cal.coupling_gain if cal.coupling else None,
+               "coupling_std": cal.coupling_std, "consistent": cal.consistent,
                "residual_before_Nm": cal.residual_before, "residual_after_Nm": cal.residual_after,
                "unseen": list(cal.unseen), "turn": {}}
         cells = []

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import json
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -107,6 +108,40 @@ def test_says_what_it_cannot_see(pairwise_setup):
     assert text and _covers(text[0], 120.0)
 
 
+@pytest.mark.slow
+def test_recovers_the_cores_coupling(pairwise_setup):
+    """The coupled-vs-pairwise mismatch both ways, on the same samples with the exact right sides: a plant with
+    the cores' coupling (the design's, on the setup's perturbed tables) and a pairwise model — the fit adds the
+    design's coupling at gain 1 within 3σ, the tables within 3 % of the plant's peak below 25°, the torque error
+    drops ≥ 5×; without the gain (``coupling=False``) the tables cannot take its place (flagged). And a pairwise
+    plant with a coupled model: the gain goes to 0 within 3σ."""
+    design, own, model, plant, holds = pairwise_setup
+    coupled = design_model(design).model
+    truth = replace(plant, coupling=coupled.coupling)
+    samples = replace(holds, rhs=_rhs_for(truth, holds), backend="synthetic")
+    cal = calibrate(design, model, samples)
+    assert cal.coupling and abs(cal.coupling_gain - 1.0) < max(3 * cal.coupling_std, 0.02)
+    assert cal.coupling_std < 0.05 and "coupling" in cal.summary()
+    seen = np.degrees(cal.nodes) < 25.0
+    for fit, true in ((cal.detent, plant.detent.tau), (cal.winding, plant.linear.tau)):
+        assert np.max(np.abs(fit - true)[seen]) < 0.03 * np.max(np.abs(true))
+    before, after = torque_error(model, truth), torque_error(cal.model, truth)
+    assert after < before / 5 and cal.consistent
+    # the calibrated servo on the coupled plant: a 90° turn (1.2 s) tracks as the exact model does, the pairwise
+    # model does worse
+    axis = np.array([1.0, 0.5, 2.0]) / math.sqrt(5.25)
+    traj = Trajectory.turn(np.eye(3), axis, math.pi / 2, 4 * (math.pi / 2) / 1.2 ** 2)
+    err = {name: float(np.max(simulate_servo(design, traj, truth, limits=own.limits, controller_model=ctrl,
+                                             settle=0.3, rate=500).tracking_error))
+           for name, ctrl in (("pairwise", model), ("calibrated", cal.model), ("exact", truth))}
+    assert err["calibrated"] <= 1.05 * err["exact"] + math.radians(0.005) < err["pairwise"]
+    blind = calibrate(design, model, samples, coupling=False)
+    assert not blind.coupling and not blind.consistent and "WARNING" in blind.summary()
+    back = calibrate(design, coupled, holds)  # the holds the loop recorded on the pairwise plant
+    assert abs(back.coupling_gain) < max(3 * back.coupling_std, 0.02)
+    assert torque_error(back.model, plant) < torque_error(coupled, plant) / 5
+
+
 def _rhs_for(plant, holds: Holds) -> np.ndarray:
     """The exact right sides the same samples would give on ``plant`` (its weighted torque sums)."""
     T = plant.torque(holds.sample_R, holds.sample_c)
@@ -152,6 +187,7 @@ def test_save_load_and_design_model(setup, tmp_path):
     assert np.allclose(back.detent, cal.detent, rtol=1e-12, atol=0) and np.allclose(back.winding, cal.winding,
                                                                                      rtol=1e-12, atol=0)
     assert back.unseen == cal.unseen and back.holds == cal.holds
+    assert back.coupling and back.coupling_gain == cal.coupling_gain and back.coupling_std == cal.coupling_std
     R = so3.random(5, 1)
     c = np.random.default_rng(2).uniform(-1, 1, (5, model.coil_count))
     assert np.allclose(back.model.torque(R, c), cal.model.torque(R, c), rtol=1e-10, atol=1e-12)
