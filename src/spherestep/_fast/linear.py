@@ -19,7 +19,8 @@ of the ambient gradient drops out). :func:`affine_call` picks the evaluator once
 * :func:`torque_affine` otherwise (any kernel, :func:`.kernels._point`).
 
 What the servo loop's :class:`spherestep.control.ModelCache` and the simulation's plant need when the orientation
-has moved.
+has moved; :func:`first_order` carries a cached ``K``, ``b`` to a nearby orientation with their derivatives (the
+law's cache at rest).
 """
 
 from __future__ import annotations
@@ -129,6 +130,24 @@ def spline_affine(breaks, lut, inv_delta, tau, g_ends, R, coils, C0, D, poles, P
         b1 += R[1, 0] * y0 + R[1, 1] * y1 + R[1, 2] * y2
         b2 += R[2, 0] * y0 + R[2, 1] * y1 + R[2, 2] * y2
     bias[0], bias[1], bias[2] = b0, b1, b2
+
+
+@njit(cache=True)
+def first_order(R, A, K, dK, bias, dbias, K1, bias1):
+    """``K1 = K + Σ_j ε_j dK[:, :, j]`` and ``bias1 = bias + dbias ε`` (written in place): ``K (3, N)`` and
+    ``bias (3,)`` evaluated at ``A (3, 3)``, their derivatives ``dK (3, N, 3)``, ``dbias (3, 3)`` per rad about
+    the fixed axes, carried to ``R (3, 3)`` near ``A`` with ``ε = vee(M − Mᵀ)/2``, ``M = R Aᵀ`` (``sin θ`` times
+    the axis of ``R Aᵀ``: its rotation vector to ``θ³/6``)."""
+    e0 = 0.5 * (R[2, 0] * A[1, 0] + R[2, 1] * A[1, 1] + R[2, 2] * A[1, 2]
+                - R[1, 0] * A[2, 0] - R[1, 1] * A[2, 1] - R[1, 2] * A[2, 2])
+    e1 = 0.5 * (R[0, 0] * A[2, 0] + R[0, 1] * A[2, 1] + R[0, 2] * A[2, 2]
+                - R[2, 0] * A[0, 0] - R[2, 1] * A[0, 1] - R[2, 2] * A[0, 2])
+    e2 = 0.5 * (R[1, 0] * A[0, 0] + R[1, 1] * A[0, 1] + R[1, 2] * A[0, 2]
+                - R[0, 0] * A[1, 0] - R[0, 1] * A[1, 1] - R[0, 2] * A[1, 2])
+    for i in range(3):
+        for k in range(K.shape[1]):
+            K1[i, k] = K[i, k] + dK[i, k, 0] * e0 + dK[i, k, 1] * e1 + dK[i, k, 2] * e2
+        bias1[i] = bias[i] + dbias[i, 0] * e0 + dbias[i, 1] * e1 + dbias[i, 2] * e2
 
 
 def affine_call(packed, C0: np.ndarray, D: np.ndarray):

@@ -29,11 +29,12 @@ torque ``d`` (N·m, fixed frame) that the model gets wrong, taken as constant be
 (``≈ 2ω_o + ω_d``, ``ω_o² + 2ω_oω_d`` and ``I ω_o² ω_d`` times ``Δ`` for small ``ωΔ``). The feedback cancels
 ``d̂`` (:class:`~spherestep.control.servo.ServoLaw` asks the allocation for ``τ* − d̂``), so a constant torque
 error is removed with the error dynamics' poles and a varying one is followed with bandwidth ``~ω_d``.
-Tuning (the servo law's default, :func:`disturbance_bandwidths`): a triple pole at ``10 ω_c`` (300 rad/s at 1 kHz)
-for a model with a detent; without one, ``10/3 ω_c`` (100 rad/s) at rest rising with the trajectory's speed as
-``|ω_d|/0.01 rad`` to ``10 ω_c``; off when the sensor is slower than ``10/3 ω_c/0.3``. The sensor's noise sets the
-rest value (0.02° at 1 kHz: ``d̂`` ≈ 0.9 N·m rms at 300 rad/s, 0.1 at 100), the detent's position-dependent error
-the value in motion and at rest (docs/control.md, "Robust to model error").
+Tuning (the servo law's default, :func:`disturbance_bandwidths`): a triple pole at rest at ``1/T`` (the coils'
+``L/R``) within ``[10/3 ω_c, 10 ω_c]`` for a model with a detent (128 rad/s for the iron prototype's coil), at
+``10/3 ω_c`` (100 rad/s) without one, rising with the trajectory's speed as ``|ω_d|/0.01 rad`` to ``10 ω_c`` (300
+rad/s at 1 kHz); off when the sensor is slower than ``10/3 ω_c/0.3``. The sensor's noise and the coils' lag set
+the rest value (0.02° at 1 kHz: ``d̂`` ≈ 0.9 N·m rms at 300 rad/s, 0.1 at 100), a position-dependent error
+the value in motion (docs/control.md, "Robust to model error").
 """
 
 from __future__ import annotations
@@ -59,23 +60,31 @@ DISTURBANCE_BANDWIDTH = DISTURBANCE_RATIO * BANDWIDTH  # rad/s: 100 at the defau
 MOTION_BANDWIDTH = MOTION_RATIO * BANDWIDTH  # rad/s: 300 at the default ω_c
 
 
-def disturbance_bandwidths(sensor_rate: float, bandwidth: float = BANDWIDTH, bias: bool = True
-                           ) -> tuple[float, float]:
+def disturbance_bandwidths(sensor_rate: float, bandwidth: float = BANDWIDTH, bias: bool = True,
+                           time_constant: float = 0.0) -> tuple[float, float]:
     """The servo law's default ``(ω_d, ω_m)`` (rad/s): the extended observer's triple pole at rest and its cap
-    in motion, for measurements at ``sensor_rate`` (Hz), the feedback's ``bandwidth`` ``ω_c`` and a model with
-    (``bias``) or without a bias torque: ``ω_m = min(10 ω_c, 0.3 f_s)``; ``ω_d = ω_m`` with a bias (a detent's
-    error is a stiffness, up to a fifth of the detent's, that the estimate must out-run at rest too: holds of
-    the iron prototype with its winding ×0.85 miss 0.05° by up to 0.34° at 100 rad/s, 0.03° at 300), else
-    ``10/3 ω_c`` (the error of coils alone is proportional to the torque they give, and the lower pole keeps
-    the sensor's noise out of the currents: holding the air-core prototype costs 1.3 W instead of 32 W);
-    ``(0, 0)`` (no disturbance estimate) when ``10/3 ω_c > 0.3 f_s``: a sensor too slow for an estimate well
-    above the loop's bandwidth, whose lag costs more than it removes (the 200 Hz hardware loop)."""
+    in motion, for measurements at ``sensor_rate`` (Hz), the feedback's ``bandwidth`` ``ω_c``, a model with
+    (``bias``) or without a bias torque and coils of electrical ``time_constant`` ``T = L/R`` (s; 0: not
+    known): ``ω_m = min(10 ω_c, 0.3 f_s)``; with a bias ``ω_d = min(ω_m, max(10/3 ω_c, 1/T))`` (``ω_m`` when
+    ``T`` is 0): the estimate at rest no faster than the coil's current follows near its bound, where the sensor's
+    noise that ``d̂`` carries (∝ ``ω_d^{5/2}``) is rectified into a torque shortfall — the current rises at most
+    at ``(u − c)/T`` and falls at ``(u + c)/T`` (the iron prototype's 0.65 H coil, ``T`` = 7.8 ms: 128 rad/s; its
+    holds near the bound missed 0.05° by up to 0.09° at 300); else ``10/3 ω_c`` (the error of coils alone is
+    proportional to the torque they give, and the lower pole keeps the sensor's noise out of the currents:
+    holding the air-core prototype costs 1.3 W instead of 32 W); ``(0, 0)`` (no disturbance estimate) when
+    ``10/3 ω_c > 0.3 f_s``: a sensor too slow for an estimate well above the loop's bandwidth, whose lag costs
+    more than it removes (the 200 Hz hardware loop). The detent's own stiffness (up to ~230 N·m/rad, above the
+    loop's ``I ω_c²``) is the model's business, not the estimate's: the law takes ``K`` and ``b`` to first order
+    about its cache's anchor at rest (:meth:`~spherestep.control.ModelCache.at`)."""
     wc = checks.positive(bandwidth, "bandwidth")
     top = DISTURBANCE_POLE * checks.positive(sensor_rate, "sensor_rate")
+    T = checks.non_negative(time_constant, "time_constant", "a non-negative time constant in seconds (0: unknown)")
     if DISTURBANCE_RATIO * wc > top + 1e-9:
         return 0.0, 0.0
     wm = min(MOTION_RATIO * wc, top)
-    return (wm if bias else DISTURBANCE_RATIO * wc), wm
+    if not bias:
+        return DISTURBANCE_RATIO * wc, wm
+    return (min(wm, max(DISTURBANCE_RATIO * wc, 1.0 / T)) if T > 0 else wm), wm
 
 
 def observer_gains(interval: float, bandwidth: float, disturbance_bandwidth: float, inertia: float,

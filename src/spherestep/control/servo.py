@@ -17,7 +17,10 @@ One period, at loop time ``t`` (s):
    the trajectory's ``(R_d, ω_d, α_d)(t)``;
 4. *model*: ``K(R̂)`` (3 × N, N·m per unit current) and the bias ``b(R̂) = τ(R̂, 0)`` from :class:`ModelCache`,
    re-evaluated only when ``R̂`` has turned more than ``K_REUSE`` since they were last evaluated (the bias only
-   for a model that has one);
+   for a model that has one); for a model with a bias, while the trajectory turns slower than ``SLOPE_SPEED``,
+   carried from there to ``R̂`` to first order (:meth:`ModelCache.at`'s ``slope``): held frozen, the detent's
+   stiffness — up to ~230 N·m/rad on the iron prototype, above the loop's own ``I ω_c²`` = 65 — is a
+   position-dependent torque error within the reuse angle that only a fast ``d̂`` could cancel;
 5. *allocation*: :func:`~spherestep.control.allocation.allocate_matrix`, least copper power with
    ``b + K c = τ*`` within the limits, warm-started from the last period's dual; the command is ``c``, the
    torque it promises ``τ_p = b + K c`` (what step 1 uses next period) and whether ``τ*`` was reachable.
@@ -77,6 +80,8 @@ ADAPT_RIDGE = 0.05  # its ridge, relative to the regressors' energy (damps the c
 ADAPT_LIMIT = 0.5  # the largest |θ| (a plant within ±50 % of the model's bias and winding)
 ADAPT_WINDING = False  # learn the winding's scale θ_K too (measured worse: the coils' L/R lag reads as a weaker winding)
 ADAPT_SPEED = 0.2  # rad/s: the scales learn only in motion (|ω_d| above this); at rest d̂ alone serves
+SLOPE_SPEED = 0.2  # rad/s: K and b to first order about their anchor while |ω_d| is below this (an anchor then
+# serves ≥ K_REUSE × rate / SLOPE_SPEED = 10 periods at 1 kHz, which pays for its slopes' 3 evaluations)
 
 
 class ModelCache:
@@ -101,29 +106,70 @@ class ModelCache:
         self._cos = 1.0 + 2.0 * math.cos(self.reuse)  # tr(R Aᵀ) at the reuse angle
         self.has_bias = bool(model.has_bias)
         self.evaluations = 0
+        self.slope_evaluations = 0
+        self._slopes: tuple[np.ndarray, np.ndarray] | None = None
+        self._K1, self._bias1 = np.zeros((3, model.coil_count)), np.zeros(3)
         self._at: np.ndarray | None = None
         self._K = np.zeros((3, model.coil_count))
         self._bias = np.zeros(3)
         self._zeros = np.zeros(model.coil_count)
         self._affine = _affine_terms(model)
+        from .._fast.linear import first_order  # compiled: imported with the law, not with the room
+
+        self._first_order = first_order
         self.compiled = self._affine is not None
 
-    def at(self, R: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def at(self, R: np.ndarray, slope: bool = False) -> tuple[np.ndarray, np.ndarray]:
         """``(K (3, N), b (3,))`` for one rotation ``R (3, 3)`` (trusted: the loop's own estimate). The arrays are
-        the cache's own, overwritten at the next re-evaluation: copy them to keep them."""
+        the cache's own, overwritten at the next re-evaluation: copy them to keep them.
+
+        ``slope``: to first order about the anchor ``A`` (the orientation they were last evaluated at),
+        ``K(A) + Σ_j ε_j ∂_j K(A)`` and ``b(A) + ∂b(A) ε`` with ``ε = vee(R Aᵀ − A Rᵀ)/2`` (fixed frame; ``≈
+        log(R Aᵀ)`` to ``|ε|³``), the derivatives ``∂_j`` along the fixed axes by forward differences of
+        ``reuse/2`` (3 evaluations, once per anchor, when first asked: :attr:`slope_evaluations`; their error
+        ``O(reuse)`` is of the order of the ``O(ε)`` neglected; one compiled call per period after that,
+        :func:`spherestep._fast.linear.first_order`).
+        Within the reuse angle the error is then ``O(ε²)`` instead of the stiffness ``∂b ε`` (the iron's detent:
+        up to ~230 N·m/rad, ×2e-3 rad)."""
         A = self._at
         if A is None or self._moved(R, A):
-            if self._affine is not None:
-                self._affine(R if R.flags.c_contiguous else np.ascontiguousarray(R), self._K, self._bias)
-                if not self.has_bias:
-                    self._bias[:] = 0.0
-            else:
-                self._K = np.asarray(self.model.torque_matrix(R), dtype=float)
-                if self.has_bias:
-                    self._bias = np.asarray(self.model.torque(R, self._zeros), dtype=float)
-            self._at = np.array(R, dtype=float)
+            self._evaluate(R, self._K, self._bias)
+            self._at = A = np.array(R, dtype=float)
+            self._slopes = None
             self.evaluations += 1
-        return self._K, self._bias
+        if not slope or self.reuse == 0:
+            return self._K, self._bias
+        if self._slopes is None:
+            self._slopes = self._derivatives(A)
+        dK, db = self._slopes
+        self._first_order(R, A, self._K, dK, self._bias, db, self._K1, self._bias1)
+        return self._K1, self._bias1
+
+    def _evaluate(self, R: np.ndarray, K: np.ndarray, bias: np.ndarray) -> None:
+        """``K(R)`` and ``b(R)`` written into ``K (3, N)`` and ``bias (3,)``."""
+        if self._affine is not None:
+            self._affine(R if R.flags.c_contiguous else np.ascontiguousarray(R), K, bias)
+            if not self.has_bias:
+                bias[:] = 0.0
+        else:
+            K[:] = np.asarray(self.model.torque_matrix(R), dtype=float)
+            bias[:] = np.asarray(self.model.torque(R, self._zeros), dtype=float) if self.has_bias else 0.0
+
+    def _derivatives(self, A: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """``(∂K (3, N, 3), ∂b (3, 3))`` at ``A`` along the fixed axes (``[..., j]``: per rad about axis ``j``),
+        forward differences of ``reuse/2`` from the anchor's own ``K``, ``b``."""
+        dK = np.empty(self._K.shape + (3,))
+        db = np.empty((3, 3))
+        h = 0.5 * self.reuse
+        Kp, bp = np.empty_like(self._K), np.empty(3)
+        for j in range(3):
+            v = np.zeros(3)
+            v[j] = h
+            self._evaluate(so3.exp(v) @ A, Kp, bp)
+            dK[:, :, j] = (Kp - self._K) / h
+            db[:, j] = (bp - self._bias) / h
+        self.slope_evaluations += 3
+        return dK, db
 
     def _moved(self, R: np.ndarray, A: np.ndarray) -> bool:
         """Whether ``R`` is more than ``reuse`` rad from ``A``: ``tr(R Aᵀ) < 1 + 2 cos(reuse)``."""
@@ -182,9 +228,10 @@ class ServoLaw:
     ``sensor_rate`` (Hz) the rate measurements arrive at (the observer's gains; default the controller's rate);
     ``observer_bandwidth`` (rad/s, default the observer's: ``ω_d`` with the disturbance estimate, else 120);
     ``disturbance_bandwidth`` and ``motion_bandwidth`` (rad/s, the extended observer's triple pole at rest and
-    in motion; default :func:`~spherestep.control.controller.disturbance_bandwidths`: 300 with a 1 kHz sensor
-    for a model with a bias (the iron's detent), 100 at rest and 300 in motion without, off with a sensor slower
-    than 333 Hz; ``disturbance_bandwidth=0``: no disturbance estimate, the PD
+    in motion; default :func:`~spherestep.control.controller.disturbance_bandwidths`: for a model with a bias
+    (the iron's detent) ``1/T`` at rest (``T`` = ``limits.time_constant``, the coil's ``L/R``; 128 rad/s for the
+    iron coil's 0.65 H) within ``[100, 300]``, 300 in motion with a 1 kHz sensor; 100 at rest and 300 in motion
+    without, off with a sensor slower than 333 Hz; ``disturbance_bandwidth=0``: no disturbance estimate, the PD
     law with feed-forward alone; a ``disturbance_bandwidth`` given alone: fixed poles); ``reuse``
     rad (see :class:`ModelCache`);
     ``delay`` the control periods between a command and the drive applying it (0 in simulation; 1 on hardware,
@@ -213,7 +260,7 @@ class ServoLaw:
         self.model, self.trajectory, self.controller = model, trajectory, controller
         self.limits = DriveLimits() if limits is None else limits
         rate = controller.rate if sensor_rate is None else checks.positive(sensor_rate, "sensor_rate")
-        wd, wm = disturbance_bandwidths(rate, controller.bandwidth, bool(model.has_bias))
+        wd, wm = disturbance_bandwidths(rate, controller.bandwidth, bool(model.has_bias), self.limits.time_constant)
         if disturbance_bandwidth is not None:
             wd, wm = disturbance_bandwidth, 0.0
         self.observer = Observer(trajectory.start, inertia=controller.inertia, sensor_period=1.0 / rate,
@@ -290,14 +337,14 @@ class ServoLaw:
         tau = self.controller.torque(obs.R, obs.w, Rd, wd, ad)
         if obs.l3:
             tau = tau - obs.d
-        alloc = self._allocate(tau, obs.R)
+        alloc = self._allocate(tau, obs.R, self.cache.has_bias and float(wd @ wd) < SLOPE_SPEED * SLOPE_SPEED)
         self._promised.append(alloc.torque)
         return ServoCommand(alloc.currents, alloc.torque, tau, alloc.reachable, obs.R, obs.w, obs.d)
 
-    def _allocate(self, tau: np.ndarray, R: np.ndarray):
-        """Steps 4 and 5 of the module: ``K``/bias at ``R``, the period's current box and the warm-started
-        allocation of ``tau``."""
-        K, b = self.cache.at(R)
+    def _allocate(self, tau: np.ndarray, R: np.ndarray, slope: bool = False):
+        """Steps 4 and 5 of the module: ``K``/bias at ``R`` (to first order about the cache's anchor with
+        ``slope``), the period's current box and the warm-started allocation of ``tau``."""
+        K, b = self.cache.at(R, slope)
         if self.adapt:
             b_nominal = b
             kb, kk = 1.0 + self._theta[0], 1.0 + self._theta[1]
