@@ -10,6 +10,9 @@ built (each an :class:`~spherestep.magnetics.IronTorqueMap`, so each can also be
   calibration start from the pairwise model (``design_model(design, coupling=False)``), which misses the coupling;
 * pairwise plant: the reverse (the plant without the coupling, the controller on the coupled model).
 
+The fit has the coupling's gain as a parameter on every plant (``calibrate(..., coupling=True)``; by default only
+a pairwise model's is fitted).
+
 Per plant: ``control.collect_holds`` on the simulated plant (the servo on the controller's model, 1 kHz, a random
 walk of 25° moves), ``control.calibrate``, then
 
@@ -120,7 +123,7 @@ def main() -> None:
             collect = time.perf_counter() - t0
             key.write_bytes(pickle.dumps(holds))
         t0 = time.perf_counter()
-        cal = calibrate(design, ctrl, holds)
+        cal = calibrate(design, ctrl, holds, coupling=True)  # the coupling's gain fitted on every plant
         fit = time.perf_counter() - t0
         e0 = torque_error(ctrl, plant, count=200)
         e1 = torque_error(cal.model, plant, count=200)

@@ -114,7 +114,8 @@ def test_recovers_the_cores_coupling(pairwise_setup):
     the cores' coupling (the design's, on the setup's perturbed tables) and a pairwise model — the fit adds the
     design's coupling at gain 1 within 3σ, the tables within 3 % of the plant's peak below 25°, the torque error
     drops ≥ 5×; without the gain (``coupling=False``) the tables cannot take its place (flagged). And a pairwise
-    plant with a coupled model: the gain goes to 0 within 3σ."""
+    plant with a coupled model (``coupling=True``: by default a coupled model's gain is kept at 1): the gain goes
+    to 0 within 3σ."""
     design, own, model, plant, holds = pairwise_setup
     coupled = design_model(design).model
     truth = replace(plant, coupling=coupled.coupling)
@@ -137,7 +138,7 @@ def test_recovers_the_cores_coupling(pairwise_setup):
     assert err["calibrated"] <= 1.05 * err["exact"] + math.radians(0.005) < err["pairwise"]
     blind = calibrate(design, model, samples, coupling=False)
     assert not blind.coupling and not blind.consistent and "WARNING" in blind.summary()
-    back = calibrate(design, coupled, holds)  # the holds the loop recorded on the pairwise plant
+    back = calibrate(design, coupled, holds, coupling=True)  # the holds the loop recorded on the pairwise plant
     assert abs(back.coupling_gain) < max(3 * back.coupling_std, 0.02)
     assert torque_error(back.model, plant) < torque_error(coupled, plant) / 5
 

@@ -30,7 +30,11 @@ coupling (a magnet acting on another through a core: not a sum over pole–core 
 place), whose torque ``g T_c(R)`` (from the coupled model's tables; the design's own coupling at ``g = 0`` for a
 pairwise model, the model's at ``g = 1`` for a coupled one) is a column of its own. Gaussian prior: ``s`` of
 standard deviation 0.3, ``δ`` 0.3 and its second differences 0.1 (smooth shape changes), ``g`` 1.0, so the data
-must speak to move a node. MAP by least squares on ``[X/σ; L] x = [y/σ; 0]`` (``LᵀL`` the prior's precision), with
+must speak to move a node. By default ``g`` is fitted only for a pairwise model: a coupled model's coupling at
+its modelled strength lets the holds at rest see the tables' common scale (the coupling does not scale with them),
+where with ``g`` free only the moves weigh it — and a move's currents are the commanded ones, which on a motor whose
+current loop lags (the emulated iron motor: L/R = 7.8 ms, 200 Hz) bias the scale (×0.35–0.5 with ``g`` free on the
+emulated motor at ×1.2 detent, ×0.85 winding). MAP by least squares on ``[X/σ; L] x = [y/σ; 0]`` (``LᵀL`` the prior's precision), with
 ``σ`` the residual RMS (re-estimated twice, from the effective degrees of freedom, floored at 1e-6 of the
 peak detent). Posterior covariance ``(XᵀX/σ² + LᵀL)⁻¹``: a parameter whose posterior variance is more than
 half its prior's is *not seen* by the data and is reported (:attr:`Calibration.unseen`), as is the common
@@ -423,8 +427,9 @@ class Calibration:
                  f"{self.sigma * 1e3:.2g} mN·m)",
                  f"detent table ×{self.scale_detent:.4f} ± {self.scale_std[0]:.4f}, winding table "
                  f"×{self.scale_winding:.4f} ± {self.scale_std[1]:.4f} (fitted against nominal, θ⁰·θ / θ⁰·θ⁰)",
-                 (f"the cores' coupling ×{self.coupling_gain:.4f} ± {self.coupling_std:.4f}" if self.coupling
-                  else "no coupling through the cores"),
+                 ("no coupling through the cores" if not self.coupling else
+                  f"the cores' coupling ×{self.coupling_gain:.4f} ± {self.coupling_std:.4f}" if self.coupling_std > 0
+                  else f"the cores' coupling kept as modelled (×{self.coupling_gain:g})"),
                  f"{len(self.moved)} table nodes moved beyond 2σ"]
         for m in self.moved[:8]:
             lines.append(f"  {m.table} at {math.degrees(m.angle):g}°: {m.nominal:+.4g} -> {m.fitted:+.4g} "
@@ -534,12 +539,14 @@ def _ranges(nodes_deg: np.ndarray, mask: np.ndarray) -> list[str]:
 
 
 def calibrate(design, model, holds: Holds, *, prior: dict | None = None, scales: bool = True,
-              coupling: bool = True) -> Calibration:
+              coupling: bool | None = None) -> Calibration:
     """Fit the pair tables of the iron ``model`` (an :class:`~spherestep.magnetics.IronTorqueMap`, the
     controller's) to ``holds`` (:func:`collect_holds`) and return the :class:`Calibration` (module docstring).
     ``prior`` overrides the prior's standard deviations :data:`PRIOR` (keys ``scale``, ``node``, ``curvature``,
-    ``coupling``); ``scales=False`` fits the shape corrections alone; ``coupling`` fits the gain of the cores'
-    coupling (the model's, or the design's own for a pairwise model, from gain 0; ``False``: kept as it is)."""
+    ``coupling``); ``scales=False`` fits the shape corrections alone. ``coupling``: whether to fit the gain of the
+    cores' coupling (the model's from 1, or the design's own from 0 for a pairwise model); default (None) only for
+    a pairwise model — a coupled model's coupling is kept at its modelled strength, which lets the holds fix the
+    tables' common scale (module docstring); ``False``: never."""
     from ..magnetics import IronTorqueMap, iron_model
 
     if not isinstance(model, IronTorqueMap):
@@ -561,9 +568,9 @@ def calibrate(design, model, holds: Holds, *, prior: dict | None = None, scales:
     Ad, Al = regression(model, holds.sample_R, holds.sample_c, holds.sample_w, holds.sample_eq, E)
     # the cores' coupling: its torque (the model's at gain 1, else the design's own at gain 0) is a column of its own
     cross, gain0 = model.coupling, 1.0
-    if cross is None and coupling:
+    if cross is None and coupling is not False:
         cross, gain0 = iron_model(design, model.coil, model.linear.meshing, coupling=True).coupling, 0.0
-    fit_gain = coupling and cross is not None
+    fit_gain = cross is not None and (coupling is True or (coupling is None and gain0 == 0.0))
     offset = np.zeros((E, 3))
     if cross is not None:
         pair = IronTorqueMap(model.detent, model.linear, model.coil)
