@@ -130,11 +130,11 @@ def step_us(model, trajectory, measured, reuse: float = 2e-3) -> tuple[float, in
 
 def tracker_us(design, trajectory) -> float:
     from spherestep.hardware import FieldTracker
-    from spherestep.sensing import CoilField, Estimator, FieldTable, default_array
+    from spherestep.sensing import default_array, field_model
 
     sensors = default_array(design, 8)
-    table = FieldTable.build(design, sensors.positions)
-    estimator = Estimator(table, sensors.axes, sensors.part, (CoilField.build(design, sensors.positions),))
+    model = field_model(design, sensors.positions)  # the session's: the cores' field on an iron design
+    table, estimator = model.table, model.estimator(sensors)
     R = trajectory.sample(np.arange(PERIODS) * 1e-3)[0]
     rng = np.random.default_rng(1)
     fields = [np.einsum("sab,sa->sb", sensors.axes, table.field(r)) + sensors.part.noise_T *

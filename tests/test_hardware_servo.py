@@ -141,13 +141,12 @@ def starved(rig, faults, duration=3.0, rate=200.0, lockstep=True, **options):
     from spherestep.dynamics import Rotor
     from spherestep.hardware import (DriveLink, EmulatedMotor, FieldTracker, LockstepLink, MotorPty, run_servo,
                                      wire_limits)
-    from spherestep.sensing import CoilField, Estimator, FieldTable
+    from spherestep.sensing import field_model
 
     design, sensors, drive = rig["design"], rig["sensors"], rig["drive"]
     traj = turn_reference(np.eye(3), DEMO_AXIS, 2 * math.pi, 2.4, delay=0.2)
     rotor = Rotor.from_design(design, damping=0.01)
-    estimator = Estimator(FieldTable.build(design, sensors.positions), sensors.axes, sensors.part,
-                          (CoilField.build(design, sensors.positions),))
+    estimator = field_model(design, sensors.positions).estimator(sensors)  # the session's (the cores on iron)
     law = ServoLaw(rig["model"], traj, GeometricPD(rotor.inertia, bandwidth=2 * math.pi * 3, rate=rate,
                                                    damping=rotor.damping),
                    limits=wire_limits(drive), sensor_rate=rate, delay=1, observer_bandwidth=rate)
