@@ -1,7 +1,7 @@
 """The control room's speed and the three drive modes, in one run.
 
 Run: ``OPENBLAS_NUM_THREADS=1 .venv/bin/python benchmarks/bench_control.py`` (about 5–10 minutes on a shared
-2-core machine; ``--quick`` skips the three-mode comparison).
+2-core machine; ``--quick`` skips the three-mode comparison; ``--json PATH`` also stores the numbers).
 
 1. Allocation for the prototype's 29 coils (``K(R)`` of the magnets' torque map at 100 uniform orientations,
    requests of 0.2–1.8 N·m within reach): median time per call of ``allocate_matrix`` (dual Newton), and in the
@@ -26,6 +26,7 @@ import time
 
 import numpy as np
 
+from _record import Record
 from _timing import median_seconds
 from spherestep import so3
 from spherestep.control import DriveLimits, allocate_matrix, allocate_relay, torque_capability
@@ -70,6 +71,7 @@ def cpu_per_call(func, cases, repeats: int = 5) -> float:
 
 
 def main() -> None:
+    record = Record("control")  # --json PATH: the numbers below stored for scripts/docs_numbers.py
     quick = "--quick" in sys.argv
     print(f"# bench_control  {datetime.datetime.now().isoformat(timespec='minutes')}  {platform.platform()}  "
           f"cpus={os.cpu_count()}  python={platform.python_version()}  "
@@ -104,6 +106,10 @@ def main() -> None:
     print(f"CPU time per call (µs): Newton {1e6 * cpu['newton']:.1f}, pinv {1e6 * cpu['pinv']:.1f}, "
           f"Clarabel {1e6 * cpu['clarabel']:.1f}")
     print(f"largest difference Newton vs Clarabel currents: {agree:.2e} (per unit)")
+    record.put("allocation us", {"newton": 1e6 * fast, "pinv": 1e6 * pinv, "clarabel": 1e6 * clar,
+                                 "out of reach": 1e6 * cone, "relay": 1e6 * relay})
+    record.put("allocation cpu us", {k: 1e6 * v for k, v in cpu.items()})
+    record.put("newton vs clarabel", agree)
 
     print("\n## closed loop at 1 kHz (hold, 0.2 s simulated)")
     R = so3.random(1, 3)[0]
@@ -125,16 +131,21 @@ def main() -> None:
     print("\n## capability map")
     start = time.perf_counter()
     cap = torque_capability(design, tmap, samples=1000, seed=0)
+    record.put("capability 1000 s", time.perf_counter() - start)
     print(f"1000 orientations: {time.perf_counter() - start:.1f} s; available torque percentiles (N·m) "
           f"{ {k: round(v, 3) for k, v in cap.percentiles().items()} }; "
           f"≥ 1 N·m on {100 * cap.fraction_at_least(1.0):.1f} %, ≥ 1.5 N·m on {100 * cap.fraction_at_least(1.5):.1f} %")
 
+    record.put("closed loop", {"x real time": 0.2 / wall, "ms per period": 1e3 * wall / 201, "K(R) ms": 1e3 * Kt,
+                               "torque ms": 1e3 * tq, "hold worst deg": worst})
     if quick:
+        record.write()
         return
     print("\n## the demo's 360° turn about (1, 0.5, 2), three ways")
     start = time.perf_counter()
     comparison = compare_drives(design, model=tmap, damped_servo=True)
-    print(f"(compared in {time.perf_counter() - start:.0f} s wall)")
+    compared = time.perf_counter() - start
+    print(f"(compared in {compared:.0f} s wall)")
     print(f"{'mode':>24} {'time s':>9} {'final °':>9} {'max track °':>12} {'peak W':>8} {'mean W':>8}")
     for r in comparison.results:
         d = r.to_dict()
@@ -144,6 +155,8 @@ def main() -> None:
     print(f"bang-bang bound {comparison.bound:.3f} s; servo / bound = {comparison.ratio:.2f}; ramped pull-out "
           f"{comparison.pull_out_rate:.1f} steps/s")
     print(json.dumps(comparison.to_dict(), allow_nan=False))
+    record.put("compare drives s", compared)
+    record.write()
 
 
 if __name__ == "__main__":

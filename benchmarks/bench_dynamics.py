@@ -1,6 +1,6 @@
 """Simulated seconds per wall-clock second for the prototype's rotor (medians of repeats).
 
-Run: ``.venv/bin/python benchmarks/bench_dynamics.py``.
+Run: ``.venv/bin/python benchmarks/bench_dynamics.py [--json PATH]``.
 
 One plan step (the coils of a stepper state energised, the rotor released 3° off it) integrated for 2 s
 (Yoshida 4th order: 3 torque evaluations per step) at the time step ``dynamics.tune`` chooses for the model
@@ -21,6 +21,7 @@ import time
 
 import numpy as np
 
+from _record import Record
 from spherestep import so3
 from spherestep.dynamics import Integrator, tune
 from spherestep.motor import coil_currents
@@ -40,6 +41,7 @@ def speed(model, rotor, dt: float, R0, c, repeats: int = 3, duration: float = 2.
 
 
 def main() -> None:
+    record = Record("dynamics")  # --json PATH: the rows below stored for scripts/docs_numbers.py
     print(f"# bench_dynamics  {datetime.datetime.now().isoformat(timespec='minutes')}  {platform.platform()}  "
           f"cpus={os.cpu_count()}  python={platform.python_version()}  "
           f"OPENBLAS_NUM_THREADS={os.environ.get('OPENBLAS_NUM_THREADS', 'unset')}")
@@ -58,6 +60,9 @@ def main() -> None:
         fast, fine = speed(model, tuning.rotor, 5e-3, R0, c), speed(model, tuning.rotor, 1e-3, R0, c)
         print(f"{name:>22} {1000 * tuning.dt:>6.1f} ms {tuned:>12.1f} {plain:>12.1f} {tuned / plain:>6.1f}x "
               f"{fast:>9.1f} {fine:>9.1f}")
+        record.put(name, {"dt ms": 1e3 * tuning.dt, "x real time": tuned, "numpy x real time": plain,
+                          "dt 5 ms x real time": fast, "dt 1 ms x real time": fine})
+    record.write()
 
 
 if __name__ == "__main__":

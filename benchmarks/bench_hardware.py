@@ -8,7 +8,8 @@ parse, one device control step), ``DRIVE`` round trips per second against the em
 magnetometers, the device in its own process), and whole sessions at 200 Hz: holding a pose, the 360° turn
 about (1, 0.5, 2) in 2.4 s, and the fault drill (time from each injected fault to all coils off). The machine's
 load average is printed with them: on a shared 2-core machine the loop rate is the machine's, not the code's.
-Run: ``.venv/bin/python benchmarks/bench_hardware.py`` (``--servo`` for the current mode only).
+Run: ``.venv/bin/python benchmarks/bench_hardware.py`` (``--servo`` for the current mode only; ``--json PATH``
+also stores the numbers for ``scripts/docs_numbers.py``).
 """
 
 from __future__ import annotations
@@ -22,6 +23,7 @@ import time
 
 import numpy as np
 
+from _record import Record
 from spherestep.commutation import Plan, Step, default_channel_map
 from spherestep.hardware import DryRun, PtyDevice, Serial, play
 from spherestep.hardware.protocol import crc16, crc16_table, decode, encode
@@ -30,6 +32,7 @@ FRAMES = 500
 SERVO_RATES = (200.0, 500.0)  # Hz: the loop's former default and today's
 REPEATS = 5
 RATE, RATE_STEPS = 200.0, 200  # a schedule to keep: steps at RATE Hz
+RECORD = Record("hardware", argv=[])  # the run's record; from sys.argv (``--json PATH``) when run as a script
 
 
 def frames_per_second(cases: dict, frames: dict) -> dict:
@@ -83,6 +86,8 @@ def main() -> None:
         print(f"{name:<34} {rate:>12,.0f} {rate / base:>13.2f}")
     print(f"play() of {RATE_STEPS} steps at {RATE:g} Hz over pty: worst step lateness "
           f"{statistics.median(lags) * 1000:.2f} ms (median of {REPEATS} runs; max {max(lags) * 1000:.2f} ms)")
+    RECORD.put("relay frames per second", rates)
+    RECORD.put("play lateness ms", {"rate Hz": RATE, "median": statistics.median(lags) * 1e3, "max": max(lags) * 1e3})
 
 
 def servo() -> None:
@@ -139,6 +144,7 @@ def servo() -> None:
     print(f"{'per frame':<34} {'median µs':>10} {'ratio to CRC':>13}")
     for name, sec in costs.items():
         print(f"{name:<34} {sec * 1e6:>10.1f} {sec / base:>13.2f}")
+    RECORD.put("per frame us", {name: sec * 1e6 for name, sec in costs.items()})
 
     with MotorPty(EmulatedMotor(design, model, sensors, drive=drive), watchdog_ms=1000) as dev, \
             DriveLink(dev.port, timeout=0.5) as link:
@@ -149,6 +155,7 @@ def servo() -> None:
             for _ in range(200):
                 link.drive(block)
             rounds.append(200 / (time.perf_counter() - t))
+        RECORD.put("DRIVE round trips per second", statistics.median(rounds[1:]))
         print(f"DRIVE round trips over pty against the emulated motor: {statistics.median(rounds[1:]):,.0f}/s "
               f"(median of {REPEATS} rounds of 200; min {min(rounds[1:]):,.0f}, max {max(rounds[1:]):,.0f})")
 
@@ -164,9 +171,11 @@ def servo() -> None:
         for rate in SERVO_RATES:
             s = session(hold(target), 3.0, R0=np.eye(3), rate=rate, **extra)
             held = [math.degrees(so3.distance(tr.R, target)) for t, tr in s.truth if t > 0.5]
-            _row(f"hold 3 s at {rate:g} Hz, max error after 0.5 s, {how}", s.report, max(held, default=math.nan))
+            _row(f"hold 3 s at {rate:g} Hz, max error after 0.5 s, {how}", s.report, max(held, default=math.nan),
+                 ("hold", how, rate))
             s = session(turning, 3.0, rate=rate, **extra)
-            _row(f"360° (1,0.5,2) 2.4 s at {rate:g} Hz, end error, {how}", s.report, math.degrees(s.report.end_error))
+            _row(f"360° (1,0.5,2) 2.4 s at {rate:g} Hz, end error, {how}", s.report, math.degrees(s.report.end_error),
+                 ("turn", how, rate))
     print(f"load average now {os.getloadavg()[0]:.1f}")
     at = 1.0  # mid-turn, on the coil carrying the most current (index −1); the line faults at 0.4 s of a hold
     drill = {"open coil": (MotorFaults(open_coil=(-1, at)), True), "coil stuck at full current":
@@ -184,15 +193,24 @@ def servo() -> None:
         latency = (s.final.off_at - start) * 1000
         off += (0 <= latency <= 100) and not s.final.enabled and s.report.outcome != "done"
         print(f"{name:<28} {'lockstep' if in_lockstep else 'pty':>9} {s.report.outcome:>8} {latency:>15.1f}")
+        RECORD.values.setdefault("faults", []).append({"fault": name, "where": "lockstep" if in_lockstep else "pty",
+                                                       "outcome": s.report.outcome, "to all off ms": latency})
     print(f"all coils off within the watchdog period: {off} of {len(drill)}")
+    RECORD.put("faults all off", [off, len(drill)])
 
 
-def _row(label: str, report, error: float) -> None:
+def _row(label: str, report, error: float, key: tuple) -> None:
+    RECORD.values.setdefault("sessions", []).append(
+        {"case": key[0], "how": key[1], "rate asked Hz": key[2], "rate Hz": report.rate, "missed": report.missed,
+         "realtime": report.realtime, "cpu mean ms": report.cpu_mean * 1e3, "cpu max ms": report.cpu_max * 1e3,
+         "outcome": report.outcome, "error deg": error})
     print(f"{label:<52} {report.rate:>8.0f} {report.missed:>7} {'yes' if report.realtime else 'no':>3} "
           f"{report.cpu_mean * 1e3:>7.2f}/{report.cpu_max * 1e3:<8.2f} {report.outcome:>8} {error:>9.4f}")
 
 
 if __name__ == "__main__":
+    RECORD = Record("hardware")  # --json PATH: what this run measured, for scripts/docs_numbers.py
     if "--servo" not in sys.argv:
         main()
     servo()
+    RECORD.write()

@@ -1,6 +1,6 @@
 """Timings of spherestep.harmonics against simple baselines measured in the same run (medians of repeats).
 
-Run: ``.venv/bin/python benchmarks/bench_harmonics.py``. Baselines:
+Run: ``.venv/bin/python benchmarks/bench_harmonics.py [--json PATH]``. Baselines:
 
 * P^l matrix: the elementwise three-term recurrence in l (``legendre_P`` broadcast over all m, n), and Wigner's
   explicit sum evaluated naively in floating point (with ``lgamma``); both on fewer angles, scaled per angle.
@@ -19,6 +19,7 @@ import numpy as np
 import scipy
 from scipy.special import gammaln, sph_harm_y
 
+from _record import Record
 from _timing import median_seconds
 from spherestep import so3
 from spherestep.harmonics import (
@@ -65,6 +66,7 @@ def naive_wigner_sum(l: int, beta: np.ndarray) -> np.ndarray:
 
 
 def main() -> None:
+    record = Record("harmonics")  # --json PATH: the rows below stored for scripts/docs_numbers.py
     rng = np.random.default_rng(0)
     rows = []
 
@@ -125,6 +127,9 @@ def main() -> None:
     for task, ours, name, baseline, error in rows:
         ratio = baseline / ours if np.isfinite(baseline) else float("nan")
         print(f"{task:<34} {ours * 1e3:>10.2f}  {name:<44} {baseline * 1e3:>13.1f} {ratio:>8.1f} {error:>11.1e}")
+        record.values.setdefault("rows", []).append({"task": task, "s": ours, "baseline": name, "baseline s": baseline,
+                                                     "max diff": error})
+    record.write()
 
 
 if __name__ == "__main__":

@@ -9,7 +9,8 @@ air-core map, and the FEM time per solve (read from data/iron_fem.csv, written b
 machine: a FEM solve takes minutes and is not repeated here).
 
 Run: ``OPENBLAS_NUM_THREADS=1 nice -n 5 .venv/bin/python benchmarks/bench_iron.py [--level 0] [--no-mom]`` (level 0
-keeps the factorisation to a few minutes on a loaded machine; the default map uses level 1).
+keeps the factorisation to a few minutes on a loaded machine; the default map uses level 1); ``--json PATH`` also
+stores the numbers for ``scripts/docs_numbers.py``.
 """
 
 from __future__ import annotations
@@ -22,6 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
+from _record import Record
 from _timing import median_seconds
 from spherestep import so3
 from spherestep.magnetics import _iron as iron
@@ -30,6 +32,8 @@ from spherestep.magnetics import iron_model, torque_map
 from spherestep.magnetics._ironmap import read_table
 from spherestep.motor import prototype
 from spherestep.motor.coil import iron_coil
+
+RECORD = Record("iron", argv=[])  # the run's record; from sys.argv (``--json PATH``) when run as a script
 
 
 def model_timings() -> None:
@@ -105,6 +109,11 @@ def model_timings() -> None:
         print(f"| dynamics, {name}, tuned dt {1e3 * dt:.2f} ms | {factor:.1f} × real time | |")
     for name, *_, cap in rows:
         print(f"| capability map, 400 orientations, {name} | {cap:.1f} s | |")
+    RECORD.put("model", {"label": own.label, "E+tau pairwise us": 1e6 * t_pair, "E+tau coupled numpy us": 1e6 * t_exact,
+                         "E+tau coupled tables us": 1e6 * t_own, "E+tau coupled packed us": 1e6 * t_packed,
+                         "tables cold build s": build, "coupling grid s": rebuild,
+                         "rows": [{"model": name, "dt ms": 1e3 * dt, "x real time": factor, "capability s": cap}
+                                  for name, dt, factor, cap in rows]})
 
 
 def main() -> None:
@@ -141,13 +150,19 @@ def main() -> None:
     print(f"| MoM: pair table, per angle (detent + linear) | {per_angle:.2f} s | |")
     print(f"| iron map: 1000 orientations | {1e3 * t_iron:.1f} ms | {t_iron / t_air:.2f} × air map |")
     print(f"| iron map: one orientation | {1e6 * one_iron:.0f} µs | {one_iron / one_air:.2f} × air map |")
+    RECORD.put("mom", {"level": level, "cells": len(solver.cells), "factorise s": t1 - t0, "per angle s": per_angle,
+                       "iron map 1000 ms": 1e3 * t_iron, "air map 1000 ms": 1e3 * t_air,
+                       "iron map one us": 1e6 * one_iron, "air map one us": 1e6 * one_air})
     if fem is not None:
         solve = float(np.median(fem[:, 6]))
         mesh = float(np.median(fem[:, 5]))
+        RECORD.values["mom"].update({"fem mesh s": mesh, "fem solve s": solve})
         print(f"| FEM (NGSolve): mesh one angle | {mesh:.1f} s | |")
         print(f"| FEM (NGSolve): one solve | {solve:.1f} s | {solve / per_angle:.0f} × MoM per angle; "
               f"{solve / one_iron:.2g} × iron map per orientation |")
 
 
 if __name__ == "__main__":
+    RECORD = Record("iron")  # --json PATH: what this run measured, for scripts/docs_numbers.py
     main()
+    RECORD.write()

@@ -1,7 +1,7 @@
 """Timings of spherestep.packing (medians of repeats, time.perf_counter), with a brute-force baseline
 measured in the same run.
 
-Run: ``.venv/bin/python benchmarks/bench_packing.py [--quick]``.
+Run: ``.venv/bin/python benchmarks/bench_packing.py [--quick] [--json PATH]``.
 
 * refine the truncated icosahedron (60 caps) until it has at least 10,000 caps (level 6: 21,872 caps);
 * ``validate()`` and ``min_separation()`` on that packing (KD-tree neighbourhoods);
@@ -21,6 +21,7 @@ import platform
 import numpy as np
 import scipy
 
+from _record import Record
 from _timing import median_seconds
 from spherestep.packing import by_name, refine, semiregular
 
@@ -43,6 +44,7 @@ def fmt(seconds: float) -> str:
 
 
 def main() -> None:
+    record = Record("packing")  # --json PATH: the numbers below stored for scripts/docs_numbers.py
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="fewer repeats")
     args = parser.parse_args()
@@ -83,6 +85,11 @@ def main() -> None:
     print()
     print(f"brute-force N² / KD-tree min separation on {len(mid)} caps: {brute / kd:.1f}x "
           f"(results agree to {agree:.1e} rad)")
+    record.put("refined caps", len(big))
+    record.put("seconds", {key: row[1] for key, row in zip(("refine", "validate", "min_separation", "symmetry_order",
+                                                            "symmetry_order 120", "semiregular", "kd", "brute"), rows)})
+    record.put("brute caps", len(mid))
+    record.write()
 
 
 if __name__ == "__main__":

@@ -1,6 +1,6 @@
 """The geometric (Sec. III-A) and potential (Sec. III-B) planners side by side on the same trajectories.
 
-Run: ``.venv/bin/python benchmarks/bench_planners.py [--trials N]``.
+Run: ``.venv/bin/python benchmarks/bench_planners.py [--trials N] [--json PATH]``.
 
 For each trial: a 360° turn about a random axis from a random stepper state of the prototype, at steps of
 half a max step. Reported per planner: median and worst tracking error (Park distance of achieved to
@@ -20,12 +20,14 @@ import time
 
 import numpy as np
 
+from _record import Record
 from spherestep.commutation import about_axis, plan_geometric, plan_potential, steps_for
 from spherestep.motor import prototype
 from spherestep.potential import MotorPotential
 
 
 def main() -> None:
+    record = Record("planners")  # --json PATH: the rows below stored for scripts/docs_numbers.py
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--trials", type=int, default=10)
     args = parser.parse_args()
@@ -55,6 +57,11 @@ def main() -> None:
         d = np.array(data)
         print(f"{name:>10} {np.median(d[:, 0]):>12.2f} {d[:, 1].max():>11.2f} {np.median(d[:, 2]):>11.2f} "
               f"{np.median(d[:, 3]):>6.0f} {d[:, 4].mean():>10.2f} {int(d[:, 5].sum()):>7d} {np.median(d[:, 6]):>8.0f}")
+        record.put(name, {"trials": args.trials, "median error deg": np.median(d[:, 0]), "worst error deg": d[:, 1].max(),
+                          "final error deg": np.median(d[:, 2]), "steps": np.median(d[:, 3]),
+                          "coils per step": d[:, 4].mean(), "blocked": int(d[:, 5].sum()),
+                          "steps per s": np.median(d[:, 6])})
+    record.write()
 
 
 if __name__ == "__main__":

@@ -1,7 +1,7 @@
 """Timings of spherestep.potential for the prototype: the exact forms, the fast path and ducc0, side by side.
 
-Run: ``.venv/bin/python benchmarks/bench_potential.py`` (``OPENBLAS_NUM_THREADS=1`` recommended on a shared
-machine; the header prints it).
+Run: ``.venv/bin/python benchmarks/bench_potential.py [--json PATH]`` (``OPENBLAS_NUM_THREADS=1`` recommended on
+a shared machine; the header prints it).
 
 Table (batches of 1000 random orientations, random currents on all 29 coils and a state's 4 coils): the energy
 of eq. (4) in the harmonic form (Plancherel with the corrected eq. (16)), the pairwise form (energy, energy +
@@ -30,6 +30,7 @@ import numpy as np
 import scipy
 from threadpoolctl import threadpool_limits
 
+from _record import Record
 from _timing import median_seconds
 from spherestep import so3
 from spherestep.motor import prototype
@@ -57,6 +58,7 @@ def anchor(model: MotorPotential, R: np.ndarray, c: np.ndarray):
 
 
 def main() -> None:
+    record = Record("potential")  # --json PATH: the rows below stored for scripts/docs_numbers.py
     rng = np.random.default_rng(0)
     design = prototype()
     states = design.states()
@@ -166,6 +168,13 @@ def main() -> None:
     for name in ("fast", "exact"):
         dt, factor = dynamics[name]
         print(f"{'dynamics at the tuned step, ' + name:<52} {factor:>8.1f}x real time (dt {1e3 * dt:.2f} ms)")
+    record.put("batch us per orientation", {task: 1e6 * seconds / K for task, seconds, *_ in rows})
+    record.put("batch vs exact", {task: vs for task, _, _, vs, _ in rows})
+    record.put("single us", {task: 1e6 * seconds for task, seconds in single})
+    record.put("equilibria 1e4 s", {"fast": eq_fast, "exact": eq_exact, "converged": converged})
+    record.put("planner steps per s", planner)
+    record.put("dynamics", {name: {"dt ms": 1e3 * dt, "x real time": f} for name, (dt, f) in dynamics.items()})
+    record.write()
 
 
 def _compiled_call(model: MotorPotential):

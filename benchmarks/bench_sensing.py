@@ -2,7 +2,8 @@
 sensor count, global start, symmetry, the marker's cost, and a 1 kHz tracking run with the IMU alternatives.
 
 Run: ``OPENBLAS_NUM_THREADS=1 .venv/bin/python benchmarks/bench_sensing.py [--quick]``, or one section with
-``--timing``, ``--model-error``, ``--servo``, ``--calibration``. Times are medians of
+``--timing``, ``--model-error``, ``--servo``, ``--calibration``, ``--docs`` (the README's: time per call and the
+default array's accuracy; ``--json PATH`` stores them). Times are medians of
 repeated calls (``_timing.median_seconds``); ``× magpylib`` compares one estimator update with one magpylib
 evaluation of the rotor's field at the same sensors (what a per-iteration magpylib estimator would pay at
 least once per iteration). Errors are geodesic angles in degrees.
@@ -19,10 +20,13 @@ import time
 import magpylib
 import numpy as np
 
+from _record import Record
 from _timing import median_seconds
 from spherestep import sensing, so3
 from spherestep.magnetics import rotor_collection
 from spherestep.motor import prototype
+
+RECORD = Record("sensing", argv=[])  # the run's record; from sys.argv (``--json PATH``) when run as a script
 
 
 def table_accuracy(design, array):
@@ -61,6 +65,7 @@ def timing(design, array):
     for name, f in rows:
         t = t_mag if f is rows[0][1] else median_seconds(300, f)
         print(f"| {name} | {t * 1e6:.0f} | {1 / t:.0f} | {t_mag / t:.1f} |")
+        RECORD.values.setdefault("timing us", {})[name] = t * 1e6
     e = est.track(m, R_prev, c)
     print(f"one-step tracking error: {math.degrees(so3.distance(e.R, R)):.4f}°; "
           f"after solve: {math.degrees(so3.distance(est.solve(m, R_prev, c).R, R)):.4f}°")
@@ -244,8 +249,22 @@ def servo(design, array):
               f"{math.degrees(np.sqrt(np.mean(est ** 2))):.4f} | {time.perf_counter() - t0:.1f} |")
 
 
+def docs(design, array, samples: int = 300):
+    """The numbers the README quotes: time per call, and the accuracy of the default array (24 sensors)."""
+    timing(design, array)
+    a = sensing.accuracy(design, array, samples=samples, seed=len(array))
+    print(f"default array ({len(array)} sensors), {samples} Haar-random orientations: RMS {math.degrees(a.rms):.4f}°, "
+          f"worst {math.degrees(a.worst):.4f}°")
+    RECORD.put("accuracy", {"sensors": len(array), "samples": samples, "rms deg": math.degrees(a.rms),
+                            "worst deg": math.degrees(a.worst)})
+
+
 def main() -> None:
     quick = "--quick" in sys.argv
+    if "--docs" in sys.argv:
+        design = prototype()
+        docs(design, sensing.default_array(design))
+        return
     if "--timing" in sys.argv:
         design = prototype()
         timing(design, sensing.default_array(design))
@@ -284,4 +303,6 @@ def main() -> None:
 
 
 if __name__ == "__main__":
+    RECORD = Record("sensing")  # --json PATH: what this run measured, for scripts/docs_numbers.py
     main()
+    RECORD.write()

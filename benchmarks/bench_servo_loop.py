@@ -16,7 +16,8 @@ same run.
 
 "Before" is the same code with the compiled pieces swapped for the reference ones (a model wrapper without packed
 terms; the NumPy Newton and Clarabel). Run: ``OPENBLAS_NUM_THREADS=1 python benchmarks/bench_servo_loop.py``.
-Prints CPU µs (process time, so a busy machine does not inflate it much) and the load average.
+Prints CPU µs (process time, so a busy machine does not inflate it much) and the load average; ``--json PATH``
+also stores them (``scripts/docs_numbers.py bench`` renders docs/hardware.md's and docs/control.md's tables).
 """
 
 from __future__ import annotations
@@ -30,6 +31,7 @@ import time
 
 import numpy as np
 
+from _record import Record
 from spherestep import so3
 from spherestep.control import GeometricPD, ModelCache, ServoLaw, Trajectory
 from spherestep.control import allocation as alloc_module
@@ -168,6 +170,7 @@ def emulator_tick_us(design, model) -> tuple[float, float]:
 
 
 def main() -> None:
+    record = Record("servo_loop")  # --json PATH: the numbers below stored for scripts/docs_numbers.py
     print(f"# bench_servo_loop  {datetime.datetime.now().isoformat(timespec='minutes')}  {platform.platform()}  "
           f"cpus={os.cpu_count()}  load={os.getloadavg()[0]:.1f}  "
           f"OPENBLAS_NUM_THREADS={os.environ.get('OPENBLAS_NUM_THREADS', 'unset')}")
@@ -184,6 +187,7 @@ def main() -> None:
             before = law_parts(Unpacked(model), turn, measured)
         for part in now:
             print(f"  {name:>5} {part:>20} {now[part]:9.1f} | {before[part]:9.1f}")
+        record.put(f"law {name}", {part: [now[part], before[part]] for part in now})
         step, evaluations = step_us(model, turn, measured)
         worst, _ = step_us(model, turn, measured, reuse=0.0)
         with reference_allocation():
@@ -192,8 +196,11 @@ def main() -> None:
         print(f"  {name:>5} {'law.step (turn)':>20} {step:9.1f} | {step_b:9.1f}   (K(R) evaluated {evaluations} "
               f"times in {PERIODS})")
         print(f"  {name:>5} {'law.step, K each':>20} {worst:9.1f} | {worst_b:9.1f}")
+        record.values[f"law {name}"].update({"law.step (turn)": [step, step_b], "law.step, K each": [worst, worst_b],
+                                             "K evaluations": [evaluations, PERIODS]})
     tracker = tracker_us(design, turn)
     print(f"  {'':>5} {'magnetometer update':>20} {tracker:9.1f}   (Hall tracker, 8 magnetometers)")
+    record.put("magnetometer update", tracker)
     print("\nsimulate_servo, one 1 kHz period (CPU µs): now | before | x real time now | max |ΔR| (rad)")
     for name, model in models.items():
         for case, traj in (("hold", hold), ("turn 20°", turn)):
@@ -201,11 +208,14 @@ def main() -> None:
             before, R_before = simulate_us(design, Unpacked(model), traj, 0.3)
             diff = float(so3.distance(R_now, R_before).max())
             print(f"  {name:>5} {case:>9} {now:9.1f} | {before:9.1f} | {1e3 / now:6.2f} | {diff:.1e}")
+            record.put(f"simulate {name} {case.split()[0]}", {"now": now, "before": before, "max dR rad": diff})
     print("\nthe emulated motor's tick (CPU µs): device step with coils and rotor | magnetometer read")
     for name, model in models.items():
         step, sense = emulator_tick_us(design, model)
         print(f"  {name:>5} {step:9.1f} | {sense:9.1f}")
+        record.put(f"emulator {name}", {"device step": step, "magnetometer read": sense})
     print(f"# load at the end {os.getloadavg()[0]:.1f}")
+    record.write()
 
 
 if __name__ == "__main__":

@@ -9,10 +9,16 @@ Blocks on their own lines hold tables; inline blocks hold a sentence's numbers. 
     python scripts/docs_numbers.py forces                # data/forces_states.json: `spherestep forces`, 20 states
     python scripts/docs_numbers.py robust [BENCH.json]   # data/servo_robust.json: benchmarks/bench_servo_robust.py
     python scripts/docs_numbers.py iron                  # data/iron_compare.json: scripts/iron_compare.py
-    python scripts/docs_numbers.py all                   # demo + forces (the end-of-session run)
+    python scripts/docs_numbers.py bench [NAME ...]      # data/bench_NAME.json: every benchmark of BENCHES (or
+                                                         # those named) run one after another: ~15 min quiet,
+                                                         # ~40 min at load 10 (bench_motor's 812-pole rotor)
+    python scripts/docs_numbers.py all                   # demo + forces (the end-of-session run; not bench)
     python scripts/docs_numbers.py                       # rewrite every block from the stored files
     python scripts/docs_numbers.py --check               # list the blocks that differ, exit 1 if any
 
+``bench`` is a separate step (minutes of both cores): run it on a quiet machine, alone; each stored benchmark
+records its date, command, machine and the load average at its start and end, and every table it feeds states
+them. The gallery's blocks read ``src/spherestep/data/gallery/metrics.csv`` (``scripts/gallery_metrics.py``).
 Each command that stores a measurement then rewrites every block. ``tests/test_docs_numbers.py`` renders every
 block again from the stored files and compares it with the docs (and holds the cheap stored numbers against the
 live code).
@@ -20,6 +26,7 @@ live code).
 
 from __future__ import annotations
 
+import csv
 import datetime
 import json
 import os
@@ -39,6 +46,7 @@ STORES = {
     "forces": DATA / "forces_states.json",
     "robust": DATA / "servo_robust.json",
     "iron": DATA / "iron_compare.json",
+    "gallery": ROOT / "src" / "spherestep" / "data" / "gallery" / "metrics.csv",  # scripts/gallery_metrics.py
 }
 # the demo summary's keys not stored: file lists and per-state lists (their counts are the numbers)
 DROP = ("escape_violation_states", "escape_violation_states_note", "files")
@@ -47,7 +55,12 @@ MARKER = re.compile(r"<!-- ([a-z0-9-]+):(start|end) -->")
 
 
 def stored(name: str) -> dict | list:
-    return json.loads(STORES[name].read_text(encoding="utf-8"))
+    """A stored measurement: JSON, or a CSV as ``{first column: {column: value}}``."""
+    path = STORES[name]
+    if path.suffix == ".csv":
+        with path.open(encoding="utf-8", newline="") as f:
+            return {row[next(iter(row))]: {k: _num(v) for k, v in row.items()} for row in csv.DictReader(f)}
+    return json.loads(path.read_text(encoding="utf-8"))
 
 
 def _store(name: str, value) -> None:
@@ -182,6 +195,14 @@ def move_servo(s: dict) -> str:
             f"{m['max_tracking_error_deg']:.2f}°")
 
 
+def demo_servo_power(s: dict) -> str:
+    """docs/control.md: the demo's servo turn on both models, supply power and tracking."""
+    i, a = _mode(s["drives"], "servo"), _mode(s["drives_other"], "servo")
+    return (f"peaks of **{i['peak_power_W']:.0f} W iron and {a['peak_power_W']:.0f} W air**, mean "
+            f"{i['mean_power_W']:.0f} / {a['mean_power_W']:.0f} W, tracked within {i['max_tracking_error_deg']:.2f}° / "
+            f"{a['max_tracking_error_deg']:.2f}°")
+
+
 def run_frames(s: dict) -> str:
     """docs/errors.md: what ``run`` says of the demo's plan."""
     return f"{s['plan']['steps'] + 1} frames (the start and {s['plan']['steps']} steps)"
@@ -271,6 +292,19 @@ def iron_drives(s: dict) -> str:
         f"**{servo['time_s']:.2f} s** (bang-bang bound {d['bang_bang_bound_s']:.2f} s), final error "
         f"{servo['final_error_deg']:.3f}°, max tracking error {servo['max_tracking_error_deg']:.2f}°, peak "
         f"{servo['peak_power_W']:.0f} W, mean {servo['mean_power_W']:.1f} W")
+
+
+def iron_meaning(s: dict) -> str:
+    """docs/magnetics.md, "What this means": the demo's iron numbers in its sentence."""
+    i = s["iron"]
+    ratio = s["capability"]["available_torque_N_m"]["50"] / s["capability_other"]["available_torque_N_m"]["50"]
+    polarity = ("a reversed coil still pulls the pole in" if i["wrong_polarity_attracts"] else
+                f"a reversed coil repels out to {i['wrong_polarity_angles_deg'][-1]:.0f}°")
+    return (f"(median {i['iron_offset_median_deg']:.1f}°) away from the geometric state the commutation assumes: the "
+            "Sec. III-A tolerance is not met, and stepping has to be planned on the iron model — where most relay "
+            "activations no longer move the rotor at all. Polarity switching does what the paper assumes near the "
+            f"axis ({polarity}). Current control with every coil works: the iron gives {ratio:.1f}× the air core's "
+            "median torque capability")
 
 
 # ------------------------------------------------------------------------------------------------------ forces
@@ -380,17 +414,490 @@ def iron_compare_table(rows: dict) -> str:
     return "\n".join(lines)
 
 
+# ------------------------------------------------------------------------------------------ stored benchmarks
+
+# each benchmark's command (in benchmarks/) and its store, data/bench_NAME.json: ``docs_numbers.py bench [NAME...]``
+BENCHES = {
+    "servo_loop": ("bench_servo_loop.py",),
+    "hardware": ("bench_hardware.py",),
+    "iron": ("bench_iron.py",),
+    "packing": ("bench_packing.py",),
+    "motor": ("bench_motor.py", "--levels", "1", "2", "3"),
+    "harmonics": ("bench_harmonics.py",),
+    "potential": ("bench_potential.py",),
+    "dynamics": ("bench_dynamics.py",),
+    "planners": ("bench_planners.py",),
+    "control": ("bench_control.py", "--quick"),
+    "sensing": ("bench_sensing.py", "--docs"),
+}
+STORES.update({f"bench-{name}": DATA / f"bench_{name}.json" for name in BENCHES})
+
+
+def _when(b: dict) -> str:
+    """When and under what load a stored benchmark ran: ``2026-11-26 00:18 UTC, load 5.5–7.1``."""
+    lo, hi = sorted(b["load"])
+    load = f"{lo:.1f}" if f"{lo:.1f}" == f"{hi:.1f}" else f"{lo:.1f}–{hi:.1f}"
+    return f"{b['measured']}, load {load}"
+
+
+def _us(x: float) -> str:
+    return f"{x:.0f}" if x >= 10 else f"{x:.1f}"
+
+
+def _range(values, fmt: str = "{:.2f}", sep: str = "–") -> str:
+    lo, hi = min(values), max(values)
+    a, b = fmt.format(lo), fmt.format(hi)
+    return a if a == b else f"{a}{sep}{b}"
+
+
+LAW_ROWS = (("estimate (observer predict + correct)", "estimate"),
+            ("feedback (trajectory + geometric PD)", "feedback"),
+            ("`K(R)` and bias, one evaluation (`ModelCache`, compiled: `spherestep._fast.linear`)", "K(R) and bias"),
+            ("allocation, warm-started (compiled Newton: `spherestep._fast.allocation`)", "allocation"),
+            ("the supply box + allocation (the law's)", "supply box + allocation"),
+            ("out of reach: closest reachable torque (compiled bisection \\| Clarabel)", "closest reachable"),
+            ("`ServoLaw.step` on a 20° turn", "law.step (turn)"),
+            ("`ServoLaw.step`, `K(R)` every period (the fast turn's worst case)", "law.step, K each"))
+
+
+def loop_cost_table(b: dict) -> str:
+    """docs/hardware.md: the law's cost per period by part, now | before (``bench_servo_loop.py``)."""
+    v = b["values"]
+    air, iron = v["law air"], v["law iron"]
+    lines = [f"Measured {_when(b)} (`benchmarks/bench_servo_loop.py`; {b['machine']}); CPU µs, now \\| before issue "
+             "27 (the reference paths in the same run):", "",
+             "| part of one period | air-core map, µs | iron model (pairwise), µs |", "|---|---|---|"]
+    for label, key in LAW_ROWS:
+        if key == "law.step (turn)":
+            label += (f" (`K(R)` re-evaluated in {air['K evaluations'][0]} / {iron['K evaluations'][0]} of "
+                      f"{air['K evaluations'][1]} periods)")
+        lines.append(f"| {label} | {_us(air[key][0])} \\| {_us(air[key][1])} | {_us(iron[key][0])} \\| "
+                     f"{_us(iron[key][1])} |")
+    mag = _us(v["magnetometer update"])
+    lines.append(f"| + magnetometer update (the Hall tracker, 8 magnetometers) | {mag} | {mag} |")
+    return "\n".join(lines)
+
+
+def _simulate(b: dict) -> list[dict]:
+    return [r for k, r in b["values"].items() if k.startswith("simulate ")]
+
+
+def loop_simulate(b: dict) -> str:
+    """docs/hardware.md: ``simulate_servo``'s cost per 1 kHz period and the emulated motor's tick."""
+    sims = _simulate(b)
+    now, before = [r["now"] / 1e3 for r in sims], [r["before"] / 1e3 for r in sims]
+    emu = [r for k, r in b["values"].items() if k.startswith("emulator ")]
+    return (f"`simulate_servo` at 1 kHz: {_range(now)} ms per period, "
+            f"{_range([1 / t for t in now], '{:.1f}')}× real time (before: {_range(before)} ms); the emulated motor's "
+            f"tick: {_range([r['device step'] for r in emu], '{:.0f}')} µs a device step with the coils and rotor, "
+            f"{_range([r['magnetometer read'] for r in emu], '{:.0f}')} µs a magnetometer read ({_when(b)})")
+
+
+def hardware_cycle(b: dict) -> str:
+    """docs/hardware.md: the host's whole cycle against the emulated motor over the pty (``bench_hardware.py``)."""
+    rows = {r["case"]: r for r in b["values"]["sessions"] if r["how"] == "pty" and r["rate asked Hz"] == 500}
+    hold, turn = rows["hold"], rows["turn"]
+    return (f"{hold['cpu mean ms']:.2f} ms (hold) to {turn['cpu mean ms']:.2f} ms (the 360° turn in 2.4 s) of CPU on "
+            f"the air-core map, against a 2 ms period, at {hold['rate Hz']:.0f} / {turn['rate Hz']:.0f} Hz with "
+            f"{hold['missed']} / {turn['missed']} deadlines missed (`bench_hardware.py --servo`, {_when(b)})")
+
+
+def control_speed_table(b: dict) -> str:
+    """docs/control.md, Speed: ``bench_control.py --quick`` (allocation, closed loop, holds, capability)."""
+    v = b["values"]
+    a, cpu, loop = v["allocation us"], v["allocation cpu us"], v["closed loop"]
+    rows = [
+        ("allocation, 29 coils, dual Newton (exact)",
+         f"{a['newton']:.0f} µs wall, **{cpu['newton']:.0f} µs CPU** per call ({_thin(round(1e6 / a['newton']))}/s); "
+         f"`pinv(K)t` without limits {a['pinv']:.0f} µs wall, {cpu['pinv']:.0f} µs CPU; Clarabel on the same QP "
+         f"{a['clarabel'] / 1e3:.2f} ms ({a['clarabel'] / a['newton']:.0f}×), {cpu['clarabel'] / 1e3:.2f} ms CPU; "
+         f"currents agree to {v['newton vs clarabel']:.1e}"),
+        ("out-of-reach allocation (Clarabel SOCP + Newton)", _us_or_ms(a["out of reach"])),
+        ("relay allocation (exhaustive, ≤ 4 coils)", _us_or_ms(a["relay"])),
+        ("closed loop at 1 kHz, hold (`dynamics.hold`, magnets' torque map)",
+         f"{loop['x real time']:.2f}× real time ({loop['ms per period']:.2f} ms per control period; one `K(R)` "
+         f"{loop['K(R) ms']:.2f} ms, one torque evaluation {loop['torque ms']:.2f} ms of the torque map)"),
+        ("holding 5 random orientations, 0.02° noise",
+         "largest error over the last 0.15 s of 0.3 s: " + ", ".join(f"{w:.4f}°" for w in loop["hold worst deg"])),
+        ("capability map, 1000 orientations", f"{v['capability 1000 s']:.1f} s"),
+    ]
+    body = "\n".join(f"| {k} | {x} |" for k, x in rows)
+    return f"Measured {_when(b)} (`{b['command']}`; {b['machine']}):\n\n| what | measured |\n|---|---|\n{body}"
+
+
+def control_loop_table(b: dict) -> str:
+    """docs/control.md: ``simulate_servo`` per period and the law alone (``bench_servo_loop.py``)."""
+    v = b["values"]
+    lines = [f"Measured {_when(b)} ({b['machine']}); \"before\" is the same run through the reference paths "
+             "(the models' own methods, the NumPy Newton and Clarabel):", "",
+             "| model | hold | 20° turn | `ServoLaw.step` | the law with K and bias every period |",
+             "|---|---|---|---|---|"]
+    for name, label in (("air", "air core (`magnetics.torque_map`)"), ("iron", "iron (`magnetics.iron_model`, pairwise)")):
+        hold, turn, law = v[f"simulate {name} hold"], v[f"simulate {name} turn"], v[f"law {name}"]
+        lines.append(f"| {label} | {hold['now'] / 1e3:.2f} ms (before {hold['before'] / 1e3:.2f}) | "
+                     f"{turn['now'] / 1e3:.2f} ms (before {turn['before'] / 1e3:.2f}) | "
+                     f"**{law['law.step (turn)'][0] / 1e3:.3f} ms** (before {law['law.step (turn)'][1] / 1e3:.2f}) | "
+                     f"{law['law.step, K each'][0] / 1e3:.3f} ms (before {law['law.step, K each'][1] / 1e3:.2f}) |")
+    return "\n".join(lines)
+
+
+def loop_law(b: dict) -> str:
+    """docs/control.md, the robust servo's cost: the law's step and the supply box (``bench_servo_loop.py``)."""
+    v = b["values"]
+    air, iron = v["law air"], v["law iron"]
+    every = _range([iron["law.step, K each"][0], air["law.step, K each"][0]], "{:.0f}")
+    return (f"`law.step` iron {iron['law.step (turn)'][0]:.1f} µs, air {air['law.step (turn)'][0]:.1f} µs ({every} µs "
+            f"when `K` is re-evaluated every period); the supply box + allocation "
+            f"{iron['supply box + allocation'][0]:.1f} µs against {iron['allocation'][0]:.1f} µs for the symmetric "
+            f"box alone (`bench_servo_loop.py`, {_when(b)})")
+
+
+def loop_evaluations(b: dict) -> str:
+    """docs/control.md: how often the law re-evaluates ``K(R̂)`` on the 20° turn."""
+    n, periods = b["values"]["law iron"]["K evaluations"]
+    return f"{n} times in {periods} periods"
+
+
+def iron_bench_table(b: dict) -> str:
+    """docs/magnetics.md: the pairwise and the coupled model's costs side by side (``bench_iron.py``)."""
+    m = b["values"]["model"]
+    pair = m["E+tau pairwise us"]
+    rows = {r["model"].split()[0]: r for r in m["rows"]}
+    p, c = rows["pairwise"], rows["coupled"]
+    lines = [f"Measured {_when(b)} (`benchmarks/bench_iron.py`; {b['machine']}; the design's own model: "
+             f"{m['label']}):", "", "| what | measured | ratio to pairwise |", "|---|---|---|",
+             f"| E + τ, one orientation, pairwise (compiled zonal sums, 29 cores × 92 poles) | {pair:.0f} µs | 1 |",
+             f"| E + τ, one orientation, coupled, NumPy sums | {m['E+tau coupled numpy us'] / 1e3:.1f} ms | "
+             f"{m['E+tau coupled numpy us'] / pair:.0f} × |",
+             f"| E + τ, one orientation, coupled, tables (the model's call) | {m['E+tau coupled tables us']:.0f} µs | "
+             f"1/{pair / m['E+tau coupled tables us']:.0f} |",
+             f"| E + τ, one orientation, coupled, tables (the compiled call the integrator makes) | "
+             f"{m['E+tau coupled packed us']:.1f} µs | 1/{pair / m['E+tau coupled packed us']:.0f} |",
+             f"| coupled tables, cold build (of which `G` on its grid) | {m['tables cold build s']:.1f} s "
+             f"({m['coupling grid s']:.1f} s) | |",
+             f"| dynamics at the tuned step ({p['dt ms']:.2f} / {c['dt ms']:.2f} ms), pairwise | "
+             f"{p['x real time']:.1f} × real time | |",
+             f"| dynamics at the tuned step, coupled (tables) | {c['x real time']:.0f} × real time | "
+             f"{c['x real time'] / p['x real time']:.0f} × pairwise |",
+             f"| capability map, 400 orientations, pairwise / coupled | {p['capability s']:.1f} s / "
+             f"{c['capability s']:.1f} s | |"]
+    return "\n".join(lines)
+
+
+def iron_mom_table(b: dict) -> str:
+    """docs/magnetics.md: the moment method's and the FEM's costs (``bench_iron.py`` without ``--no-mom``)."""
+    m = b["values"]["mom"]
+    lines = [f"Measured {_when(b)} (`benchmarks/bench_iron.py`; the FEM rows: medians of `data/iron_fem.csv`):", "",
+             "| what | time | ratio |", "|---|---|---|",
+             f"| MoM: factorise one core (level {m['level']}, {m['cells']} cells; `demag_tensor` + LU) | "
+             f"{m['factorise s']:.1f} s | |",
+             f"| MoM: pair table, per angle (detent + linear) | {m['per angle s']:.2f} s | |",
+             f"| iron map (pairwise): 1000 orientations (compiled spline sums, detent over all 29 cores) | "
+             f"{m['iron map 1000 ms']:.0f} ms | {m['iron map 1000 ms'] / m['air map 1000 ms']:.2f} × air map |",
+             f"| iron map (pairwise): one orientation | {m['iron map one us']:.0f} µs | "
+             f"{m['iron map one us'] / m['air map one us']:.2f} × air map |"]
+    if "fem solve s" in m:
+        lines += [f"| FEM (NGSolve): mesh one angle, median of the stored runs | {m['fem mesh s']:.0f} s | |",
+                  f"| FEM (NGSolve): one solve (order 2, sparse Cholesky), median of the stored runs | "
+                  f"{m['fem solve s']:.0f} s | {m['fem solve s'] / m['per angle s']:.0f} × a MoM angle |"]
+    return "\n".join(lines)
+
+
+def _times(x: float) -> str:
+    """A ratio with about three significant figures: 3,766 / 91 / 2.4."""
+    return f"{x:,.0f}" if x >= 10 else f"{x:.1f}"
+
+
+def _script(b: dict) -> str:
+    return f"`{b['command']}`, {_when(b)}"
+
+
+def performance_table(bs: dict) -> str:
+    """README, Performance: one row per benchmark figure, each with its run's date and load."""
+    g = {k.removeprefix("bench-"): v for k, v in bs.items()}
+    pk, mo, ha, po = g["packing"]["values"], g["motor"]["values"], g["harmonics"]["values"], g["potential"]["values"]
+    dy, pl, hw, co = g["dynamics"]["values"], g["planners"]["values"], g["hardware"]["values"], g["control"]["values"]
+    lo, se = g["servo_loop"]["values"], g["sensing"]["values"]
+    sec = pk["seconds"]
+    lv = {r["poles"]: r for r in mo["levels"]}
+    proto, finer = lv[min(lv)], sorted(lv)[1:]
+    leg = next(r for r in ha["rows"] if r["task"].startswith("P^l matrix, l=64") and "recurrence" in r["baseline"])
+    batch, single = po["batch us per orientation"], po["single us"]
+    pair29 = batch["energy, pairwise (exact), 29 coils"]
+    quad = batch["quadrature (5 orientations, scaled), 29 coils"]
+    fast = [batch[f"{t}, 29 coils"] for t in ("energy, fast", "energy + torque, fast", "E, τ, Hessian, fast",
+                                                "K(R), fast")]
+    vs = po["batch vs exact"]
+    speedups = [vs[f"{t}, 29 coils"] for t in ("energy, fast", "energy + torque, fast", "E, τ, Hessian, fast",
+                                                "K(R), fast")]
+    dyn = {k: dy[k] for k in ("potential", "magnets' torque map", "iron model")}
+    rates = hw["relay frames per second"]
+    alloc, cpu = co["allocation us"], co["allocation cpu us"]
+    sims = _simulate(g["servo_loop"])
+    law = lo["law iron"]
+    sessions = [r for r in hw["sessions"] if r["rate asked Hz"] == 500]
+    pty = {r["case"]: r for r in sessions if r["how"] == "pty"}
+    lock = {r["case"]: r for r in sessions if r["how"] == "lockstep"}
+    off, drills = hw["faults all off"]
+    track = se["timing us"]["track: 1 Gauss–Newton step (update)"]
+    acc = se["accuracy"]
+    rows = [
+        (f"refine the truncated icosahedron to ≥ 10,000 caps ({pk['refined caps']:,})", f"{sec['refine']:.2f} s",
+         g["packing"]),
+        (f"`validate()` / `min_separation()` on {pk['refined caps']:,} caps (KD-tree)",
+         f"{1e3 * sec['validate']:.0f} ms / {1e3 * sec['min_separation']:.1f} ms", g["packing"]),
+        (f"min separation, brute-force N² vs KD-tree, {pk['brute caps']:,} caps",
+         f"{sec['brute'] / sec['kd']:.1f}× slower", g["packing"]),
+        (f"stepper states of the prototype ({proto['states']:,})",
+         f"{proto['enumerate s']:.2f} s; dense dot products instead of the voxel lookup: "
+         f"{mo['baseline']['dense s']:.1f} s ({mo['baseline']['dense s'] / mo['baseline']['voxel s']:.1f}×)",
+         g["motor"]),
+        ("stepper states with finer rotors (same stator)",
+         "; ".join(f"{r} poles (tol {lv[r]['tol deg']:.2f}°): {lv[r]['states']:,} states in "
+                   f"{lv[r]['enumerate s']:.0f} s" for r in finer) + " — they grow with the square of the poles",
+         g["motor"]),
+        ("geometric planner", f"{proto['plan steps per s']:,.0f} steps/s (prototype), "
+         f"{lv[max(lv)]['plan steps per s']:,.0f} steps/s with the {max(lv)}-pole rotor", g["motor"]),
+        ("potential planner, prototype (compiled descent)",
+         f"{po['planner steps per s']['fast']:,.0f} steps/s over one turn (`bench_potential.py`), "
+         f"{pl['potential']['steps per s']:,.0f} (`bench_planners.py`, {pl['potential']['trials']} turns); exact forms "
+         f"{po['planner steps per s']['exact']:,.0f}", g["potential"]),
+        (f"geometric vs potential planner, {pl['geometric']['trials']} full turns",
+         f"tracking error median {pl['geometric']['median error deg']:.2f}° vs {pl['potential']['median error deg']:.2f}°, "
+         f"worst {pl['geometric']['worst error deg']:.1f}° vs {pl['potential']['worst error deg']:.1f}°, final "
+         f"{pl['geometric']['final error deg']:.2f}° vs {pl['potential']['final error deg']:.2f}°", g["planners"]),
+        ("rotor dynamics at the tuned time step (4th order), compiled integrator: potential model / magnets' torque "
+         "map / iron model (pairwise)",
+         " / ".join(f"{_times(r['x real time'])}× real time ({r['dt ms']:.1f} ms)" for r in dyn.values())
+         + "; NumPy `Rotor.step`: " + " / ".join(f"{_times(r['numpy x real time'])}×" for r in dyn.values())
+         + "; at 5 ms: " + " / ".join(f"{_times(r['dt 5 ms x real time'])}×" for r in dyn.values()), g["dynamics"]),
+        ("generalized Legendre matrix P^l, l = 64, 1000 angles",
+         f"{1e3 * leg['s']:.0f} ms; {leg['baseline s'] / leg['s']:.0f}× faster than the element-wise recurrence",
+         g["harmonics"]),
+        ("motor energy, 1000 orientations, 29 coils: pairwise / harmonic form",
+         f"{pair29:.0f} ms / {batch['energy, harmonic (exact), 29 coils']:.0f} ms; {quad / pair29:.0f}× / "
+         f"{quad / batch['energy, harmonic (exact), 29 coils']:.0f}× faster than quadrature", g["potential"]),
+        ("fast path (rotor function at the coils, ducc0), 1000 orientations, 29 coils: energy / energy + torque / "
+         "E, τ, Hessian / `K(R)`",
+         " / ".join(f"{x:.1f}" for x in fast) + f" µs per orientation: {_range(speedups, '{:.0f}')}× faster than "
+         f"the pairwise form; ducc0's synthesis of the energy alone "
+         f"{batch['ducc0 synthesis of F (anchor), 29 coils']:.2f} µs (the anchor)", g["potential"]),
+        ("one orientation per call, 4 coils: energy + torque / torque",
+         f"{single['single call energy + torque, fast, 4 coils']:.0f} µs / "
+         f"{single['single call torque, fast, 4 coils']:.0f} µs (the compiled call alone "
+         f"{single['single call energy + torque, the compiled call alone, 4 coils']:.0f} µs); pairwise form "
+         f"{single['single call energy + torque, pairwise, 4 coils']:.0f} µs", g["potential"]),
+        ("equilibria of 10⁴ starts, fast path (compiled descent) / exact forms",
+         f"{po['equilibria 1e4 s']['fast']:.2f} s / {po['equilibria 1e4 s']['exact']:.1f} s", g["potential"]),
+        ("serial protocol 1 over a pseudo-terminal (stop-and-wait)",
+         f"{rates['SET round trip over pty']:,.0f} acknowledged SET frames/s, `play()` "
+         f"{rates['play() over pty, rate unbounded']:,.0f}/s", g["hardware"]),
+        ("least-power current allocation, 29 coils",
+         f"{alloc['newton']:.0f} µs per call ({cpu['newton']:.0f} µs CPU); Clarabel on the same QP "
+         f"{alloc['clarabel'] / 1e3:.2f} ms, same currents to {co['newton vs clarabel']:.1e}", g["control"]),
+        ("torque capability over 1000 orientations (magnets' torque map)", f"{co['capability 1000 s']:.1f} s",
+         g["control"]),
+        ("servo simulation at 1 kHz control (coil electrics, sensor, plant and law)",
+         f"{_range([1e3 / r['now'] for r in sims], '{:.1f}')}× real time; one period of the servo law "
+         f"{law['law.step (turn)'][0]:.0f} µs CPU on a turn (iron; `K(R)` and bias {law['K(R) and bias'][0]:.0f} µs "
+         f"when re-evaluated, allocation {law['allocation'][0]:.0f} µs; {law['law.step (turn)'][1]:.0f} µs through "
+         "the reference paths)", g["servo_loop"]),
+        (f"orientation from {acc['sensors']} magnetometers (one Gauss–Newton update on the field table)",
+         f"{track:.0f} µs ({1e3 / track:.1f} kHz); {acc['rms deg']:.4f}° RMS, {acc['worst deg']:.4f}° worst over "
+         f"{acc['samples']} uniform orientations with coils energised", g["sensing"]),
+        ("protocol 2 over a pseudo-terminal against the emulated motor (magnets' torque map), the loop at 500 Hz",
+         f"{pty['hold']['cpu mean ms']:.2f}–{pty['turn']['cpu mean ms']:.2f} ms host CPU per 2 ms cycle; hold "
+         f"{pty['hold']['error deg']:.3f}° at {pty['hold']['rate Hz']:.0f} Hz ({pty['hold']['missed']} deadlines "
+         f"missed), the 360° turn about (1, 0.5, 2) in 2.4 s {pty['turn']['error deg']:.3f}° off at the loop's end "
+         f"({pty['turn']['missed']} missed); in lockstep {lock['turn']['rate Hz']:.0f} Hz, {lock['turn']['missed']} "
+         f"missed, {lock['turn']['error deg']:.4f}°; {off} of {drills} injected faults end all-off within the 100 ms "
+         "watchdog", g["hardware"]),
+    ]
+    body = "\n".join(f"| {what} | {value} | {_script(b)} |" for what, value, b in rows)
+    machines = sorted({b["machine"] for b in bs.values()})
+    return f"Machine: {'; '.join(machines)}.\n\n| what | measured | script, when |\n|---|---|---|\n{body}"
+
+
+SENSING_ROWS = (("magpylib: rotor field at the 24 sensors", "magpylib rotor field (1 call)"),
+                ("table: field", "table field"), ("table: field + Jacobian", "table field + Jacobian"),
+                ("**update (`track`, 1 Gauss–Newton step)**", "track: 1 Gauss–Newton step (update)"),
+                ("`solve`: LM to 1e-10 rad from 0.06°", "solve: LM to 1e-10 rad from 0.06°"))
+
+
+def _us_or_ms(us: float) -> str:
+    return f"{us / 1e3:.1f} ms" if us >= 1000 else f"{us:.0f} µs"
+
+
+def sensing_timing(b: dict) -> str:
+    """docs/sensing.md: time per call of the estimator's pieces (``bench_sensing.py --docs``)."""
+    t = b["values"]["timing us"]
+    mag = t["magpylib rotor field (1 call)"]
+    lines = [f"Measured {_when(b)} (`benchmarks/bench_sensing.py --docs`; {b['machine']}):", "",
+             "| call | median | rate | vs one magpylib call |", "|---|---|---|---|"]
+    for label, key in SENSING_ROWS:
+        bold = "**" if label.startswith("**") else ""
+        lines.append(f"| {label} | {bold}{_us_or_ms(t[key])}{bold} | {bold}{_thin(round(1e6 / t[key]))} /s{bold} | "
+                     f"{mag / t[key]:.0f}× |".replace("| 1× |", "| 1 |"))
+    return "\n".join(lines)
+
+
+def sensing_rate(b: dict) -> str:
+    return f"{1e3 / b['values']['timing us']['track: 1 Gauss–Newton step (update)']:.1f} kHz in Python"
+
+
+def sensing_magpylib(b: dict) -> str:
+    return f"{1e6 / b['values']['timing us']['magpylib rotor field (1 call)']:.0f} Hz"
+
+
+def sensing_update(b: dict) -> str:
+    us = b["values"]["timing us"]["track: 1 Gauss–Newton step (update)"]
+    return f"{1e3 / us:.1f} kHz (one Gauss–Newton step, {us:.0f} µs; {b['measured'][:10]})"
+
+
+def sensing_rms(b: dict) -> str:
+    return f"{b['values']['accuracy']['rms deg']:.4f}° RMS"
+
+
+def sensing_accuracy(b: dict) -> str:
+    """docs/sensing.md: the default array's accuracy (``bench_sensing.py --docs``)."""
+    a = b["values"]["accuracy"]
+    return (f"**{a['rms deg']:.4f}° RMS, {a['worst deg']:.4f}° worst** ({a['samples']} Haar orientations, "
+            f"{b['measured'][:10]})")
+
+
+# ----------------------------------------------------------------------------------------------------- gallery
+
+GALLERY_LABELS = {"prototype": "our reading of the paper", "jhu-as-built": "Johns Hopkins",
+                  "ncsu-goldberg": "NCSU stator layout"}
+GALLERY_TARGET = ("| Kumagai & Hollis SIM (target) | n/a | n/a | n/a | n/a | n/a | n/a | n/a | target: 4 N·m about any axis "
+                  "| n/a | n/a | n/a |")
+
+
+def _num(x: str):
+    """A metrics.csv cell: a number, a boolean, or None when empty."""
+    if x in ("True", "False"):
+        return x == "True"
+    if x == "":
+        return None
+    for kind in (int, float):
+        try:
+            return kind(x)
+        except ValueError:
+            pass
+    return x
+
+
+def _thin(n: int) -> str:
+    return f"{n:,}".replace(",", " ")
+
+
+def _nm(x: float) -> str:
+    return f"{x:.2f}" if x >= 1 else f"{x:.3f}"
+
+
+def gallery_table(g: dict) -> str:
+    """docs/gallery.md: the stored metrics of every entry (``src/spherestep/data/gallery/metrics.csv``)."""
+    lines = ["| design | magnets / coils | core | states | res. median | res. p95 | all SO(3) | escape | torque median "
+             "(p5) | detent | magnets | W/coil |", "|---|---|---|---|---|---|---|---|---|---|---|---|"]
+    for key, r in g.items():
+        label = GALLERY_LABELS.get(key)
+        name = f"**{key}**" + (f" ({label}, {r['rotor_poles']}/{r['coils']})" if label else "")
+        detent = f"{r['bias_torque_max_N_m']:.1f} N·m" if r["bias_torque_max_N_m"] else "0"
+        mass = r["magnet_mass_kg"]
+        lines.append(
+            f"| {name} | {r['rotor_poles']} / {r['coils']} | {r['core']} | {_thin(r['states'])} | "
+            f"{r['resolution_median_deg']:.2f}° | {r['resolution_p95_deg']:.2f}° | {'yes' if r['reaches_all'] else 'no'} | "
+            f"{100 * r['escape_violations'] / r['states']:.0f} % | {_nm(r['torque_median_N_m'])} "
+            f"({_nm(r['torque_p5_N_m'])}) N·m | {detent} | {mass:.2f} kg | "
+            f"{r['coil_power_W']:.{1 if r['coil_power_W'] >= 1 else 2}f} |".replace(
+                f"{mass:.2f} kg", f"{mass:.3g} kg" if mass < 1 else f"{mass:.2f} kg"))
+    lines.append(GALLERY_TARGET)
+    return "\n".join(lines)
+
+
+def gallery_drive_table(g: dict) -> str:
+    """docs/gallery.md: each design driven (the servo's fastest turn, the settled relay plan), as stored."""
+    lines = ["| design | servo time | final | max track | power | relay plan: executed | steps on plan |",
+             "|---|---|---|---|---|---|---|"]
+    for key, r in g.items():
+        if r["servo_turn_s"] is None:
+            servo = "— (planner refused) | — | — | —"
+        else:
+            servo = (f"{r['servo_turn_s']:.3f} s | {r['servo_final_error_deg']:.1e}° | "
+                     f"{r['servo_max_tracking_error_deg']:.2f}° | {r['servo_mean_power_W']:.1f} W")
+        lines.append(f"| **{key}** | {servo} | {'yes' if r['relay_executed'] else 'no'} | "
+                     f"{r['relay_steps_on_plan']} / {r['relay_steps']} |")
+    return "\n".join(lines)
+
+
+def gallery_asbuilt(g: dict) -> str:
+    """docs/gallery.md: the as-built layout against our reading, in numbers."""
+    p, j = g["prototype"], g["jhu-as-built"]
+    return (f"{_thin(j['states'])} states against {_thin(p['states'])}, resolution median {j['resolution_median_deg']:.2f}° "
+            f"against {p['resolution_median_deg']:.2f}°, torque in every direction median "
+            f"{_nm(j['torque_median_N_m'])} against {_nm(p['torque_median_N_m'])} N·m and 5th percentile "
+            f"{_nm(j['torque_p5_N_m'])} against {_nm(p['torque_p5_N_m'])} N·m")
+
+
+def gallery_escape(g: dict) -> str:
+    p = g["prototype"]
+    return f"{100 * p['escape_violations'] / p['states']:.0f} %"
+
+
+def gallery_gimbal(g: dict) -> str:
+    return f"about {1e3 * g['gimbal-40mm']['torque_median_N_m']:.0f} mN·m"
+
+
+def gallery_servo(g: dict) -> str:
+    """docs/gallery.md: the servo's turn on each design, and where the planner refused, its reason."""
+    arrived = {k: r for k, r in g.items() if r["servo_turn_s"] is not None}
+    refused = {k: r for k, r in g.items() if r["servo_turn_s"] is None}
+    out = "; ".join(f"{k} in {r['servo_turn_s']:.2f} s at {r['servo_mean_power_W']:.0f} W (tracked within "
+                    f"{r['servo_max_tracking_error_deg']:.2f}°)" for k, r in arrived.items())
+    if refused:
+        reasons = []
+        for k, r in refused.items():
+            m = re.search(r"instead received '([^']*)'", r["drive_note"] or "")
+            reasons.append(f"{k} ({m.group(1) if m else r['drive_note'] or 'no reason stored'})")
+        out += ". The planner refuses the turn for " + "; ".join(reasons)
+    return out
+
+
+def gallery_relay(g: dict) -> str:
+    """docs/gallery.md: the settled relay plan on each design, as stored."""
+    done = [k for k, r in g.items() if r["relay_executed"]]
+    part = ", ".join(f"{k} {r['relay_steps_on_plan']} of {r['relay_steps']}" for k, r in g.items()
+                     if not r["relay_executed"])
+    return (f"runs the whole turn on {', '.join(done) or 'none of the designs'}; steps settled within 0.5° of the "
+            f"plan elsewhere: {part}")
+
+
 # ------------------------------------------------------------------------------------------------------ blocks
 
 @dataclass(frozen=True)
 class Block:
-    """One generated block: ``name`` its marker, ``path`` the file, ``source`` the stored measurement."""
+    """One generated block: ``name`` its marker, ``path`` the file, ``source`` the stored measurement (a tuple of
+    them: the renderer gets ``{source: stored}``)."""
 
     name: str
     path: str
-    source: str
+    source: str | tuple[str, ...]
     render: Callable[[dict], str]
     inline: bool = False
+
+    @property
+    def sources(self) -> tuple[str, ...]:
+        return self.source if isinstance(self.source, tuple) else (self.source,)
+
+    def data(self, cache: dict | None = None):
+        """What ``render`` takes: the stored measurement, or ``{source: stored}`` for several."""
+        cache = {} if cache is None else cache
+        got = {s: cache.setdefault(s, stored(s)) for s in self.sources}
+        return got if isinstance(self.source, tuple) else got[self.source]
+
+    def missing(self) -> list[str]:
+        """The stored files this block needs that do not exist."""
+        return [str(STORES[s].relative_to(ROOT)) for s in self.sources if not STORES[s].exists()]
 
     def text(self, data) -> str:
         body = self.render(data)
@@ -402,6 +909,7 @@ BLOCKS = (
     Block("demo-numbers", "README.md", "demo", readme_table),
     Block("drives-table", "docs/control.md", "demo", drives_table),
     Block("move-servo", "docs/control.md", "demo", move_servo, inline=True),
+    Block("demo-servo-power", "docs/control.md", "demo", demo_servo_power, inline=True),
     Block("robust-table", "docs/control.md", "robust", robust_table),
     Block("run-frames", "docs/errors.md", "demo", run_frames, inline=True),
     Block("motor-metrics", "docs/motor.md", "demo", motor_metrics, inline=True),
@@ -409,11 +917,35 @@ BLOCKS = (
     Block("motor-violations", "docs/motor.md", "demo", motor_violations, inline=True),
     Block("iron-table", "docs/magnetics.md", "demo", iron_table),
     Block("iron-drives", "docs/magnetics.md", "demo", iron_drives, inline=True),
+    Block("iron-meaning", "docs/magnetics.md", "demo", iron_meaning, inline=True),
     Block("forces-table", "docs/magnetics.md", "forces", forces_table),
     Block("forces-summary", "docs/magnetics.md", "forces", forces_summary, inline=True),
     Block("forces-soft", "docs/magnetics.md", "forces", forces_soft, inline=True),
     Block("forces-steps", "docs/magnetics.md", "forces", forces_steps, inline=True),
     Block("iron-compare", "docs/magnetics.md", "iron", iron_compare_table),
+    Block("gallery-table", "docs/gallery.md", "gallery", gallery_table),
+    Block("gallery-drive-table", "docs/gallery.md", "gallery", gallery_drive_table),
+    Block("gallery-asbuilt", "docs/gallery.md", "gallery", gallery_asbuilt, inline=True),
+    Block("gallery-escape", "docs/gallery.md", "gallery", gallery_escape, inline=True),
+    Block("gallery-gimbal", "docs/gallery.md", "gallery", gallery_gimbal, inline=True),
+    Block("gallery-servo", "docs/gallery.md", "gallery", gallery_servo, inline=True),
+    Block("gallery-relay", "docs/gallery.md", "gallery", gallery_relay, inline=True),
+    Block("bench-sensing-timing", "docs/sensing.md", "bench-sensing", sensing_timing),
+    Block("bench-sensing-rate", "docs/sensing.md", "bench-sensing", sensing_rate, inline=True),
+    Block("bench-sensing-magpylib", "docs/sensing.md", "bench-sensing", sensing_magpylib, inline=True),
+    Block("bench-sensing-update", "docs/sensing.md", "bench-sensing", sensing_update, inline=True),
+    Block("bench-sensing-rms", "docs/sensing.md", "bench-sensing", sensing_rms, inline=True),
+    Block("bench-sensing-accuracy", "docs/sensing.md", "bench-sensing", sensing_accuracy, inline=True),
+    Block("bench-performance", "README.md", tuple(f"bench-{n}" for n in BENCHES if n != "iron"), performance_table),
+    Block("bench-loop-cost", "docs/hardware.md", "bench-servo_loop", loop_cost_table),
+    Block("bench-loop-simulate", "docs/hardware.md", "bench-servo_loop", loop_simulate, inline=True),
+    Block("bench-hw-cycle", "docs/hardware.md", "bench-hardware", hardware_cycle, inline=True),
+    Block("bench-control-speed", "docs/control.md", "bench-control", control_speed_table),
+    Block("bench-loop-table", "docs/control.md", "bench-servo_loop", control_loop_table),
+    Block("bench-loop-law", "docs/control.md", "bench-servo_loop", loop_law, inline=True),
+    Block("bench-loop-evaluations", "docs/control.md", "bench-servo_loop", loop_evaluations, inline=True),
+    Block("bench-iron-models", "docs/magnetics.md", "bench-iron", iron_bench_table),
+    Block("bench-iron-mom", "docs/magnetics.md", "bench-iron", iron_mom_table),
 )
 
 
@@ -435,12 +967,11 @@ def differing() -> list[str]:
     cache: dict = {}
     bad = []
     for b in BLOCKS:
-        if not STORES[b.source].exists():
-            bad.append(f"{b.name}: {STORES[b.source].relative_to(ROOT)} missing")
+        if b.missing():
+            bad.append(f"{b.name}: {', '.join(b.missing())} missing")
             continue
-        data = cache.setdefault(b.source, stored(b.source))
         have = current((ROOT / b.path).read_text(encoding="utf-8"), b.name)
-        if have != b.text(data):
+        if have != b.text(b.data(cache)):
             bad.append(f"{b.path}: {b.name}" + (" (markers missing)" if have is None else ""))
     return bad
 
@@ -450,8 +981,8 @@ def write() -> int:
     cache: dict = {}
     changed = 0
     for b in BLOCKS:
-        if not STORES[b.source].exists():
-            print(f"skipped {b.name}: {STORES[b.source].relative_to(ROOT)} missing")
+        if b.missing():
+            print(f"skipped {b.name}: {', '.join(b.missing())} missing")
             continue
         path = ROOT / b.path
         text = path.read_text(encoding="utf-8")
@@ -459,7 +990,7 @@ def write() -> int:
         if have is None:
             print(f"skipped {b.name}: no markers in {b.path}")
             continue
-        new = b.text(cache.setdefault(b.source, stored(b.source)))
+        new = b.text(b.data(cache))
         if new != have:
             path.write_text(text.replace(have, new), encoding="utf-8")
             changed += 1
@@ -484,6 +1015,15 @@ def store_robust(source: Path | None) -> None:
                       "source": "benchmarks/bench_servo_robust.py", "rows": json.loads(source.read_text(encoding="utf-8"))})
 
 
+def run_bench(name: str) -> None:
+    """Run one benchmark of :data:`BENCHES` (alone: one at a time) storing ``data/bench_NAME.json``."""
+    script, *options = BENCHES[name]
+    print(f"running benchmarks/{script} {' '.join(options)} (load {os.getloadavg()[0]:.1f})", flush=True)
+    subprocess.run([sys.executable, str(ROOT / "benchmarks" / script), *options, "--json",
+                    str(STORES[f"bench-{name}"])], check=True, cwd=ROOT,
+                   env={**os.environ, "OPENBLAS_NUM_THREADS": os.environ.get("OPENBLAS_NUM_THREADS", "1")})
+
+
 def main(argv: list[str]) -> int:
     args = list(argv)
     if args[:1] == ["--check"]:
@@ -502,9 +1042,17 @@ def main(argv: list[str]) -> int:
     if cmd == "iron":
         subprocess.run([sys.executable, str(ROOT / "scripts" / "iron_compare.py"), "--json", str(STORES["iron"])],
                        check=True, cwd=ROOT)
-    if cmd not in ("demo", "forces", "robust", "iron", "all", "write"):
-        print(f"unknown command {cmd!r}: demo [SUMMARY], forces, robust [BENCH.json], iron, all [SUMMARY], --check",
-              file=sys.stderr)
+    if cmd == "bench":
+        names = args or list(BENCHES)
+        unknown = [n for n in names if n not in BENCHES]
+        if unknown:
+            print(f"unknown benchmark {', '.join(unknown)}: one of {', '.join(BENCHES)}", file=sys.stderr)
+            return 2
+        for name in names:
+            run_bench(name)
+    if cmd not in ("demo", "forces", "robust", "iron", "bench", "all", "write"):
+        print(f"unknown command {cmd!r}: demo [SUMMARY], forces, robust [BENCH.json], iron, bench [NAME ...], "
+              "all [SUMMARY], --check", file=sys.stderr)
         return 2
     print(f"{write()} blocks rewritten")
     return 0

@@ -1,6 +1,6 @@
 """Every generated block of README and docs/ is what ``scripts/docs_numbers.py`` renders from the stored
-measurements (``data/demo_summary.json``, ``data/forces_states.json``, ``data/servo_robust.json``), so the docs
-cannot drift from them; and the stored measurements' cheap numbers are held against the live code (issue 27 §4)."""
+measurements (``data/demo_summary.json``, ``data/forces_states.json``, ``data/servo_robust.json``,
+``data/iron_compare.json``, the benchmarks' ``data/bench_*.json``), so the docs cannot drift from them; and the stored measurements' cheap numbers are held against the live code (issue 27 §4)."""
 
 import importlib.util
 import math
@@ -30,10 +30,11 @@ def test_every_block_is_its_stored_measurement_rendered(block):
     text = (ROOT / block.path).read_text(encoding="utf-8")
     have = SCRIPT.current(text, block.name)
     assert have is not None, f"{block.path} lost the markers of {block.name}"
-    assert SCRIPT.STORES[block.source].exists(), f"{SCRIPT.STORES[block.source]} missing"
-    assert have == block.text(SCRIPT.stored(block.source)), (
-        f"{block.path}: the block {block.name} differs from {SCRIPT.STORES[block.source].name}: run "
-        "`python scripts/docs_numbers.py` (after `make demo && python scripts/docs_numbers.py demo` for new numbers)")
+    assert not block.missing(), f"{block.missing()} missing"
+    assert have == block.text(block.data()), (
+        f"{block.path}: the block {block.name} differs from {', '.join(block.sources)}: run "
+        "`python scripts/docs_numbers.py` (after `make demo && python scripts/docs_numbers.py demo` for new numbers, "
+        "`python scripts/docs_numbers.py bench` for new benchmark runs)")
 
 
 def test_every_marker_is_registered_and_paired():
@@ -63,6 +64,46 @@ def test_the_generator_rewrites_a_stale_block(tmp_path, monkeypatch):
     assert SCRIPT.write() == 1
     assert doc.read_text(encoding="utf-8") == f"before {good} after\n"
     assert SCRIPT.differing() == []
+
+
+@pytest.mark.parametrize("name", SCRIPT.BENCHES)
+def test_every_stored_benchmark_says_when_and_under_what_load(name):
+    """A stored benchmark run is its script's (which takes ``--json``) and states its date, load and machine, which
+    every table rendered from it repeats; no benchmark runs here."""
+    script = ROOT / "benchmarks" / SCRIPT.BENCHES[name][0]
+    assert script.exists() and "Record(" in script.read_text(encoding="utf-8"), f"{script.name} stores no --json"
+    b = SCRIPT.stored(f"bench-{name}")
+    assert b["benchmark"] == name and b["command"].startswith(script.name)
+    assert re.fullmatch(r"\d{4}-\d\d-\d\d \d\d:\d\d UTC", b["measured"]) and len(b["load"]) == 2
+    assert b["values"] and "cores" in b["machine"]
+    for block in SCRIPT.BLOCKS:
+        if f"bench-{name}" in block.sources and not block.inline:
+            assert b["measured"] in block.text(block.data()), f"{block.name} does not say when {name} ran"
+
+
+def test_a_bench_block_follows_its_stored_run(tmp_path, monkeypatch):
+    """Drift of a benchmark's stored number reaches its docs: the stored run changed, the block differs."""
+    import json
+
+    block = next(b for b in SCRIPT.BLOCKS if b.name == "bench-loop-cost")
+    b = SCRIPT.stored("bench-servo_loop")
+    b["values"]["law iron"]["law.step (turn)"][0] *= 2
+    path = tmp_path / "bench_servo_loop.json"
+    path.write_text(json.dumps(b), encoding="utf-8")
+    monkeypatch.setitem(SCRIPT.STORES, "bench-servo_loop", path)
+    assert f"{block.path}: {block.name}" in SCRIPT.differing()
+
+
+def test_the_gallery_blocks_read_what_the_package_stores():
+    """The gallery's blocks read ``metrics.csv`` as ``gallery.stored_metrics()`` does: same entries, same numbers."""
+    from spherestep import gallery
+
+    g, live = SCRIPT.stored("gallery"), gallery.stored_metrics()
+    assert list(g) == list(live) == [e.key for e in gallery.entries()]
+    for key, m in live.items():
+        assert g[key]["states"] == m.states
+        assert g[key]["torque_median_N_m"] == pytest.approx(m.torque_median_N_m, rel=1e-9)
+        assert g[key]["resolution_median_deg"] == pytest.approx(math.degrees(m.resolution_median_rad), rel=1e-9)
 
 
 def test_the_stored_demo_agrees_with_the_code(proto, proto_metrics):
