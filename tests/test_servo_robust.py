@@ -208,7 +208,7 @@ def test_model_cache_first_order_about_its_anchor(iron):
         errors.append([np.abs(x - y).max() for x, y in ((b0, b), (b1, b), (K0, K), (K1, K))])
     e = np.array(errors)
     assert np.all(e[:, 1] < e[:, 0]) and np.all(e[:, 3] < e[:, 2])
-    assert e[:, 1].sum() < e[:, 0].sum() / 10 and e[:, 3].sum() < e[:, 2].sum() / 30  # measured ~25x and ~100x
+    assert e[:, 1].sum() < e[:, 0].sum() / 10 and e[:, 3].sum() < e[:, 2].sum() / 30  # measured 64x and 128x
     np.testing.assert_allclose(cache.at(A, slope=True)[0], cache.at(A)[0], rtol=0, atol=1e-12)  # the anchor's own
     cache.at(R, slope=True)
     assert cache.slope_evaluations == 3  # kept while the anchor is
