@@ -7,6 +7,11 @@
     ... scripts/fem_iron.py --table 0 2 & scripts/fem_iron.py --table 1 2; scripts/fem_iron.py --merge
         # the pair tables' FEM nodes (1°…20° and 1.5°, 2.5°, 3.5°, but not the reference angles) in 2 shares:
         # data/iron_fem_table.csv; --table-angles A B ... solves the given angles only
+    ... scripts/fem_iron.py --shape        # the shape table's 5 held-out magnets: data/iron_fem_shape.csv
+        # (the prototype's 5°, 12.5°, 3°, ... stretched to each magnet, one pass per angle, resumable;
+        # 2.6-7 min a point at load 8-12, ~1 min on a quiet core)
+    ... scripts/fem_iron.py --shape-grid   # the shape table's 8 other grid nodes at 18 angles up to 20° (stretched):
+        # data/iron_fem_shape_grid.csv, for scripts/iron_shape_table.py --write (144 points)
 
 Formulation (coil frame: axis z, core face at z = 0, body z > 0). The field is ``H = T0 − ∇ψ`` with a
 total scalar potential ψ (H1, order 2, ψ = 0 on a sphere of 0.2 m) and two sources that need no field from
