@@ -125,7 +125,9 @@ def test_candidates_cover_the_baseline_neighbourhood():
     assert ("truncated-icosahedron", 1, "truncated-cuboctahedron", 1, 80.0, 4.0) in scaled
 
 
-def test_iron_affordability_is_the_prototype_parts(proto):
+def test_iron_affordability_is_the_stored_tables(proto):
+    """Iron is affordable where stored tables serve it at once (the prototype's shape, scaled by the law, at any
+    ampere-turns; the shape table's magnets) and costly where the moment method must solve (another gap)."""
     from dataclasses import replace
 
     from spherestep.synthesis.ladder import build
@@ -135,7 +137,9 @@ def test_iron_affordability_is_the_prototype_parts(proto):
     design = build(c, "iron", spec)
     assert iron_is_stored(design) and iron_is_stored(proto)
     assert not iron_is_stored(replace(design, air_gap=2 * design.air_gap))
-    assert not iron_is_stored(replace(design, coil=replace(design.coil, supply_voltage=12.0)))  # fewer ampere-turns
+    assert iron_is_stored(replace(design, coil=replace(design.coil, supply_voltage=12.0)))  # NI: the law's factor
+    assert iron_is_stored(replace(design, magnet_diameter=0.9 * design.magnet_diameter))  # in the shape table
+    assert not iron_is_stored(replace(design, magnet_diameter=0.5 * design.magnet_diameter))  # below it
 
 
 def test_tasks_are_submitted_longest_first_by_their_cost_estimate():

@@ -18,10 +18,10 @@ sizes, coil count, fit, lookup grid, candidate count, metrics):
 
 The torques (holding and capability) are measured on the design's own model
 (:func:`spherestep.magnetics.design_model`: the point's ``core``, the coil's own ampere-turns and drive limits);
-``model`` names it. An iron core reads stored tables only for the prototype's parts (:func:`iron_is_stored`:
-1-in magnets, 2-in coils, the prototype's gap): other parts would need a moment-method solve of minutes per part
-size, which a sweep does not do, so their torque columns are empty and the reason says why (``--core air``
-measures every design).
+``model`` names it. An iron core reads stored tables for the prototype's shape scaled by the law and for
+magnets the shape table covers (:func:`iron_is_stored`); other parts would need a moment-method solve of minutes
+per part size, which a sweep does not do, so their torque columns are empty and the reason says why (``--core
+air`` measures every design).
 
 The candidate count is the number of (coil pair, ordered pole pair) with arcs within ``2 tol`` of each
 other, exactly the alignments :func:`spherestep.motor.find_states` starts from.
@@ -42,7 +42,7 @@ import numpy as np
 
 from .. import checks
 from ..errors import InputError, SpherestepError
-from ..motor import MotorDesign, PolarityRule, check_fits, prototype
+from ..motor import MotorDesign, PolarityRule, check_fits
 from ..motor.coil import iron_coil
 from ..motor.states import candidate_count
 from ..packing import named
@@ -163,35 +163,27 @@ def lookup_voxels(design: MotorDesign) -> float:
 
 
 def iron_is_stored(design: MotorDesign) -> bool:
-    """Whether the iron model of ``design`` reads the stored FEM tables (pair and coupling) as they are: magnet,
-    coil, gap, remanence, the pot's groove, the ampere-turns and the permeability all the prototype's (what the
-    tables depend on); any other iron design solves its tables by the moment method first (minutes)."""
-    p = prototype()
-    same = [(design.radius, p.radius), (design.magnet_diameter, p.magnet_diameter),
-            (design.magnet_length, p.magnet_length), (design.coil_diameter, p.coil_diameter),
-            (design.coil_length, p.coil_length), (design.air_gap, p.air_gap), (design.remanence, p.remanence),
-            (design.rotor_shell, p.rotor_shell)]
-    if not all(round(a, 9) == round(b, 9) for a, b in same):
-        return False
-    a, b = design.coil, p.coil
-    groove_a = a.groove(design.coil_diameter, design.coil_length)
-    groove_b = b.groove(p.coil_diameter, p.coil_length)
-    return (all(round(x, 9) == round(y, 9) for x, y in zip(groove_a, groove_b))
-            and round(a.nominal_ampere_turns(design.coil_diameter, design.coil_length), 9)
-            == round(b.nominal_ampere_turns(p.coil_diameter, p.coil_length), 9)
-            and a.material.relative_permeability == b.material.relative_permeability)
+    """Whether the iron model of ``design`` reads stored tables, ready at once: the prototype's FEM tables scaled
+    by the law, or the shape table for other magnets (:func:`spherestep.magnetics.solve_needed`); any other iron
+    design solves its tables by the moment method first (minutes)."""
+    from ..magnetics import solve_needed
+
+    return solve_needed(design, design.coil) is None
 
 
 def unmeasured_iron(design: MotorDesign) -> str | None:
     """None when the sweep measures ``design``'s torques (an air core, or iron on stored tables,
     :func:`iron_is_stored`); else why not, for people."""
-    if design.coil.core != "iron" or iron_is_stored(design):
+    from ..magnetics import solve_needed
+
+    if design.coil.core != "iron":
         return None
-    p = prototype()
+    why = solve_needed(design, design.coil)
+    if why is None:
+        return None
     return (f"the iron model of these parts (magnet {1e3 * design.magnet_diameter:.3g} mm, coil "
-            f"{1e3 * design.coil_diameter:.3g} mm; stored: the prototype's {1e3 * p.magnet_diameter:.3g} and "
-            f"{1e3 * p.coil_diameter:.3g} mm) has no stored tables: a moment-method solve of minutes per part "
-            "size, which a sweep does not do (--core air measures every design)")
+            f"{1e3 * design.coil_diameter:.3g} mm) has no stored tables ({why}): a moment-method solve of minutes "
+            "per part size, which a sweep does not do (--core air measures every design)")
 
 
 def torque_capability_sample(design: MotorDesign, seed: int, samples: int = CAPABILITY_SAMPLES,

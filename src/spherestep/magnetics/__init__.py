@@ -29,7 +29,7 @@ from ._iron import IRON_LEVEL, CoreGeometry, CoreSolver, core_solver, magnet_fac
 from ._ironforce import fig6_forces as iron_force_curve
 from ._ironforce import pair_tables as iron_pair_torques
 from ._ironmap import IronTorqueMap, iron_model
-from ._ironscale import iron_source, scaled_design
+from ._ironscale import iron_source, scaled_design, solve_needed
 from .design_model import DesignModel, design_model
 from ._ironsummary import IronSummary, iron_summary
 from ._model import coil_polarization, model_summary, rotor_collection, rotor_magnets, stator_coils
@@ -37,7 +37,7 @@ from ._statics import StateTorque, equilibrium, state_currents, state_torques
 from ._table import TABLE_MESHING, TorqueMap, pair_torque, table_nodes, torque_function, torque_map
 
 __all__ = [
-    "iron_source", "scaled_design",
+    "iron_source", "scaled_design", "solve_needed",
     "IRON_LEVEL", "CoreGeometry", "CoreSolver", "core_solver", "magnet_face_radius",
     "DesignModel", "MESHING", "StateTorque", "design_model", "TABLE_MESHING", "Calibration", "Comparison", "ForceCurve", "IronSummary", "IronTorqueMap",
     "coil_inductance", "iron_force_curve", "iron_model", "iron_pair_torques", "iron_summary",

@@ -366,6 +366,15 @@ def table_label(design, coil, level: int = IRON_LEVEL) -> str:
     return "shape table (FEM-based)" if in_shape_table(design, coil, level) is None else "method-of-moments table"
 
 
+def solve_needed(design, coil, level: int = IRON_LEVEL) -> str | None:
+    """None when the iron model of ``design`` with ``coil`` is ready at once from stored tables (the prototype's
+    FEM tables scaled by the law, or the shape table); else why its tables need a moment-method solve (for
+    people)."""
+    if prototype_scale(design, coil, level) is not None:
+        return None
+    return in_shape_table(design, coil, level)
+
+
 def iron_source(design, coil, level: int = IRON_LEVEL) -> str:
     """Where the iron model of ``design`` with ``coil`` comes from, for people: the prototype's FEM tables
     (scaled), the shape table, or a solve on first use (and why)."""
@@ -374,7 +383,7 @@ def iron_source(design, coil, level: int = IRON_LEVEL) -> str:
     sc = prototype_scale(design, coil, level)
     if sc is not None:
         return f"the prototype's FEM tables scaled by the law (s = {sc.s:.6g}): ready at once"
-    why = in_shape_table(design, coil, level)
+    why = solve_needed(design, coil, level)
     if why is None:
         x, asp = shape_ratios(design)
         xs, asps = _shape_table()[:2]

@@ -114,8 +114,8 @@ def coil_for(design, core: str, spec):
 
 
 def iron_is_stored(design) -> bool:
-    """Whether the iron model of ``design`` reuses the stored FEM tables as they are: the prototype's parts
-    (:func:`spherestep.explore.iron_is_stored`, the one check)."""
+    """Whether the iron model of ``design`` reads stored tables, ready at once (the prototype's scaled, or the
+    shape table; :func:`spherestep.explore.iron_is_stored`, the one check)."""
     from ..explore import iron_is_stored as stored
 
     return stored(design)
@@ -296,8 +296,9 @@ def climb(candidate: Candidate, spec, allow_costly: bool = False, baseline: dict
         if core == "iron":
             row["iron_stored"] = iron_is_stored(d)
             if not row["iron_stored"] and not allow_costly:
-                stop([core], "geometry", "costly", "an iron core with other parts than the prototype's solves a "
-                     "moment-method table first (~1 min); searched with the thorough budget")
+                stop([core], "geometry", "costly", "an iron core whose parts the stored tables do not cover (the "
+                     "prototype's shape scaled, the shape table's magnets) solves a moment-method table first "
+                     "(~1 min); searched with the thorough budget")
                 live.remove(core)
     if live:  # --- rung 2: states (shared by the cores) ---
         d = designs[live[0]]
