@@ -54,7 +54,7 @@ from spherestep.magnetics.mismatch import scaled_model, shell_model
 from spherestep.motor import prototype
 
 AXIS = np.array([1.0, 0.5, 2.0]) / np.linalg.norm([1.0, 0.5, 2.0])
-VERSION = "v2"  # the holds' cache: bump when the plants or the collection change
+VERSION = "v3"  # the holds' cache: bump when the plants or the collection change
 PLANS = (("fastest", None), ("margin", MARGIN))  # plan_turn's default (the demo's) and the robustness table's
 
 
@@ -115,19 +115,18 @@ def main() -> None:
         plant, ctrl = cases[name]
         key = cache / f"{hashlib.sha1(f'{VERSION}{name}'.encode()).hexdigest()[:12]}_{holds_n}.pkl"
         t0 = time.perf_counter()
-        if key.is_file():
-            holds = pickle.loads(key.read_bytes())
-            collect = float("nan")
+        if key.is_file():  # the holds and the time their collection took, measured when they were collected
+            holds, collect = pickle.loads(key.read_bytes())
         else:
             holds = collect_holds(design, plant, holds_n, model=ctrl, limits=limits)
             collect = time.perf_counter() - t0
-            key.write_bytes(pickle.dumps(holds))
+            key.write_bytes(pickle.dumps((holds, collect)))
         t0 = time.perf_counter()
         cal = calibrate(design, ctrl, holds, coupling=True)  # the coupling's gain fitted on every plant
         fit = time.perf_counter() - t0
         e0 = torque_error(ctrl, plant, count=200)
         e1 = torque_error(cal.model, plant, count=200)
-        row = {"plant": name, "holds": len(holds), "collect_s": None if math.isnan(collect) else collect, "fit_s": fit,
+        row = {"plant": name, "holds": len(holds), "collect_s": collect, "fit_s": fit,
                "torque_error_before": e0, "torque_error_after": e1, "ratio": e0 / e1,
                "scale_detent": cal.scale_detent, "scale_winding": cal.scale_winding,
                "scale_std": list(cal.scale_std), "coupling_gain": cal.coupling_gain if cal.coupling else None,

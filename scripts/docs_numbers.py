@@ -9,6 +9,8 @@ Blocks on their own lines hold tables; inline blocks hold a sentence's numbers. 
     python scripts/docs_numbers.py forces                # data/forces_states.json: `spherestep forces`, 20 states
     python scripts/docs_numbers.py robust [BENCH.json]   # data/servo_robust.json: benchmarks/bench_servo_robust.py
     python scripts/docs_numbers.py iron                  # data/iron_compare.json: scripts/iron_compare.py
+    python scripts/docs_numbers.py calibration           # data/calibration_table.json: bench_calibration.py
+                                                         # (~10 min quiet)
     python scripts/docs_numbers.py bench [NAME ...]      # data/bench_NAME.json: every benchmark of BENCHES (or
                                                          # those named) run one after another: ~15 min quiet,
                                                          # ~40 min at load 10 (bench_motor's 812-pole rotor)
@@ -46,6 +48,7 @@ STORES = {
     "forces": DATA / "forces_states.json",
     "robust": DATA / "servo_robust.json",
     "iron": DATA / "iron_compare.json",
+    "calibration": DATA / "calibration_table.json",  # benchmarks/bench_calibration.py --json
     "gallery": ROOT / "src" / "spherestep" / "data" / "gallery" / "metrics.csv",  # scripts/gallery_metrics.py
 }
 # the demo summary's keys not stored: file lists and per-state lists (their counts are the numbers)
@@ -389,6 +392,39 @@ def robust_table(stored_run: dict) -> str:
             f"**{on['max_tracking_error_deg']:.3f}°** | {off['mean_power_W']:.1f} → {on['mean_power_W']:.1f} W | "
             f"{on['reachable_fraction']:.3f} | {'yes' if on['passed'] else '**no**'} |")
     return "\n".join(lines)
+
+
+def calibration_table(run: dict) -> str:
+    """docs/control.md: benchmarks/bench_calibration.py's table, per plant the torque error and the turn on each
+    plan before calibration, after and on the exact model."""
+    plans = run["plans"]
+    head = ("| plant (controller: the design's coupled model unless said) | holds (collected in) | torque error before "
+            "→ after (ratio) | scales fitted (detent, winding; coupling) ± σ |"
+            + "".join(f" {'fastest' if k == 'fastest' else '`MARGIN`'} plan ({plans[k]['duration_s']:.2f} s): before "
+                      "→ **after** (exact) |" for k in plans))
+    lines = [f"Measured {run['measured']}, load {run['load'][0]:.1f} → {run['load_after'][0]:.1f} "
+             f"(`benchmarks/bench_calibration.py --json data/calibration_table.json`):", "", head,
+             "|" + "---|" * (4 + len(plans))]
+    for r in run["rows"]:
+        sd = r["scale_std"]
+        gain = "" if r["coupling_gain"] is None else f"; {r['coupling_gain']:.4f} ± {r['coupling_std']:.4f}"
+        cells = "".join(f" {r['turn'][k]['before_max_deg']:.3f}° → **{r['turn'][k]['after_max_deg']:.3f}°** "
+                        f"({r['turn'][k]['exact_max_deg']:.3f}°) |" for k in plans if k in r["turn"])
+        lines.append(f"| {r['plant'].replace('-', '−')} | {r['holds']} ({r['collect_s']:.0f} s) | "
+                     f"{r['torque_error_before']:.4f} → {r['torque_error_after']:.4f} ({r['ratio']:.0f}×) | "
+                     f"{r['scale_detent']:.4f} ± {sd[0]:.4f}, {r['scale_winding']:.4f} ± {sd[1]:.4f}{gain} |" + cells)
+    return "\n".join(lines)
+
+
+def calibration_summary(run: dict) -> str:
+    """docs/control.md, inline: the range of the error drop and of the calibrated servo's tracking on the MARGIN plan."""
+    rows = run["rows"]
+    ratios = [r["ratio"] for r in rows]
+    after = [r["turn"]["margin"]["after_max_deg"] for r in rows]
+    gap = max(abs(r["turn"]["margin"]["after_max_deg"] - r["turn"]["margin"]["exact_max_deg"]) for r in rows)
+    return (f"the torque error drops {min(ratios):.0f}–{max(ratios):.0f}× (≥ 5×), and on the `MARGIN` plan the "
+            f"calibrated servo tracks within {min(after):.3f}–{max(after):.3f}° (≤ 0.2°), equal to the exact model's "
+            f"to {max(gap, 0.0005):.3f}°")
 
 
 # ------------------------------------------------------------------------------------------- the iron models
@@ -911,6 +947,8 @@ BLOCKS = (
     Block("move-servo", "docs/control.md", "demo", move_servo, inline=True),
     Block("demo-servo-power", "docs/control.md", "demo", demo_servo_power, inline=True),
     Block("robust-table", "docs/control.md", "robust", robust_table),
+    Block("calibration-table", "docs/control.md", "calibration", calibration_table),
+    Block("calibration-summary", "docs/control.md", "calibration", calibration_summary, inline=True),
     Block("run-frames", "docs/errors.md", "demo", run_frames, inline=True),
     Block("motor-metrics", "docs/motor.md", "demo", motor_metrics, inline=True),
     Block("motor-states", "docs/motor.md", "demo", motor_states, inline=True),
@@ -1042,6 +1080,9 @@ def main(argv: list[str]) -> int:
     if cmd == "iron":
         subprocess.run([sys.executable, str(ROOT / "scripts" / "iron_compare.py"), "--json", str(STORES["iron"])],
                        check=True, cwd=ROOT)
+    if cmd == "calibration":
+        subprocess.run([sys.executable, str(ROOT / "benchmarks" / "bench_calibration.py"), "--json",
+                        str(STORES["calibration"])], check=True, cwd=ROOT)
     if cmd == "bench":
         names = args or list(BENCHES)
         unknown = [n for n in names if n not in BENCHES]
@@ -1050,8 +1091,8 @@ def main(argv: list[str]) -> int:
             return 2
         for name in names:
             run_bench(name)
-    if cmd not in ("demo", "forces", "robust", "iron", "bench", "all", "write"):
-        print(f"unknown command {cmd!r}: demo [SUMMARY], forces, robust [BENCH.json], iron, bench [NAME ...], "
+    if cmd not in ("demo", "forces", "robust", "iron", "calibration", "bench", "all", "write"):
+        print(f"unknown command {cmd!r}: demo [SUMMARY], forces, robust [BENCH.json], iron, calibration, bench [NAME ...], "
               "all [SUMMARY], --check", file=sys.stderr)
         return 2
     print(f"{write()} blocks rewritten")
