@@ -266,3 +266,22 @@ def test_cli_refuses_a_bad_spec(tmp_path):
     bad.write_text(GOOD + "core: copper\n")
     assert main(["synthesize", str(bad), "--out", str(tmp_path / "o")]) == 2
     assert not (tmp_path / "o").exists()
+
+
+def test_the_eta_weighs_the_tasks_by_their_estimated_cost():
+    """The longest tasks go first: after a quarter of the work in one task of four, an ETA counting tasks says
+    three times the elapsed time; weighted by cost it says three times as well only when the costs are equal."""
+    from spherestep.synthesis.run import Progress
+
+    def left(bar):
+        bar.start -= 100.0  # 100 s elapsed
+        text = bar.eta()
+        return float(text.split()[1]) * (60.0 if text.endswith("min") else 1.0)
+
+    counted = Progress(4)
+    counted.advance()
+    weighted = Progress(4, cost=10.0)
+    weighted.advance(7.0)  # the longest task, 70 % of the work
+    assert left(counted) == pytest.approx(300.0, rel=0.01)
+    assert left(weighted) == pytest.approx(100.0 * 3.0 / 7.0, rel=0.01)
+    assert Progress(3).eta() == "ETA —"

@@ -124,16 +124,27 @@ def neighbours(c: Candidate, gaps: tuple[float, ...] = GAP_SCALES) -> list[Candi
 
 @dataclass
 class Progress:
-    """Counts and an ETA for the search's progress line."""
+    """Counts and an ETA for the search's progress line: the time so far times the work left over the work done,
+    the work counted in tasks, or in their :func:`cost_estimate` when given (``cost``, the total; the longest
+    tasks go first, so counting tasks alone would overstate the time left severalfold)."""
 
     total: int
     done: int = 0
     start: float = field(default_factory=time.perf_counter)
+    cost: float = 0.0
+    done_cost: float = 0.0
+
+    def advance(self, cost: float = 0.0) -> None:
+        """One task finished (of estimated ``cost``)."""
+        self.done += 1
+        self.done_cost += cost
 
     def eta(self) -> str:
         if not self.done:
             return "ETA —"
-        left = (time.perf_counter() - self.start) / self.done * (self.total - self.done)
+        weighted = self.cost > 0 and self.done_cost > 0
+        left_work = (self.cost - self.done_cost) / self.done_cost if weighted else (self.total - self.done) / self.done
+        left = (time.perf_counter() - self.start) * left_work
         return f"ETA {left:.0f} s" if left < 120 else f"ETA {left / 60:.1f} min"
 
 
@@ -178,7 +189,7 @@ def _submit_all(client, fn, items: list, *, say, what: str, retries: int = 2, pr
         else:
             results[n] = future.result()
         future.release()
-        bar.done += 1
+        bar.advance()
         say(f"{what} ({bar.eta()})", done=bar.done, total=bar.total)
     if lost:
         raise ComputationError(f"{len(lost)} of {len(items)} tasks failed on the cluster; first: {lost[0]}")
@@ -424,7 +435,7 @@ def _climb(client, runner, spec, store, todo, say, label: str) -> None:
     cost = {c: cost_estimate(c, spec, runner.may_solve(c)) for c in fresh}  # the longest first
     futures = {client.submit(runner, c, pure=False, retries=2, priority=cost[c]): c
                for c in sorted(fresh, key=lambda c: -cost[c])}
-    bar = Progress(len(fresh))
+    bar = Progress(len(fresh), cost=sum(cost.values()))
     batch: list = []
     last = time.perf_counter()
     try:
@@ -432,7 +443,7 @@ def _climb(client, runner, spec, store, todo, say, label: str) -> None:
             if future.status == "finished":
                 batch.extend(future.result())
             future.release()
-            bar.done += 1
+            bar.advance(cost[futures[future]])
             say(f"{label}ladder: geometry → states → capability{' → relays' if spec.relays else ''} ({bar.eta()})",
                 done=bar.done, total=bar.total)
             if len(batch) >= 32 or time.perf_counter() - last > 15:
