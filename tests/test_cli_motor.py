@@ -59,6 +59,18 @@ def test_demo_writes_plan_figures_simulation_and_report(tmp_path, capsys):
     r = info["robustness"]
     assert r["case"] == "winding ×0.85, detent ×1.2" and r["holds"] == 2
     assert r["final_error_deg"] <= 0.05 and r["mean_power_W"] <= 100
+    # the calibration on the emulated motor built with a stated error: the fit explains the holds, the model's
+    # torque error falls at least fivefold, and the servo's turn on the plant is no worse with the fitted model
+    c = info["calibration"]
+    from spherestep.demo import QUICK_CALIBRATION_HOLDS
+
+    assert c["plant_error"] == {"detent": 1.2, "winding": 0.85} and c["holds"] == QUICK_CALIBRATION_HOLDS
+    assert c["backend"].startswith("emulated") and c["consistent"] is True
+    assert 0 < c["torque_error_after"] < c["torque_error_before"] / 5
+    assert c["scale_detent"] == pytest.approx(1.2, abs=0.1) and c["scale_winding"] == pytest.approx(0.85, abs=0.1)
+    for t in (c["turn_before"], c["turn_after"]):
+        assert t["final_error_deg"] <= 0.05 and t["turn_time_s"] > 0
+    assert c["turn_after"]["max_tracking_error_deg"] <= c["turn_before"]["max_tracking_error_deg"] * 1.05
     assert 0 <= info["potential_plan"]["moves"] <= info["potential_plan"]["steps"]
     assert json.loads((out / "drives.json").read_text()) == {
         "drives": info["drives"], "drives_other": info["drives_other"], "potential_plan": info["potential_plan"],
@@ -69,6 +81,7 @@ def test_demo_writes_plan_figures_simulation_and_report(tmp_path, capsys):
     text = (out / "report.html").read_text()
     # motor 3-D, histogram, commutation slider, simulated run, capability map, servo run
     assert f"<b>{info['plan']['steps']} steps</b>" in text and text.count("Plotly.newPlot(") == 6
+    assert "calibrated on the emulated motor" in text
     for anchor in ("capability", "iron", "drives", "servo"):
         assert f'id="section-{anchor}"' in text
 

@@ -14,6 +14,9 @@
    model (on iron the detent holds the rotor: few or none of them move it); on an iron design, the servo against
    the model's known error (:func:`robustness`: a plant with the winding ×0.85 and the detent ×1.2, the worst
    case of docs/control.md's table — holds at random orientations and the turn);
+   and the calibration (:func:`calibration`): the emulated motor built with a stated error (the design's model
+   with the detent ×1.2 and the winding ×0.85), holds collected by the servo on it, the fit, the torque error and
+   the servo's turn before and after;
 5. the HTML report with every section, and ``summary.json``.
 
 :data:`DEMO_FILES` names everything written, so a caller can check the folder before the work and count what was
@@ -43,6 +46,9 @@ CAPABILITY_SAMPLES = 400
 ROBUSTNESS_CASE = "winding ×0.85, detent ×1.2"  # the worst case of the table in docs/control.md (issue 25 §2)
 ROBUSTNESS_HOLDS = 5
 QUICK_CAPABILITY_SAMPLES = 60
+CALIBRATION_ERROR = {"detent": 1.2, "winding": 0.85}  # the emulated motor's stated error (scaled_model's factors)
+CALIBRATION_HOLDS = 60  # on the emulated motor: ~1 min of the demo's (measured, load 3), the fit ~15 s
+QUICK_CALIBRATION_HOLDS = 30
 
 
 def write_plan_files(design, plan, axis, out: Path) -> None:
@@ -138,6 +144,10 @@ def run_demo(design, out: Path, axis, angle_deg: float, *,
     if own.core == "iron":
         say(f"the servo against the model's known error: the plant with {ROBUSTNESS_CASE}")
         info["robustness"] = robustness(design, axis, angle, holds=2 if quick else ROBUSTNESS_HOLDS)
+    info["calibration"] = None
+    if own.core == "iron":
+        info["calibration"] = calibration(design, own, axis, angle,
+                                          holds=QUICK_CALIBRATION_HOLDS if quick else CALIBRATION_HOLDS, progress=say)
     write_text(out / "drives.json", json.dumps({"drives": info["drives"], "drives_other": info["drives_other"],
                                                 "potential_plan": info["potential_plan"],
                                                 "robustness": info["robustness"]}, indent=1, allow_nan=False))
@@ -155,7 +165,8 @@ def run_demo(design, out: Path, axis, angle_deg: float, *,
         Section("iron", "Iron: detent and saturation", html=_iron_table(iron_effects, iron_capability)),
         Section("drives", "The turn driven three ways", html=_drives_table(drives["own"]) + _drives_table(
             drives["other"]) + '<p class="note">' + potential_plan_line(info["potential_plan"]) + ".</p>"
-            + ('<p class="note">' + robustness_line(info["robustness"]) + ".</p>" if info["robustness"] else "")),
+            + ('<p class="note">' + robustness_line(info["robustness"]) + ".</p>" if info["robustness"] else "")
+            + ('<p class="note">' + calibration_line(info["calibration"]) + ".</p>" if info["calibration"] else "")),
         Section("servo", "Servo run", note=f"The servo's run of the same turn on the {own.label} model: tracking "
                 "error against the trajectory and the sensor's error, every coil's current, and the power drawn "
                 "from the supply.", figure=servo_figure(servo), height=640),
@@ -207,6 +218,58 @@ def robustness_line(r: dict) -> str:
             f"final error "
             f"{r['final_error_deg']:.3f}°, max tracking error {r['max_tracking_error_deg']:.2f}°, mean "
             f"{r['mean_power_W']:.0f} W")
+
+
+def calibration(design, own, axis, angle: float, *, holds: int = CALIBRATION_HOLDS, progress=None) -> dict:
+    """The calibration on the emulated motor (issue 26): the plant the design's own model ``own``
+    (:func:`~spherestep.magnetics.design_model`) with :data:`CALIBRATION_ERROR`
+    (:func:`~spherestep.magnetics.mismatch.scaled_model`), run by the hardware emulator
+    (:class:`~spherestep.control.Emulated`, lockstep); ``holds`` holds on a random walk collected by the servo on
+    ``own`` (:func:`~spherestep.control.collect_holds`), the fit (:func:`~spherestep.control.calibrate`), the
+    relative RMS torque error against the plant at 200 held-out orientations (:func:`~spherestep.control.torque_error`)
+    and the turn of ``angle`` rad about ``axis`` on the plant (:func:`spherestep.dynamics.robustness.turn_run`,
+    planned within :data:`~spherestep.control.trajectory.MARGIN`) with the servo on the model before and after."""
+    from .control import Emulated, calibrate, collect_holds, hold_orientations, torque_error
+    from .control.trajectory import MARGIN
+    from .dynamics import Rotor
+    from .dynamics.robustness import turn_run
+    from .magnetics.mismatch import scaled_model
+
+    say = progress or (lambda _: None)
+    plant = scaled_model(own.model, **CALIBRATION_ERROR)
+    collected = collect_holds(design, Emulated(plant), hold_orientations(holds, seed=0), model=own.model,
+                              limits=own.limits, progress=lambda text, *_: say(f"calibration on the emulated motor: {text}"))
+    say("calibration: fitting the tables")
+    cal = calibrate(design, own.model, collected)
+    say("calibration: the torque error against the emulated motor")
+    before, after = torque_error(own.model, plant), torque_error(cal.model, plant)
+    rotor = Rotor.from_design(design)
+    turns = {}
+    for name, model, label in (("before", own.model, "uncalibrated"), ("after", cal.model, "calibrated")):
+        say(f"calibration: the turn on the emulated motor with the {label} model")
+        traj, run = turn_run(design, plant, model, own.limits, rotor, axis=axis, angle=angle, margin=MARGIN)
+        s = run.summary()
+        turns[name] = {"turn_time_s": float(traj.duration), "final_error_deg": math.degrees(s.final_error),
+                       "max_tracking_error_deg": math.degrees(s.max_tracking_error)}
+    return {"plant": f"{own.label} with the detent ×{CALIBRATION_ERROR['detent']:g} and the winding "
+                     f"×{CALIBRATION_ERROR['winding']:g}", "plant_error": dict(CALIBRATION_ERROR),
+            "backend": "emulated motor (lockstep)", "holds": len(collected), "consistent": cal.consistent,
+            "scale_detent": cal.scale_detent, "scale_winding": cal.scale_winding,
+            "residual_before_Nm": cal.residual_before, "residual_after_Nm": cal.residual_after,
+            "torque_error_before": before, "torque_error_after": after, "torque_error_orientations": 200,
+            "margin": MARGIN, "turn_before": turns["before"], "turn_after": turns["after"]}
+
+
+def calibration_line(c: dict) -> str:
+    """The calibration on the emulated motor (:func:`calibration`), in one sentence."""
+    b, a = c["turn_before"], c["turn_after"]
+    return (f"calibrated on the {c['backend']} built as the {c['plant']}: {c['holds']} holds, fitted detent "
+            f"×{c['scale_detent']:.3f}, winding ×{c['scale_winding']:.3f}; torque error at "
+            f"{c['torque_error_orientations']} held-out orientations {c['torque_error_before']:.1%} → "
+            f"{c['torque_error_after']:.2%}; the servo's turn planned within {c['margin']:.0%} of the torque, "
+            f"uncalibrated → calibrated: max tracking error {b['max_tracking_error_deg']:.3f}° → "
+            f"{a['max_tracking_error_deg']:.3f}°, final error {b['final_error_deg']:.3f}° → "
+            f"{a['final_error_deg']:.3f}°")
 
 
 def potential_plan_line(p: dict) -> str:

@@ -68,7 +68,8 @@ def demo(
 
     Example: [bold]spherestep demo --out spherestep-out[/bold]
     """
-    from ..demo import DEMO_FILES, drive_lines, potential_plan_line, robustness_line, run_demo
+    from ..demo import (DEMO_FILES, calibration_line, drive_lines, potential_plan_line, robustness_line,
+                        run_demo)
     from ..motor import prototype
     from ..outputs import Outputs, output_folder
 
@@ -108,6 +109,8 @@ def demo(
         console.print(potential_plan_line(info["potential_plan"]))
         if info["robustness"]:
             console.print(robustness_line(info["robustness"]))
+        if info["calibration"]:
+            console.print(calibration_line(info["calibration"]))
         console.print(f"wrote {len(files.paths)} files to {out}/")
 
 
