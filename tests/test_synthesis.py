@@ -285,3 +285,24 @@ def test_the_eta_weighs_the_tasks_by_their_estimated_cost():
     assert left(counted) == pytest.approx(300.0, rel=0.01)
     assert left(weighted) == pytest.approx(100.0 * 3.0 / 7.0, rel=0.01)
     assert Progress(3).eta() == "ETA —"
+
+
+def test_a_task_that_fails_on_the_cluster_is_a_row_not_lost(tmp_path):
+    """A task whose workers died (Dask's KilledWorker: on one machine, a task over the worker's memory limit; the
+    272-pole rotor over 29 coils needed more than 11 GiB) is stored as a failed row that says so, one per core."""
+    from types import SimpleNamespace
+
+    from distributed.scheduler import KilledWorker
+
+    from spherestep.synthesis.run import _store, failed_rows
+
+    spec = load_spec(EXAMPLES / "prototype-relays-iron.yaml")
+    c = Candidate("truncated-icosahedron", 2, "truncated-cuboctahedron", 1, 80.0, 12 * 0.0254)
+    rows = failed_rows(c, spec, None, KilledWorker("ladder-1", SimpleNamespace(address="tcp://127.0.0.1:1"), 3))
+    assert [r["core"] for r in rows] == list(spec.cores)
+    assert all(r["status"] == "failed" and r["stage"] == "cluster" and "memory" in r["reason"] for r in rows)
+    store = _store(tmp_path)
+    store.append(rows)
+    table = store.read()
+    assert list(table["key"]) == [c.key(spec.digest, core) for core in spec.cores]
+    assert (table["status"] == "failed").all()

@@ -23,7 +23,7 @@ import numpy as np
 
 from .. import checks
 from ..errors import InputError, bad_value
-from .ladder import PROTOTYPE, Candidate, baseline_layout, build, climb
+from .ladder import PROTOTYPE, Candidate, _row, baseline_layout, build, climb
 
 STORE = "results"
 GAP_SCALES = (2.0, 4.0, 8.0)  # the baseline's air gap widened (iron: a table solve each, thorough budget)
@@ -146,6 +146,22 @@ class Progress:
         left_work = (self.cost - self.done_cost) / self.done_cost if weighted else (self.total - self.done) / self.done
         left = (time.perf_counter() - self.start) * left_work
         return f"ETA {left:.0f} s" if left < 120 else f"ETA {left / 60:.1f} min"
+
+
+def failed_rows(candidate: Candidate, spec, baseline, exc: BaseException) -> list[dict]:
+    """The rows of a task that failed on the cluster (status ``failed`` at stage ``cluster``, one per core), so the
+    search's counts and store keep it; a worker that died running it (Dask's ``KilledWorker``) is, on one machine,
+    almost always one that exceeded its memory limit."""
+    try:
+        text = str(exc)
+    except Exception:  # noqa: BLE001 (an exception that cannot even print itself: its type says enough)
+        text = ""
+    why = f"{type(exc).__name__}: {text}"
+    if type(exc).__name__ == "KilledWorker":
+        why = ("the workers running it died (Dask KilledWorker; on one machine: the task exceeded the worker's memory "
+               f"limit, the machine's memory over the workers); {text}")
+    return [{**_row(candidate, core, spec, baseline), "stage": "cluster", "status": "failed",
+             "reason": f"the task failed on the cluster: {why}"} for core in spec.cores]
 
 
 def _store(out: Path):
@@ -433,17 +449,21 @@ def _climb(client, runner, spec, store, todo, say, label: str) -> None:
     if not fresh:
         return
     cost = {c: cost_estimate(c, spec, runner.may_solve(c)) for c in fresh}  # the longest first
+    work = {c: cost_estimate(c, spec) for c in fresh}  # the ETA's weights: the enumeration's (a solve's is a guess)
     futures = {client.submit(runner, c, pure=False, retries=2, priority=cost[c]): c
                for c in sorted(fresh, key=lambda c: -cost[c])}
-    bar = Progress(len(fresh), cost=sum(cost.values()))
+    bar = Progress(len(fresh), cost=sum(work.values()))
     batch: list = []
     last = time.perf_counter()
     try:
         for future in as_completed(list(futures)):
+            c = futures[future]
             if future.status == "finished":
                 batch.extend(future.result())
+            else:  # the task itself failed on the cluster (e.g. its worker killed for memory): a row says so
+                batch.extend(failed_rows(c, spec, runner.baseline, future.exception()))
             future.release()
-            bar.advance(cost[futures[future]])
+            bar.advance(work[c])
             say(f"{label}ladder: geometry → states → capability{' → relays' if spec.relays else ''} ({bar.eta()})",
                 done=bar.done, total=bar.total)
             if len(batch) >= 32 or time.perf_counter() - last > 15:
