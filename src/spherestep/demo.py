@@ -227,12 +227,15 @@ def calibration(design, own, axis, angle: float, *, holds: int = CALIBRATION_HOL
     (:class:`~spherestep.control.Emulated`, lockstep); ``holds`` holds on a random walk collected by the servo on
     ``own`` (:func:`~spherestep.control.collect_holds`), the fit (:func:`~spherestep.control.calibrate`), the
     relative RMS torque error against the plant at 200 held-out orientations (:func:`~spherestep.control.torque_error`)
-    and the turn of ``angle`` rad about ``axis`` on the plant (:func:`spherestep.dynamics.robustness.turn_run`,
-    planned within :data:`~spherestep.control.trajectory.MARGIN`) with the servo on the model before and after."""
+    and the turn of ``angle`` rad about ``axis`` on the plant (:func:`spherestep.dynamics.robustness.turn_run`)
+    with the servo on the model before and after, one plan for both: within
+    :data:`~spherestep.control.trajectory.MARGIN` on the pairwise model, as the robustness table's (the coupled
+    one is refused within it; benchmarks/bench_calibration.py)."""
     from .control import Emulated, calibrate, collect_holds, hold_orientations, torque_error
     from .control.trajectory import MARGIN
     from .dynamics import Rotor
     from .dynamics.robustness import turn_run
+    from .magnetics import design_model
     from .magnetics.mismatch import scaled_model
 
     say = progress or (lambda _: None)
@@ -244,10 +247,12 @@ def calibration(design, own, axis, angle: float, *, holds: int = CALIBRATION_HOL
     say("calibration: the torque error against the emulated motor")
     before, after = torque_error(own.model, plant), torque_error(cal.model, plant)
     rotor = Rotor.from_design(design)
+    pairwise = design_model(design, coupling=False)
     turns = {}
     for name, model, label in (("before", own.model, "uncalibrated"), ("after", cal.model, "calibrated")):
         say(f"calibration: the turn on the emulated motor with the {label} model")
-        traj, run = turn_run(design, plant, model, own.limits, rotor, axis=axis, angle=angle, margin=MARGIN)
+        traj, run = turn_run(design, plant, model, own.limits, rotor, axis=axis, angle=angle, margin=MARGIN,
+                             plan_model=pairwise.model)
         s = run.summary()
         turns[name] = {"turn_time_s": float(traj.duration), "final_error_deg": math.degrees(s.final_error),
                        "max_tracking_error_deg": math.degrees(s.max_tracking_error)}
@@ -257,7 +262,7 @@ def calibration(design, own, axis, angle: float, *, holds: int = CALIBRATION_HOL
             "scale_detent": cal.scale_detent, "scale_winding": cal.scale_winding,
             "residual_before_Nm": cal.residual_before, "residual_after_Nm": cal.residual_after,
             "torque_error_before": before, "torque_error_after": after, "torque_error_orientations": 200,
-            "margin": MARGIN, "turn_before": turns["before"], "turn_after": turns["after"]}
+            "margin": MARGIN, "turn_planned_on": pairwise.label, "turn_before": turns["before"], "turn_after": turns["after"]}
 
 
 def calibration_line(c: dict) -> str:

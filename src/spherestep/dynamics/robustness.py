@@ -81,14 +81,14 @@ def hold_errors(design, plant, model, limits, rotor, *, holds: int = 20, seed: i
 
 def turn_run(design, plant, model, limits, rotor, *, axis=TURN_AXIS, angle: float = TURN_ANGLE, seed: int = 0,
              settle: float = 0.5, noise: float = NOISE, disturbance_bandwidth: float | None = None,
-             margin: float | None = None):
-    """``(trajectory, run)``: the turn of the module planned on ``model`` (within ``margin``, default
-    ``plan_turn``'s) and driven on ``plant``."""
+             margin: float | None = None, plan_model=None):
+    """``(trajectory, run)``: the turn of the module planned on ``plan_model`` (default ``model``; within
+    ``margin``, default ``plan_turn``'s) and driven on ``plant`` with the servo on ``model``."""
     from ..commutation.turn import turn_targets
     from ..control import plan_turn
 
     start = turn_targets(design, axis, angle, steps=1)[0]
-    traj = plan_turn(model, start, axis, angle, rotor.inertia, limits, damping=rotor.damping, margin=margin)
+    traj = plan_turn(model if plan_model is None else plan_model, start, axis, angle, rotor.inertia, limits, damping=rotor.damping, margin=margin)
     run = simulate_servo(design, traj, plant, limits=limits, rotor=rotor, sensor=_sensor(noise, seed),
                          settle=settle, controller_model=model, disturbance_bandwidth=disturbance_bandwidth)
     return traj, run
