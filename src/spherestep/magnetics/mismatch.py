@@ -175,8 +175,9 @@ class CoupledPlant(TorqueModelBase):
 
 @dataclass(frozen=True)
 class MismatchCase:
-    """A plant ≠ model case: ``name``; the controller's model is the design's iron model (pairwise, its FEM
-    table: what :func:`~spherestep.magnetics.design_model` gives), the plant that model with the winding's torque
+    """A plant ≠ model case: ``name``; the controller's model is the design's pairwise iron model (its FEM
+    table: ``design_model(design, coupling=False)``; the default coupled model is the controller of
+    ``benchmarks/bench_servo_robust.py --controller coupled``), the plant that model with the winding's torque
     ×``winding`` and the detent ×``detent`` (:func:`scaled_model`), the shell ``shell`` m thicker
     (:func:`shell_model`) or the ``coupling`` (:class:`CoupledPlant`): the motor as built."""
 
