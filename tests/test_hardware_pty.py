@@ -194,6 +194,8 @@ def test_plan_wider_than_the_device_is_refused_before_anything_is_switched(devic
 def test_ctrl_c_mid_plan_switches_everything_off(device_factory):
     dev = device_factory()
     serial = host(dev)
+    # as a terminal delivers it: a test run as a background job of a non-interactive shell inherits SIGINT ignored
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
     timer = threading.Timer(0.15, os.kill, (os.getpid(), signal.SIGINT))
     timer.start()
     try:
@@ -201,6 +203,7 @@ def test_ctrl_c_mid_plan_switches_everything_off(device_factory):
             play(make_plan(100), serial, rate=25.0)
     finally:
         timer.cancel()
+        signal.signal(signal.SIGINT, previous)
     assert dev.state() == (0, 0) and dev.device.trips == []  # switched off by the host, not the watchdog
     assert serial.transcript.entries[-2][2].split(",")[1].startswith("OFF")
 
