@@ -14,6 +14,13 @@ Blocks on their own lines hold tables; inline blocks hold a sentence's numbers. 
     python scripts/docs_numbers.py bench [NAME ...]      # data/bench_NAME.json: every benchmark of BENCHES (or
                                                          # those named) run one after another: ~15 min quiet,
                                                          # ~40 min at load 10 (bench_motor's 812-pole rotor)
+    python scripts/docs_numbers.py potential             # data/potential_numbers.json: the prototype's energy
+                                                         # model (measure_potential, ~1 min)
+    python scripts/docs_numbers.py dynamics              # data/dynamics_tune.json: dynamics.tune (~30 s)
+    python scripts/docs_numbers.py explore [FOLDER]      # data/explore_default.json: docs/explore.md's default
+                                                         # sweep (spherestep explore --budget-coils 32 --workers 2,
+                                                         # ~15-40 min), or the summary of a finished FOLDER
+                                                         # (these three rewrite only their own page's blocks)
     python scripts/docs_numbers.py all                   # demo + forces (the end-of-session run; not bench)
     python scripts/docs_numbers.py                       # rewrite every block from the stored files
     python scripts/docs_numbers.py --check               # list the blocks that differ, exit 1 if any
@@ -31,6 +38,7 @@ from __future__ import annotations
 import csv
 import datetime
 import json
+import math
 import os
 import re
 import statistics
@@ -50,6 +58,9 @@ STORES = {
     "iron": DATA / "iron_compare.json",
     "calibration": DATA / "calibration_table.json",  # benchmarks/bench_calibration.py --json
     "gallery": ROOT / "src" / "spherestep" / "data" / "gallery" / "metrics.csv",  # scripts/gallery_metrics.py
+    "explore": DATA / "explore_default.json",  # docs_numbers.py explore: spherestep explore, docs/explore.md's sweep
+    "potential": DATA / "potential_numbers.json",  # docs_numbers.py potential (measure_potential)
+    "dynamics": DATA / "dynamics_tune.json",  # docs_numbers.py dynamics (measure_dynamics)
 }
 # the demo summary's keys not stored: file lists and per-state lists (their counts are the numbers)
 DROP = ("escape_violation_states", "escape_violation_states_note", "files")
@@ -908,6 +919,419 @@ def gallery_relay(g: dict) -> str:
             f"plan elsewhere: {part}")
 
 
+# ----------------------------------------------------------------------------------------------------- explore
+
+EXPLORE_OPTIONS = ("--budget-coils", "32", "--workers", "2")  # docs/explore.md's default sweep
+EXPLORE_KEEP = ("rotor", "rotor_level", "rotor_poles", "stator", "stator_level", "cap_half_angle_deg", "coils", "states",
+                "resolution_median_deg", "resolution_p95_deg", "escape_violations", "holding_torque_median_Nm",
+                "capability_median_Nm", "capability_p5_Nm", "family_rule", "rotor_family", "stator_family", "model")
+# the paper's pair, as the sweep names it (docs/explore.md compares it with the proposals)
+EXPLORE_PROTOTYPE = {"rotor": "truncated-icosahedron", "rotor_level": 1, "stator": "truncated-cuboctahedron",
+                     "stator_level": 1, "cap_half_angle_deg": 80.0}
+
+
+def _records(df) -> list[dict]:
+    """Rows as plain JSON values (NaN → None)."""
+    return json.loads(df.to_json(orient="records"))
+
+
+def summarise_explore(folder: Path, run: dict) -> dict:
+    """The numbers docs/explore.md quotes from a finished sweep folder (``results.csv``, ``pareto.csv``) and how it
+    ran (``run``: command, measured, wall_s, load, machine)."""
+    import pandas as pd
+
+    t = pd.read_csv(folder / "results.csv")
+    front = pd.read_csv(folder / "pareto.csv")
+    reason = t["reason"].fillna("")
+    status = t["status"]
+    ok = t[status == "ok"]
+    reach = ok[ok["reaches_all"].astype(bool)]
+
+    def share(df):
+        return df["escape_violations"] / df["states"]
+
+    def family(df) -> dict:
+        esc = share(df)
+        return {"designs": len(df), "resolution_median_deg": float(df["resolution_median_deg"].median()),
+                "resolution_best_deg": float(df["resolution_median_deg"].min()),
+                "escape_share_median": float(esc.median()), "escape_under_5pct": int((esc < 0.05).sum()),
+                "holding_median_Nm": None if df["holding_torque_median_Nm"].isna().all()
+                else float(df["holding_torque_median_Nm"].median()),
+                "holding_measured": int(df["holding_torque_median_Nm"].notna().sum())}
+
+    over = t[status == "over_budget"]
+    proto = t
+    for k, v in EXPLORE_PROTOTYPE.items():
+        proto = proto[proto[k] == v]
+    return {
+        **run,
+        "designs": len(t),
+        "status_counts": {k: int(v) for k, v in status.value_counts().items()},
+        "no_states": {"few_coils": int(((status == "no_states") & reason.str.contains("coils? in the stator cap")).sum()),
+                      "no_alignment": int(((status == "no_states") & reason.str.startswith("no orientation")).sum())},
+        "too_large": {"lookup": int(((status == "too_large") & reason.str.contains("lookup grid")).sum()),
+                      "candidates": int(((status == "too_large") & reason.str.contains("candidate alignments")).sum()),
+                      "poles": int(((status == "too_large") & reason.str.contains("poles, over")).sum())},
+        "over_budget": {"designs": len(over), "stators": sorted(set(over["stator"])),
+                        "coils": [int(over["coils"].min()), int(over["coils"].max())] if len(over) else []},
+        "does_not_fit_reasons": sorted(set(reason[status == "does_not_fit"])),
+        "measured": len(ok),
+        "torques_measured": int(ok["model"].notna().sum()),
+        "models": {k: int(v) for k, v in ok["model"].value_counts().items()},
+        "reach_all": len(reach),
+        "seconds_inside_designs": float(t["seconds"].fillna(0).sum()),
+        "pareto": _records(front[list(EXPLORE_KEEP)]),
+        "prototype": _records(proto[list(EXPLORE_KEEP)])[0] if len(proto) else None,
+        "family": {"different": family(reach[reach["family_rule"] != "same"]),
+                   "same": family(reach[reach["family_rule"] == "same"])},
+    }
+
+
+def run_explore(folder: Path | None) -> None:
+    """``spherestep explore`` with docs/explore.md's options into ``folder`` (a fresh temporary one by default),
+    timed, the load at its start and end recorded; its summary stored in data/explore_default.json. Given a finished
+    ``folder`` whose ``run.json`` says how it ran, only the summary is stored."""
+    if folder is not None and (folder / "results.csv").exists():
+        run = json.loads((folder / "run.json").read_text(encoding="utf-8")) if (folder / "run.json").exists() else {}
+    else:
+        folder = folder or Path(tempfile.mkdtemp(prefix="explore-"))
+        cmd = [sys.executable, "-c", "from spherestep.cli import main; main()", "explore", *EXPLORE_OPTIONS,
+               "--out", str(folder), "--quiet"]
+        load0, start = os.getloadavg()[0], datetime.datetime.now(datetime.UTC)
+        print(f"running spherestep explore {' '.join(EXPLORE_OPTIONS)} --out {folder} (load {load0:.1f})", flush=True)
+        subprocess.run(cmd, check=True, cwd=ROOT,
+                       env={**os.environ, "OPENBLAS_NUM_THREADS": os.environ.get("OPENBLAS_NUM_THREADS", "1")})
+        wall = (datetime.datetime.now(datetime.UTC) - start).total_seconds()
+        run = {"command": f"spherestep explore {' '.join(EXPLORE_OPTIONS)} --out …",
+               "measured": start.strftime("%Y-%m-%d %H:%M UTC"), "wall_s": round(wall, 1),
+               "load": [round(load0, 1), round(os.getloadavg()[0], 1)], "machine": _machine()}
+        (folder / "run.json").write_text(json.dumps(run, indent=1) + "\n", encoding="utf-8")
+    _store("explore", summarise_explore(folder, run))
+
+
+def _machine() -> str:
+    import platform
+
+    import numpy
+
+    return (f"{os.cpu_count()} cores ({platform.machine()}, {platform.system()}), Python {platform.python_version()}, "
+            f"NumPy {numpy.__version__}")
+
+
+def _pack(name: str) -> str:
+    return name.replace("-", " ")
+
+
+def _ex_when(e: dict) -> str:
+    lo, hi = sorted(e["load"])
+    return f"{e['measured']}, load {lo:.1f}–{hi:.1f}"
+
+
+def explore_run(e: dict) -> str:
+    """docs/explore.md: how the default sweep ran and what became of its designs."""
+    c, ns, tl, ob = e["status_counts"], e["no_states"], e["too_large"], e["over_budget"]
+    minutes, seconds = divmod(round(e["wall_s"]), 60)
+    models = "; ".join(f"{n} on {m}" for m, n in e["models"].items())
+    fit = c.get("does_not_fit", 0)
+    return (
+        f"Measured {_ex_when(e)} with `{e['command']}` under `nice -n 5` ({e['machine']}; other jobs shared the "
+        f"two cores): {minutes} min {seconds:02d} s wall, {e['seconds_inside_designs']:.0f} s inside designs summed "
+        f"over both workers. The coils are iron-cored (the default `--core iron`), the torques measured on each "
+        f"design's own model.\n\n"
+        f"Of the {e['designs']} designs {e['measured']} were measured; {c.get('no_states', 0)} have no states "
+        f"({ns['no_alignment']} with no alignment of two poles on two coils, {ns['few_coils']} with fewer than two "
+        f"coils in the cap), {c.get('too_large', 0)} were too large ({tl['lookup']} lookup grids, {tl['candidates']} "
+        f"candidate counts, {tl['poles']} rotors over 300 poles), {fit} do not fit and {ob['designs']} are over the "
+        f"budget ({', '.join(_pack(s) for s in ob['stators']) or 'none'} as a stator"
+        + (f": {ob['coils'][0]} to {ob['coils'][1]} coils" if ob["coils"] else "") + "). "
+        f"Torques were measured on {e['torques_measured']} of the {e['measured']} ({models}); the others' parts have "
+        f"no stored iron tables (their reason says so). {e['reach_all']} of the {e['measured']} reach every "
+        f"orientation. The Pareto set within 32 coils:")
+
+
+def explore_pareto_table(e: dict) -> str:
+    """docs/explore.md: the default sweep's Pareto set, and the paper's pair beside it."""
+    lines = ["| # | rotor | stator | cap | coils | median | 95 % | escape | holding (N·m) | capability p5 (N·m) | "
+             "families |", "|---|---|---|---|---|---|---|---|---|---|---|"]
+    seen = set()
+    for i, r in enumerate(e["pareto"], start=1):
+        rotor = f"{_pack(r['rotor'])} L{r['rotor_level']}"
+        if rotor not in seen:
+            rotor += f" ({r['rotor_poles']})"
+            seen.add(rotor.rsplit(" (", 1)[0])
+        hold = "—" if r["holding_torque_median_Nm"] is None else f"{r['holding_torque_median_Nm']:.2f}"
+        cap = "—" if r["capability_p5_Nm"] is None else _signed(r["capability_p5_Nm"], 2)
+        same = " same" if r["family_rule"] == "same" else ""
+        lines.append(f"| {i} | {rotor} | {_pack(r['stator'])} L{r['stator_level']} | {r['cap_half_angle_deg']:.0f}° | "
+                     f"{r['coils']} | {r['resolution_median_deg']:.2f}° | {r['resolution_p95_deg']:.2f}° | "
+                     f"{100 * r['escape_violations'] / r['states']:.0f} % | {hold} | {cap} | "
+                     f"{r['rotor_family']}/{r['stator_family']}{same} |")
+    return "\n".join(lines)
+
+
+def explore_prototype(e: dict) -> str:
+    """docs/explore.md: the paper's pair as the sweep measured it."""
+    p = e["prototype"]
+    hold = "not measured" if p["holding_torque_median_Nm"] is None else f"{p['holding_torque_median_Nm']:.2f} N·m"
+
+    def dominates(r) -> bool:
+        h, hp = r["holding_torque_median_Nm"], p["holding_torque_median_Nm"]
+        torque = h is None or hp is None or h >= hp
+        no_worse = r["resolution_median_deg"] <= p["resolution_median_deg"] and r["coils"] <= p["coils"] and torque
+        return no_worse and r != p
+
+    by = [(i, r) for i, r in enumerate(e["pareto"], start=1) if dominates(r)]
+    if any(r == p for r in e["pareto"]):
+        verdict = "it is on the Pareto front"
+    elif by:
+        i, r = by[-1]
+        rh = "" if r["holding_torque_median_Nm"] is None else f", {r['holding_torque_median_Nm']:.2f} N·m"
+        verdict = (f"it is dominated by #{i} ({_pack(r['rotor'])} L{r['rotor_level']} × {_pack(r['stator'])} "
+                   f"L{r['stator_level']}, {r['cap_half_angle_deg']:.0f}°: {r['coils']} coils, "
+                   f"{r['resolution_median_deg']:.2f}°{rh})")
+    else:
+        verdict = "it is dominated (by a design outside the coil budget or the reach condition)"
+    return (f"{p['coils']} coils, {_thin(p['states'])} states, median {p['resolution_median_deg']:.2f}°, 95 % "
+            f"{p['resolution_p95_deg']:.2f}°, escape {100 * p['escape_violations'] / p['states']:.0f} %, holding "
+            f"torque {hold}: {verdict}")
+
+
+def explore_measured(e: dict) -> str:
+    return f"{e['measured']} measured designs"
+
+
+def explore_family(e: dict) -> str:
+    """docs/explore.md: the family rule on the designs that reach every orientation."""
+    d, s = e["family"]["different"], e["family"]["same"]
+    same_front = sum(r["family_rule"] == "same" for r in e["pareto"])
+
+    def hold(f):
+        return "—" if f["holding_median_Nm"] is None else f"{f['holding_median_Nm']:.2f}"
+
+    return (f"Among the {e['reach_all']} designs that reach every orientation, the {d['designs']} different-family "
+            f"ones have a median resolution of {d['resolution_median_deg']:.2f}° (best "
+            f"{d['resolution_best_deg']:.2f}°) and the {s['designs']} same-family ones {s['resolution_median_deg']:.2f}° "
+            f"(best {s['resolution_best_deg']:.2f}°); the median share of states failing the escape test is "
+            f"{100 * d['escape_share_median']:.1f} % and {100 * s['escape_share_median']:.1f} %, and "
+            f"{d['escape_under_5pct']} and {s['escape_under_5pct']} designs have fewer than 5 % failing; the median "
+            f"holding torque (of the {d['holding_measured']} and {s['holding_measured']} with torques measured) is "
+            f"{hold(d)} and {hold(s)} N·m. {same_front} of the {len(e['pareto'])} proposals are same-family pairs")
+
+
+# --------------------------------------------------------------------------------- the potential and dynamics
+
+POTENTIAL_OFFSET_STATES, POTENTIAL_SEED = 5000, 0
+
+
+def measure_potential() -> dict:
+    """docs/potential.md's numbers of the prototype's energy model: profiles, band limit, kernel table, cut-off, the
+    equilibria of ``POTENTIAL_OFFSET_STATES`` random states (seed ``POTENTIAL_SEED``) and the example curve's fit.
+    Deterministic; ~1 min."""
+    import numpy as np
+
+    from spherestep import so3
+    from spherestep.motor import coil_currents, prototype
+    from spherestep.potential import MotorPotential, example_force_curve, fit_profile
+    from spherestep.statics import equilibrium
+
+    d = prototype()
+    p = MotorPotential(d)
+    stator_alone = MotorPotential(d, rotor_profile=p.stator_profile).bandlimit
+    field = p.rotor_field
+    cut = float(field.cut)
+    x = np.random.default_rng(POTENTIAL_SEED).normal(size=(20_000, 3))
+    x /= np.linalg.norm(x, axis=1, keepdims=True)
+    inside = float(np.mean(np.sum(x @ field.poles.T > math.cos(cut), axis=1)))
+    states = d.states()
+    picks = np.sort(np.random.default_rng(POTENTIAL_SEED).choice(len(states), POTENTIAL_OFFSET_STATES, replace=False))
+    coils = [states.coils(int(i)) for i in picks]
+    c = np.array([coil_currents(k, len(d.stator)) for k in coils])
+    geo = states.rotations[picks]
+    eq = equilibrium(p, geo, c)
+    off = np.degrees(so3.distance(eq.rotation, geo))
+    held = np.array([len(k) for k in coils])
+    rows = []
+    for n in [*sorted(set(held.tolist())), None]:
+        sel = off if n is None else off[held == n]
+        rows.append({"held": n, "states": int(sel.size), "median": float(np.median(sel)), "mean": float(np.mean(sel)),
+                     "p90": float(np.percentile(sel, 90)), "max": float(np.max(sel))})
+    fit = fit_profile(*example_force_curve(), 0.1524, p.rotor_profile)
+    return {
+        "rotor_half_width_deg": math.degrees(p.rotor_profile.half_width), "rotor_kappa": p.rotor_profile.kappa,
+        "stator_half_width_deg": math.degrees(p.stator_profile.half_width), "stator_kappa": p.stator_profile.kappa,
+        "bandlimit": p.bandlimit, "bandlimit_stator_alone": stator_alone,
+        "kernel_intervals": p.kernel.intervals, "kernel_errors": list(p.kernel.table_error),
+        "cutoff_deg": math.degrees(cut), "poles": len(field.poles), "poles_inside_mean": inside,
+        "equilibria": {"states": POTENTIAL_OFFSET_STATES, "seed": POTENTIAL_SEED,
+                       "minima": int(np.sum(eq.is_minimum)), "iterations_max": int(np.max(eq.iterations)),
+                       "iterations_mean": float(np.mean(eq.iterations)), "rows": rows,
+                       "stiffness_median": [float(v) for v in np.median(eq.stiffness, axis=0)],
+                       "stiffness_min": float(np.min(eq.stiffness))},
+        "example_fit": {"kappa_s": fit.stator.kappa, "amplitude_s": fit.stator.amplitude},
+    }
+
+
+def potential_profiles(m: dict) -> str:
+    return (f"`ρ_r = {m['rotor_half_width_deg']:.3f}°`, `κ_r = {m['rotor_kappa']:.2f}` and "
+            f"`ρ_s = {m['stator_half_width_deg']:.3f}°`, `κ_s = {m['stator_kappa']:.2f}`")
+
+
+def potential_bandlimit(m: dict) -> str:
+    return (f"`L = {m['bandlimit']}` for the prototype (the rotor's sharper bump decides; the stator alone needs "
+            f"{m['bandlimit_stator_alone']})")
+
+
+def potential_kernel(m: dict) -> str:
+    g, g1, g2 = m["kernel_errors"]
+    return f"{m['kernel_intervals']} intervals, errors {g:.1e} (G), {g1:.1e} (G'), {g2:.1e} (G'')"
+
+
+def potential_cutoff(m: dict) -> str:
+    return (f"**{m['cutoff_deg']:.0f}°** for the prototype, so {m['poles_inside_mean']:.0f} of {m['poles']} poles per "
+            "point on average")
+
+
+def potential_offsets(m: dict) -> str:
+    """docs/potential.md: equilibria of random states against their geometric states."""
+    e = m["equilibria"]
+    lines = [f"({e['states']:,} random states of the prototype (seed {e['seed']}), each with its held coils energised "
+             f"with the polarity of their poles, started at the state): {e['minima']:,} of {e['states']:,} converge to "
+             f"strict minima (Hessian positive definite) in at most {e['iterations_max']} Newton iterations (mean "
+             f"{e['iterations_mean']:.1f}). Park distance equilibrium ↔ geometric state:", "",
+             "| held pairs | states | median | mean | 90th pct | max |", "|---:|---:|---:|---:|---:|---:|"]
+    for r in e["rows"]:
+        lines.append(f"| {r['held'] if r['held'] is not None else 'all'} | {r['states']} | {r['median']:.3f}° | "
+                     f"{r['mean']:.3f}° | {r['p90']:.3f}° | {r['max']:.3f}° |")
+    return "\n".join(lines)
+
+
+def potential_stiffness(m: dict) -> str:
+    e = m["equilibria"]
+    return (f"median {', '.join(f'{v:.1f}' for v in e['stiffness_median'])}; smallest over the sample "
+            f"{e['stiffness_min']:.2f}")
+
+
+def potential_fit(m: dict) -> str:
+    f = m["example_fit"]
+    return (f"`κ_s = {f['kappa_s']:.2f}`, `A_s = {f['amplitude_s']:.3f}` ({100 * abs(f['kappa_s'] / 51.03 - 1):.1f} % "
+            f"and {100 * abs(f['amplitude_s'] / 6.0 - 1):.1f} % off: noise)")
+
+
+def potential_timings(b: dict) -> str:
+    """docs/potential.md, Timings: ``bench_potential.py``'s batches of 1000 orientations and its other figures."""
+    v = b["values"]
+    batch, vs, single = v["batch us per orientation"], v["batch vs exact"], v["single us"]
+    lines = [f"Measured {_when(b)} (`benchmarks/bench_potential.py`; {b['machine']}, `OPENBLAS_NUM_THREADS="
+             f"{b.get('OPENBLAS_NUM_THREADS', '?')}`). Batches of 1000 random orientations; \"vs ducc0\" is the row's "
+             "time over the anchor's (ducc0's `synthesis_general` of `F` alone at the same points, library time "
+             "only); \"vs exact\" the matching exact row's time over the row's. The accuracy of each row is the "
+             "tests' (Accuracy, above).", "",
+             "| task (1000 orientations) | µs per orientation | per second | vs ducc0 | vs exact |",
+             "|---|---:|---:|---:|---:|"]
+    for task, us in batch.items():
+        coils = task.rsplit(", ", 1)[1]
+        anchor = batch[f"ducc0 synthesis of F (anchor), {coils}"]
+        name = task.replace("K(R)", "`K(R)`").replace("synthesis of F", "synthesis of `F`")
+        if ", fast, " in task:
+            name = "**" + name.replace(f", {coils}", "") + f"**, {coils}"
+        ratio = vs.get(task)
+        lines.append(f"| {name} | {_thin(round(us)) if us >= 100 else f'{us:.2f}'} | {_thin(round(1e6 / us))} | "
+                     f"{_times(us / anchor)}× | {'' if ratio is None else f'{ratio:.1f}×'} |")
+    eq, pl, dy = v["equilibria 1e4 s"], v["planner steps per s"], v["dynamics"]
+    lines += ["", "Same script, same run:", "", "| task | fast path | exact forms |", "|---|---:|---:|"]
+    for n in (4, 29):
+        lines.append(f"| single call, energy + torque, {n} coils | {single[f'single call energy + torque, fast, {n} coils']:.1f} µs "
+                     f"(the compiled call alone {single[f'single call energy + torque, the compiled call alone, {n} coils']:.1f} µs) | "
+                     f"{single[f'single call energy + torque, pairwise, {n} coils']:.1f} µs (pairwise) |")
+        lines.append(f"| single call, torque only, {n} coils | {single[f'single call torque, fast, {n} coils']:.1f} µs | |")
+        lines.append(f"| single call, E, τ, Hessian, {n} coils | {single[f'single call E, τ, Hessian, fast, {n} coils']:.1f} µs | |")
+    lines += [f"| equilibria of 10⁴ starts (2° off a state, its coils; {100 * eq['converged']:.0f} % converged) | "
+              f"**{eq['fast']:.2f} s** | {eq['exact']:.1f} s |",
+              f"| potential planner, one 360° turn | {_thin(round(pl['fast']))} steps/s | {_thin(round(pl['exact']))} steps/s |",
+              f"| dynamics at the tuned step ({dy['fast']['dt ms']:.1f} ms) | {_thin(round(dy['fast']['x real time']))}× real "
+              f"time | {_times(dy['exact']['x real time'])}× real time |"]
+    return "\n".join(lines)
+
+
+def _met(ok: bool) -> str:
+    return "met" if ok else "**not reached**"
+
+
+def potential_targets(bs: dict) -> str:
+    """docs/potential.md: issue 17's targets against the stored runs of bench_potential, bench_planners, bench_dynamics."""
+    po, pl, dy = bs["bench-potential"], bs["bench-planners"], bs["bench-dynamics"]
+    v = po["values"]
+    batch, single = v["batch us per orientation"], v["single us"]
+    et, k, h = (batch[f"{t}, fast, 29 coils"] for t in ("energy + torque", "K(R)", "E, τ, Hessian"))
+    one = single["single call energy + torque, fast, 4 coils"]
+    eq, steps, dyn = v["equilibria 1e4 s"], v["planner steps per s"], dy["values"]["potential"]
+    lines = [f"`bench_potential.py` {_when(po)}; `bench_planners.py` {_when(pl)}; `bench_dynamics.py` {_when(dy)}:", "",
+             "| task | stored runs | target |", "|---|---:|---:|",
+             f"| energy + torque, 29 coils, batches of 1000 | {et:.1f} µs per orientation ({_times(et / batch['ducc0 synthesis of F (anchor), 29 coils'])}× "
+             f"the anchor; {batch['energy + torque, pairwise (exact), 29 coils'] / et:.0f}× faster than pairwise) | ≤ 5 µs — {_met(et <= 5)} |",
+             f"| `K(R)`, 29 coils, batches | {k:.1f} µs → {_thin(int(round(1e6 / k, -3)))} per second | ≥ 10⁵ /s — {_met(1e6 / k >= 1e5)} |",
+             f"| E, τ, Hessian, 29 coils, batches | {h:.1f} µs | — |",
+             f"| one orientation per call, energy + torque, 4 coils | {one:.1f} µs (the compiled call alone "
+             f"{single['single call energy + torque, the compiled call alone, 4 coils']:.1f} µs; pairwise "
+             f"{single['single call energy + torque, pairwise, 4 coils']:.0f} µs) | ≤ 30 µs — {_met(one <= 30)} |",
+             f"| equilibria of 10⁴ starts | {eq['fast']:.2f} s (exact forms {eq['exact']:.1f} s) | < 1 s — {_met(eq['fast'] < 1)} |",
+             f"| potential planner, one 360° turn | {_thin(round(steps['fast']))} steps/s in `bench_potential.py`, "
+             f"{_thin(round(pl['values']['potential']['steps per s']))} in `bench_planners.py` (median of "
+             f"{pl['values']['potential']['trials']} turns; exact forms {_thin(round(steps['exact']))}) | ≥ 1000 — "
+             f"{_met(min(steps['fast'], pl['values']['potential']['steps per s']) >= 1000)} |",
+             f"| dynamics at the tuned step ({dyn['dt ms']:.1f} ms) | {_thin(round(dyn['x real time']))}× real time "
+             f"(NumPy `Rotor.step` {_thin(round(dyn['numpy x real time']))}×) | ≥ 500× — {_met(dyn['x real time'] >= 500)} |"]
+    return "\n".join(lines)
+
+
+def planners_potential(b: dict) -> str:
+    """docs/potential.md: the potential planner over bench_planners.py's turns, as stored."""
+    p = b["values"]["potential"]
+    return (f"median {p['median error deg']:.2f}°, worst {p['worst error deg']:.2f}°, final {p['final error deg']:.2f}° "
+            f"over {p['trials']} turns, {_thin(round(p['steps per s']))} steps/s ({_when(b)})")
+
+
+def measure_dynamics() -> dict:
+    """docs/dynamics.md's numbers: the prototype's inertia and ``dynamics.tune`` on the torque map and the iron
+    model (deterministic; ~30 s)."""
+    from spherestep.dynamics import Rotor, tune
+    from spherestep.magnetics import iron_model, torque_map
+    from spherestep.motor import prototype
+
+    d = prototype()
+    out = {"inertia_kg_m2": Rotor.from_design(d).inertia}
+    for name, model in (("torque map", torque_map(d)), ("iron model", iron_model(d))):
+        t = tune(d, model)
+        out[name] = {"stiffness_Nm_per_rad": t.stiffness, "omega_rad_s": t.omega,
+                     "damping_Nm_s": t.rotor.damping, "dwell_s": t.dwell, "dt_s": t.dt}
+    return out
+
+
+def dynamics_tune(m: dict) -> str:
+    """docs/dynamics.md: ``dynamics.tune`` on the prototype."""
+    a, i = m["torque map"], m["iron model"]
+    return (f"Prototype on the torque map: `k` = {a['stiffness_Nm_per_rad']:.3f} N·m/rad, `ω` = {a['omega_rad_s']:.2f} "
+            f"rad/s, `b` = {a['damping_Nm_s']:.3f} N·m·s, dwell {a['dwell_s']:.2f} s, `dt` {1e3 * a['dt_s']:.1f} ms; on the "
+            f"iron model: `k` = {i['stiffness_Nm_per_rad']:.1f} N·m/rad, `ω` = {i['omega_rad_s']:.1f} rad/s, `b` = "
+            f"{i['damping_Nm_s']:.2f} N·m·s, dwell {i['dwell_s']:.2f} s, `dt` {1e3 * i['dt_s']:.1f} ms")
+
+
+def dynamics_inertia(m: dict) -> str:
+    return f"{m['inertia_kg_m2']:.4f} kg·m²"
+
+
+def dynamics_speed(b: dict) -> str:
+    """docs/dynamics.md, Speed: ``bench_dynamics.py``, each model at its own tuned step."""
+    v = b["values"]
+    rows = [(v["potential"], "the potential"), (v["magnets' torque map"], "the torque map"),
+            (v["iron model"], "the iron model")]
+    at = ", ".join(f"{_times(r['x real time'])}× on {name} ({r['dt ms']:.1f} ms)" for r, name in rows)
+    numpy = ", ".join(f"{_times(r['numpy x real time'])}×" for r, _ in rows)
+    at5 = ", ".join(f"{_times(r['dt 5 ms x real time'])}×" for r, _ in rows)
+    return (f"`benchmarks/bench_dynamics.py`, {_when(b)}, each model at its own tuned step: {at}; `Rotor.step` in "
+            f"the same run {numpy}; all three at 5 ms: {at5}")
+
+
 # ------------------------------------------------------------------------------------------------------ blocks
 
 @dataclass(frozen=True)
@@ -984,6 +1408,20 @@ BLOCKS = (
     Block("bench-loop-evaluations", "docs/control.md", "bench-servo_loop", loop_evaluations, inline=True),
     Block("bench-iron-models", "docs/magnetics.md", "bench-iron", iron_bench_table),
     Block("bench-iron-mom", "docs/magnetics.md", "bench-iron", iron_mom_table),
+    Block("potential-profiles", "docs/potential.md", "potential", potential_profiles, inline=True),
+    Block("potential-bandlimit", "docs/potential.md", "potential", potential_bandlimit, inline=True),
+    Block("potential-kernel", "docs/potential.md", "potential", potential_kernel, inline=True),
+    Block("potential-cutoff", "docs/potential.md", "potential", potential_cutoff, inline=True),
+    Block("potential-offsets", "docs/potential.md", "potential", potential_offsets),
+    Block("potential-stiffness", "docs/potential.md", "potential", potential_stiffness, inline=True),
+    Block("potential-fit", "docs/potential.md", "potential", potential_fit, inline=True),
+    Block("bench-potential-planner", "docs/potential.md", "bench-planners", planners_potential, inline=True),
+    Block("bench-potential-timings", "docs/potential.md", "bench-potential", potential_timings),
+    Block("bench-potential-targets", "docs/potential.md", ("bench-potential", "bench-planners", "bench-dynamics"),
+          potential_targets),
+    Block("dynamics-inertia", "docs/dynamics.md", "dynamics", dynamics_inertia, inline=True),
+    Block("dynamics-tune", "docs/dynamics.md", "dynamics", dynamics_tune, inline=True),
+    Block("bench-dynamics-speed", "docs/dynamics.md", "bench-dynamics", dynamics_speed, inline=True),
 )
 
 
@@ -1014,11 +1452,14 @@ def differing() -> list[str]:
     return bad
 
 
-def write() -> int:
-    """Rewrite every block from the stored measurements; the number of blocks changed."""
+def write(paths: set[str] | None = None) -> int:
+    """Rewrite every block from the stored measurements (only those in the files ``paths`` when given); the number
+    of blocks changed."""
     cache: dict = {}
     changed = 0
     for b in BLOCKS:
+        if paths is not None and b.path not in paths:
+            continue
         if b.missing():
             print(f"skipped {b.name}: {', '.join(b.missing())} missing")
             continue
@@ -1091,9 +1532,19 @@ def main(argv: list[str]) -> int:
             return 2
         for name in names:
             run_bench(name)
+    own = {"potential": {"docs/potential.md"}, "dynamics": {"docs/dynamics.md"}, "explore": {"docs/explore.md"}}
+    if cmd in own:  # these store their own measurement and rewrite only their page's blocks
+        if cmd == "potential":
+            _store("potential", measure_potential())
+        elif cmd == "dynamics":
+            _store("dynamics", measure_dynamics())
+        else:
+            run_explore(arg)
+        print(f"{write(own[cmd])} blocks rewritten")
+        return 0
     if cmd not in ("demo", "forces", "robust", "iron", "calibration", "bench", "all", "write"):
         print(f"unknown command {cmd!r}: demo [SUMMARY], forces, robust [BENCH.json], iron, calibration, bench [NAME ...], "
-              "all [SUMMARY], --check", file=sys.stderr)
+              "potential, dynamics, explore [FOLDER], all [SUMMARY], --check", file=sys.stderr)
         return 2
     print(f"{write()} blocks rewritten")
     return 0

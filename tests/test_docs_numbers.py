@@ -139,3 +139,38 @@ def test_the_stored_forces_agree_with_the_code(proto):
             assert got[key] == pytest.approx(want[key], rel=1e-6, abs=1e-9), key
         assert got["stiffness_Nm_per_rad"] == pytest.approx(want["stiffness_Nm_per_rad"], rel=1e-6)
         assert (got["downhill_steps"], got["steps"]) == (want["downhill_steps"], want["steps"])
+
+
+def test_the_stored_potential_numbers_agree_with_the_code():
+    """docs/potential.md's model constants are the live model's (profiles, band limit, kernel table, cut-off); the
+    stored equilibria are a full sample of strict minima."""
+    from spherestep.motor import prototype
+    from spherestep.potential import MotorPotential
+
+    m = SCRIPT.stored("potential")
+    p = MotorPotential(prototype())
+    assert m["rotor_kappa"] == pytest.approx(p.rotor_profile.kappa, rel=1e-12)
+    assert m["stator_kappa"] == pytest.approx(p.stator_profile.kappa, rel=1e-12)
+    assert (m["bandlimit"], m["kernel_intervals"]) == (p.bandlimit, p.kernel.intervals)
+    assert m["kernel_errors"] == pytest.approx(list(p.kernel.table_error), rel=1e-6)
+    assert m["cutoff_deg"] == pytest.approx(math.degrees(p.rotor_field.cut), abs=1e-9)
+    e = m["equilibria"]
+    assert e["minima"] == e["states"] == SCRIPT.POTENTIAL_OFFSET_STATES
+    assert sum(r["states"] for r in e["rows"] if r["held"] is not None) == e["states"]
+
+
+def test_the_stored_dynamics_numbers_agree_with_the_code():
+    """docs/dynamics.md's inertia is the live rotor's; the tuning is internally consistent: ``b = 2ζ√(kI)`` with
+    ζ = 1, ``ω = √(k/I)``, ``dt ≤ dwell/50``."""
+    from spherestep.dynamics import Rotor
+    from spherestep.motor import prototype
+
+    m = SCRIPT.stored("dynamics")
+    inertia = Rotor.from_design(prototype()).inertia
+    assert m["inertia_kg_m2"] == pytest.approx(inertia, rel=1e-12)
+    for name in ("torque map", "iron model"):
+        t = m[name]
+        assert t["omega_rad_s"] == pytest.approx(math.sqrt(t["stiffness_Nm_per_rad"] / inertia), rel=1e-9)
+        assert t["damping_Nm_s"] == pytest.approx(2 * math.sqrt(t["stiffness_Nm_per_rad"] * inertia), rel=1e-9)
+        assert 0 < t["dt_s"] <= t["dwell_s"] / 50 * (1 + 1e-12)
+
