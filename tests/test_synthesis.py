@@ -104,6 +104,7 @@ def test_range_orientations_stay_in_the_cone():
 
 
 def test_candidates_cover_the_baseline_neighbourhood():
+    from spherestep.synthesis.ladder import GRADES, WINDINGS
     from spherestep.synthesis.run import GAP_SCALES, neighbours
 
     spec = load_spec(EXAMPLES / "prototype-relays-iron.yaml")
@@ -115,14 +116,49 @@ def test_candidates_cover_the_baseline_neighbourhood():
     found = candidates(spec, normal)
     assert len(set(found)) == len(found)
     near = neighbours(proto)
-    assert proto not in near and len(near) == 8 - 1 + 3 - 1 + 3 - 1 + 16 - 1 + 16 - 1 + len(GAP_SCALES)
+    assert proto not in near and len(near) == (8 - 1 + 3 - 1 + 3 - 1 + 16 - 1 + 16 - 1 + len(GAP_SCALES)
+                                               + len(GRADES) - 1 + len(WINDINGS))
     for c in near:  # exactly one choice differs
-        diff = [k for k in ("rotor", "rotor_level", "stator", "stator_level", "cap_deg", "gap_scale")
-                if getattr(c, k) != getattr(proto, k)]
+        diff = [k for k in ("rotor", "rotor_level", "stator", "stator_level", "cap_deg", "gap_scale", "remanence",
+                            "wound_for") if getattr(c, k) != getattr(proto, k)]
         assert len(diff) == 1, diff
     scaled = {(c.rotor, c.rotor_level, c.stator, c.stator_level, c.cap_deg, c.gap_scale) for c in found}
     assert ("truncated-icosahedron", 1, "truncated-cuboctahedron", 0, 80.0, 1.0) in scaled
     assert ("truncated-icosahedron", 1, "truncated-cuboctahedron", 1, 80.0, 4.0) in scaled
+    parts = {(c.remanence, c.wound_for) for c in found if (c.rotor, c.rotor_level, c.stator, c.stator_level,
+                                                             c.cap_deg, c.gap_scale) == scaled_key(proto)}
+    assert parts == {(g, 0) for g in GRADES} | {(g, n) for g in GRADES for n in WINDINGS}  # every combination
+
+
+def scaled_key(c):
+    return c.rotor, c.rotor_level, c.stator, c.stator_level, c.cap_deg, c.gap_scale
+
+
+def test_parts_rewind_and_grade_the_prototype():
+    """A candidate's parts: the grade sets the magnets' remanence; a rewound coil draws the supply's share
+    ``P / (V n)`` with ``n`` coils on (the thickest wire that does, so more ampere-turns) and the iron model
+    reads the stored tables at once; the change from the baseline counts each part once plus a tenth of its log
+    ratio."""
+    from dataclasses import asdict, replace
+
+    from spherestep.motor.coil import iron_coil
+    from spherestep.synthesis.ladder import N42, baseline_layout, build, change_from
+
+    spec = load_spec(EXAMPLES / "prototype-relays-iron.yaml")
+    base = baseline_layout(spec)
+    c = Candidate("truncated-icosahedron", 1, "truncated-cuboctahedron", 1, 80.0, 12 * 0.0254)
+    built = build(c, "iron", spec)
+    assert built.remanence == N42 and built.coil.wire_diameter == iron_coil().wire_diameter
+    rewound = build(replace(c, remanence=0.25, wound_for=3), "iron", spec)
+    el, el0 = rewound.coil_electrics(), built.coil_electrics()
+    assert rewound.remanence == 0.25 and rewound.coil.coils_on == 3
+    assert 0.99 * 100 / 72 < el.nominal_current <= 100 / 72 and el.ampere_turns > 2 * el0.ampere_turns
+    assert iron_is_stored(rewound)
+    assert change_from(c, "iron", base) == 0.0
+    assert change_from(replace(c, wound_for=4), "iron", base) == 1.0
+    assert 2.19 < change_from(replace(c, remanence=0.25, wound_for=3), "iron", base) < 2.2
+    assert c.key(spec.digest, "iron") == Candidate(**json.loads(json.dumps(asdict(c)))).key(spec.digest, "iron")
+    assert replace(c, remanence=0.25).key(spec.digest, "iron") != c.key(spec.digest, "iron")
 
 
 def test_iron_affordability_is_the_stored_tables(proto):

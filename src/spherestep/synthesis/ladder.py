@@ -47,6 +47,10 @@ MIN_GAP = 0.1e-3  # m: a scaled-down air gap stays at least this
 MIN_WIRE = 0.1e-3  # m
 PROTOTYPE_LAYOUT = {"rotor": "truncated-icosahedron", "rotor_level": 1, "stator": "truncated-cuboctahedron",
                     "stator_level": 1, "cap_deg": 80.0}
+N42 = 1.32  # T: the prototype's magnets (MotorDesign's default remanence)
+GRADES = {N42: "N42", 0.7: "bonded NdFeB", 0.4: "sintered ferrite", 0.25: "bonded ferrite",
+          0.2: "flexible ferrite"}  # remanence (T) → grade, typical values
+WINDINGS = (4, 3, 2)  # coils on at once that a rewound coil shares the supply with (Candidate.wound_for)
 
 
 @dataclass(frozen=True)
@@ -54,7 +58,11 @@ class Candidate:
     """One layout at one ball size: ``rotor``/``stator`` base packings refined ``*_level`` times, the stator cap
     ``cap_deg`` (degrees) about −z, the ball ``sphere_diameter`` (m); ``seed`` and ``samples`` of the measurements;
     ``gap_scale`` widens the air gap (the baseline's neighbourhood: a wider gap weakens the iron's detent faster
-    than the coils' pull). Cores are a row each (:func:`evaluate`)."""
+    than the coils' pull). Parts: ``remanence`` (T) the magnets' grade (:data:`GRADES`); ``wound_for`` 0 keeps the
+    pot core's winding (AWG 29 scaled), ``n`` ≥ 1 rewinds it with the wire that draws the supply's share with ``n``
+    coils on at once, ``I = P / (V n)`` (:func:`wire_for`): with iron the detent goes as ``B_r²`` and the winding's
+    pull as ``B_r N I``, so both parts move the ratio that decides where a relay step lands (docs/synthesis.md).
+    Cores are a row each (:func:`evaluate`)."""
 
     rotor: str
     rotor_level: int
@@ -66,6 +74,8 @@ class Candidate:
     capability_samples: int = 64
     seed: int = 0
     gap_scale: float = 1.0
+    remanence: float = N42
+    wound_for: int = 0
 
     @property
     def scale(self) -> float:
@@ -74,13 +84,16 @@ class Candidate:
     @property
     def label(self) -> str:
         return (f"{self.rotor}/L{self.rotor_level} × {self.stator}/L{self.stator_level}, {self.cap_deg:g}°, "
-                f"{1e3 * self.sphere_diameter:.4g} mm" + (f", gap ×{self.gap_scale:g}" if self.gap_scale != 1 else ""))
+                f"{1e3 * self.sphere_diameter:.4g} mm" + (f", gap ×{self.gap_scale:g}" if self.gap_scale != 1 else "")
+                + (f", {self.remanence:g} T magnets" if self.remanence != N42 else "")
+                + (f", rewound for {self.wound_for} on" if self.wound_for else ""))
 
     def key(self, spec_digest: str, core: str) -> str:
         """16 hex digits naming this candidate with ``core`` under a spec (its :attr:`~Spec.digest`)."""
         params = asdict(self)
-        if params["gap_scale"] == 1.0:  # keys of the layouts without it stay as they were
-            del params["gap_scale"]
+        for name, default in (("gap_scale", 1.0), ("remanence", N42), ("wound_for", 0)):
+            if params[name] == default:  # keys of the layouts without it stay as they were
+                del params[name]
         text = json.dumps({"version": KEY_VERSION, "spec": spec_digest, "core": core} | params,
                           sort_keys=True, separators=(",", ":"))
         return hashlib.sha256(text.encode()).hexdigest()[:16]
@@ -100,17 +113,39 @@ class Candidate:
                            coil_diameter_min=0.5 * INCH * s, coil_length=P["coil_length"] * s)
 
 
-def coil_for(design, core: str, spec):
+def coil_for(design, core: str, spec, wound_for: int = 0):
     """The coil of ``design`` with ``core``: the prototype's pot core and winding scaled by the coil's diameter
-    (pole, wall, wire) and length (back plate), on the spec's supply; the prototype's coil exactly at its size."""
+    (pole, wall, wire) and length (back plate), on the spec's supply; the prototype's coil exactly at its size.
+    ``wound_for`` ``n`` ≥ 1: rewound with the wire that draws ``P / (V n)`` (:func:`wire_for`), ``coils_on = n``."""
     from ..motor.coil import iron_coil
 
     k = design.coil_diameter / PROTOTYPE["coil_diameter"]
     h = design.coil_length / PROTOTYPE["coil_length"]
     base = iron_coil()
-    return replace(base, core=core, pole_diameter=base.pole_diameter * k, wall_thickness=base.wall_thickness * k,
+    coil = replace(base, core=core, pole_diameter=base.pole_diameter * k, wall_thickness=base.wall_thickness * k,
                    back_thickness=base.back_thickness * h, wire_diameter=max(MIN_WIRE, base.wire_diameter * k),
                    supply_voltage=spec.supply.voltage, supply_power=spec.supply.power)
+    if wound_for:
+        amps = spec.supply.power / (spec.supply.voltage * wound_for)
+        coil = replace(coil, coils_on=wound_for, wire_diameter=wire_for(coil, design, amps))
+    return coil
+
+
+def wire_for(coil, design, amps: float) -> float:
+    """The wire diameter (m, 0.1 µm) whose winding of ``coil`` on ``design``'s coil size draws ``amps`` at the
+    supply voltage, ``V / R = I`` (``R ∝ 1/d⁴`` at a fixed fill: bisection in ``log d``; at least :data:`MIN_WIRE`):
+    the thickest the supply's share allows, so the most ampere-turns ``N I`` (``∝ d²``) it affords."""
+    size = (design.coil_diameter, design.coil_length)
+    lo, hi = MIN_WIRE, 5e-3
+    if coil.supply_voltage / replace(coil, wire_diameter=lo).resistance(*size) >= amps:
+        return lo
+    for _ in range(60):
+        mid = math.sqrt(lo * hi)
+        if coil.supply_voltage / replace(coil, wire_diameter=mid).resistance(*size) < amps:
+            lo = mid
+        else:
+            hi = mid
+    return round(lo, 7)
 
 
 def iron_is_stored(design) -> bool:
@@ -160,13 +195,20 @@ def magnet_mass(design) -> float:
 def change_from(candidate: Candidate, core: str, baseline: dict | None) -> float | None:
     """How far ``candidate`` with ``core`` is from the ``baseline`` layout (a dict as :data:`PROTOTYPE_LAYOUT` with
     ``core`` and ``sphere_diameter``): one per changed choice (rotor packing, its level, stator packing, its level,
-    core, ball size, air gap) plus the cap's change in tens of degrees. None without a baseline."""
+    core, ball size, air gap, magnet grade, winding) plus the cap's change in tens of degrees, and for a changed
+    part a tenth of the log of its ratio: ``|ln(B_r / B_r0)|`` for the grade, ``ln(4 / n)`` for a winding rewound
+    for ``n`` coils on (so of two grades that work the nearer one is the smaller change). None without a baseline."""
     if baseline is None:
         return None
     steps = sum(getattr(candidate, k) != baseline[k] for k in ("rotor", "rotor_level", "stator", "stator_level"))
     steps += core != baseline["core"]
     steps += not math.isclose(candidate.sphere_diameter, baseline["sphere_diameter"], rel_tol=1e-9)
     steps += candidate.gap_scale != 1.0
+    was = baseline.get("remanence", N42)
+    if not math.isclose(candidate.remanence, was, rel_tol=1e-9):
+        steps += 1.0 + 0.1 * abs(math.log(candidate.remanence / was))
+    if candidate.wound_for:
+        steps += 1.0 + 0.1 * math.log(4.0 / candidate.wound_for)
     return float(steps + abs(candidate.cap_deg - baseline["cap_deg"]) / 10.0)
 
 
@@ -176,7 +218,8 @@ def build(candidate: Candidate, core: str, spec, name: str | None = None):
     from ..explore import Limits, build_design
 
     design = build_design(candidate.point(), Limits(budget_coils=spec.max_coils))
-    return replace(design, coil=coil_for(design, core, spec), name=name or f"synth {candidate.key(spec.digest, core)}")
+    return replace(design, coil=coil_for(design, core, spec, candidate.wound_for), remanence=candidate.remanence,
+                   name=name or f"synth {candidate.key(spec.digest, core)}")
 
 
 def capability_numbers(design, spec, R, *, failed_check: bool, directions: int = 200) -> dict:
@@ -284,6 +327,7 @@ def climb(candidate: Candidate, spec, allow_costly: bool = False, baseline: dict
         electrics = d.coil_electrics()
         power = math.nan if electrics.power is None else electrics.power
         row["power_W"] = float(power) * min(d.coil.coils_on, len(d.stator))
+        row.update(remanence_T=float(d.remanence), ampere_turns=electrics.ampere_turns)
         why = None
         if spec.envelope.stator_reach is not None and reach > spec.envelope.stator_reach * (1 + 1e-9):
             why = f"the stator reaches {1e3 * reach:.3g} mm from the ball, over {1e3 * spec.envelope.stator_reach:.3g} mm"
@@ -368,7 +412,7 @@ def baseline_layout(spec) -> dict | None:
     if spec.baseline is None:
         return None
     if spec.baseline == "prototype":
-        return PROTOTYPE_LAYOUT | {"core": "iron", "sphere_diameter": PROTOTYPE["sphere_diameter"]}
+        return PROTOTYPE_LAYOUT | {"core": "iron", "sphere_diameter": PROTOTYPE["sphere_diameter"], "remanence": N42}
     from ..design_file import read
     from ..errors import bad_value
 
@@ -380,4 +424,4 @@ def baseline_layout(spec) -> dict | None:
     return {"rotor": rotor.packing, "rotor_level": rotor.refine or 0, "stator": stator.packing,
             "stator_level": stator.refine or 0, "cap_deg": round(math.degrees(stator.cap_half_angle), 9),
             "core": (doc.coil.core if doc.coil is not None else None) or "iron",
-            "sphere_diameter": doc.dimensions.sphere_diameter}
+            "sphere_diameter": doc.dimensions.sphere_diameter, "remanence": float(doc.remanence)}

@@ -23,7 +23,7 @@ import numpy as np
 
 from .. import checks
 from ..errors import InputError, bad_value
-from .ladder import PROTOTYPE, Candidate, _row, baseline_layout, build, climb
+from .ladder import GRADES, N42, PROTOTYPE, WINDINGS, Candidate, _row, baseline_layout, build, climb
 
 STORE = "results"
 GAP_SCALES = (2.0, 4.0, 8.0)  # the baseline's air gap widened (iron: a table solve each, thorough budget)
@@ -79,7 +79,8 @@ def candidates(spec, budget: Budget, seed: int = 0) -> list[Candidate]:
     """The layouts a budget searches for ``spec`` (module docstring): rotor × stator pairs whose primary circles are
     within the budget's ratio (both symmetry-family rules, as the sweep), refinements, caps and ball sizes; with a
     baseline, also every layout one choice away from it (packings at its levels, levels, caps 50°–85°, the air gap
-    widened by :data:`GAP_SCALES`)."""
+    widened by :data:`GAP_SCALES`, the magnets' grade, the winding) and the baseline's parts in every combination
+    (:data:`~.ladder.GRADES` × :data:`~.ladder.WINDINGS`: both move the detent-to-winding ratio, docs/synthesis.md)."""
     from ..explore import distinct_names, primary_ratio
 
     names = distinct_names()
@@ -100,17 +101,22 @@ def candidates(spec, budget: Budget, seed: int = 0) -> list[Candidate]:
     base = baseline_layout(spec)
     if base is not None:
         one = dict(rotor=base["rotor"], rotor_level=base["rotor_level"], stator=base["stator"],
-                   stator_level=base["stator_level"], cap_deg=base["cap_deg"], sphere_diameter=base["sphere_diameter"])
+                   stator_level=base["stator_level"], cap_deg=base["cap_deg"], sphere_diameter=base["sphere_diameter"],
+                   remanence=base.get("remanence", N42))
         out[Candidate(**one, **common)] = None
         if budget.neighbourhood:  # (the quick budget: the baseline itself)
             for c in neighbours(Candidate(**one, **common)):
                 out[c] = None
+            for grade in GRADES:
+                for n in WINDINGS:
+                    out[Candidate(**(one | {"remanence": grade}), **common, wound_for=n)] = None
     return list(out)
 
 
 def neighbours(c: Candidate, gaps: tuple[float, ...] = GAP_SCALES) -> list[Candidate]:
     """Every layout one choice away from ``c``: the cap 50°–85° in 5° steps, either refinement 0–2, either packing
-    among the distinct ones, the air gap widened by ``gaps``."""
+    among the distinct ones, the air gap widened by ``gaps``, the magnets' grade (:data:`~.ladder.GRADES`), the
+    winding (as built, or rewound for :data:`~.ladder.WINDINGS` coils on)."""
     from dataclasses import replace
 
     from ..explore import distinct_names
@@ -119,6 +125,7 @@ def neighbours(c: Candidate, gaps: tuple[float, ...] = GAP_SCALES) -> list[Candi
     out += [replace(c, rotor_level=lv) for lv in range(3)] + [replace(c, stator_level=lv) for lv in range(3)]
     out += [replace(c, rotor=n) for n in distinct_names()] + [replace(c, stator=n) for n in distinct_names()]
     out += [replace(c, gap_scale=k) for k in gaps]
+    out += [replace(c, remanence=g) for g in GRADES] + [replace(c, wound_for=n) for n in (0,) + WINDINGS]
     return [x for x in dict.fromkeys(out) if x != c]
 
 
@@ -182,7 +189,8 @@ def _schema():
             ("resolution_median_deg", f), ("resolution_p95_deg", f), ("range_fraction", f), ("reaches_all", b),
             ("torque_quantile_Nm", f), ("torque_median_Nm", f), ("torque_positive_fraction", f), ("detent_Nm", f),
             ("failed_coil_torque_Nm", f), ("step_torque_Nm", f), ("time_estimate_s", f), ("relay_steps", i),
-            ("relay_steps_on_plan", i), ("relay_executed", b), ("change", f), ("model", s), ("params", s),
+            ("relay_steps_on_plan", i), ("relay_executed", b), ("relay_worst_deg", f), ("relay_peak_W", f),
+            ("remanence_T", f), ("ampere_turns", f), ("change", f), ("model", s), ("params", s),
             ("seconds", f), ("worker", s)]
 
 
@@ -258,24 +266,37 @@ def cost_estimate(c: Candidate, spec, costly: bool = False) -> float:
 
 def relay_rung(candidate: Candidate, row: dict, spec, design=None) -> None:
     """The ladder's relay rung, for relay specs: the settled relay plan of the stated turn (30° about z without
-    one) on the design's own model (:func:`spherestep.drive.drive_turn`, ``mode="settled"``); prunes the row unless
-    every step lands within 0.5° of the plan. ``design``: the row's design as the cheap rungs built it (its stepper
-    states already found), else built again."""
-    from ..drive import drive_turn
+    one) on the design's own model, simulated as :func:`spherestep.drive.drive_turn` (``mode="settled"``) does
+    (the same plan, tuning and :func:`spherestep.dynamics.simulate`), keeping each step's landing error; prunes the
+    row unless every step lands within 0.5° of the plan and the plan's most coils at once draw at most the supply's
+    power. ``design``: the row's design as the cheap rungs built it (its stepper states already found), else built
+    again. Records ``relay_worst_deg`` (the worst landing error) and ``relay_peak_W``."""
+    from ..drive.turn import Turn, choose_model
+    from ..dynamics import simulate
 
     start = time.perf_counter()
     design = build(candidate, row["core"], spec) if design is None else design
     axis = spec.speed.axis.vector if spec.speed is not None else np.array([0.0, 0.0, 1.0])
     angle = spec.speed.turn if spec.speed is not None else math.radians(30.0)
     try:
-        det = drive_turn(design, axis, angle, mode="settled").details
+        job = Turn(design, axis, angle, choose_model(design))
+        plan, tuning = job.plan, job.tuning
+        sim = simulate(design, plan, job.chosen.model, dwell=tuning.dwell, rotor=tuning.rotor, dt=tuning.dt)
     except Exception as exc:  # noqa: BLE001 (a plan that cannot be made is recorded)
         row.update(stage="relays", status="pruned", reason=f"no relay plan: {type(exc).__name__}: {exc}")
         return
-    row.update(relay_steps=det.steps, relay_steps_on_plan=det.steps_settled_on_plan, relay_executed=det.executed)
-    if not det.executed:
-        row.update(stage="relays", status="pruned", reason=f"settled relay plan: {det.steps_settled_on_plan} of "
-                   f"{det.steps} steps within 0.5° of the plan")
+    errors = np.asarray(sim.step_errors[1:], dtype=float)  # the steps, not the start
+    on_plan = int(np.count_nonzero(errors <= sim.tolerance))
+    limits = job.chosen.limits
+    peak = max(len(s.coils) for s in plan.steps) * limits.supply_voltage * limits.nominal_current
+    row.update(relay_steps=len(errors), relay_steps_on_plan=on_plan, relay_executed=bool(sim.executed),
+               relay_worst_deg=math.degrees(float(errors.max())) if len(errors) else 0.0, relay_peak_W=peak)
+    if not sim.executed:
+        row.update(stage="relays", status="pruned", reason=f"settled relay plan: {on_plan} of {len(errors)} steps "
+                   f"within 0.5° of the plan (the worst {row['relay_worst_deg']:.3g}° off)")
+    elif peak > spec.supply.power * (1 + 1e-9):
+        row.update(stage="relays", status="pruned", reason=f"the relay plan energises coils drawing {peak:.3g} W at "
+                   f"once, over the supply's {spec.supply.power:.3g} W")
     else:
         row["stage"] = "relays"
     row["seconds"] = row.get("seconds", 0.0) + time.perf_counter() - start
@@ -370,11 +391,19 @@ def _json(v):
     return str(v)
 
 
+def _missing(v) -> bool:
+    return v is None or (isinstance(v, float) and math.isnan(v))
+
+
 def _layout(row) -> str:
     gap = row.get("gap_scale") or 1.0
+    params = json.loads(row["params"]) if row.get("params") else {}
+    grade, wound = float(params.get("remanence", N42)), int(params.get("wound_for", 0))
     return (f"{row['rotor']}/L{row['rotor_level']} × {row['stator']}/L{row['stator_level']}, cap "
             f"{row['cap_deg']:g}°, ball {row['sphere_diameter_mm']:.4g} mm, {row['core']}"
-            + (f", air gap ×{gap:g}" if gap != 1.0 else ""))
+            + (f", air gap ×{gap:g}" if gap != 1.0 else "")
+            + (f", {GRADES.get(grade, 'magnets')} {grade:g} T" if grade != N42 else "")
+            + (f", rewound for {wound} coils on" if wound else ""))
 
 
 @dataclass(frozen=True)
@@ -586,6 +615,15 @@ def describe_change(row: dict, base: dict) -> str:
         parts.append(f"ball {1e3 * base['sphere_diameter']:.4g} → {row['sphere_diameter_mm']:.4g} mm")
     if (row.get("gap_scale") or 1.0) != 1.0:
         parts.append(f"air gap ×{row['gap_scale']:g} ({row['air_gap_mm']:.3g} mm)")
+    params = json.loads(row["params"]) if row.get("params") else {}
+    grade = float(params.get("remanence", N42))
+    if not math.isclose(grade, base.get("remanence", N42), rel_tol=1e-9):
+        was = base.get("remanence", N42)
+        parts.append(f"magnets {GRADES.get(was, 'B_r')} {was:g} T → {GRADES.get(grade, 'B_r')} {grade:g} T")
+    if params.get("wound_for"):
+        at = row.get("ampere_turns")
+        parts.append(f"coils rewound to draw the supply's share with {params['wound_for']} on"
+                     + (f" ({at:.0f} ampere-turns)" if at is not None and not _missing(at) else ""))
     return ", ".join(parts) or "none (the baseline itself)"
 
 
