@@ -63,6 +63,18 @@ def _nearest_existing(path: Path) -> Path:
     return Path(".")
 
 
+def interrupt_of(exc: BaseException | None) -> KeyboardInterrupt | None:
+    """The Ctrl-C or SIGTERM behind ``exc``: itself, or one in its chain of causes (a compiled numba call
+    interrupted mid-way surfaces as ``SystemError`` with the ``KeyboardInterrupt`` as its context)."""
+    seen = set()
+    while exc is not None and id(exc) not in seen:
+        if isinstance(exc, KeyboardInterrupt):
+            return exc
+        seen.add(id(exc))
+        exc = exc.__cause__ or exc.__context__
+    return None
+
+
 def output_folder(path: str | os.PathLike, name: str = "--out") -> Path:
     """Check that ``path`` is, or can be created as, a writable folder (it is created by the first write, so a
     refused command leaves nothing behind) and remove stale temporary files in it; returns it as a Path.
@@ -155,7 +167,7 @@ class Outputs:
             pass
 
     def __exit__(self, kind, exc, tb) -> bool:
-        if isinstance(exc, KeyboardInterrupt):  # Ctrl-C or SIGTERM: complete or absent
+        if interrupt_of(exc) is not None:  # Ctrl-C or SIGTERM (also inside a compiled call): complete or absent
             for path in self.written():
                 try:
                     path.unlink()

@@ -55,10 +55,12 @@ def main(argv: list[str] | None = None) -> int:
         args.remove("--debug")
     command = _command()
     try:
-        with sigterm_as_interrupt():
+        with sigterm_as_interrupt() as received:
             result = command.main(args=args, prog_name="spherestep", standalone_mode=False)
         # outside standalone mode Typer returns the code of an Exit (130 for Ctrl-C) instead of exiting
         code = result if isinstance(result, int) else 0
+        if code == 130 and received.name and not received.told:  # Typer's silent 130 for Ctrl-C or SIGTERM
+            code = _interrupted(Terminated() if received.name == "SIGTERM" else KeyboardInterrupt())
     except NoArgsIsHelpError as exc:  # `spherestep` or `spherestep design` alone: the usage
         print(exc.ctx.get_help())
         code = 0

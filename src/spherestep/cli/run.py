@@ -17,7 +17,7 @@ import typer
 from ..errors import InputError, bad_value
 from .app import app
 from .common import console, number, print_json
-from .signals import Terminated, sigterm_as_interrupt
+from .signals import Terminated, sigterm_as_interrupt, told
 
 LOG_LINE = re.compile(r"^\s*-?\d+\.\d{6} (TX|RX|NOTE) ")  # a line of Transcript.lines()
 
@@ -169,6 +169,7 @@ def run(
             off = "all coils off, acknowledged by the device" if not (dry_run or simulate) else outcome
             signame = "SIGTERM" if isinstance(exc, Terminated) else "SIGINT"
             print(f"spherestep: interrupted ({signame}): {off}", file=sys.stderr)
+            told()
             raise typer.Exit(143 if isinstance(exc, Terminated) else 130) from None
         raise
     if sink is not None:

@@ -7,36 +7,63 @@ import signal
 import threading
 from contextlib import contextmanager
 
+from ..outputs import interrupt_of  # noqa: F401  (the CLI's name for it; outputs' own)
+
 
 class Terminated(KeyboardInterrupt):
     """SIGTERM, raised in the main thread so that it unwinds like Ctrl-C (every coil switched off)."""
 
 
+class Received:
+    """The signal that arrived while inside :func:`sigterm_as_interrupt` (``name``: "SIGINT", "SIGTERM" or None) and
+    whether the command already said so on stderr (``told``, set by :func:`told`)."""
+
+    def __init__(self):
+        self.name: str | None = None
+        self.told = False
+
+
+_CURRENT: list[Received] = []
+
+
+def told() -> None:
+    """The command printed its own interrupted line (the CLI then adds none)."""
+    for received in _CURRENT:  # nested commands: every level knows
+        received.told = True
+
+
 def _raise_terminated(signum, frame):
+    for received in _CURRENT:
+        received.name = "SIGTERM"
     raise Terminated()
+
+
+def _raise_interrupt(signum, frame):
+    for received in _CURRENT:
+        received.name = "SIGINT"
+    raise KeyboardInterrupt()
 
 
 @contextmanager
 def sigterm_as_interrupt():
     """While inside, SIGTERM raises :class:`Terminated` in the main thread (like Ctrl-C raises
-    KeyboardInterrupt); the previous handler is restored on leaving."""
+    KeyboardInterrupt), and either is recorded in the :class:`Received` yielded (Typer turns an interrupt into a
+    silent exit status 130; the CLI says which signal it was); the previous handlers are restored on leaving."""
+    received = Received()
     if threading.current_thread() is not threading.main_thread():
-        yield
+        yield received
         return
     previous = signal.signal(signal.SIGTERM, _raise_terminated)
+    previous_int = signal.getsignal(signal.SIGINT)
+    if previous_int is signal.default_int_handler:  # not when ignored or when a caller installed its own
+        signal.signal(signal.SIGINT, _raise_interrupt)
+    _CURRENT.append(received)
     try:
-        yield
+        yield received
     finally:
+        _CURRENT.pop()
         signal.signal(signal.SIGTERM, previous)
+        if previous_int is signal.default_int_handler:
+            signal.signal(signal.SIGINT, previous_int)
 
 
-def interrupt_of(exc: BaseException) -> KeyboardInterrupt | None:
-    """The Ctrl-C or SIGTERM behind ``exc``: itself, or one in its chain of causes (a compiled numba call
-    interrupted mid-way surfaces as ``SystemError`` with the ``KeyboardInterrupt`` as its context)."""
-    seen = set()
-    while exc is not None and id(exc) not in seen:
-        if isinstance(exc, KeyboardInterrupt):
-            return exc
-        seen.add(id(exc))
-        exc = exc.__cause__ or exc.__context__
-    return None

@@ -1,0 +1,35 @@
+"""Ctrl-C and SIGTERM in a command that does not handle them itself (issue 27 §3, the case at its top:
+``move --mode settled`` interrupted exited 130 with no message, or with a SystemError from a compiled call):
+exit 130/143, one line saying which, no traceback, the output folder absent."""
+
+import signal
+import subprocess
+import sys
+import time
+
+import pytest
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("sig, code, name", [(signal.SIGINT, 130, "SIGINT"), (signal.SIGTERM, 143, "SIGTERM")])
+def test_move_settled_interrupted_mid_simulation_says_so_in_one_line(tmp_path, sig, code, name):
+    out = tmp_path / "move"
+    proc = subprocess.Popen([sys.executable, "-c", "from spherestep.cli import main; main()", "move", "--axis",
+                             "1,0.5,2", "--angle", "360", "--mode", "settled", "--core", "air", "--out", str(out)],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        seen, deadline = [], time.monotonic() + 300
+        while time.monotonic() < deadline:  # the plain progress lines (stderr is a pipe) say when it simulates
+            line = proc.stderr.readline()
+            seen.append(line)
+            if not line or line.startswith("spherestep: simulating"):
+                break
+        assert seen[-1].startswith("spherestep: simulating"), seen
+        time.sleep(0.5)  # inside the simulation's compiled integrator
+        proc.send_signal(sig)
+        _, err = proc.communicate(timeout=60)
+    finally:
+        proc.kill()
+    assert proc.returncode == code, err
+    assert "Traceback" not in err and err.strip().splitlines() == [f"spherestep: interrupted ({name})"], err
+    assert not out.exists()
