@@ -219,6 +219,26 @@ def test_the_relay_rung_reuses_the_states_and_gives_the_same_row():
     assert together[0]["stage"] == "relays" and together[0]["relay_steps"] > 0
 
 
+def test_ferrite_and_a_rewound_coil_make_the_prototype_step_on_iron():
+    """Issue 29 §3: the prototype on iron lands its settled relay plan (every step within 0.5°) with two parts
+    changed — 0.2 T ferrite magnets and the coils rewound for the supply's share with 4 on (docs/synthesis.md: the
+    landing error depends on ``B_r / N I`` alone); the relay rung keeps the worst landing error and the plan's
+    peak power."""
+    from dataclasses import replace
+
+    from spherestep.synthesis.ladder import baseline_layout
+    from spherestep.synthesis.run import Ladder
+
+    spec = load_spec(EXAMPLES / "prototype-relays-iron.yaml")
+    proto = Candidate("truncated-icosahedron", 1, "truncated-cuboctahedron", 1, 80.0, 12 * 0.0254, samples=400,
+                      capability_samples=32)
+    row = Ladder(spec, False, baseline_layout(spec))(replace(proto, remanence=0.2, wound_for=4))[0]
+    assert row["status"] == "ok" and row["stage"] == "relays" and row["relay_executed"], row["reason"]
+    assert row["relay_steps_on_plan"] == row["relay_steps"] == 7
+    assert 0.4 < row["relay_worst_deg"] < 0.5 and row["relay_peak_W"] <= 100.0
+    assert 2.1 < row["change"] < 2.2 and 1500 < row["ampere_turns"] < 1600
+
+
 # --- §2–3 a quick search end to end, and every finalist re-measured --------------------------------------------
 
 @pytest.fixture(scope="module")
