@@ -174,3 +174,21 @@ def test_the_stored_dynamics_numbers_agree_with_the_code():
         assert t["damping_Nm_s"] == pytest.approx(2 * math.sqrt(t["stiffness_Nm_per_rad"] * inertia), rel=1e-9)
         assert 0 < t["dt_s"] <= t["dwell_s"] / 50 * (1 + 1e-12)
 
+
+def test_the_stored_explore_sweep_is_the_default_grid():
+    """data/explore_default.json is docs/explore.md's command on today's default grid (restricted to the stated
+    pairs): every design of that grid has a status, the counts add up, the torques are on the designs' own (iron)
+    models, the front is within budget."""
+    from spherestep.explore.grid import default_grid
+
+    e = SCRIPT.stored("explore")
+    assert e["command"] == f"spherestep explore {' '.join(SCRIPT.EXPLORE_OPTIONS)} --out …"
+    grid = default_grid(**SCRIPT.EXPLORE_SUBSET)
+    assert e["designs"] == len(grid.points()) == sum(e["status_counts"].values())
+    assert e["pairs"] == len(grid.pairs())
+    assert e["measured_designs"] == e["status_counts"]["ok"] and e["reach_all"] <= e["measured_designs"]
+    assert sum(e["no_states"].values()) == e["status_counts"].get("no_states", 0)
+    assert sum(e["too_large"].values()) == e["status_counts"].get("too_large", 0)
+    assert sum(e["models"].values()) == e["torques_measured"] and all(m.startswith("iron") for m in e["models"])
+    assert e["pareto"] and all(r["coils"] <= 32 for r in e["pareto"])
+    assert e["family"]["different"]["designs"] + e["family"]["same"]["designs"] == e["reach_all"]

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import math
+import sys
 from pathlib import Path
 
 import typer
@@ -159,8 +160,11 @@ def explore(
 
     Example: [bold]spherestep explore --budget-coils 32 --out explore-out --workers 2[/bold]
     """
+    from rich.console import Console
     from rich.progress import (BarColumn, MofNCompleteColumn, Progress, SpinnerColumn, TextColumn,
                                TimeElapsedColumn, TimeRemainingColumn)
+
+    from .progress import progress as progress_lines
 
     from ..explore.build import Limits
     from ..outputs import output_folder
@@ -187,22 +191,32 @@ def explore(
 
     store = ResultStore(out / "results")
     show = not (quiet or as_json)
+    plain = show and not sys.stderr.isatty()  # a pipe, a log, CI: plain periodic lines on stderr (issue 27 §4)
     columns = (SpinnerColumn(), TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(),
                TimeElapsedColumn(), TextColumn("eta"), TimeRemainingColumn())
-    with Progress(*columns, console=console, disable=not show, transient=True) as progress:
+    count = {"done": 0, "todo": None}
+
+    def started(total: int, todo: int) -> None:
+        count["todo"] = todo
+        progress.update(task, total=todo, description=f"{total - todo} of {total} stored; evaluating")
+        say(f"{total - todo} of {total} designs stored; evaluating the rest")
+
+    def finished(row) -> None:
+        count["done"] += 1
+        progress.update(task, advance=1, description=f"{row['rotor']} × {row['stator']}: {row['status']}")
+        say("evaluating designs", count["done"], count["todo"])
+
+    with Progress(*columns, console=Console(stderr=True), disable=not show or plain, transient=True) as progress:
         task = progress.add_task("starting Dask", total=None)
-        try:
-            with dask_client(scheduler, threads=threads, workers=workers) as client:
+        try:  # the plain lines once Dask is up: a refused --scheduler stays one line
+            with dask_client(scheduler, threads=threads, workers=workers) as client, \
+                    progress_lines("reading stored results", enabled=plain) as say:
                 progress.update(task, description="reading stored results")
-                summary = run_sweep(
-                    points, store, client, limits,
-                    on_start=lambda total, todo: progress.update(
-                        task, total=todo, description=f"{total - todo} of {total} stored; evaluating"),
-                    on_result=lambda row: progress.update(
-                        task, advance=1, description=f"{row['rotor']} × {row['stator']}: {row['status']}"))
+                summary = run_sweep(points, store, client, limits, on_start=started, on_result=finished)
         except InputError as exc:
             raise _as_option(exc) from None
         progress.update(task, description="writing the table, the Pareto set and the design files", total=None)
+        say("writing the table, the Pareto set and the design files")
         table = store.read().set_index("key")
         table = table.loc[[p.key for p in points if p.key in table.index]].reset_index()
         proposal = propose(table, out, limits, require_reach_all=not partial_range)
