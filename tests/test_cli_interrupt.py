@@ -33,3 +33,30 @@ def test_move_settled_interrupted_mid_simulation_says_so_in_one_line(tmp_path, s
     assert proc.returncode == code, err
     assert "Traceback" not in err and err.strip().splitlines() == [f"spherestep: interrupted ({name})"], err
     assert not out.exists()
+
+
+@pytest.mark.slow
+def test_move_emulate_interrupted_mid_loop_leaves_no_traceback_from_the_emulator(tmp_path):
+    """Ctrl-C during ``move --emulate`` (the issue's 9-line traceback from the emulator's process): one line, 130,
+    nothing left in --out."""
+    out = tmp_path / "move"
+    proc = subprocess.Popen([sys.executable, "-c", "from spherestep.cli import main; main()", "move", "--axis",
+                             "1,0.5,2", "--angle", "360", "--emulate", "--out", str(out)],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        seen, deadline = [], time.monotonic() + 300
+        while time.monotonic() < deadline:
+            line = proc.stderr.readline()
+            seen.append(line)
+            if not line or line.startswith("spherestep: servo on the emulated motor"):
+                break
+        assert seen[-1].startswith("spherestep: servo on the emulated motor"), seen
+        time.sleep(1.0)  # inside the loop
+        proc.send_signal(signal.SIGINT)
+        _, err = proc.communicate(timeout=60)
+    finally:
+        proc.kill()
+    assert proc.returncode == 130, err
+    lines = err.strip().splitlines()
+    assert "Traceback" not in err and len(lines) == 1 and lines[0].startswith("spherestep: interrupted (SIGINT)"), err
+    assert not out.exists()
