@@ -115,7 +115,8 @@ def test_the_stored_demo_agrees_with_the_code(proto, proto_metrics):
     s = SCRIPT.stored("demo")
     assert s["states"] == proto_metrics.states == 101_640
     assert s["resolution_median_deg"] == pytest.approx(math.degrees(proto_metrics.resolution_median_rad), abs=0.03)
-    assert s["plan"]["steps"] == len(turn(proto, s["plan"]["axis"], math.radians(s["plan"]["angle_deg"])).steps) - 1
+    assert s["plan"]["steps"] == len(turn(proto, s["plan"]["axis"], math.radians(s["plan"]["angle_deg"])).steps) - 1 \
+        == 73  # the headline's plan length, pinned (issue 27 §5)
     assert s["iron"]["electrics"]["nominal_current_A"] == pytest.approx(design_model(proto).limits.nominal_current,
                                                                         rel=1e-12)
     assert s["torque_model"] == design_model(proto).label
