@@ -8,9 +8,15 @@ map by the method of moments (factorising a core and the pair table), time per o
 air-core map, and the FEM time per solve (read from data/iron_fem.csv, written by scripts/fem_iron.py on the same
 machine: a FEM solve takes minutes and is not repeated here).
 
-Run: ``OPENBLAS_NUM_THREADS=1 nice -n 5 .venv/bin/python benchmarks/bench_iron.py [--level 0] [--no-mom]`` (level 0
-keeps the factorisation to a few minutes on a loaded machine; the default map uses level 1); ``--json PATH`` also
-stores the numbers for ``scripts/docs_numbers.py``.
+Cold (issue 28 §3, first; ``--cold-only`` runs only this): a new design's own model (``design_model``, coupled)
+ready in a fresh process — the import, the model and its first ``E + τ`` with a coil on — for the prototype, the
+prototype with a 0.95-in magnet (the shape table) and with every length ×1.5 (the scaling law), each in its own
+subprocess with numba's on-disk cache warm (an unrecorded run first fills it), and the prototype once more with an
+empty numba cache (a first run after installing: every kernel compiled). Wall and CPU seconds, with the load.
+
+Run: ``OPENBLAS_NUM_THREADS=1 nice -n 5 .venv/bin/python benchmarks/bench_iron.py [--level 0] [--no-mom]
+[--cold-only]`` (level 0 keeps the factorisation to a few minutes on a loaded machine; the default map uses level
+1); ``--json PATH`` also stores the numbers for ``scripts/docs_numbers.py``.
 """
 
 from __future__ import annotations
@@ -116,7 +122,62 @@ def model_timings() -> None:
                                   for name, dt, factor, cap in rows]})
 
 
+COLD_CODE = """
+import json, os, sys, time
+w0, c0 = time.perf_counter(), time.process_time()
+import numpy as np
+from dataclasses import replace
+from spherestep.magnetics import design_model, scaled_design
+from spherestep.motor import prototype
+w1, c1 = time.perf_counter(), time.process_time()
+p = prototype()
+d = {"prototype": p, "magnet 0.95 in": replace(p, magnet_diameter=0.95 * 0.0254, name="magnet 0.95 in"),
+     "x1.5": scaled_design(p, 1.5)}[sys.argv[1]]
+own = design_model(d)
+c = np.zeros(len(d.stator))
+c[0] = 1.0
+E, tau = own.model.evaluate(np.eye(3), c, 1)
+w2, c2 = time.perf_counter(), time.process_time()
+print(json.dumps({"label": own.label, "import s": w1 - w0, "model s": w2 - w1, "total s": w2 - w0,
+                  "import cpu s": c1 - c0, "model cpu s": c2 - c1, "total cpu s": c2 - c0,
+                  "load": os.getloadavg()[0]}))
+"""
+
+
+def cold_timings() -> None:
+    """A new design's own model in a fresh process (module docstring): one subprocess per row."""
+    import json
+    import subprocess
+    import tempfile
+
+    rows = []
+    cases = [("prototype", "warm-up"), ("prototype", None), ("magnet 0.95 in", None), ("x1.5", None),
+             ("prototype", "empty")]
+    for name, cache in cases:
+        env = dict(os.environ, OPENBLAS_NUM_THREADS="1")
+        with tempfile.TemporaryDirectory() as empty:
+            if cache == "empty":
+                env["NUMBA_CACHE_DIR"] = empty
+            out = subprocess.run([sys.executable, "-c", COLD_CODE, name], env=env, capture_output=True, text=True,
+                                 check=True)
+        row = json.loads(out.stdout.strip().splitlines()[-1])
+        row.update({"design": name, "numba cache": cache or "warm"})
+        if cache != "warm-up":
+            rows.append(row)
+    print(f"# bench_iron (cold) {datetime.datetime.now().isoformat(timespec='minutes')} "
+          f"load {os.getloadavg()[0]:.1f}")
+    print("| design (numba cache) | model | import | import + model (wall) | CPU | load |")
+    print("|---|---|---|---|---|---|")
+    for r in rows:
+        print(f"| {r['design']} ({r['numba cache']}) | {r['label']} | {r['import s']:.1f} s | {r['total s']:.1f} s | "
+              f"{r['total cpu s']:.1f} s | {r['load']:.1f} |")
+    RECORD.put("cold", rows)
+
+
 def main() -> None:
+    cold_timings()
+    if "--cold-only" in sys.argv:
+        return
     model_timings()
     if "--no-mom" in sys.argv:
         return

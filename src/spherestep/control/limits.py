@@ -51,17 +51,31 @@ def core_key(spec, design) -> tuple:
         (round(float(spec.material.relative_permeability), 6),)
 
 
+def stored_permeance(key: tuple) -> float | None:
+    """``L / N²`` (H) of the core ``key`` (:func:`core_key`) from :data:`IRON_PERMEANCE`: a stored core's, or
+    ``s ×`` it for a core whose every length is a stored one's ×``s`` at the same permeability (linear
+    magnetostatics is scale-free: the flux per ampere-turn, a permeance, scales as a length); else None."""
+    if key in IRON_PERMEANCE:
+        return IRON_PERMEANCE[key]
+    for base, value in IRON_PERMEANCE.items():
+        s = key[0] / base[0]
+        if key[5] == base[5] and all(math.isclose(k, s * b, rel_tol=1e-7) for k, b in zip(key[:5], base[:5])):
+            return s * value
+    return None
+
+
 def iron_inductance(spec, design) -> float:
-    """The iron-cored coil's own inductance (H) for ``design`` wound as ``spec``: ``N² · IRON_PERMEANCE[core]``
-    for a stored core, else :func:`spherestep.magnetics.coil_inductance` solved once per core in the process
-    (~17 s)."""
+    """The iron-cored coil's own inductance (H) for ``design`` wound as ``spec``: ``N² ·`` the core's stored
+    ``L / N²`` (:func:`stored_permeance`: a stored core or a scaled copy of one), else
+    :func:`spherestep.magnetics.coil_inductance` solved once per core in the process (~17 s)."""
     key = core_key(spec, design)
     turns = spec.turns(design.coil_diameter, design.coil_length)
-    if key not in IRON_PERMEANCE and key not in _SOLVED:
+    permeance = stored_permeance(key)
+    if permeance is None and key not in _SOLVED:
         from ..magnetics import coil_inductance
 
         _SOLVED[key] = coil_inductance(design, spec) / turns ** 2
-    return turns ** 2 * IRON_PERMEANCE.get(key, _SOLVED.get(key, 0.0))
+    return turns ** 2 * (permeance if permeance is not None else _SOLVED[key])
 
 
 def wheeler_inductance(turns: float, outer_radius: float, length: float, inner_radius: float) -> float:

@@ -20,30 +20,31 @@ Every torque is about the sphere's centre in the fixed frame (N·m), forces in N
 nominal ±1 (``coil_ampere_turns``), ``+1`` attracting a north-out (``+1``) pole.
 """
 
-from ._calibration import Calibration, Comparison, calibrate, compare_models, fit_limit, random_drives
-from ._curve import ForceCurve, force_curve
-from ._figures import figure_comparison, figure_force_curve
-from ._direct import MESHING, coil_wrenches, force, force_torque, reaction, torque
-from ._inductance import coil_inductance
-from ._iron import IRON_LEVEL, CoreGeometry, CoreSolver, core_solver, magnet_face_radius  # for sensing (the cores' field)
-from ._ironforce import fig6_forces as iron_force_curve
-from ._ironforce import pair_tables as iron_pair_torques
-from ._ironmap import IronTorqueMap, iron_model
-from ._ironscale import iron_source, scaled_design, solve_needed
-from .design_model import DesignModel, design_model
-from ._ironsummary import IronSummary, iron_summary
-from ._model import coil_polarization, model_summary, rotor_collection, rotor_magnets, stator_coils
-from ._statics import StateTorque, equilibrium, state_currents, state_torques
-from ._table import TABLE_MESHING, TorqueMap, pair_torque, table_nodes, torque_function, torque_map
+from ..lazy import lazy_names
+from ._ironforce import fig6_forces as iron_force_curve  # noqa: F401  (renamed; the iron model's module anyway)
+from ._ironforce import pair_tables as iron_pair_torques  # noqa: F401
+from .design_model import DesignModel, design_model  # noqa: F401  (eager: the function shadows its module's name)
 
-__all__ = [
-    "iron_source", "scaled_design", "solve_needed",
-    "IRON_LEVEL", "CoreGeometry", "CoreSolver", "core_solver", "magnet_face_radius",
-    "DesignModel", "MESHING", "StateTorque", "design_model", "TABLE_MESHING", "Calibration", "Comparison", "ForceCurve", "IronSummary", "IronTorqueMap",
-    "coil_inductance", "iron_force_curve", "iron_model", "iron_pair_torques", "iron_summary",
-    "TorqueMap", "calibrate", "coil_polarization", "coil_wrenches", "compare_models", "equilibrium",
-    "figure_comparison", "figure_force_curve", "fit_limit", "force", "force_curve", "force_torque",
-    "model_summary", "pair_torque", "random_drives", "reaction", "rotor_collection",
-    "rotor_magnets", "state_currents", "state_torques", "stator_coils", "table_nodes",
-    "torque", "torque_function", "torque_map",
-]
+# The other public names load from their modules on first use (spherestep.lazy): a design's model does not import
+# matplotlib (the figures), the potential model (the calibration) or the solver's mesher.
+_MODULES = {
+    "_calibration": ("Calibration", "Comparison", "calibrate", "compare_models", "fit_limit", "random_drives"),
+    "_curve": ("ForceCurve", "force_curve"),
+    "_figures": ("figure_comparison", "figure_force_curve"),
+    "_direct": ("MESHING", "coil_wrenches", "force", "force_torque", "reaction", "torque"),
+    "_inductance": ("coil_inductance",),
+    "_iron": ("IRON_LEVEL", "CoreGeometry", "CoreSolver", "core_solver", "magnet_face_radius"),  # sensing too
+    "_ironmap": ("IronTorqueMap", "iron_model"),
+    "_ironscale": ("iron_source", "scaled_design", "solve_needed"),
+    "_ironsummary": ("IronSummary", "iron_summary"),
+    "_model": ("coil_polarization", "model_summary", "rotor_collection", "rotor_magnets", "stator_coils"),
+    "_statics": ("StateTorque", "equilibrium", "state_currents", "state_torques"),
+    "_table": ("TABLE_MESHING", "TorqueMap", "pair_torque", "table_nodes", "torque_function", "torque_map"),
+}
+__getattr__, _lazy_dir, _lazy_all = lazy_names(__name__, _MODULES)
+_EAGER = ["DesignModel", "design_model", "iron_force_curve", "iron_pair_torques"]
+__all__ = sorted(_lazy_all + _EAGER)  # noqa: PLE0605  (the one list of names)
+
+
+def __dir__():
+    return sorted(set(_lazy_dir()) | set(_EAGER))

@@ -178,15 +178,15 @@ class CoreCoupling:
 
     def _coupling_table(self) -> np.ndarray:
         """``G`` as cubed-sphere coefficients on :data:`COUPLING_FACE` (:mod:`spherestep._fast.spheretable`)."""
-        from .._fast.coupling import coupling_energies
+        from .._fast.coupling import coupling_energies, in_threads
         from .._fast.spheretable import face_coefficients, face_nodes
 
         nodes = face_nodes(COUPLING_FACE)
         knots, C = self.spline_coefficients()
         values = np.empty(nodes.shape[:-1]).reshape(-1)
-        coupling_energies(np.ascontiguousarray(nodes.reshape(-1, 3)), np.ascontiguousarray(self.poles.T),
-                          np.ascontiguousarray(self.polarity), float(self.alpha[-1]), math.radians(TAPER_DEG),
-                          np.ascontiguousarray(knots), np.ascontiguousarray(C), values)
+        in_threads(coupling_energies, np.ascontiguousarray(nodes.reshape(-1, 3)), np.ascontiguousarray(self.poles.T),
+                   np.ascontiguousarray(self.polarity), float(self.alpha[-1]), math.radians(TAPER_DEG),
+                   np.ascontiguousarray(knots), np.ascontiguousarray(C), out=values)
         return face_coefficients(values.reshape(nodes.shape[:-1]))
 
     def fast_evaluate(self, detent, linear, R, c, order: int) -> tuple[np.ndarray, ...]:
@@ -249,7 +249,7 @@ class CoupledTables:
     def build(cls, detent, linear, coupling_coefficients: np.ndarray, n: int = TABLE_FACE) -> CoupledTables:
         """From the pair maps ``detent``, ``linear`` (:class:`~spherestep.magnetics.TorqueMap`, sharing their
         nodes and poles) and ``G``'s coefficients on :data:`COUPLING_FACE`."""
-        from .._fast.coupling import zonal_energies
+        from .._fast.coupling import in_threads, zonal_energies
         from .._fast.spheretable import HALO, face_coefficients, face_nodes, sphere_values
 
         nodes = face_nodes(n)
@@ -261,7 +261,7 @@ class CoupledTables:
             raise bad_value("linear", "a pair table on the detent table's nodes", f"{len(linear._e.x) - 1} intervals")
         P = np.ascontiguousarray(np.stack([detent.polarity, linear.polarity]))
         values = np.empty((2, len(x)))
-        zonal_energies(x, poles, P, breaks, energy, values)
+        in_threads(zonal_energies, x, poles, P, breaks, energy, out=values)
         G = np.empty(len(x))
         coarse = np.ascontiguousarray(coupling_coefficients.reshape(-1))
         sphere_values(coarse, coupling_coefficients.shape[1], 2.0 * COUPLING_FACE / math.pi, HALO, x, 0, G,

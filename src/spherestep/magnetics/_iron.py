@@ -39,8 +39,6 @@ from functools import lru_cache
 import magpylib as magpy
 import numpy as np
 import scipy.linalg
-from magpylib_material_response.demag import demag_tensor
-from magpylib_material_response.meshing import mesh_Cylinder
 from scipy.spatial.transform import Rotation
 
 from .. import checks
@@ -103,6 +101,8 @@ def mesh_parameters(level: int) -> dict:
 
 def core_cells(geom: CoreGeometry, level: int = IRON_LEVEL) -> list:
     """The core's cells (magpylib ``Cylinder``/``CylinderSegment``, unit-less polarization 0) in the coil frame."""
+    from magpylib_material_response.meshing import mesh_Cylinder  # (imported on a solve only: 0.4 s)
+
     p = mesh_parameters(level)
     cells = []
     for r0, r1, z0, z1 in geom.parts():
@@ -162,6 +162,8 @@ class CoreSolver:
                           for c in core_cells(geom, level)])
         self.near = np.tile(depth < NEAR_DEPTH, len(placements))
         n = len(self.cells)
+        from magpylib_material_response.demag import demag_tensor
+
         T = demag_tensor(self.cells) * MU0
         self.T = T.swapaxes(2, 3).reshape((3 * n, 3 * n)).T  # the layout of apply_demag: x1..xn, y1..yn, z1..zn
         self.chi = geom.mu_r - 1.0
