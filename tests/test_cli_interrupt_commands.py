@@ -72,3 +72,20 @@ def test_a_signal_mid_command_exits_with_one_line_and_complete_or_no_output(tmp_
         assert not out.exists() or out.read_text(encoding="utf-8").strip(), "an empty calibration file"
     else:
         assert not out.exists() or {p.name for p in out.iterdir()} == complete, sorted(out.iterdir())
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("sig, code, name", SIGNALS, ids=["SIGINT", "SIGTERM"])
+def test_move_emulate_interrupted_in_the_loop_says_all_off_was_acknowledged(tmp_path, sig, code, name):
+    """A signal while the loop drives the emulated motor (its ``t … turned …`` status lines come every 0.25 s):
+    the loop switches every coil off and the one line says the device acknowledged it, as ``run`` says; exit
+    130/143, no traceback from the emulator's process, nothing left in --out (the loop's log included)."""
+    out = tmp_path / "move"
+    status, err = _interrupt(["move", "--axis", "1,0.5,2", "--angle", "360", "--emulate", "--out", str(out)],
+                             "spherestep: t ", sig, settle=0.3)
+    lines = err.strip().splitlines()
+    assert status == code, err
+    assert "Traceback" not in err and all(line.startswith("spherestep: ") for line in lines), err
+    assert lines[-1] == f"spherestep: interrupted ({name}): all coils off, acknowledged by the device", err
+    assert sum("interrupted" in line for line in lines) == 1, err
+    assert not out.exists(), sorted(out.iterdir())

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import sys
 from pathlib import Path
 
 import typer
@@ -13,6 +14,7 @@ from ..outputs import output_folder
 from .app import app
 from .common import check_axis, check_core, console, design_from, number, parse_vector, print_json, usable
 from .motor import ANGLE
+from .signals import Terminated, sigterm_as_interrupt, told
 
 MODES = ("servo", "ramped", "settled")
 
@@ -128,16 +130,29 @@ def move(
     if time is not None:  # before the progress starts: a refusal is one line
         check_duration(design, axis_vec, math.radians(angle), choose_model(design, own), time, "--time",
                        start=None)
+    result = received = None
     with progress("driving the turn", enabled=not as_json) as say:
         names = DriveResult.FILES + (("servo-log.csv",) if backend != "simulated" else ())
         files = Outputs(out, names)
-        with files:
-            out.mkdir(parents=True, exist_ok=True)
-            result = drive_turn(design, axis_vec, math.radians(angle), mode=mode, backend=backend,
-                                model=own, duration=time, sensor=sensor, sensor_noise=noise,
-                                port=port, rate=rate, tolerance=math.radians(tolerance),
-                                log=out / "servo-log.csv" if backend != "simulated" else None, progress=say)
-            written = result.write(out)
+        try:
+            with files, sigterm_as_interrupt() as received:
+                out.mkdir(parents=True, exist_ok=True)
+                result = drive_turn(design, axis_vec, math.radians(angle), mode=mode, backend=backend,
+                                    model=own, duration=time, sensor=sensor, sensor_noise=noise,
+                                    port=port, rate=rate, tolerance=math.radians(tolerance),
+                                    log=out / "servo-log.csv" if backend != "simulated" else None, progress=say)
+                if backend != "simulated" and result.details.outcome == "INTERRUPT":  # the loop caught it, coils off
+                    raise Terminated() if received.name == "SIGTERM" else KeyboardInterrupt()
+                written = result.write(out)
+        except KeyboardInterrupt as exc:  # the files removed (Outputs); say whether the device confirmed all off
+            if backend == "simulated" or received is None or received.name is None or result is None:
+                raise  # before the loop drove a coil (or a simulation): the CLI's own line
+            d = result.details
+            off = "all coils off, acknowledged by the device" if d.off_acknowledged else \
+                f"all off NOT acknowledged; {d.message.rpartition('OFF was not acknowledged: ')[2]}"
+            print(f"spherestep: interrupted ({received.name}): {off}", file=sys.stderr)
+            told()
+            raise typer.Exit(143 if isinstance(exc, Terminated) else 130) from None
     if backend != "simulated":
         written.append(out / "servo-log.csv")
     if as_json:
