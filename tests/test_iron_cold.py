@@ -94,3 +94,28 @@ def test_table_builders_do_not_depend_on_the_thread_split(monkeypatch):
     assert fast_coupling.table_threads() == 3
     assert np.array_equal(results[0][0], results[1][0]) and np.array_equal(results[0][1], results[1][1])
     assert np.ptp(results[0][0]) > 0.0
+
+
+def test_zonal_sums_are_the_pair_splines():
+    """``_fast.coupling.zonal_energies`` (the interval by look-up) is ``−Σ_j P_j e(acos x·u_j)`` of the pair maps'
+    energy splines, to rounding, also at points whose angle to a pole is a spline break."""
+    model = design_model(prototype()).model
+    det, lin = model.detent, model.linear
+    breaks = np.asarray(det._e.x)
+    rng = np.random.default_rng(5)
+    u = det.poles[0]
+    side = np.cross(u, [0.0, 0.0, 1.0] if abs(u[2]) < 0.9 else [1.0, 0.0, 0.0])
+    side /= np.linalg.norm(side)
+    on_breaks = np.cos(breaks)[:, None] * u + np.sin(breaks)[:, None] * side  # pole 0 at every break angle
+    x = np.vstack([on_breaks, so3.random(200, rng)[:, :, 0]])
+    x = np.ascontiguousarray(x / np.linalg.norm(x, axis=1, keepdims=True))
+    P = np.stack([det.polarity, lin.polarity])
+    out = np.empty((2, len(x)))
+    fast_coupling.zonal_energies(x, np.ascontiguousarray(det.poles.T), np.ascontiguousarray(P),
+                                 np.ascontiguousarray(breaks),
+                                 np.ascontiguousarray(np.stack([np.asarray(det._e.c).T, np.asarray(lin._e.c).T])),
+                                 out)
+    alpha = np.arccos(np.clip(x @ det.poles.T, -1.0, 1.0))  # (Q, M)
+    for t, spline in enumerate((det._e, lin._e)):
+        ref = -(spline(alpha) * P[t]).sum(axis=1)
+        np.testing.assert_allclose(out[t], ref, rtol=0, atol=1e-12 * np.abs(ref).max())
