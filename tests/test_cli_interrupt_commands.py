@@ -89,3 +89,28 @@ def test_move_emulate_interrupted_in_the_loop_says_all_off_was_acknowledged(tmp_
     assert lines[-1] == f"spherestep: interrupted ({name}): all coils off, acknowledged by the device", err
     assert sum("interrupted" in line for line in lines) == 1, err
     assert not out.exists(), sorted(out.iterdir())
+
+
+@pytest.mark.parametrize("failure, code, line", [
+    ("SIGTERM", 143, "spherestep: interrupted (SIGTERM)"),
+    (OSError(28, "No space left on device"), 1, "1 of 2 files written")])
+def test_capability_interrupted_between_its_two_files_leaves_none(tmp_path, monkeypatch, capsys, failure, code, line):
+    """SIGTERM arrives, or the disk fills, as the figure is written after capability.json: the folder is absent, or
+    the one line counts what was written, never a lone capability.json without a word."""
+    import os
+
+    from spherestep import plots
+    from spherestep.cli import main
+
+    def fail(*args, **kwargs):
+        if failure == "SIGTERM":
+            os.kill(os.getpid(), signal.SIGTERM)  # the CLI's handler raises in this (the main) thread
+            time.sleep(5)
+        raise failure
+
+    monkeypatch.setattr(plots, "save_figure", fail)
+    out = tmp_path / "cap"
+    assert main(["capability", "--samples", "20", "--out", str(out), "--json"]) == code
+    err = capsys.readouterr().err
+    assert line in err and len(err.strip().splitlines()) == 1, err
+    assert not out.exists() or code != 143

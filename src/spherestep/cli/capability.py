@@ -37,6 +37,7 @@ def capability(
     from .. import plots
     from ..control import figure_capability, torque_capability
     from ..magnetics import design_model
+    from ..outputs import Outputs
 
     out = output_folder(out, "--out")  # before the work: a bad location costs nothing
     design = usable(design_from(design_path))
@@ -47,8 +48,9 @@ def capability(
         say("writing capability.json and capability.png")
         summary = {"model": own.label} | cap.to_dict() | {"threshold_N_m": threshold,
                                                            "fraction_at_threshold": cap.fraction_at_least(threshold)}
-        written = [write_json(out / "capability.json", summary),
-                   plots.save_figure(figure_capability(cap, threshold), out / "capability.png")]
+        with Outputs(out, ("capability.json", "capability.png")):  # complete or absent (Ctrl-C, a full disk)
+            written = [write_json(out / "capability.json", summary),
+                       plots.save_figure(figure_capability(cap, threshold), out / "capability.png")]
     if as_json:
         print_json(summary | {"files": [str(p) for p in written]})
         return
