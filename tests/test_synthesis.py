@@ -237,6 +237,7 @@ def test_ferrite_and_a_rewound_coil_make_the_prototype_step_on_iron():
     assert row["relay_steps_on_plan"] == row["relay_steps"] == 7
     assert 0.4 < row["relay_worst_deg"] < 0.5 and row["relay_peak_W"] <= 100.0
     assert 2.1 < row["change"] < 2.2 and 1500 < row["ampere_turns"] < 1600
+    assert row["motor"].endswith("i-0.2T-w4")  # the same layout with other parts is another motor on the front
 
 
 # --- §2–3 a quick search end to end, and every finalist re-measured --------------------------------------------

@@ -321,7 +321,9 @@ def climb(candidate: Candidate, spec, allow_costly: bool = False, baseline: dict
         row = rows[core]
         from ..explore import motor_fingerprint
 
-        row.update(motor=motor_fingerprint(d) + core[0], coils=len(d.stator), rotor_poles=len(d.rotor), magnet_diameter_mm=1e3 * d.magnet_diameter,
+        parts = (f"-{candidate.remanence:g}T" if candidate.remanence != N42 else "") + \
+            (f"-w{candidate.wound_for}" if candidate.wound_for else "")  # the fingerprint is the layout's
+        row.update(motor=motor_fingerprint(d) + core[0] + parts, coils=len(d.stator), rotor_poles=len(d.rotor), magnet_diameter_mm=1e3 * d.magnet_diameter,
                    coil_diameter_mm=1e3 * d.coil_diameter, air_gap_mm=1e3 * d.air_gap, magnet_mass_kg=magnet_mass(d))
         reach = d.air_gap + d.coil_length
         electrics = d.coil_electrics()

@@ -50,13 +50,14 @@ class Budget:
     allow_costly: bool = False
     costly_neighbourhood: bool = False  # the baseline's wider gaps with iron solved even so (a few table solves)
     neighbourhood: bool = True  # with a baseline, every layout one choice away from it (else the baseline alone)
+    parts: bool = True  # with a baseline, its parts in every combination (magnet grade × winding)
     rounds: int = 1  # when no candidate passes: local rounds around the closest ones (their one-change neighbours)
     round_seeds: int = 3
 
 
 BUDGETS = {
     "quick": Budget("quick", ("truncated-icosahedron",), ("truncated-cuboctahedron",), 9.0, (0, 1), (0,),
-                    (60.0, 80.0), 1, 400, 32, 2, 1, 1000, 64, neighbourhood=False, rounds=0),
+                    (60.0, 80.0), 1, 400, 32, 2, 1, 1000, 64, neighbourhood=False, parts=False, rounds=0),
     "normal": Budget("normal", None, None, 1.25, (0, 1), (0, 1), (60.0, 70.0, 80.0), 2, 1000, 64, 4, 3, 4000, 200,
                      costly_neighbourhood=True),
     "thorough": Budget("thorough", None, None, 1.6, (0, 1, 2), (0, 1, 2), (50.0, 60.0, 70.0, 80.0, 85.0), 3, 2000,
@@ -107,8 +108,9 @@ def candidates(spec, budget: Budget, seed: int = 0) -> list[Candidate]:
         if budget.neighbourhood:  # (the quick budget: the baseline itself)
             for c in neighbours(Candidate(**one, **common)):
                 out[c] = None
+        if budget.parts:
             for grade in GRADES:
-                for n in WINDINGS:
+                for n in (0,) + WINDINGS:
                     out[Candidate(**(one | {"remanence": grade}), **common, wound_for=n)] = None
     return list(out)
 

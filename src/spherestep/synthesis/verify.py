@@ -8,7 +8,8 @@ its own code path:
 * the torque available in every direction over the range on the design's own model, the worst single coil failure
   (:func:`spherestep.control.available_torque`), a relay state's holding torque;
 * the stated turn driven by :func:`spherestep.drive.drive_turn`: the fastest servo turn (``mode="servo"``) and the
-  paper's settled relay plan (``mode="settled"``, every step within 0.5° of the plan) as the spec's drive asks;
+  paper's settled relay plan (``mode="settled"``, every step within 0.5° of the plan, its peak power within the
+  supply's) as the spec's drive asks;
 * holds at random orientations in the range: the servo (:func:`spherestep.dynamics.simulate_servo`) holding
   ``Trajectory.hold(R)`` for 0.5 s with the spec's sensor (the Hall array of ``sensing.hall_parts`` parts, else the
   drive room's noisy sensor, σ = :data:`spherestep.drive.SENSOR_NOISE` = 0.02°), the largest distance from ``R``;
@@ -253,6 +254,9 @@ def verify(design_text: str, spec, *, seed: int = 1, capability_samples: int = 2
         checks.append(_yes("settled relay plan executes (every step within 0.5° of the plan)",
                            f"{det.steps} of {det.steps} steps", f"{det.steps_settled_on_plan} of {det.steps} steps",
                            det.executed))
+        numbers["relay_peak_W"] = float(run.peak_power)
+        checks.append(_at_most("relay plan's peak power (its most coils at once)", float(run.peak_power),
+                               spec.supply.power, ".3g", "W"))
         if spec.speed is not None and not spec.servo:
             checks.append(_at_most(f"relay turn of {math.degrees(angle):g}°", float(run.time), spec.speed.within,
                                    ".3g", "s"))
