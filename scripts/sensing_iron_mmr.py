@@ -1,24 +1,31 @@
-"""The iron prototype's cores' field at the default sensor array by an independent solve with
-magpylib-material-response (issue 26): the check of :func:`spherestep.sensing.iron.iron_fields` against a library
-other than the iron room's own method of moments.
+"""The iron prototype's cores' field at the default sensor array against direct magpylib-material-response solves
+on successively finer meshes (issue 26): the mesh convergence of :func:`spherestep.sensing.iron.iron_fields`.
 
-The 29 pot cores (:class:`spherestep.magnetics.CoreGeometry`: centre pole, outer wall, back plate, the same shape
-the sensing model solves) are meshed with :func:`magpylib_material_response.meshing.mesh_Cylinder` on slabs of
-their own grading (first slab ``first`` at the face growing by 1.8 up to ``size``, lateral cells ``size``), placed
-as the sensing model places them (:func:`spherestep.sensing.iron.core_frames`, face at ``radius + air_gap``), and
-the 92 rotor magnets as magpylib cylinders (radius of :func:`magnetics.magnet_face_radius`) at 3 orientations
-``so3.random(3, 26)`` (those of ``sensing_iron_reference.csv``). :func:`magpylib_material_response.demag.apply_demag`
-solves all the cores in one moment system (χ = μr − 1, magnets χ = 0: the cores' mutual coupling in full), and
-the cores' field at the sensors is the solved cells' field (total minus the magnets' own).
+What is solved. Each of the 29 pot cores with the whole rotor (92 magnets, magpylib cylinders at the iron model's
+radius, :func:`magnetics.magnet_face_radius`) at 3 orientations ``so3.random(3, 26)`` (those of
+``sensing_iron_reference.csv``), meshed by the iron room's mesher (``_iron.core_cells``: slabs graded from the face,
+level ``L`` divides every size by ``2^(L/4)``) and solved on its own by magpylib-material-response's point-matched
+moment system ``(I − χT) J = χ B_src`` (its ``demag_tensor``, factorised once per level by
+:class:`magnetics.CoreSolver`, then one back-substitution per core and orientation: what ``apply_demag(solver=
+"direct")`` solves, without rebuilding ``T`` 87 times; checked equal below). The cores' field at the sensors is the
+solved cells' field. The cores' mutual coupling is not re-solved per level (a system of all 29 cores is 19 GB at
+level 2): each level's column is the cores solved each on its own, and the coupling is the model's (dipole
+coupling within 50°, its own check against one moment system is in docs/sensing.md) taken from
+``sensing_iron_reference.csv`` (level 2).
 
-Run: ``OPENBLAS_NUM_THREADS=1 .venv/bin/python scripts/sensing_iron_mmr.py [size_mm first_mm] ...`` — each pair
-is one mesh (default ``30 8`` and ``20 4``: 45 and 58 cells per core; 1305 cells took 158 s per orientation at load 3); writes ``data/sensing_iron_mmr.csv`` (columns per mesh).
+``apply_demag`` itself (``apply-demag``): the two cores nearest sensor 8 (26 and 22, 1124 cells at level 2) and the
+92 magnets as χ = 0 cells in one ``apply_demag(solver="direct")`` at orientation 0, against the factorised joint
+solve of the same two cores in ``sensing_iron_reference.csv`` (``cluster_joint``); writes
+``data/sensing_iron_mmr_apply_demag.csv``.
+
+Run: ``OPENBLAS_NUM_THREADS=1 nice -n 5 .venv/bin/python scripts/sensing_iron_mmr.py [level ...]`` (default
+``0 1 2 3 4 5``); writes ``data/sensing_iron_mmr.csv`` after each level (one column triple per level), keeping
+the levels already stored. ``... scripts/sensing_iron_mmr.py apply-demag``: the check above.
 """
 
 from __future__ import annotations
 
 import datetime
-import math
 import os
 import sys
 import time
@@ -26,67 +33,15 @@ from pathlib import Path
 
 import magpylib as magpy
 import numpy as np
-from magpylib_material_response.demag import apply_demag
-from magpylib_material_response.meshing import mesh_Cylinder
 from scipy.spatial.transform import Rotation
 
 from spherestep import so3
-from spherestep.magnetics import CoreGeometry, magnet_face_radius
+from spherestep.magnetics import CoreGeometry, CoreSolver, magnet_face_radius
 from spherestep.motor import prototype
 from spherestep.sensing import default_array, iron
 
 OUT = Path(__file__).resolve().parents[1] / "data" / "sensing_iron_mmr.csv"
 SEED, COUNT = 26, 3
-GROWTH = 1.8
-
-
-def slabs(z0: float, z1: float, first: float, size: float) -> np.ndarray:
-    """Slab boundaries on ``[z0, z1]``: thickness ``first`` at ``z = 0`` (the face) growing by :data:`GROWTH` up to
-    ``size``."""
-    edges, t = [0.0], first
-    while edges[-1] < z1 - 1e-12:
-        edges.append(min(z1, edges[-1] + t))
-        t = min(size, t * GROWTH)
-    if len(edges) > 2 and edges[-1] - edges[-2] < 0.3 * (edges[-2] - edges[-3]):
-        edges.pop(-2)
-    e = np.asarray(edges)
-    return np.unique(np.clip(np.concatenate([[z0], e[(e > z0) & (e < z1)], [z1]]), z0, z1))
-
-
-def core_mesh(geom: CoreGeometry, size: float, first: float) -> list:
-    """The core's cells in its own frame (axis ``+z``, face at ``z = 0``)."""
-    cells = []
-    for r0, r1, z0, z1 in geom.parts():
-        nr = max(1, round((r1 - r0) / size))
-        nphi = max(6, round(math.pi * (r0 + r1) / size))
-        edges = slabs(z0, z1, first, size)
-        for a, b in zip(edges[:-1], edges[1:]):
-            if r0 == 0.0:
-                slab = magpy.magnet.Cylinder(dimension=(2 * r1, b - a), polarization=(0, 0, 0),
-                                             position=(0, 0, 0.5 * (a + b)))
-            else:
-                slab = magpy.magnet.CylinderSegment(dimension=(r0, r1, b - a, 0, 360), polarization=(0, 0, 0),
-                                                    position=(0, 0, 0.5 * (a + b)))
-            cells.extend(mesh_Cylinder(slab, (nphi, nr, 1)).sources_all)
-    for c in cells:
-        c.parent = None
-    return cells
-
-
-def stator_cells(design, size: float, first: float) -> list:
-    """All 29 cores' cells in the fixed frame, placed as :func:`spherestep.sensing.iron.core_frames`."""
-    geom = CoreGeometry.of(design, design.coil)
-    Q = iron.core_frames(design)
-    face = design.radius + design.air_gap
-    out = []
-    for k, v in enumerate(design.stator.centers):
-        rot = Rotation.from_matrix(Q[k])
-        for c in core_mesh(geom, size, first):
-            c = c.copy()
-            c.orientation = rot * c.orientation
-            c.position = Q[k] @ c.position + face * v
-            out.append(c)
-    return out
 
 
 def rotor_magnets(design, R) -> list:
@@ -101,48 +56,121 @@ def rotor_magnets(design, R) -> list:
     return out
 
 
-def cores_field(design, positions, R, size: float, first: float) -> tuple[np.ndarray, int]:
-    """The cores' field ``(S, 3)`` (T) at ``positions`` with the rotor at ``R``, one apply_demag of all cores."""
-    cells = stator_cells(design, size, first)
-    chi = float(design.coil.material.relative_permeability) - 1.0
-    for c in cells:
-        c.susceptibility = chi
+def independent(design, positions, Rs, level: int) -> tuple[np.ndarray, int]:
+    """The cores' field ``(K, S, 3)`` (T) at ``positions`` for each ``R`` of ``Rs``, every core solved on its own
+    at mesh ``level``; and the cells per core."""
+    solver = CoreSolver(CoreGeometry.of(design, design.coil), level)
+    n = len(solver.cells)
+    Q = iron.core_frames(design)
+    face = design.radius + design.air_gap
+    v = design.stator.centers
+    Y = np.einsum("kji,ksj->ksi", Q, positions[None] - face * v[:, None]).reshape(-1, 3)  # sensors, core frames
+    G = iron._unit_fields(solver, Y).reshape(len(v), len(positions), 3, 3 * n)  # per unit cell polarization
+    out = np.zeros((len(Rs), len(positions), 3))
+    for i, R in enumerate(Rs):
+        mags = rotor_magnets(design, R)
+        cells = np.einsum("kij,nj->kni", Q, solver.centroids) + face * v[:, None]  # (29, n, 3) fixed frame
+        B = np.asarray(magpy.getB(mags, cells.reshape(-1, 3), sumup=True)).reshape(len(v), n, 3)
+        J = solver.polarization(np.einsum("kni,kij->knj", B, Q))  # core frames
+        Jf = np.moveaxis(J, 2, 1).reshape(len(v), 3 * n)  # solver layout x1..xn, y1..yn, z1..zn
+        out[i] = np.einsum("kij,ksj->si", Q, np.einsum("ksac,kc->ksa", G, Jf))
+    return out, n
+
+
+def apply_demag_check(cores=(26, 22), level: int = 2, k: int = 0) -> None:
+    """``apply_demag`` of ``cores`` (one moment system) with the whole rotor at orientation ``k``, written beside
+    the factorised solve of ``sensing_iron_reference.csv`` (``cluster_joint``, the same cores at level 2)."""
+    from magpylib_material_response.demag import apply_demag
+
+    from spherestep.magnetics import _iron
+
+    design = prototype()
+    p = default_array(design).positions
+    R = so3.random(COUNT, SEED)[k]
+    geom = CoreGeometry.of(design, design.coil)
+    Q = iron.core_frames(design)
+    face = design.radius + design.air_gap
+    cells = []
+    for c in cores:
+        rot = Rotation.from_matrix(Q[c])
+        for cell in _iron.core_cells(geom, level):
+            cell.orientation = rot * cell.orientation
+            cell.position = Q[c] @ cell.position + face * design.stator.centers[c]
+            cell.susceptibility = geom.mu_r - 1.0
+            cells.append(cell)
     mags = rotor_magnets(design, R)
     for m in mags:
         m.susceptibility = 0.0
+    t0 = time.perf_counter()
     solved = apply_demag(magpy.Collection(*cells, *mags), solver="direct")
-    iron_cells = solved.sources_all[:len(cells)]
-    return np.asarray(magpy.getB(iron_cells, positions, sumup=True)).reshape(-1, 3), len(cells)
+    B = np.asarray(magpy.getB(solved.sources_all[:len(cells)], p, sumup=True)).reshape(-1, 3)
+    took = time.perf_counter() - t0
+    ref_path = Path(__file__).resolve().parents[1] / "src" / "spherestep" / "data" / "sensing_iron_reference.csv"
+    lines = [ln for ln in ref_path.read_text().splitlines() if ln and not ln.startswith("#")]
+    data = np.array([[float(v) for v in ln.split(",")] for ln in lines[1:]])
+    joint = data[data[:, 0] == k][:, 14:17]
+    d = B - joint
+    note = (f"cores {' '.join(map(str, cores))}, level {level} ({len(cells)} cells), orientation {k}: {took:.0f} s"
+            f" (load {os.getloadavg()[0]:.1f}, {datetime.datetime.now(datetime.UTC):%Y-%m-%d %H:%M} UTC);"
+            f" apply_demag − factorised: max {np.abs(d).max():.2e} T, RMS {np.sqrt(np.mean(d ** 2)):.2e} T"
+            f" of {np.sqrt(np.mean(joint ** 2)):.4e} T")
+    print(note, flush=True)
+    out = OUT.with_name("sensing_iron_mmr_apply_demag.csv")
+    head = ["# cores' field (T) at the default array's 24 sensors, prototype, R = so3.random(3, 26)[k]: one"
+            " magpylib-material-response apply_demag(solver='direct') of the cores with the 92 magnets (chi = 0)"
+            " against the factorised joint solve (sensing_iron_reference.csv cluster_joint)",
+            "# command: OPENBLAS_NUM_THREADS=1 nice -n 5 .venv/bin/python scripts/sensing_iron_mmr.py apply-demag",
+            f"# {note}", "sensor,apply_demag_x,apply_demag_y,apply_demag_z,factorised_x,factorised_y,factorised_z"]
+    out.write_text("\n".join(head + [f"{s}," + ",".join(f"{v:.12e}" for v in (*B[s], *joint[s]))
+                                      for s in range(len(p))]) + "\n")
 
 
 def main(argv) -> None:
-    nums = [float(a) for a in argv] or [30.0, 8.0, 20.0, 4.0]
-    meshes = list(zip(nums[0::2], nums[1::2]))
+    if argv[:1] == ["apply-demag"]:
+        apply_demag_check()
+        return
+    levels = [int(a) for a in argv] or [0, 1, 2, 3, 4, 5]
     design = prototype()
     p = default_array(design).positions
     Rs = so3.random(COUNT, SEED)
-    cols, notes = [], []
-    for size, first in meshes:
-        B, t0 = [], time.perf_counter()
-        for R in Rs:
-            b, n = cores_field(design, p, R, size * 1e-3, first * 1e-3)
-            B.append(b)
-        cols.append(np.array(B))
-        notes.append(f"mesh size {size:g} mm first slab {first:g} mm: {n} cells ({n // 29} per core),"
-                     f" {time.perf_counter() - t0:.0f} s for {COUNT} solves")
-        print(notes[-1], flush=True)
-    head = [f"# cores' field (T) at the default array's 24 sensors, prototype, R = so3.random({COUNT}, {SEED}),"
-            " magpylib-material-response apply_demag of all 29 cores (coupled) with the whole rotor",
-            "# command: OPENBLAS_NUM_THREADS=1 .venv/bin/python scripts/sensing_iron_mmr.py "
-            + " ".join(f"{a:g}" for m in meshes for a in m),
-            f"# {datetime.datetime.now(datetime.UTC):%Y-%m-%d %H:%M} UTC, load {os.getloadavg()[0]:.1f}",
-            *[f"# mesh {i}: {s}" for i, s in enumerate(notes)],
-            "k,sensor," + ",".join(f"mesh{i}_{a}" for i in range(len(meshes)) for a in "xyz")]
-    rows = [f"{k},{s}," + ",".join(f"{v:.9e}" for c in cols for v in c[k, s])
-            for k in range(COUNT) for s in range(len(p))]
-    OUT.write_text("\n".join(head + rows) + "\n")
-    d = cols[-1] - cols[0]
-    print(f"wrote {OUT}; mesh difference max {np.abs(d).max() * 1e6:.1f} µT RMS {np.sqrt(np.mean(d ** 2)) * 1e6:.1f} µT")
+    cols, notes, commands = stored()  # levels already stored are kept unless recomputed
+    for level in levels:
+        t0 = time.perf_counter()
+        B, n = independent(design, p, Rs, level)
+        cols[level] = B
+        notes[level] = (f"level {level}: {n} cells per core, {time.perf_counter() - t0:.0f} s"
+                        f" (load {os.getloadavg()[0]:.1f}, {datetime.datetime.now(datetime.UTC):%Y-%m-%d %H:%M} UTC)")
+        print(notes[level], f"RMS {np.sqrt(np.mean(B ** 2)) * 1e3:.4f} mT", flush=True)
+        done = sorted(cols)
+        for a, b in zip(done[:-1], done[1:]):
+            d = cols[b] - cols[a]
+            print(f"  level {b} − level {a}: RMS {np.sqrt(np.mean(d ** 2)) * 1e6:.1f} µT, max"
+                  f" {np.abs(d).max() * 1e6:.1f} µT", flush=True)
+        cmd = "OPENBLAS_NUM_THREADS=1 nice -n 5 .venv/bin/python scripts/sensing_iron_mmr.py " + " ".join(map(str, levels))
+        head = [f"# cores' field (T) at the default array's 24 sensors, prototype, R = so3.random({COUNT}, {SEED}),"
+                " every core solved on its own (magpylib-material-response demag_tensor, point matching) with the"
+                " whole rotor, mesh _iron.core_cells at each level",
+                *[f"# command: {c}" for c in dict.fromkeys([*commands, cmd])],
+                *[f"# {notes[lv]}" for lv in done],
+                "k,sensor," + ",".join(f"level{lv}_{a}" for lv in done for a in "xyz")]
+        rows = [f"{k},{s}," + ",".join(f"{v:.9e}" for lv in done for v in cols[lv][k, s])
+                for k in range(COUNT) for s in range(len(p))]
+        OUT.write_text("\n".join(head + rows) + "\n")
+
+
+def stored() -> tuple[dict, dict, list]:
+    """The levels already in :data:`OUT`: ``({level: (K, S, 3)}, {level: note}, [commands])``."""
+    if not OUT.is_file() or "level" not in OUT.read_text().split("k,sensor,", 1)[-1].split("\n", 1)[0]:
+        return {}, {}, []
+    lines = OUT.read_text().splitlines()
+    comments = [ln[2:] for ln in lines if ln.startswith("# ")]
+    head = next(ln for ln in lines if ln.startswith("k,sensor,"))
+    levels = [int(c[5:-2]) for c in head.split(",")[2::3]]
+    data = np.array([[float(v) for v in ln.split(",")[2:]] for ln in lines if ln and ln[0].isdigit()])
+    data = data.reshape(COUNT, -1, len(levels), 3)
+    notes = {int(c.split()[1].rstrip(":")): c for c in comments if c.startswith("level ")}
+    commands = [c[len("command: "):] for c in comments if c.startswith("command: ")]
+    return {lv: data[:, :, i] for i, lv in enumerate(levels)}, notes, commands
 
 
 if __name__ == "__main__":
