@@ -1,23 +1,21 @@
 """The servo against a plant it does not know exactly (issue 25 §2): the table of mismatch cases on the iron
 prototype, with and without the disturbance observer, side by side in one run.
 
-For each case of :data:`spherestep.magnetics.mismatch.MISMATCH_CASES` (controller = the design's iron model;
-plant = that model with the winding ×0.85/×1.15, the detent ×0.8/×1.2, both ×0.85/×1.2, the coupling through the
-cores, or the rotor's shell 0.3 mm thinner/thicker) :func:`spherestep.dynamics.robustness.robustness_row`: 20
-holds of random orientations (seed 0), each judged over 1.0–1.2 s, and the demo's 360° turn about (1, 0.5, 2)
-from the stepper state nearest the identity planned by ``plan_turn`` on the controller's model within the robust
-margin (``MARGIN`` = 0.7; then, apart, with plan_turn's default 0.9, the fastest turn), 0.5 s of
+For each case of :data:`spherestep.magnetics.mismatch.MISMATCH_CASES` (controller = the design's own model, the
+coupled iron model; plant = that model with the winding ×0.85/×1.15, the detent ×0.8/×1.2, both ×0.85/×1.2, or
+the rotor's shell 0.3 mm thinner/thicker; and the pairwise model as the controller against the coupled plant)
+:func:`spherestep.dynamics.robustness.robustness_row`: 20 holds of random orientations (seed 0), each judged over
+1.0–1.2 s, and the demo's 360° turn about (1, 0.5, 2) from the stepper state nearest the identity planned by
+``plan_turn`` on the pairwise model within the robust margin (``MARGIN`` = 0.7: the coupled model is refused
+within it; then, apart, with plan_turn's default 0.9 on the controller's model, the fastest turn), 0.5 s of
 settling, 0.02° sensor noise. Targets: every hold and the turn's end within 0.05°, the turn's tracking error
 ≤ 0.5°, mean power ≤ 100 W. Then the exact model (plant = model) for reference, and the coupled plant's
 surrogate error against the full coupled model.
 
-Run: ``OPENBLAS_NUM_THREADS=1 python benchmarks/bench_servo_robust.py [--holds N] [--cases "a;b"] [--quick]``
-(about 15 minutes; the coupled plant alone about 5: its anchors cost 7 coupled-model evaluations each).
-
-``--controller coupled [--json F]``: the same cases with the design's own default model (the coupled one) as the
-controller, observer on, each plant the coupled model changed (the pair tables scaled or the shell's, the coupling
-as modelled; "pairwise plant" the reverse of the coupled-plant case); the turn planned within ``MARGIN`` on the
-pairwise model (the coupled one is refused within it). About 2 minutes.
+Run: ``OPENBLAS_NUM_THREADS=1 python benchmarks/bench_servo_robust.py [--holds N] [--cases "a;b"] [--quick]
+[--json F]`` (about 10 minutes at load 1; the coupled plant's rows take the longest: its anchors cost 7
+coupled-model evaluations each). ``--controller pairwise``: every case with the pairwise model as the controller
+(the table before 2026-11-26 04:00 UTC).
 """
 
 from __future__ import annotations
@@ -29,6 +27,7 @@ import math
 import os
 import platform
 import time
+from dataclasses import replace
 
 import numpy as np
 
@@ -99,50 +98,6 @@ def fast_plan(design, cases) -> None:
               f"  CPU {time.process_time() - t0:.0f} s", flush=True)
 
 
-def coupled_controller_table(design, holds: int, path: str) -> None:
-    """``--controller coupled`` (module docstring): one row per case, observer on."""
-    from dataclasses import replace
-
-    from spherestep.dynamics import Rotor
-    from spherestep.dynamics.robustness import HOLD_TOLERANCE, MAX_POWER, MAX_TRACKING, hold_errors
-    from spherestep.magnetics import design_model
-    from spherestep.magnetics.mismatch import scaled_model, shell_model
-
-    own = design_model(design)
-    coupled, pairwise = own.model, design_model(design, coupling=False).model
-    rotor = Rotor.from_design(design)
-    rows = []
-    load = os.getloadavg()[0]
-    print(f"# controller: {own.label}; load {load:.1f}")
-    for case in list(MISMATCH_CASES) + [MismatchCase("exact model")]:
-        if case.coupling:
-            name, plant = "pairwise plant", pairwise
-        else:
-            name = case.name
-            plant = replace(shell_model(design, case.shell), coupling=coupled.coupling) if case.shell else coupled
-        if (case.winding, case.detent) != (1.0, 1.0):
-            plant = scaled_model(plant, case.winding, case.detent)
-        he = hold_errors(design, plant, coupled, own.limits, rotor, holds=holds)
-        traj, run = turn_run(design, plant, coupled, own.limits, rotor, margin=MARGIN, plan_model=pairwise)
-        row = {"case": name, "holds_within": int(sum(e <= HOLD_TOLERANCE for e in he)), "holds": len(he),
-               "worst_hold_deg": math.degrees(max(he)), "turn_time_s": traj.duration,
-               "final_error_deg": math.degrees(run.tracking_error[-1]),
-               "max_tracking_error_deg": math.degrees(run.tracking_error.max()),
-               "mean_power_W": float(np.mean(run.power))}
-        row["passed"] = (row["holds_within"] == row["holds"] and row["final_error_deg"] <= math.degrees(HOLD_TOLERANCE)
-                         and row["max_tracking_error_deg"] <= math.degrees(MAX_TRACKING)
-                         and row["mean_power_W"] <= MAX_POWER)
-        rows.append(row)
-        print(f"{name:>28} | {row['holds_within']:>2}/{row['holds']} {row['worst_hold_deg']:.4f}° | "
-              f"{row['final_error_deg']:.4f}° | {row['max_tracking_error_deg']:.3f}° | {row['mean_power_W']:.1f} W | "
-              f"{'yes' if row['passed'] else 'NO'}", flush=True)
-    if path:
-        stamp = datetime.datetime.now(datetime.UTC).strftime("%Y-%m-%d %H:%M UTC")
-        with open(path, "w") as f:
-            json.dump({"measured": stamp, "controller": own.label, "load": [load, os.getloadavg()[0]], "rows": rows},
-                      f, indent=1, ensure_ascii=False)
-
-
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--holds", type=int, default=20)
@@ -151,17 +106,16 @@ def main() -> None:
     ap.add_argument("--json", default="")
     ap.add_argument("--no-fast", action="store_true", help="skip the turns planned with plan_turn's default margin")
     ap.add_argument("--reach-only", action="store_true", help="only which holds the plants can reach (no runs)")
-    ap.add_argument("--controller", choices=("pairwise", "coupled"), default="pairwise",
-                    help="coupled: the design's default model as the controller (module docstring)")
+    ap.add_argument("--controller", choices=("coupled", "pairwise"), default="coupled",
+                    help="pairwise: every case with the pairwise model as the controller (module docstring)")
     args = ap.parse_args()
     print(f"# bench_servo_robust  {datetime.datetime.now().isoformat(timespec='minutes')}  {platform.platform()}  "
           f"cpus={os.cpu_count()}  OPENBLAS_NUM_THREADS={os.environ.get('OPENBLAS_NUM_THREADS', 'unset')}", flush=True)
     design = prototype()
     holds = 4 if args.quick else args.holds
-    if args.controller == "coupled":
-        coupled_controller_table(design, holds, args.json)
-        return
     cases = list(MISMATCH_CASES) + [MismatchCase("exact model")]
+    if args.controller == "pairwise":
+        cases = [replace(c, controller="pairwise") for c in cases]
     if args.cases:
         wanted = set(args.cases.split(";"))
         cases = [c for c in cases if c.name in wanted]

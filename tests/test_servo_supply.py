@@ -151,7 +151,7 @@ def test_scales_learn_the_plants_winding_and_detent(monkeypatch):
 def test_the_one_missed_hold_is_beyond_the_plant():
     """The ×0.85 winding × 1.2 detent plant cannot hold the 5th orientation of ``so3.random(20, 0)`` within the
     limits at all (the hold the robustness table misses), and can hold the others: the honest target there is every
-    hold the plant can reach."""
+    hold the plant can reach. The plant is the table's: the coupled model scaled (MismatchCase's default)."""
     from spherestep import so3
     from spherestep.magnetics import design_model
     from spherestep.magnetics.mismatch import MismatchCase
@@ -166,7 +166,7 @@ def test_the_one_missed_hold_is_beyond_the_plant():
         b = np.asarray(plant.torque(R, np.zeros(plant.coil_count)), dtype=float)
         unmet.append(allocate_matrix(K, np.zeros(3), limits, bias=b)[0].error)
     assert np.flatnonzero(np.array(unmet) > 1e-6).tolist() == [4]
-    assert 0.4 < unmet[4] < 0.7  # measured 0.518 N·m at the full 100 W
+    assert 0.7 < unmet[4] < 1.1  # measured 0.918 N·m at the full 100 W (0.518 on the pairwise plant)
 
 
 def test_supply_power_ball_bounds_copper_and_back_emf_power():

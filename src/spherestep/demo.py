@@ -195,9 +195,9 @@ def drive_lines(d: dict) -> list[str]:
 def robustness(design, axis, angle: float, holds: int = ROBUSTNESS_HOLDS) -> dict:
     """The servo on a plant that differs from the design's model by the worst case of docs/control.md's table
     (:data:`ROBUSTNESS_CASE`, :mod:`spherestep.magnetics.mismatch`): ``holds`` random holds and the turn of
-    ``angle`` rad about ``axis``, the controller on the design's pairwise iron model (the table's, ``MismatchCase``;
-    with the default coupled model as the controller this plant tracks the turn within 0.83°, docs/control.md),
-    the turn planned within the robust margin (:data:`spherestep.control.trajectory.MARGIN`, as the table: the
+    ``angle`` rad about ``axis``, the controller on the design's own (coupled) model (the table's,
+    ``MismatchCase``), the turn planned on the pairwise model within the robust margin
+    (:data:`spherestep.control.trajectory.MARGIN`, as the table: the coupled model is refused within it, and the
     fastest plan's 0.9 leaves no torque for a model error of this size)."""
     from .control.trajectory import MARGIN
     from .dynamics.robustness import robustness_row
@@ -214,7 +214,7 @@ def robustness_line(r: dict) -> str:
 
     return (f"against a motor that differs from its model by {r['case']} (the worst case of docs/control.md's "
             f"table), the servo on the "
-            f"design's pairwise model holds {r['holds_within']} of {r['holds']} random orientations within 0.05° (worst "
+            f"design's own model holds {r['holds_within']} of {r['holds']} random orientations within 0.05° (worst "
             f"{r['worst_hold_deg']:.3f}°) and, planned within {MARGIN:.0%} of the torque, turns in {r['turn_time_s']:.2f} s, "
             f"final error "
             f"{r['final_error_deg']:.3f}°, max tracking error {r['max_tracking_error_deg']:.2f}°, mean "

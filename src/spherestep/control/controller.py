@@ -32,7 +32,7 @@ error is removed with the error dynamics' poles and a varying one is followed wi
 Tuning (the servo law's default, :func:`disturbance_bandwidths`): a triple pole at rest at ``1/T`` (the coils'
 ``L/R``) within ``[10/3 ω_c, 10 ω_c]`` for a model with a detent (128 rad/s for the iron prototype's coil), at
 ``10/3 ω_c`` (100 rad/s) without one, rising with the trajectory's speed as ``|ω_d|/0.01 rad`` to ``10 ω_c`` (300
-rad/s at 1 kHz); off when the sensor is slower than ``10/3 ω_c/0.3``. The sensor's noise and the coils' lag set
+rad/s at 1 kHz; ``20/3 ω_c``, 200 rad/s, with a detent unless the rest pole is higher); off when the sensor is slower than ``10/3 ω_c/0.3``. The sensor's noise and the coils' lag set
 the rest value (0.02° at 1 kHz: ``d̂`` ≈ 0.9 N·m rms at 300 rad/s, 0.1 at 100), a position-dependent error
 the value in motion (docs/control.md, "Robust to model error").
 """
@@ -53,6 +53,8 @@ BANDWIDTH = 30.0  # rad/s, closed-loop natural frequency
 OBSERVER_BANDWIDTH = 120.0  # rad/s
 DISTURBANCE_RATIO = 10.0 / 3.0  # the servo law's extended observer at rest: a triple pole at ω_c·10/3 (100 rad/s)
 MOTION_RATIO = 10.0  # ... rising with the speed to 10 ω_c (300 rad/s) in motion
+BIAS_MOTION_RATIO = 20.0 / 3.0  # ... to 20/3 ω_c (200 rad/s) for a model with a bias (the sensor's noise near the
+# back-EMF-limited supply box; disturbance_bandwidths)
 SPEED_SCALE = 0.01  # rad: the poles rise by speed/SPEED_SCALE (a position-dependent torque error changes that fast)
 SPEED_MEMORY = 0.3  # s: the servo law holds the trajectory's speed peaks this long (decaying) for the poles
 DISTURBANCE_POLE = 0.3  # every pole at most this far from z = 1 per measurement: ω ≤ 0.3 × the sensor rate
@@ -69,7 +71,11 @@ def disturbance_bandwidths(sensor_rate: float, bandwidth: float = BANDWIDTH, bia
     ``T`` is 0): the estimate at rest no faster than the coil's current follows near its bound, where the sensor's
     noise that ``d̂`` carries (∝ ``ω_d^{5/2}``) is rectified into a torque shortfall — the current rises at most
     at ``(u − c)/T`` and falls at ``(u + c)/T`` (the iron prototype's 0.65 H coil, ``T`` = 7.8 ms: 128 rad/s; its
-    holds near the bound missed 0.05° by up to 0.09° at 300); else ``10/3 ω_c`` (the error of coils alone is
+    holds near the bound missed 0.05° by up to 0.09° at 300), and in motion ``max(ω_d, min(ω_m, 20/3 ω_c))`` (200
+    rad/s): at the turn's top speed the back-EMF leaves the coils little of the 24 V, and the noise ``d̂`` carries
+    at 300 rad/s (~0.9 N·m rms; ~0.3 at 200) pushes the request out of the supply box, one-sidedly (the ×0.85
+    winding, ×1.2 detent plant under the coupled model: 6 % of the periods out of reach, tracking 0.83–0.88°
+    against 0.32° at 200; docs/control.md, "Tuning"); else ``10/3 ω_c`` (the error of coils alone is
     proportional to the torque they give, and the lower pole keeps the sensor's noise out of the currents:
     holding the air-core prototype costs 1.3 W instead of 32 W); ``(0, 0)`` (no disturbance estimate) when
     ``10/3 ω_c > 0.3 f_s``: a sensor too slow for an estimate well above the loop's bandwidth, whose lag costs
@@ -84,7 +90,8 @@ def disturbance_bandwidths(sensor_rate: float, bandwidth: float = BANDWIDTH, bia
     wm = min(MOTION_RATIO * wc, top)
     if not bias:
         return DISTURBANCE_RATIO * wc, wm
-    return (min(wm, max(DISTURBANCE_RATIO * wc, 1.0 / T)) if T > 0 else wm), wm
+    wd = min(wm, max(DISTURBANCE_RATIO * wc, 1.0 / T)) if T > 0 else wm
+    return wd, max(wd, min(wm, BIAS_MOTION_RATIO * wc))
 
 
 def observer_gains(interval: float, bandwidth: float, disturbance_bandwidth: float, inertia: float,

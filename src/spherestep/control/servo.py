@@ -230,7 +230,7 @@ class ServoLaw:
     ``disturbance_bandwidth`` and ``motion_bandwidth`` (rad/s, the extended observer's triple pole at rest and
     in motion; default :func:`~spherestep.control.controller.disturbance_bandwidths`: for a model with a bias
     (the iron's detent) ``1/T`` at rest (``T`` = ``limits.time_constant``, the coil's ``L/R``; 128 rad/s for the
-    iron coil's 0.65 H) within ``[100, 300]``, 300 in motion with a 1 kHz sensor; 100 at rest and 300 in motion
+    iron coil's 0.65 H) within ``[100, 300]``, 200 in motion with a 1 kHz sensor; 100 at rest and 300 in motion
     without, off with a sensor slower than 333 Hz; ``disturbance_bandwidth=0``: no disturbance estimate, the PD
     law with feed-forward alone; a ``disturbance_bandwidth`` given alone: fixed poles); ``reuse``
     rad (see :class:`ModelCache`);

@@ -6,8 +6,9 @@ For a :class:`~spherestep.magnetics.mismatch.MismatchCase` (plant and controller
   itself for ``hold_time`` + ``hold_check`` s by :func:`~spherestep.dynamics.hold`; the hold's error is the
   largest tracking error over the last ``hold_check`` s (the target: within 0.05° after 1 s);
 * *the turn*: ``angle`` about ``axis`` (fixed frame) from the stepper state nearest the identity, planned by
-  :func:`spherestep.control.plan_turn` on the *controller's* model and limits, run ``settle`` s beyond its end:
-  final and largest tracking error, mean supply power.
+  :func:`spherestep.control.plan_turn` on the design's pairwise model (the controller's, or the pairwise one the
+  coupled controller's plan is made on: ``plan_turn`` refuses the coupled one within ``MARGIN``) and limits, run
+  ``settle`` s beyond its end: final and largest tracking error, mean supply power.
 
 Every run uses a :class:`~spherestep.sensing.NoisySensor` of ``noise`` rad at the control rate (seeded), the
 design's drive limits (:func:`~spherestep.magnetics.design_model`) and rotor. ``disturbance_bandwidth`` is passed
@@ -109,7 +110,8 @@ def robustness_row(design, case, *, holds: int = 20, seed: int = 0, hold_time: f
     errors = hold_errors(design, plant, model, limits, rotor, holds=holds, seed=seed, hold_time=hold_time,
                          noise=noise, disturbance_bandwidth=disturbance_bandwidth)
     traj, run = turn_run(design, plant, model, limits, rotor, axis=axis, angle=angle, seed=seed, settle=settle,
-                         noise=noise, disturbance_bandwidth=disturbance_bandwidth, margin=margin)
+                         noise=noise, disturbance_bandwidth=disturbance_bandwidth, margin=margin,
+                         plan_model=design_model(design, coupling=False).model)
     s = run.summary()
     return RobustnessRow(case.name, errors, float(traj.duration), s.final_error, s.max_tracking_error, s.mean_power,
                          s.reachable_fraction, disturbance_bandwidth)

@@ -17,7 +17,8 @@ of the calibration (issue 26).
   acting on another through a core) expanded to first order about anchors, ``Δ(R) ≈ Δ(A) + J_A log(R Aᵀ)``
   (``J_A`` by central differences of 1e-3 rad), an anchor added wherever the rotor goes farther than ``reach``
   from every anchor so far (7 coupled evaluations each).
-* :data:`MISMATCH_CASES` — the named cases, each :meth:`MismatchCase.build` giving ``(plant, controller_model)``.
+* :data:`MISMATCH_CASES` — the named cases, each :meth:`MismatchCase.build` giving ``(plant, controller_model)``:
+  the controller the design's own default model (coupled), the coupled plant's case the pairwise one.
 """
 
 from __future__ import annotations
@@ -175,36 +176,46 @@ class CoupledPlant(TorqueModelBase):
 
 @dataclass(frozen=True)
 class MismatchCase:
-    """A plant ≠ model case: ``name``; the controller's model is the design's pairwise iron model (its FEM
-    table: ``design_model(design, coupling=False)``; the default coupled model is the controller of
-    ``benchmarks/bench_servo_robust.py --controller coupled``), the plant that model with the winding's torque
-    ×``winding`` and the detent ×``detent`` (:func:`scaled_model`), the shell ``shell`` m thicker
-    (:func:`shell_model`) or the ``coupling`` (:class:`CoupledPlant`): the motor as built."""
+    """A plant ≠ model case: ``name``; the controller's model ``controller``: ``"coupled"`` the design's own
+    default model (``iron_model(design, coupling=True)``, :func:`~spherestep.magnetics.design_model`) or
+    ``"pairwise"`` its pairwise model (``coupling=False``); the plant that model with the winding's torque
+    ×``winding`` and the detent ×``detent`` (:func:`scaled_model`) and/or the shell ``shell`` m thicker
+    (:func:`shell_model`, the coupling kept for a coupled controller), or, with ``coupling`` (the pairwise
+    controller only), the coupled model (:class:`CoupledPlant`): the motor as built."""
 
     name: str
     winding: float = 1.0
     detent: float = 1.0
     shell: float = 0.0
     coupling: bool = False
+    controller: str = "coupled"
+
+    def __post_init__(self):
+        if self.controller not in ("coupled", "pairwise"):
+            raise bad_value("controller", "'coupled' or 'pairwise'", self.controller)
+        if self.coupling and self.controller != "pairwise":
+            raise bad_value("controller", "'pairwise' for the coupled plant (coupling=True)", self.controller)
 
     def build(self, design) -> tuple[object, object]:
         """``(plant, controller_model)`` for ``design`` (iron-cored coil)."""
         nominal = iron_model(design)
         if not isinstance(nominal, IronTorqueMap):
             raise bad_value("design", "a design with iron-cored coils", design.coil.core)
+        model = nominal if self.controller == "pairwise" else iron_model(design, coupling=True)
         if self.coupling:
             plant = CoupledPlant(iron_model(design, coupling=True))
         elif self.shell:
             plant = shell_model(design, self.shell)
+            plant = plant if model.coupling is None else replace(plant, coupling=model.coupling)
         else:
-            plant = nominal
+            plant = model
         if (self.winding, self.detent) != (1.0, 1.0):
             plant = scaled_model(plant, self.winding, self.detent)
-        return plant, nominal
+        return plant, model
 
     def to_dict(self) -> dict:
         return {"name": self.name, "winding": self.winding, "detent": self.detent, "shell_mm": self.shell * 1e3,
-                "coupling": self.coupling}
+                "coupling": self.coupling, "controller": self.controller}
 
 
 MISMATCH_CASES = (
@@ -213,7 +224,7 @@ MISMATCH_CASES = (
     MismatchCase("detent ×0.8", detent=0.8),
     MismatchCase("detent ×1.2", detent=1.2),
     MismatchCase("winding ×0.85, detent ×1.2", winding=0.85, detent=1.2),
-    MismatchCase("coupled plant", coupling=True),
+    MismatchCase("coupled plant, pairwise controller", coupling=True, controller="pairwise"),
     MismatchCase("shell −0.3 mm", shell=-0.3e-3),
     MismatchCase("shell +0.3 mm", shell=0.3e-3),
 )
