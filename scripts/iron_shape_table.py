@@ -1,10 +1,11 @@
-"""The iron pair tables over the shape ratios the scaling law leaves (issue 28 §3 c), by the moment method.
+"""The iron pair tables over the shape ratios the scaling law leaves (issue 28 §3 c): the FEM near the axis, the
+moment method beyond.
 
     OPENBLAS_NUM_THREADS=1 nohup nice -n 10 python scripts/iron_shape_table.py > shape.log 2>&1 &
         # every grid and held-out point missing from data/iron_shape_solves.csv, appended point by point;
         # then writes src/spherestep/data/iron_shape_table.csv (the grid) and data/iron_shape_heldout.csv
     python scripts/iron_shape_table.py --write     # only assemble the two files from the stored solves
-    python scripts/iron_shape_table.py --check     # the table's interpolation against the held-out solves
+    python scripts/iron_shape_table.py --check     # the table at the held-out magnets against their FEM
     OPENBLAS_NUM_THREADS=1 python scripts/iron_shape_table.py --coupling   # the coupling tables over the grid and
         # held out (data/iron_shape_coupling_solves.npz, resumable), then src/spherestep/data/iron_shape_coupling.npz
         # and its held-out check (3.3 min at load 8: one core factorisation, ~12 s a point)
@@ -12,15 +13,13 @@
 What varies. By the scaling law (:mod:`spherestep.magnetics._ironscale`) only ratios matter. The table spans the
 magnet: its diameter over the rotor radius ``d_m / R`` (0.7 to 1.3 in on the 12-in prototype) and its aspect
 ``l_m / d_m`` (0.3 to 0.8), with every other ratio the prototype's (the pot core, its groove, the coil's size,
-the gap and the shell over ``R``; ``μr``). Each point is :func:`spherestep.magnetics._ironmap.pair_table` of the
-prototype with that magnet (level 0, the moment method: one core factorisation serves every point, ~0.5–1 min a
-point here). The prototype's own point is ``data/iron_pair_table_mom.csv``. FEM (``scripts/fem_iron.py``) would
-take ~10 min and ~7 GB a point on this shared machine, so the table is the moment method's; the run-time model
-brings in the prototype's FEM table (:func:`spherestep.magnetics._ironscale.shape_table_tables`), exact at the
-prototype's ratios and checked against the FEM at the held-out magnets (``scripts/fem_iron.py --shape``,
-``data/iron_fem_shape.csv``). When ``scripts/fem_iron.py --shape-grid`` has solved every grid node near the axis
-(``data/iron_fem_shape_grid.csv``, 144 FEM points), ``--write`` builds the grid from the FEM below 21° (stretched)
-and the moment method beyond, as the prototype's own table (:func:`fem_grid`).
+the gap and the shell over ``R``; ``μr``). Each node is the NGSolve FEM below 21° (``scripts/fem_iron.py
+--shape-grid``, ``data/iron_fem_shape_grid.csv``: 8 nodes × 18 angles, the prototype's own from its FEM table) and
+:func:`spherestep.magnetics._ironmap.pair_table` of the prototype with that magnet beyond (level 0, the moment
+method: one core factorisation serves every point, ~0.5–1 min a point here; ``data/iron_shape_solves.csv``; the
+prototype's own point is ``data/iron_pair_table_mom.csv``), joined as the prototype's own table (:func:`fem_grid`).
+The held-out magnets have their own FEM (``scripts/fem_iron.py --shape``, ``data/iron_fem_shape.csv``), which
+``--check`` and ``tests/test_iron_shape.py`` hold the table to.
 """
 
 from __future__ import annotations
@@ -115,8 +114,9 @@ def fem_grid(have: dict) -> dict | None:
     for x, a, kind in points():
         if kind != "grid":
             continue
-        if abs(x - 1.0 / 6.0) < 1e-9 and a == 0.5:
-            out[(x, a)] = (proto[:, 1], proto[:, 2])
+        if abs(x - 1.0 / 6.0) < 1e-9 and a == 0.5:  # its FEM table's own nodes, read at the grid's
+            at = np.radians(proto[:, 0])
+            out[(x, a)] = tuple(CubicSpline(at, proto[:, k])(np.radians(TABLE_NODES_DEG)) for k in (1, 2))
             continue
         rows = fem[np.isclose(fem[:, 0], x, rtol=1e-9) & np.isclose(fem[:, 1], a, rtol=1e-9)]
         if len(np.unique(rows[:, 2])) < 18:  # fem_iron.SHAPE_GRID_PROTO_DEG
@@ -165,21 +165,21 @@ def write() -> None:
 
 
 def check() -> None:
-    """The table interpolated at the held-out points against their solves (moment method both)."""
-    have = stored()
-    for x, a, kind in points():
-        if kind != "held-out" or (x, a) not in have:
-            continue
-        det, lin = have[(x, a)]
+    """The package's table interpolated at the held-out magnets against their FEM (``data/iron_fem_shape.csv``),
+    as ``tests/test_iron_shape.py`` holds it: max |table − FEM| over the magnet's angles / the FEM's largest |τ|."""
+    from scipy.interpolate import CubicSpline
+
+    fem = read_table(ROOT / "data" / "iron_fem_shape.csv")
+    for x, a in sorted({(r[0], r[1]) for r in fem}):
+        rows = fem[(fem[:, 0] == x) & (fem[:, 1] == a)]
         d = design_at(x, a)
-        got = _ironscale.shape_table_tables(d, d.coil, with_fem=False)
-        if got is None:
-            print(f"d_m/R {x:.4f} l_m/d_m {a:.3f}: outside the table")
-            continue
-        e_d = np.abs(got[1] - det).max() / np.abs(det).max()
-        e_l = np.abs(got[2] - lin).max() / np.abs(lin).max()
-        print(f"held-out d_m/R {x:.4f} ({x * prototype().radius / INCH:.2f} in) l_m/d_m {a:.3f}: table vs solve, "
-              f"max |d tau| / peak: detent {100 * e_d:.2f} %, linear {100 * e_l:.2f} %")
+        nodes, det, lin = _ironscale.shape_table_tables(d, d.coil)
+        alpha = np.radians(rows[:, 2])
+        err = [np.abs(CubicSpline(nodes, tau)(alpha) - rows[:, c]).max() / np.abs(rows[:, c]).max()
+               for tau, c in ((det, 5), (lin, 6))]
+        print(f"held-out d_m/R {x:.4f} ({x * prototype().radius / INCH:.2f} in) l_m/d_m {a:.3f}, "
+              f"{len(rows)} FEM angles {rows[:, 2].min():g}-{rows[:, 2].max():g} deg: table vs FEM, max |d tau| / "
+              f"peak: detent {100 * err[0]:.2f} %, winding's part {100 * err[1]:.2f} %")
 
 
 COUPLING_SOLVES = ROOT / "data" / "iron_shape_coupling_solves.npz"

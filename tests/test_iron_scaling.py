@@ -132,21 +132,25 @@ def test_shape_is_scale_free(design):
 
 # --- the shape table: other magnets, interpolated ----------------------------------------------------------------
 
-# Table vs solve at the held-out points, max over angles / the solve's peak: measured 2026-11-25 detent 7.8–18.8 %
-# (the level-0 moment method's detent is jagged near the axis, ±20 % between neighbouring angles, so the grid of
-# 3 × 3 cannot follow it), the winding's part 1.0–3.5 % (docs/magnetics.md); the bounds are those rounded up.
-HELD_OUT_BOUND = {"detent": 0.20, "linear": 0.04}
+# The shape table's interpolation (``_ironscale.interpolate_shape``) applied to the moment method's own grid
+# (data/iron_shape_solves.csv) against its solves at the five held-out magnets, max over the angles / the solve's
+# peak. Measured 2026-11-26: from 10° on (where the package table is this method's beyond the FEM's 21°, and the
+# level-0 face cells no longer jag) the detent 0.5–2.6 %, the winding's part at every angle 1.0–3.5 %; nearer the
+# axis the level-0 detent jags ±20 % between neighbouring angles (the FEM grid carries that part: test_iron_shape).
+# The bounds are those rounded up.
+HELD_OUT_BOUND = {"detent": 0.03, "linear": 0.04}
 
 
-def _held_out():
-    """``{(d_m/R, l_m/d_m): (detent, linear)}`` of ``data/iron_shape_heldout.csv`` (moment-method solves)."""
+def _mom(path: str):
+    """``{(d_m/R, l_m/d_m): (alpha_deg, detent, linear)}`` of a moment-method file under ``data/``."""
     from pathlib import Path
 
-    arr = read_table(Path(__file__).resolve().parents[1] / "data" / "iron_shape_heldout.csv")
+    arr = read_table(Path(__file__).resolve().parents[1] / "data" / path)
     out = {}
     for x, a in sorted({(r[0], r[1]) for r in arr}):
         rows = arr[(arr[:, 0] == x) & (arr[:, 1] == a)]
-        out[(x, a)] = (rows[:, 3], rows[:, 4])
+        rows = rows[np.argsort(rows[:, 2])]
+        out[(x, a)] = (rows[:, 2], rows[:, 3], rows[:, 4])
     return out
 
 
@@ -154,17 +158,20 @@ def _with_magnet(design, x, aspect):
     return replace(design, magnet_diameter=x * design.radius, magnet_length=aspect * x * design.radius)
 
 
-def test_held_out_magnets_from_the_table(design):
-    """Five magnets not in the table: its interpolation (moment method, no FEM correction) against their own
-    moment-method solves, every angle, as a fraction of the solve's peak."""
-    held = _held_out()
+def test_interpolation_on_the_moment_method_grid(design):
+    """Five magnets not in the grid: the interpolation of the moment method's grid against their own solves."""
+    solves, held = _mom("iron_shape_solves.csv"), _mom("iron_shape_heldout.csv")
+    xs, asps = (np.array(v) for v in _ironscale.SHAPE_GRID)
+    alpha = solves[(xs[0], asps[0])][0]
+    grid = {k: np.array([[solves[(x, a)][k] for a in asps] for x in xs]) for k in (1, 2)}
     assert len(held) == 5
-    for (x, a), (det, lin) in held.items():
-        d = _with_magnet(design, x, a)
-        got = _ironscale.shape_table_tables(d, d.coil, with_fem=False)
-        assert got is not None
-        assert np.abs(got[1] - det).max() <= HELD_OUT_BOUND["detent"] * np.abs(det).max()
-        assert np.abs(got[2] - lin).max() <= HELD_OUT_BOUND["linear"] * np.abs(lin).max()
+    for (x, a), (al, det, lin) in held.items():
+        assert np.array_equal(al, alpha)
+        got_d = _ironscale.interpolate_shape(grid[1], xs, asps, np.radians(alpha), x, a, detent=True)
+        got_l = _ironscale.interpolate_shape(grid[2], xs, asps, np.radians(alpha), x, a, detent=False)
+        far = alpha >= 10.0
+        assert np.abs(got_d - det)[far].max() <= HELD_OUT_BOUND["detent"] * np.abs(det).max()
+        assert np.abs(got_l - lin).max() <= HELD_OUT_BOUND["linear"] * np.abs(lin).max()
 
 
 def test_a_new_magnet_is_ready_at_once_and_said(design, rotations):
@@ -189,12 +196,12 @@ def test_a_new_magnet_is_ready_at_once_and_said(design, rotations):
 
 
 def test_table_at_the_prototype_is_its_fem_table(design):
-    """With the FEM correction, the table at the prototype's own ratios is the FEM-based table (at the table's
-    angles, through its spline)."""
+    """The table at the prototype's own ratios is the FEM-based table (the grid's prototype node is that table
+    read at the grid's angles through its spline, stored to 9 significant digits)."""
     from scipy.interpolate import CubicSpline
 
     nodes, det, lin = _ironscale.shape_table_tables(design, design.coil)
     fem = read_table(resources.files("spherestep.data") / TABLE_FILE)
     a = np.radians(fem[:, 0])
-    assert np.allclose(det, CubicSpline(a, fem[:, 1])(nodes), rtol=0, atol=1e-9)
-    assert np.allclose(lin, CubicSpline(a, fem[:, 2])(nodes), rtol=0, atol=1e-9)
+    for got, ref in ((det, CubicSpline(a, fem[:, 1])(nodes)), (lin, CubicSpline(a, fem[:, 2])(nodes))):
+        assert np.abs(got - ref).max() <= 1e-8 * np.abs(ref).max()

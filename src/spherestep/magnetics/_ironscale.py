@@ -130,29 +130,6 @@ def _shape_table() -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.n
     return xs, asp, np.radians(nodes), arr[order, 3].reshape(shape_), arr[order, 4].reshape(shape_)
 
 
-@lru_cache(maxsize=1)
-def _fem_correction() -> tuple[np.ndarray, np.ndarray] | None:
-    """The stored FEM-based tables minus the moment method's at the prototype's ratios, at the shape table's
-    nodes: ``(Δτ_d, Δτ_1)`` (N·m), or None."""
-    from scipy.interpolate import CubicSpline
-
-    from ._ironmap import TABLE_FILE, read_table
-
-    table = _shape_table()
-    path = resources.files("spherestep.data") / TABLE_FILE
-    if table is None or not path.is_file():
-        return None
-    xs, asp, nodes, det, lin = table
-    p, _ = _prototype()
-    i = np.flatnonzero(np.isclose(xs, p.magnet_diameter / p.radius, rtol=1e-9))
-    j = np.flatnonzero(np.isclose(asp, p.magnet_length / p.magnet_diameter, rtol=1e-9))
-    if len(i) != 1 or len(j) != 1:
-        return None
-    fem = read_table(path)
-    a = np.radians(fem[:, 0])
-    return (CubicSpline(a, fem[:, 1])(nodes) - det[i[0], j[0]], CubicSpline(a, fem[:, 2])(nodes) - lin[i[0], j[0]])
-
-
 def shape_ratios(design) -> tuple[float, float]:
     """The table's coordinates of ``design``: ``(d_m / R, l_m / d_m)``."""
     return design.magnet_diameter / design.radius, design.magnet_length / design.magnet_diameter
@@ -196,76 +173,60 @@ def _weights(grid: np.ndarray, x: float, quadratic: bool) -> np.ndarray:
     return w
 
 
-def _interpolate(table: np.ndarray, xs, asps, nodes, x: float, asp: float, stretch: bool, quadratic: bool):
-    """``τ`` at ``(x, asp)`` from the grid ``table (X, A, n)``: ``τ / x²`` weighted over the grid (linear or
-    quadratic in each ratio); with ``stretch`` each grid table is read at the angle scaled by
-    ``(θ_m + θ_c) / (θ_m' + θ_c)`` (``θ_m = atan(x/2)`` the magnet's angular radius, ``θ_c`` the core's), so that
-    the near-axis structure, which widens with the magnet, lines up."""
+def _face_field(aspect: float) -> float:
+    """A cylinder magnet's field on its face centre over ``B_r/2``: ``(l/d) / √((l/d)² + 1/4)``."""
+    return aspect / math.sqrt(aspect * aspect + 0.25)
+
+
+def _landmarks(x: float) -> np.ndarray:
+    """The detent's landmarks (rad) for a magnet of ``x = d_m/R``: 0 and the magnet's rim over the groove's rim,
+    ``θ_g ∓ θ_m`` (``θ_m = atan(x/2)``, ``θ_g`` the groove's outer radius seen from the centre)."""
+    p, pc = _prototype()
+    g = CoreGeometry.of(p, pc)
+    th_g, th_m = math.atan(g.r_w / (p.radius + p.air_gap)), math.atan(0.5 * x)
+    return np.array([0.0, th_g - th_m, th_g + th_m])
+
+
+def _warp(alpha: np.ndarray, x: float, x_node: float) -> np.ndarray:
+    """The angle on the table of magnet ``x_node`` that corresponds to ``alpha`` for magnet ``x``: the landmarks
+    (:func:`_landmarks`) matched piecewise linearly, shifted beyond the last."""
+    k, k_node = _landmarks(x), _landmarks(x_node)
+    return np.where(alpha <= k[-1], np.interp(alpha, k, k_node), alpha + k_node[-1] - k[-1])
+
+
+def interpolate_shape(table: np.ndarray, xs, asps, nodes, x: float, asp: float, detent: bool) -> np.ndarray:
+    """``τ`` at ``(x, asp)`` from the grid ``table (X, A, n)`` at ``nodes`` (rad): ``τ / (x² F(asp))``
+    interpolated quadratically through the 3 × 3 grid and multiplied back, ``F`` = 1 for the winding's part and
+    :func:`_face_field` for the detent (the detent is quadratic in the magnet's field). The detent's grid tables
+    are read at :func:`_warp`'s angles, so that the features where the magnet's rim crosses the groove's rim —
+    ``θ_g − θ_m``, moving toward the axis as the magnet grows, and ``θ_g + θ_m``, away — line up."""
     from scipy.interpolate import CubicSpline
 
-    p, _ = _prototype()
-    th_c = math.atan(0.5 * p.coil_diameter / (p.radius + p.air_gap))
-    th = math.atan(0.5 * x)
-    wx, wa = _weights(xs, x, quadratic), _weights(asps, asp, quadratic)
+    def norm(u: float, a: float) -> float:
+        return u * u * (_face_field(a) if detent else 1.0)
+
+    wx, wa = _weights(xs, x, True), _weights(asps, asp, True)
     out = np.zeros(len(nodes))
     for i, xi in enumerate(xs):
-        alpha = nodes * (math.atan(0.5 * xi) + th_c) / (th + th_c) if stretch else nodes
-        for j in range(len(asps)):
+        alpha = np.clip(_warp(nodes, x, xi), 0.0, math.pi) if detent else nodes
+        for j, aj in enumerate(asps):
             if wx[i] * wa[j] != 0.0:
-                spline = CubicSpline(nodes, table[i, j] / xi ** 2)
-                out += wx[i] * wa[j] * spline(np.clip(alpha, 0.0, math.pi))
-    return out * x ** 2
+                out += wx[i] * wa[j] * CubicSpline(nodes, table[i, j] / norm(xi, aj))(alpha)
+    return out * norm(x, asp)
 
 
-SMOOTH_DEG = 1.5  # σ of the Gaussian that smooths the moment method's detent (its face cells are 7 mm, 2.6°)
-RATIO_DEG = (7.0, 10.0)  # the detent's ratio form below the first angle, blended into the additive one by the second
-
-
-def _smoothed(tau: np.ndarray, nodes: np.ndarray, sigma: float = math.radians(SMOOTH_DEG)) -> np.ndarray:
-    """``τ`` (odd in ``α``; at ``nodes``, rad) convolved with a Gaussian of ``σ = sigma`` (rad), at the nodes
-    below 45° (beyond, the value at 45°)."""
-    from scipy.interpolate import CubicSpline
-
-    step = sigma / 6.0
-    g = np.arange(-round(math.radians(45.0) / step), round(math.radians(45.0) / step) + 1) * step
-    f = np.sign(g) * CubicSpline(nodes, tau)(np.abs(g))
-    n = round(4.0 * sigma / step)
-    k = np.exp(-0.5 * (np.arange(-n, n + 1) * step / sigma) ** 2)
-    return np.interp(nodes, g, np.convolve(f, k / k.sum(), mode="same"))
-
-
-def shape_table_tables(design, coil, level: int = IRON_LEVEL, with_fem: bool = True):
-    """``(nodes (rad), τ_d, τ_1)`` of ``design`` with ``coil`` from the shape table, then scaled by the law
-    (``s = R/R_0``, ``B_r``, ``NI``). Interpolation of ``τ / (d_m/R)²``: the detent linear in ``d_m/R`` × ``l_m/d_m``
-    with the angle stretched by the magnet's angular size, the winding's part quadratic through the grid at fixed
-    angle (the choices that fit the held-out solves best, docs/magnetics.md). ``with_fem`` brings in the
-    prototype's FEM table: the winding's part plus the FEM correction (FEM − moment method at the prototype's
-    ratios) scaled by the interpolated peak over the prototype's; the detent below :data:`RATIO_DEG` as the
-    prototype's FEM detent times the ratio of the two moment-method detents (this design's over the prototype's),
-    each smoothed over a face cell (:func:`_smoothed`, σ = :data:`SMOOTH_DEG`) — the level-0 detent's cell-size
-    jags cancel, its trend with the magnet stays — blended into the additive correction above (where the two
-    methods agree at the prototype, within ~8 % of its peak from 6° on, against 31 % nearer the axis).
-    Both are the FEM table at the prototype. None when the table does not cover the design
+def shape_table_tables(design, coil, level: int = IRON_LEVEL):
+    """``(nodes (rad), τ_d, τ_1)`` of ``design`` with ``coil`` from the shape table (:func:`interpolate_shape`),
+    then scaled by the law (``s = R/R_0``, ``B_r``, ``NI``). None when the table does not cover the design
     (:func:`in_shape_table`)."""
     if in_shape_table(design, coil, level) is not None:
         return None
     xs, asps, nodes, det, lin = _shape_table()
     x, asp = shape_ratios(design)
     x, asp = float(np.clip(x, xs[0], xs[-1])), float(np.clip(asp, asps[0], asps[-1]))
-    d = _interpolate(det, xs, asps, nodes, x, asp, stretch=True, quadratic=False)
-    li = _interpolate(lin, xs, asps, nodes, x, asp, stretch=False, quadratic=True)
+    d = interpolate_shape(det, xs, asps, nodes, x, asp, detent=True)
+    li = interpolate_shape(lin, xs, asps, nodes, x, asp, detent=False)
     p, pc = _prototype()
-    if with_fem:
-        corr = _fem_correction()
-        if corr is not None:
-            i = int(np.argmin(np.abs(xs - p.magnet_diameter / p.radius)))
-            j = int(np.argmin(np.abs(asps - p.magnet_length / p.magnet_diameter)))
-            additive = d + corr[0] * np.abs(d).max() / np.abs(det[i, j]).max()
-            sp = _smoothed(det[i, j], nodes)
-            ratio = (det[i, j] + corr[0]) * _smoothed(d, nodes) / np.where(sp != 0.0, sp, 1.0)
-            w = np.clip((np.degrees(nodes) - RATIO_DEG[0]) / (RATIO_DEG[1] - RATIO_DEG[0]), 0.0, 1.0)
-            d = (1.0 - w) * ratio + w * additive
-            li = li + corr[1] * np.abs(li).max() / np.abs(lin[i, j]).max()
     s = design.radius / p.radius
     br = design.remanence / p.remanence
     ni = CoreGeometry.of(design, coil).NI / CoreGeometry.of(p, pc).NI
