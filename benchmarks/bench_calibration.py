@@ -54,7 +54,7 @@ from spherestep.magnetics.mismatch import scaled_model, shell_model
 from spherestep.motor import prototype
 
 AXIS = np.array([1.0, 0.5, 2.0]) / np.linalg.norm([1.0, 0.5, 2.0])
-VERSION = "v3"  # the holds' cache: bump when the plants or the collection change
+VERSION = "v4"  # the holds' cache: bump when the plants or the collection change
 PLANS = (("fastest", None), ("margin", MARGIN))  # plan_turn's default (the demo's) and the robustness table's
 
 

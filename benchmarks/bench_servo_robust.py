@@ -58,9 +58,9 @@ def coupled_surrogate_error(design, offsets_deg=(0.5, 1.0, 1.5), count: int = 3,
 
 
 def hold_reach(design, cases, holds: int, seed: int = 0) -> None:
-    """Which of the table's hold orientations the *plant* can hold at all within the limits (``allocate_matrix``
-    on the plant's own ``K`` and bias for zero torque): the holds no controller can meet."""
-    from spherestep.control import allocate_matrix
+    """Which of the table's hold orientations the *plant* can hold at all within the limits
+    (:func:`spherestep.dynamics.robustness.plant_can_hold`): the holds no controller can meet."""
+    from spherestep.dynamics.robustness import plant_can_hold
     from spherestep.magnetics import design_model
 
     limits = design_model(design).limits
@@ -70,11 +70,9 @@ def hold_reach(design, cases, holds: int, seed: int = 0) -> None:
         plant, _ = case.build(design)
         missing = []
         for k, R in enumerate(targets):
-            K = np.asarray(plant.torque_matrix(R), dtype=float)
-            b = np.asarray(plant.torque(R, np.zeros(plant.coil_count)), dtype=float)
-            a, _ = allocate_matrix(K, np.zeros(3), limits, bias=b, failed=plant.failed)
-            if not a.reachable:
-                missing.append(f"#{k} ({a.error:.3f} N·m unmet, |b| {np.linalg.norm(b):.1f} N·m)")
+            reachable, unmet = plant_can_hold(plant, R, limits)
+            if not reachable:
+                missing.append(f"#{k} ({unmet:.3f} N·m unmet)")
         print(f"{case.name:>28} | {holds - len(missing)}/{holds} reachable" +
               (f"; not: {', '.join(missing)}" if missing else ""), flush=True)
 

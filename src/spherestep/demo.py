@@ -208,6 +208,11 @@ def robustness(design, axis, angle: float, holds: int = ROBUSTNESS_HOLDS) -> dic
                           margin=MARGIN).to_dict() | {"plant": case.to_dict()}
 
 
+def _beyond(r: dict) -> str:
+    n = r.get("holds_plant_cannot_make", 0)
+    return f"; {n} of them the plant itself cannot hold within the supply" if n else ""
+
+
 def robustness_line(r: dict) -> str:
     """The servo against the model's known error (:func:`robustness`), in one sentence."""
     from .control.trajectory import MARGIN
@@ -215,7 +220,7 @@ def robustness_line(r: dict) -> str:
     return (f"against a motor that differs from its model by {r['case']} (the worst case of docs/control.md's "
             f"table), the servo on the "
             f"design's own model holds {r['holds_within']} of {r['holds']} random orientations within 0.05° (worst "
-            f"{r['worst_hold_deg']:.3f}°) and, planned within {MARGIN:.0%} of the torque, turns in {r['turn_time_s']:.2f} s, "
+            f"{r['worst_hold_deg']:.3f}°{_beyond(r)}) and, planned within {MARGIN:.0%} of the torque, turns in {r['turn_time_s']:.2f} s, "
             f"final error "
             f"{r['final_error_deg']:.3f}°, max tracking error {r['max_tracking_error_deg']:.2f}°, mean "
             f"{r['mean_power_W']:.0f} W")

@@ -20,6 +20,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+import numpy as np
+
 from .. import checks, so3
 from .servo import HOLD_TOLERANCE, hold, simulate_servo
 
@@ -35,7 +37,9 @@ class RobustnessRow:
     """One case of the table (radians, seconds, watts inside): ``case`` its name; ``hold_errors`` the holds' errors
     after the settling time; ``turn_time`` the planned turn's duration; ``final_error``, ``max_tracking_error``
     and ``mean_power`` of the turn; ``reachable_fraction`` of its periods; ``disturbance_bandwidth`` rad/s of the
-    law (0: off). :attr:`passed` says whether every target of issue 25 §2 was met."""
+    law (0: off); ``hold_reachable`` whether the *plant* can hold each hold's orientation at all within the limits
+    (:func:`plant_can_hold`: a hold it cannot is beyond any controller). :attr:`passed` says whether every target of
+    issue 25 §2 was met on the holds the plant can make."""
 
     case: str
     hold_errors: tuple[float, ...]
@@ -45,24 +49,43 @@ class RobustnessRow:
     mean_power: float
     reachable_fraction: float
     disturbance_bandwidth: float | None
+    hold_reachable: tuple[bool, ...] = ()
 
     @property
     def worst_hold(self) -> float:
         return max(self.hold_errors) if self.hold_errors else 0.0
 
     @property
+    def worst_reachable_hold(self) -> float:
+        """The worst error over the holds the plant can make (all, when reachability was not checked)."""
+        reach = self.hold_reachable or (True,) * len(self.hold_errors)
+        return max((e for e, r in zip(self.hold_errors, reach) if r), default=0.0)
+
+    @property
     def passed(self) -> bool:
-        return (self.worst_hold <= HOLD_TOLERANCE and self.final_error <= HOLD_TOLERANCE
+        return (self.worst_reachable_hold <= HOLD_TOLERANCE and self.final_error <= HOLD_TOLERANCE
                 and self.max_tracking_error <= MAX_TRACKING and self.mean_power <= MAX_POWER)
 
     def to_dict(self, degrees: bool = True) -> dict:
         unit, f = ("deg", math.degrees) if degrees else ("rad", float)
         return {"case": self.case, f"worst_hold_{unit}": f(self.worst_hold),
                 "holds_within": sum(e <= HOLD_TOLERANCE for e in self.hold_errors), "holds": len(self.hold_errors),
+                "holds_plant_cannot_make": sum(not r for r in self.hold_reachable),
                 "turn_time_s": self.turn_time, f"final_error_{unit}": f(self.final_error),
                 f"max_tracking_error_{unit}": f(self.max_tracking_error), "mean_power_W": self.mean_power,
                 "reachable_fraction": self.reachable_fraction, "disturbance_bandwidth": self.disturbance_bandwidth,
                 "passed": self.passed}
+
+
+def plant_can_hold(plant, R, limits) -> tuple[bool, float]:
+    """``(reachable, unmet N·m)``: whether ``plant`` can hold orientation ``R`` at rest within ``limits`` at all
+    (:func:`~spherestep.control.allocate_matrix` for zero torque against the plant's own ``K(R)`` and bias)."""
+    from ..control import allocate_matrix
+
+    K = np.asarray(plant.torque_matrix(R), dtype=float)
+    b = np.asarray(plant.torque(R, np.zeros(plant.coil_count)), dtype=float)
+    a, _ = allocate_matrix(K, np.zeros(3), limits, bias=b, failed=plant.failed)
+    return bool(a.reachable), float(a.error)
 
 
 def hold_errors(design, plant, model, limits, rotor, *, holds: int = 20, seed: int = 0, hold_time: float = 1.0,
@@ -113,8 +136,9 @@ def robustness_row(design, case, *, holds: int = 20, seed: int = 0, hold_time: f
                          noise=noise, disturbance_bandwidth=disturbance_bandwidth, margin=margin,
                          plan_model=design_model(design, coupling=False).model)
     s = run.summary()
+    reach = tuple(plant_can_hold(plant, R, limits)[0] for R in so3.random(holds, seed))
     return RobustnessRow(case.name, errors, float(traj.duration), s.final_error, s.max_tracking_error, s.mean_power,
-                         s.reachable_fraction, disturbance_bandwidth)
+                         s.reachable_fraction, disturbance_bandwidth, reach)
 
 
 def _sensor(noise: float, seed: int):
