@@ -48,11 +48,10 @@ def test_move_emulate_interrupted_mid_loop_leaves_no_traceback_from_the_emulator
         while time.monotonic() < deadline:
             line = proc.stderr.readline()
             seen.append(line)
-            if not line or line.startswith("spherestep: servo on the emulated motor"):
+            if not line or line.startswith("spherestep: t "):  # the loop's first status line: compiled, running
                 break
-        assert seen[-1].startswith("spherestep: servo on the emulated motor"), seen
-        time.sleep(1.0)  # inside the loop
-        proc.send_signal(signal.SIGINT)
+        assert seen[-1].startswith("spherestep: t "), seen
+        proc.send_signal(signal.SIGINT)  # inside the loop (a signal during numba's first compile can be lost)
         _, err = proc.communicate(timeout=60)
     finally:
         proc.kill()

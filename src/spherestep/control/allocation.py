@@ -416,3 +416,11 @@ def allocate_relay(K, torque, limits: DriveLimits | None = None, *, bias=None, f
     achieved = b + K @ c
     reachable = bool(np.linalg.norm(achieved - target) <= 1e-9 * (np.linalg.norm(target) + 1.0))
     return Allocation(c, achieved, target, reachable, float(limits.copper_power(c)), "relay")
+
+
+def can_hold(K, bias, limits, failed=()) -> tuple[bool, float]:
+    """``(reachable, unmet N·m)``: whether currents within ``limits`` cancel the ``bias`` torque through ``K``
+    (zero net torque at rest, :func:`allocate_matrix`): whether a motor can hold that orientation at all."""
+    a, _ = allocate_matrix(np.asarray(K, dtype=float), np.zeros(3), limits, bias=np.asarray(bias, dtype=float),
+                           failed=failed)
+    return bool(a.reachable), float(a.error)

@@ -79,13 +79,10 @@ class RobustnessRow:
 
 def plant_can_hold(plant, R, limits) -> tuple[bool, float]:
     """``(reachable, unmet N·m)``: whether ``plant`` can hold orientation ``R`` at rest within ``limits`` at all
-    (:func:`~spherestep.control.allocate_matrix` for zero torque against the plant's own ``K(R)`` and bias)."""
-    from ..control import allocate_matrix
+    (:func:`~spherestep.control.allocation.can_hold` against the plant's own ``K(R)`` and bias)."""
+    from ..control.allocation import can_hold
 
-    K = np.asarray(plant.torque_matrix(R), dtype=float)
-    b = np.asarray(plant.torque(R, np.zeros(plant.coil_count)), dtype=float)
-    a, _ = allocate_matrix(K, np.zeros(3), limits, bias=b, failed=plant.failed)
-    return bool(a.reachable), float(a.error)
+    return can_hold(plant.torque_matrix(R), plant.torque(R, np.zeros(plant.coil_count)), limits, failed=plant.failed)
 
 
 def hold_errors(design, plant, model, limits, rotor, *, holds: int = 20, seed: int = 0, hold_time: float = 1.0,
