@@ -54,6 +54,7 @@ def main(argv: list[str] | None = None) -> int:
     if debug:
         args.remove("--debug")
     command = _command()
+    received = None
     try:
         with sigterm_as_interrupt() as received:
             result = command.main(args=args, prog_name="spherestep", standalone_mode=False)
@@ -98,6 +99,10 @@ def main(argv: list[str] | None = None) -> int:
     except Exception as exc:  # a bug: one line and exit 1; --debug shows where
         if interrupt_of(exc) is not None:  # Ctrl-C inside a compiled call surfaces as SystemError
             code = _interrupted(interrupt_of(exc))
+            return _exit(code, argv)
+        if received is not None and received.name:  # the signal's interrupt was swallowed (e.g. by llvmlite's
+            # callback during numba's first compile) and the run failed for it later: still the signal's exit
+            code = _interrupted(Terminated() if received.name == "SIGTERM" else KeyboardInterrupt())
             return _exit(code, argv)
         if debug:
             raise
