@@ -55,6 +55,7 @@ def main(argv: list[str] | None = None) -> int:
         args.remove("--debug")
     command = _command()
     received = None
+    sys.unraisablehook = _quiet_interrupts
     try:
         with sigterm_as_interrupt() as received:
             result = command.main(args=args, prog_name="spherestep", standalone_mode=False)
@@ -110,6 +111,16 @@ def main(argv: list[str] | None = None) -> int:
                          "and report it)")
         code = 1
     return _exit(code, argv)
+
+
+_UNRAISABLE = sys.unraisablehook
+
+
+def _quiet_interrupts(unraisable) -> None:
+    """An interrupt raised where Python cannot propagate it (llvmlite's callback during numba's compile) is not
+    printed as 'Exception ignored … Traceback': the signal is recorded and reported in one line."""
+    if not isinstance(unraisable.exc_value, (KeyboardInterrupt, Terminated)):
+        _UNRAISABLE(unraisable)
 
 
 def _interrupted(exc: BaseException) -> int:
