@@ -10,9 +10,18 @@ import time
 import pytest
 
 
+@pytest.fixture(scope="module")
+def compiled(tmp_path_factory):
+    """The settled drive's kernels in numba's disk cache first: a signal during a fresh clone's first compile is
+    swallowed by llvmlite's callback and leaves the output folder (a known gap, closing note of 2026-11-26)."""
+    subprocess.run([sys.executable, "-c", "from spherestep.cli import main; main()", "move", "--axis", "1,0.5,2",
+                    "--angle", "5", "--mode", "settled", "--core", "air", "--out",
+                    str(tmp_path_factory.mktemp("warm") / "move")], capture_output=True, timeout=600)
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("sig, code, name", [(signal.SIGINT, 130, "SIGINT"), (signal.SIGTERM, 143, "SIGTERM")])
-def test_move_settled_interrupted_mid_simulation_says_so_in_one_line(tmp_path, sig, code, name):
+def test_move_settled_interrupted_mid_simulation_says_so_in_one_line(compiled, tmp_path, sig, code, name):
     out = tmp_path / "move"
     proc = subprocess.Popen([sys.executable, "-c", "from spherestep.cli import main; main()", "move", "--axis",
                              "1,0.5,2", "--angle", "360", "--mode", "settled", "--core", "air", "--out", str(out)],
