@@ -81,24 +81,35 @@ def other_cpu(run):
 
 @pytest.mark.realtime
 def test_turns_360_degrees_about_the_demo_axis_at_500_hz(rig):
-    """Over the pseudo-terminal on the wall clock: 500 Hz, at most one deadline missed, never slowed, back within
-    0.05°. Skipped, saying
-    why, only when it fails while other processes kept more than half a core of this machine busy (the loop
-    runs with SCHED_FIFO where permitted, which holds it on a busy machine, but not on one whose two cores other
-    processes fill: measured 4–5 deadlines missed of 1,500 at a load of 15)."""
-    s, others = other_cpu(lambda: run(rig, turn_reference(np.eye(3), DEMO_AXIS, 2 * math.pi, 2.4, delay=0.2), 3.0,
-                                      rate=500.0))
+    """Over the pseudo-terminal on the wall clock: 500 Hz, no deadline missed, never slowed, back within 0.05°.
+
+    This VM stalls now and then whatever runs in it: measured on an idle machine over 40 such turns (60,000
+    cycles), 36 missed nothing; the others lost 13 ticks in all — 3 while the loop slept with its work done
+    (``late_wakeups``: the OS woke it over a period late) and 10 in one cycle whose thread was charged 17 ms of
+    CPU for ~0.5 ms of work (the vCPU held up). So the turn is judged on the better of two runs (a loop that
+    misses deadlines of its own misses them in both), and skipped, saying why, only when both fail while other
+    processes kept more than a quarter of the machine busy (the loop runs with SCHED_FIFO where permitted, which
+    holds it on a busy machine, but not on one whose two cores other processes fill: measured 4–5 deadlines
+    missed of 1,500 at a load of 15)."""
+    runs = []
+    for _ in range(2):
+        s, others = other_cpu(lambda: run(rig, turn_reference(np.eye(3), DEMO_AXIS, 2 * math.pi, 2.4, delay=0.2),
+                                          3.0, rate=500.0))
+        runs.append((s, others))
+        if s.report.missed == 0 and s.report.outcome == "done":
+            break
+    s, others = min(runs, key=lambda run_: (run_[0].report.outcome != "done", run_[0].report.missed))
     r = s.report
-    starved = others is not None and others > 0.25
+    starved = all(o is not None and o > 0.25 for _, o in runs)
     if (r.missed or r.outcome != "done") and starved:
         pytest.skip(f"other processes kept {100 * others:.0f} % of the machine's {os.cpu_count()} cores busy during "
-                    f"the session (load {os.getloadavg()[0]:.1f}; real-time scheduling "
+                    f"the sessions (load {os.getloadavg()[0]:.1f}; real-time scheduling "
                     f"{'on' if r.realtime else 'refused'}): {r.missed} deadlines missed, {r.rate:.0f} Hz, outcome "
                     f"{r.outcome} are theirs to explain")
     assert r.outcome == "done", r.to_dict()
-    # at most one late cycle of 1,500: one was seen once on an idle machine in this VM (a host scheduling hiccup;
-    # the loop rides out one, three in 25 slow it down) — 0 in the other fresh-clone runs and CLI runs measured
-    assert r.missed <= 1 and r.slowed == 0 and r.rate == pytest.approx(500.0, rel=0.01), (r.to_dict(), others)
+    assert r.missed == 0 and r.slowed == 0 and r.rate == pytest.approx(500.0, rel=0.01), \
+        ([run_[0].report.to_dict() for run_ in runs], others)
+    assert r.late_readings < 0.01 * r.cycles, r.to_dict()  # a late reading costs one cycle on the prediction
     assert r.cpu_mean < 0.5 / 500.0, r.to_dict()  # the host's CPU: under half the period
     # on the way the rotor is half a turn from the start, about the demo axis; at 3 s it is back where it started
     t_half, half = max(s.truth, key=lambda sample: so3.distance(sample[1].R, np.eye(3)))

@@ -23,7 +23,9 @@ def test_move_emulate_reports_rate_missed_deadlines_and_cpu(tmp_path, capsys):
     assert d["loop_rate_Hz"] == 500 and 0 < d["rate_Hz"] <= 500 * 1.01
     assert isinstance(d["missed"], int) and d["missed"] >= 0 and d["cpu_per_cycle_ms"] > 0
     line = next(x for x in captured.out.splitlines() if x.startswith("loop: "))
-    m = re.search(r"at (\d+) Hz \((\d+) deadlines missed, ([\d.]+) ms CPU per cycle", line)
+    m = re.search(r"at (\d+) Hz \((\d+) deadlines missed(?: \((\d+) woken late by the OS\))?, (\d+) readings late, "
+                  r"([\d.]+) ms CPU per cycle", line)
     assert m, line
     assert (int(m.group(1)), int(m.group(2))) == (round(d["rate_Hz"]), d["missed"])
-    assert float(m.group(3)) == pytest.approx(d["cpu_per_cycle_ms"], abs=0.006)
+    assert int(m.group(3) or 0) == d["late_wakeups"] <= d["missed"] and int(m.group(4)) == d["late_readings"]
+    assert float(m.group(5)) == pytest.approx(d["cpu_per_cycle_ms"], abs=0.006)

@@ -74,7 +74,7 @@ def drive_on_hardware(design, axis, angle: float, chosen, *, duration: float | N
                               report.off_acknowledged, kind, note, float(traj.duration),
                               "" if report.log is None else str(report.log), bool(emulate), report.cpu_mean,
                               report.cpu_max, report.realtime, report.time_scale, report.slowed, report.end_error,
-                              session.drift_after_off())
+                              session.drift_after_off(), report.late_wakeups, report.late_readings)
     power = np.einsum("tn,tn->t", currents, currents) * chosen.limits.resistance
     return job.result("servo", "emulated" if emulate else "port", times, estimates, targets, np.zeros(len(times)),
                       currents, power, time, arrival, final, max_tracking, details)

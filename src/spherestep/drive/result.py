@@ -129,7 +129,9 @@ class HardwareDetails(_Details):
     is the copper power ``R Σ i²`` of the commanded currents (nothing measures the supply). The loop's health
     (:class:`~spherestep.hardware.ServoReport`): ``cpu_mean``/``cpu_max`` s of host CPU per cycle, ``realtime``
     (it ran with real-time scheduling), ``time_scale`` the pace it followed the trajectory at in the end and
-    ``slowed`` how often it halved rate and pace for missed deadlines, ``end_error`` rad of its last estimate;
+    ``slowed`` how often it halved rate and pace for missed deadlines, ``late_wakeups`` the deadlines missed
+    while the loop slept with its work done (the OS woke it late), ``late_readings`` the cycles run on the law's
+    prediction because the device's answer came too late, ``end_error`` rad of its last estimate;
     ``drift_after_off`` (emulated motor) how far the rotor moved in the 0.15 s after the coils went off — the final
     error is judged at the loop's last cycle, with the servo holding; an iron motor's detent then pulls the unpowered
     rotor into its nearest well."""
@@ -153,12 +155,14 @@ class HardwareDetails(_Details):
     slowed: int = 0
     end_error: float | None = None
     drift_after_off: float | None = None
+    late_wakeups: int = 0
+    late_readings: int = 0
 
     KEYS: ClassVar[Keys] = (
         ("outcome", "outcome"), ("message", "message"), ("cycles", "cycles"), ("rate_Hz", "rate"),
         ("loop_rate_Hz", "loop_rate"), ("missed", "missed"), ("cpu_per_cycle_ms", "cpu_mean", _ms),
         ("cpu_max_ms", "cpu_max", _ms), ("realtime", "realtime"), ("time_scale", "time_scale"), ("slowed", "slowed"),
-        ("loop_end_error", "end_error", ANGLE), ("drift_after_off", "drift_after_off", ANGLE),
+        ("late_wakeups", "late_wakeups"), ("late_readings", "late_readings"), ("loop_end_error", "end_error", ANGLE), ("drift_after_off", "drift_after_off", ANGLE),
         ("off_acknowledged", "off_acknowledged"), ("trajectory", "trajectory"), ("trajectory_note", "note"),
         ("motion_time_s", "motion_time"), ("log", "log"),
         ("errors_against", "truth", lambda truth: "emulated rotor" if truth else "the loop's estimate"))

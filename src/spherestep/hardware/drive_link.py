@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import math
 import os
+import select
 import time
 from collections import Counter, deque
 from dataclasses import dataclass
@@ -111,15 +112,19 @@ class DriveLink:
         link, self._link = self._link, None
         close_quietly(link)
 
-    def drive(self, currents) -> State:
-        """Set every coil's current (A, ``(N,)``) and return the device's state."""
+    def drive(self, currents, *, within: float | None = None) -> State | None:
+        """Set every coil's current (A, ``(N,)``) and return the device's state. With ``within`` (s): one attempt,
+        and ``None`` when no answer has come by then (a late reading: the frame was sent, and its answer, when it
+        comes, is skipped by its sequence number)."""
         c = np.asarray(currents, dtype=float)
         if self.info is None:
             raise LinkError(f"serial link to {self.port} is not open")
         if c.shape != (self.info.coils,) or not np.all(np.isfinite(c)):
             raise bad_value("currents", f"{self.info.coils} finite coil currents in A", f"shape {c.shape}")
-        ack = self._transact("DRIVE", encode_block(1000.0 * c))
-        return self._state(ack)
+        if within is None:
+            return self._state(self._transact("DRIVE", encode_block(1000.0 * c)))
+        ack = self._transact("DRIVE", encode_block(1000.0 * c), attempts=1, timeout=within, late_ok=True)
+        return None if ack is None else self._state(ack)
 
     def read(self) -> State:
         """The device's state (measured currents, magnetometers) without changing the setpoints."""
@@ -150,9 +155,14 @@ class DriveLink:
         while True:
             try:
                 while not self._bodies:
-                    if time.monotonic() >= deadline:
+                    wait = deadline - time.monotonic()
+                    if wait <= 0:
                         self.stats["timeouts"] += 1
                         return None
+                    if wait < _POLL and os.name == "posix" and not self._link.in_waiting:  # a read waits _POLL
+                        select.select([self._link.fileno()], [], [], wait)  # s: a nearer deadline is kept exactly
+                        if not self._link.in_waiting:
+                            continue
                     self._bodies.extend(self._reader.feed(self._link.read(max(1, self._link.in_waiting))))
             except (pyserial.SerialException, OSError) as exc:
                 raise self._lost(verb, exc) from None
@@ -175,7 +185,8 @@ class DriveLink:
                 return frame
             self.stats["ignored"] += 1
 
-    def _transact(self, verb: str, *args: object, attempts: int | None = None, timeout: float | None = None) -> Frame:
+    def _transact(self, verb: str, *args: object, attempts: int | None = None, timeout: float | None = None,
+                  late_ok: bool = False) -> Frame | None:
         if self._link is None:
             raise LinkError(f"serial link to {self.port} is not open")
         seq, self._seq = self._seq, (self._seq + 1) & 0xFF
@@ -195,5 +206,7 @@ class DriveLink:
             ack = self._answer(seq, verb, self.timeout if timeout is None else timeout)
             if ack is not None:
                 return ack
+        if late_ok:
+            return None
         raise LinkError(f"no valid answer from the device on {self.port} to {verb} after {attempts} attempts "
                         f"({self.stats['timeouts']} timeouts, {self.stats['naks']} NAKs so far)")

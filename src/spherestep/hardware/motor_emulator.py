@@ -273,7 +273,8 @@ class LockstepLink:
             raise (DeviceTrip if code in TRIP_CODES else NakError)(f"device refused {verb}: NAK {code}", code)
         return frame
 
-    def drive(self, currents):
+    def drive(self, currents, *, within: float | None = None):
+        """As :meth:`DriveLink.drive`; ``within`` does not apply (the answer comes at once on the simulated clock)."""
         return self._state(self._transact("DRIVE", encode_block(1000.0 * np.asarray(currents, dtype=float))))
 
     def read(self):

@@ -33,7 +33,10 @@ trajectory time ``reference_times`` of every cycle, and the last estimate's ``en
 end.
 Whatever ends the run — done, a fault seen by the host, a trip reported by the device, a lost link, Ctrl-C —
 the loop sends ``OFF`` and reports whether the device acknowledged it (if the link is gone, the device's
-watchdog switches the coils off within its period). Each cycle is one line of the log, streamed to
+watchdog switches the coils off within its period). A cycle's reading is waited for until ``RESERVE`` of its period is left; a later one is not used (the law
+runs that cycle on its own prediction, ``late_readings`` counts them, and the log's ``stale`` column, otherwise
+the magnetometers' stale mask in hex, is ``-``) — a link's delay then never costs a deadline, and sustained
+late readings count against the budget as late cycles do. Each cycle is one line of the log, streamed to
 ``log + ".part"`` and renamed to ``log`` at the end (a log is whole or marked partial, never half-written in
 place).
 """
@@ -74,6 +77,7 @@ RT_PRIORITY = 20  # SCHED_FIFO priority the loop asks for (1–99; the kernel's 
 MISS_WINDOW = 25  # cycles: deadlines missed within the last this many count against the budget
 MIN_SCALE = 0.125  # the slowest pace a starved loop follows the trajectory at before it stops
 RECOVER_AFTER = 2.0  # s without a missed deadline before a slowed loop doubles its pace and rate again ...
+RESERVE = 0.25  # share of the period kept for the estimate and the law: a reading later than that is not waited for
 RECOVER_BUSY = 0.8  # ... if every cycle since ended within this share of the doubled rate's period
 ON_MISSED = ("slow", "stop")
 
@@ -81,7 +85,10 @@ ON_MISSED = ("slow", "stop")
 @dataclass
 class ServoReport:
     """What a run did: ``cycles`` completed, ``duration`` s, achieved ``rate`` Hz and the ``nominal_rate``,
-    ``missed`` deadlines, ``outcome`` (``"done"`` or the fault code: a device trip code, ``SENSOR``, ``SLOW``,
+    ``missed`` deadlines (``late_wakeups`` of them missed while the loop slept, its work done: the OS woke it
+    more than a period late), ``late_readings`` (cycles whose reading came too late and ran on the law's
+    prediction),
+    ``outcome`` (``"done"`` or the fault code: a device trip code, ``SENSOR``, ``SLOW``,
     ``LIMIT``, ``LINK``, ``INTERRUPT``), ``message``, ``off_acknowledged`` (the device confirmed all off),
     ``ended_at`` s (loop time of the end), ``realtime`` whether the loop ran with real-time scheduling,
     ``cpu_mean``/``cpu_p99``/``cpu_max`` s of the host's CPU per cycle (mean, 99th percentile, worst; this
@@ -106,6 +113,8 @@ class ServoReport:
     cpu_max: float = 0.0
     time_scale: float = 1.0
     slowed: int = 0
+    late_readings: int = 0
+    late_wakeups: int = 0
     end_error: float | None = None
     times: list = field(default_factory=list)
     reference_times: list = field(default_factory=list)
@@ -124,6 +133,7 @@ class ServoReport:
                 "nominal_rate_Hz": self.nominal_rate, "missed": self.missed, "realtime": self.realtime,
                 "cpu_mean_ms": 1e3 * self.cpu_mean, "cpu_p99_ms": 1e3 * self.cpu_p99,
                 "cpu_max_ms": 1e3 * self.cpu_max, "time_scale": self.time_scale, "slowed": self.slowed,
+                "late_readings": self.late_readings, "late_wakeups": self.late_wakeups,
                 f"end_error_{unit}": None if self.end_error is None else f(self.end_error),
                 "outcome": self.outcome, "message": self.message, "off_acknowledged": self.off_acknowledged,
                 "ended_at_s": self.ended_at, "log": None if self.log is None else str(self.log)}
@@ -283,29 +293,36 @@ def run_servo(link: DriveLink, estimate, law, *, duration: float, rate: float = 
         limits.check_setpoints(currents)
         t0 = clock()
         t = 0.0
+        read_at = t0  # the host's clock when the last reading came
+        unanswered = False  # the last cycle's reading came too late to be used
         sched = 0.0  # the cycle's start on the schedule, s after t0
         clean = 0.0  # schedule time since which no deadline was missed
         while sched < end:
             start = t0 + sched
             now = clock()
-            if now < start:
+            asleep = now < start  # this cycle's work is done: a miss from here on is the OS waking the loop late
+            if asleep:
                 sleep(start - now)
             late = clock() - start
             busy = cpu_clock()
             if late > max_late:
                 raise ServoFault(f"cycle {k} started {late * 1e3:.1f} ms late, over max_late = {max_late * 1e3:.0f} "
                                  f"ms: the host is too slow for this rate ({_where(report, planned)})", "SLOW")
-            if late > period:  # missed deadlines: skip the ticks that passed, do not burst to catch up
+            missed_now = late > period
+            if missed_now:  # missed deadlines: skip the ticks that passed, do not burst to catch up
                 skipped = int(late // period)
                 report.missed += skipped
+                report.late_wakeups += skipped if asleep else 0
                 sched += skipped * period
                 late -= skipped * period
-                window.append(1)  # one late cycle, however many ticks it skipped
+            if missed_now:  # one late cycle, however many ticks it skipped
+                window.append(1)
                 clean = sched
                 if sum(window) >= miss_budget:
                     if on_missed == "stop" or paced.scale * 0.5 < MIN_SCALE:
                         raise ServoFault(f"the loop missed {report.missed} deadlines at {rate * paced.scale:g} Hz "
-                                         f"({sum(window)} of its last {len(window)} cycles late"
+                                         f"({sum(window)} of its last {len(window)} cycles late, "
+                                         f"{report.late_readings} readings late in all"
                                          f"{', at the slowest pace' if on_missed == 'slow' else ''}): stopped "
                                          f"with every coil off; {_where(report, planned)}", "SLOW")
                     end = sched + (end - sched) * 2.0  # the rest of the trajectory at half the pace
@@ -320,10 +337,22 @@ def run_servo(link: DriveLink, estimate, law, *, duration: float, rate: float = 
                     paced.slow(t, 2.0)
                     period *= 0.5
                     clean = sched
-            state = link.drive(currents)
-            _check_state(state)
-            t = (((state.time_us - start_us) & 0xFFFFFFFF) * 1e-6 if device_time else clock() - t0)
-            cmd = law.step(t, estimate(state, law.predicted(t)))
+            # the reading may take until RESERVE of the period is left for the estimate and the law (on the wall
+            # clock, and not twice in a row: a silent link is the link's to diagnose, with its own timeout)
+            within = None if not wall or unanswered else max(start + (1.0 - RESERVE) * period - clock(),
+                                                              RESERVE * period)
+            state = link.drive(currents, within=within)
+            now = clock()
+            unanswered = state is None
+            if unanswered:  # a late reading: the law runs on its own prediction for this cycle
+                report.late_readings += 1
+                t += now - read_at
+                cmd = law.step(t, law.predicted(t))
+            else:
+                _check_state(state)
+                t = (((state.time_us - start_us) & 0xFFFFFFFF) * 1e-6 if device_time else clock() - t0)
+                cmd = law.step(t, estimate(state, law.predicted(t)))
+            read_at = now
             R, w = cmd.estimate, cmd.velocity
             currents = law.amperes(cmd.currents)
             limits.check_setpoints(currents)
@@ -337,7 +366,7 @@ def run_servo(link: DriveLink, estimate, law, *, duration: float, rate: float = 
                 rv = _rotvec(R)
                 out.write(f"{t:.6f},{late:.6f},{rv[0]:.8f},{rv[1]:.8f},{rv[2]:.8f},{w[0]:.6f},{w[1]:.6f},{w[2]:.6f},"
                           f"{limits.resistance * float(currents @ currents):.4f},{np.abs(currents).max():.5f},"
-                          f"{state.stale:X}\n")
+                          f"{'-' if state is None else format(state.stale, 'X')}\n")
             if status is not None:
                 status(t, R, w, currents)
             cpu.append(cpu_clock() - busy)
