@@ -12,8 +12,9 @@ import pytest
 
 @pytest.fixture(scope="module")
 def compiled(tmp_path_factory):
-    """The settled drive's kernels in numba's disk cache first: a signal during a fresh clone's first compile is
-    swallowed by llvmlite's callback and leaves the output folder (a known gap, closing note of 2026-11-26)."""
+    """The settled drive's kernels in numba's disk cache first, so that the signal lands mid-simulation as the test
+    means (a signal during a fresh clone's first compile is swallowed by llvmlite's callback; the failure it
+    causes is then reported as the interrupt and the set removed: test_outputs_interrupt.py)."""
     subprocess.run([sys.executable, "-c", "from spherestep.cli import main; main()", "move", "--axis", "1,0.5,2",
                     "--angle", "5", "--mode", "settled", "--core", "air", "--out",
                     str(tmp_path_factory.mktemp("warm") / "move")], capture_output=True, timeout=600)

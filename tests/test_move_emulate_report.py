@@ -23,7 +23,7 @@ def test_move_emulate_reports_rate_missed_deadlines_and_cpu(tmp_path, capsys):
     assert d["loop_rate_Hz"] == 500 and 0 < d["rate_Hz"] <= 500 * 1.01
     assert isinstance(d["missed"], int) and d["missed"] >= 0 and d["cpu_per_cycle_ms"] > 0
     line = next(x for x in captured.out.splitlines() if x.startswith("loop: "))
-    m = re.search(r"at (\d+) Hz \((\d+) deadlines missed(?: \((\d+) woken late by the OS\))?, (\d+) readings late, "
+    m = re.search(r"at (\d+) Hz \((\d+) deadlines missed(?: \((\d+) woken late by the OS\))?, (\d+) readings? late, "
                   r"([\d.]+) ms CPU per cycle", line)
     assert m, line
     assert (int(m.group(1)), int(m.group(2))) == (round(d["rate_Hz"]), d["missed"])

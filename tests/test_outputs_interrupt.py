@@ -38,3 +38,26 @@ def test_full_disk_leaves_no_empty_folder_and_says_how_many(tmp_path):
             out.mkdir()
             raise OSError(errno.ENOSPC, "No space left on device")
     assert not out.exists()
+
+
+def test_a_failure_after_a_swallowed_signal_removes_the_set_too(tmp_path):
+    """A Ctrl-C during numba's first compile is swallowed by llvmlite's callback and the compile then fails with
+    an unrelated error ("no compiled object yet"): with the signal recorded (spherestep.cli.signals records every
+    one), that failure removes the set like the interrupt itself; without a signal it leaves the files it wrote."""
+    from spherestep.outputs import note_signal
+
+    out = tmp_path / "new"
+    note_signal("SIGINT")
+    try:
+        with pytest.raises(RuntimeError):
+            with Outputs(out, ["a.csv", "b.csv"]):
+                write_text(out / "a.csv", "1\n")
+                raise RuntimeError("no compiled object yet")
+    finally:
+        note_signal(None)
+    assert not out.exists()
+    with pytest.raises(RuntimeError):
+        with Outputs(out, ["a.csv", "b.csv"]):
+            write_text(out / "a.csv", "1\n")
+            raise RuntimeError("a failure of its own")
+    assert (out / "a.csv").exists()

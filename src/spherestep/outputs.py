@@ -63,6 +63,19 @@ def _nearest_existing(path: Path) -> Path:
     return Path(".")
 
 
+_SIGNALS: list[str] = []  # the signals received while a command runs (recorded by spherestep.cli.signals)
+
+
+def note_signal(name: str | None) -> None:
+    """Record that the running command received signal ``name`` (None: a new command starts, forget them): a
+    failure after it is an interrupt even when the ``KeyboardInterrupt`` itself was swallowed (llvmlite's
+    callback during numba's first compile drops it, and the compile fails later with an unrelated error)."""
+    if name is None:
+        _SIGNALS.clear()
+    else:
+        _SIGNALS.append(name)
+
+
 def interrupt_of(exc: BaseException | None) -> KeyboardInterrupt | None:
     """The Ctrl-C or SIGTERM behind ``exc``: itself, or one in its chain of causes (a compiled numba call
     interrupted mid-way surfaces as ``SystemError`` with the ``KeyboardInterrupt`` as its context)."""
@@ -167,7 +180,7 @@ class Outputs:
             pass
 
     def __exit__(self, kind, exc, tb) -> bool:
-        if interrupt_of(exc) is not None:  # Ctrl-C or SIGTERM (also inside a compiled call): complete or absent
+        if interrupt_of(exc) is not None or (exc is not None and _SIGNALS):  # Ctrl-C or SIGTERM: complete or absent
             for path in self.written():
                 try:
                     path.unlink()

@@ -163,7 +163,7 @@ def move(
             d = result.details
             console.print(f"loop: {d.outcome} after {d.cycles} cycles at {d.rate:.0f} Hz ({d.missed} deadlines "
                           f"missed{f' ({d.late_wakeups} woken late by the OS)' if d.late_wakeups else ''}, "
-                          f"{d.late_readings} readings late, {1e3 * d.cpu_mean:.2f} ms CPU per cycle, "
+                          f"{d.late_readings} reading{'' if d.late_readings == 1 else 's'} late, {1e3 * d.cpu_mean:.2f} ms CPU per cycle, "
                           f"worst {1e3 * d.cpu_max:.2f}"
                           f"{'' if d.realtime else ', no real-time scheduling'}"
                           f"{f', slowed {d.slowed}× to {d.time_scale:g} of the pace' if d.slowed else ''}); "

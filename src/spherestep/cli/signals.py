@@ -7,7 +7,7 @@ import signal
 import threading
 from contextlib import contextmanager
 
-from ..outputs import interrupt_of  # noqa: F401  (the CLI's name for it; outputs' own)
+from ..outputs import interrupt_of, note_signal  # noqa: F401  (interrupt_of: the CLI's name for it; outputs' own)
 
 
 class Terminated(KeyboardInterrupt):
@@ -35,12 +35,14 @@ def told() -> None:
 def _raise_terminated(signum, frame):
     for received in _CURRENT:
         received.name = "SIGTERM"
+    note_signal("SIGTERM")
     raise Terminated()
 
 
 def _raise_interrupt(signum, frame):
     for received in _CURRENT:
         received.name = "SIGINT"
+    note_signal("SIGINT")
     raise KeyboardInterrupt()
 
 
@@ -57,11 +59,15 @@ def sigterm_as_interrupt():
     previous_int = signal.getsignal(signal.SIGINT)
     if previous_int is signal.default_int_handler:  # not when ignored or when a caller installed its own
         signal.signal(signal.SIGINT, _raise_interrupt)
+    if not _CURRENT:  # the outermost command: a fresh record
+        note_signal(None)
     _CURRENT.append(received)
     try:
         yield received
     finally:
         _CURRENT.pop()
+        if not _CURRENT:
+            note_signal(None)
         signal.signal(signal.SIGTERM, previous)
         if previous_int is signal.default_int_handler:
             signal.signal(signal.SIGINT, previous_int)

@@ -118,6 +118,12 @@ class ModelCache:
 
         self._first_order = first_order
         self.compiled = self._affine is not None
+        # the first calls here, not in a loop's first period: on a fresh install they compile (0.3-0.7 s for the
+        # coupled iron model, longer than a device's watchdog period)
+        eye = np.eye(3)
+        self._evaluate(eye, self._K, self._bias)
+        first_order(eye, eye, self._K, np.zeros(self._K.shape + (3,)), self._bias, np.zeros((3, 3)), self._K1,
+                    self._bias1)
 
     def at(self, R: np.ndarray, slope: bool = False) -> tuple[np.ndarray, np.ndarray]:
         """``(K (3, N), b (3,))`` for one rotation ``R (3, 3)`` (trusted: the loop's own estimate). The arrays are
