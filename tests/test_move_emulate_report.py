@@ -29,3 +29,20 @@ def test_move_emulate_reports_rate_missed_deadlines_and_cpu(tmp_path, capsys):
     assert (int(m.group(1)), int(m.group(2))) == (round(d["rate_Hz"]), d["missed"])
     assert int(m.group(3) or 0) == d["late_wakeups"] <= d["missed"] and int(m.group(4)) == d["late_readings"]
     assert float(m.group(5)) == pytest.approx(d["cpu_per_cycle_ms"], abs=0.006)
+
+
+@pytest.mark.realtime
+def test_a_fresh_install_compiles_before_the_loop(tmp_path):
+    """On an empty numba cache (a fresh install) the first ``move --emulate`` compiled the law's first-order
+    ``K``, ``b`` carry in the loop's first period (0.7 s) and the device's watchdog (100 ms) ended the run after 0
+    cycles (this test failed so); every first call is now made when the law is built."""
+    import os
+    import subprocess
+    import sys
+
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "numba"))
+    done = subprocess.run([sys.executable, "-c", "from spherestep.cli import main; main()", "move", "--axis", "1,0.5,2",
+                           "--angle", "360", "--emulate", "--json", "--out", str(tmp_path / "move")], env=env,
+                          capture_output=True, text=True, timeout=900)
+    d = json.loads((tmp_path / "move" / "move.json").read_text())["details"]
+    assert d["outcome"] == "done" and d["cycles"] > 100, (d["outcome"], d["message"], done.stderr[-2000:])

@@ -118,8 +118,9 @@ class ModelCache:
 
         self._first_order = first_order
         self.compiled = self._affine is not None
-        # the first calls here, not in a loop's first period: on a fresh install they compile (0.3-0.7 s for the
-        # coupled iron model, longer than a device's watchdog period)
+        # the first calls here, not in a loop's first period: on a fresh install they compile (first_order took
+        # 0.7 s in the first period of move --emulate, 7x the device's watchdog period; the model's own evaluation
+        # on a port, where no emulator's warm-up has called it)
         eye = np.eye(3)
         self._evaluate(eye, self._K, self._bias)
         first_order(eye, eye, self._K, np.zeros(self._K.shape + (3,)), self._bias, np.zeros((3, 3)), self._K1,
