@@ -325,23 +325,23 @@ def test_cli_refuses_a_bad_spec(tmp_path):
     assert not (tmp_path / "o").exists()
 
 
-def test_the_eta_weighs_the_tasks_by_their_estimated_cost():
-    """The longest tasks go first: after a quarter of the work in one task of four, an ETA counting tasks says
-    three times the elapsed time; weighted by cost it says three times as well only when the costs are equal."""
-    from spherestep.synthesis.run import Progress
+def test_the_eta_estimates_a_task_as_the_order_does():
+    """The ETA's estimate of a ladder task (seconds of one worker) is the submission order's cost model in seconds:
+    ∝ (M N)², twice with a relay rung, and a table solve's minutes for a task that may solve iron
+    (tests/test_synthesis_eta.py tests the ETA itself)."""
+    from spherestep.synthesis.eta import ALIGNMENT_SECONDS, SOLVE_SECONDS
+    from spherestep.synthesis.run import cost_estimate, pairs, task_seconds
 
-    def left(bar):
-        bar.start -= 100.0  # 100 s elapsed
-        text = bar.eta()
-        return float(text.split()[1]) * (60.0 if text.endswith("min") else 1.0)
-
-    counted = Progress(4)
-    counted.advance()
-    weighted = Progress(4, cost=10.0)
-    weighted.advance(7.0)  # the longest task, 70 % of the work
-    assert left(counted) == pytest.approx(300.0, rel=0.01)
-    assert left(weighted) == pytest.approx(100.0 * 3.0 / 7.0, rel=0.01)
-    assert Progress(3).eta() == "ETA —"
+    relays, gimbal = load_spec(EXAMPLES / "prototype-relays-iron.yaml"), load_spec(EXAMPLES / "camera-gimbal.yaml")
+    ball = 12 * 0.0254
+    proto = Candidate("truncated-icosahedron", 1, "truncated-cuboctahedron", 1, 80.0, ball)
+    assert pairs(proto) == 92 * 33  # the stator's caps within 80° (the built design fits 29 coils on them)
+    for spec in (relays, gimbal):
+        assert task_seconds(proto, spec) == pytest.approx(ALIGNMENT_SECONDS * cost_estimate(proto, spec))
+    assert task_seconds(proto, gimbal) == pytest.approx(ALIGNMENT_SECONDS * (92 * 33) ** 2)  # ~5.5 s
+    wide = Candidate("truncated-icosahedron", 1, "truncated-cuboctahedron", 1, 80.0, ball, gap_scale=4.0)
+    assert task_seconds(wide, relays, True) == pytest.approx(task_seconds(wide, relays) + SOLVE_SECONDS)
+    assert task_seconds(wide, gimbal, True) == task_seconds(wide, gimbal)  # air cores solve nothing
 
 
 def test_a_task_that_fails_on_the_cluster_is_a_row_not_lost(tmp_path):

@@ -16,13 +16,15 @@ import json
 import math
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from .. import checks
 from ..errors import InputError, bad_value
+from .eta import (ALIGNMENT_SECONDS, BUILD_SECONDS, REPORT_SECONDS, REPORT_STATES, SOLVE_SECONDS, Progress,
+                  after_ladder, verify_seconds)
 from .ladder import GRADES, N42, PROTOTYPE, WINDINGS, Candidate, _row, baseline_layout, build, climb
 
 STORE = "results"
@@ -131,32 +133,6 @@ def neighbours(c: Candidate, gaps: tuple[float, ...] = GAP_SCALES) -> list[Candi
     return [x for x in dict.fromkeys(out) if x != c]
 
 
-@dataclass
-class Progress:
-    """Counts and an ETA for the search's progress line: the time so far times the work left over the work done,
-    the work counted in tasks, or in their :func:`cost_estimate` when given (``cost``, the total; the longest
-    tasks go first, so counting tasks alone would overstate the time left severalfold)."""
-
-    total: int
-    done: int = 0
-    start: float = field(default_factory=time.perf_counter)
-    cost: float = 0.0
-    done_cost: float = 0.0
-
-    def advance(self, cost: float = 0.0) -> None:
-        """One task finished (of estimated ``cost``)."""
-        self.done += 1
-        self.done_cost += cost
-
-    def eta(self) -> str:
-        if not self.done:
-            return "ETA —"
-        weighted = self.cost > 0 and self.done_cost > 0
-        left_work = (self.cost - self.done_cost) / self.done_cost if weighted else (self.total - self.done) / self.done
-        left = (time.perf_counter() - self.start) * left_work
-        return f"ETA {left:.0f} s" if left < 120 else f"ETA {left / 60:.1f} min"
-
-
 def failed_rows(candidate: Candidate, spec, baseline, exc: BaseException) -> list[dict]:
     """The rows of a task that failed on the cluster (status ``failed`` at stage ``cluster``, one per core), so the
     search's counts and store keep it; a worker that died running it (Dask's ``KilledWorker``) is, on one machine,
@@ -196,9 +172,12 @@ def _schema():
             ("seconds", f), ("worker", s)]
 
 
-def _submit_all(client, fn, items: list, *, say, what: str, retries: int = 2, priority=None) -> list:
-    """Run ``fn(item)`` for every item on ``client``, in order of completion; returns the results in item order
-    (a failed future's exception re-raised as a ComputationError after all others finish)."""
+def _submit_all(client, fn, items: list, *, say, bar: Progress, stage: str, what: str, costs: list[float],
+                seconds: Callable | None = None, retries: int = 2, priority=None) -> list:
+    """Run ``fn(item)`` for every item on ``client``, in order of completion, as the progress ``bar``'s ``stage``
+    (the items' estimated ``costs``, seconds of one worker; ``seconds(result)`` a result's measured seconds);
+    returns the results in item order (a failed future's exception re-raised as a ComputationError after all
+    others finish)."""
     from distributed import as_completed
 
     from ..errors import ComputationError
@@ -206,20 +185,31 @@ def _submit_all(client, fn, items: list, *, say, what: str, retries: int = 2, pr
     futures = {client.submit(fn, item, pure=False, retries=retries,
                              priority=0 if priority is None else priority(item)): n for n, item in enumerate(items)}
     results: list = [None] * len(items)
-    bar = Progress(len(items))
+    bar.begin(stage, costs, slots=_slots(client))
+    say(bar.line(what), done=0, total=len(items))
     lost = []
     for future in as_completed(list(futures)):
         n = futures[future]
+        took = None
         if future.status != "finished":
             lost.append(f"{items[n]}: {future.exception()!r}")
         else:
             results[n] = future.result()
+            took = None if seconds is None else seconds(results[n])
         future.release()
-        bar.advance()
-        say(f"{what} ({bar.eta()})", done=bar.done, total=bar.total)
+        bar.advance(costs[n], took)
+        say(bar.line(what), done=bar.done, total=bar.total)
     if lost:
         raise ComputationError(f"{len(lost)} of {len(items)} tasks failed on the cluster; first: {lost[0]}")
     return results
+
+
+def _slots(client) -> int:
+    """The tasks the cluster runs at once: its workers' threads."""
+    try:
+        return max(1, sum(client.nthreads().values()))
+    except Exception:  # noqa: BLE001 (a cluster that cannot say: one at a time, the ETA's safe side)
+        return 1
 
 
 class Ladder:
@@ -248,22 +238,38 @@ class Ladder:
 SOLVE_COST = 1e15  # cost_estimate of a task that solves an iron table (minutes): above any enumeration's
 
 
+def pairs(c: Candidate) -> int:
+    """``M N``: the rotor poles of ``c`` times the stator caps within its cap (the cost models' one size)."""
+    from ..packing import named
+
+    poles = len(named(c.rotor, c.rotor_level))
+    caps = named(c.stator, c.stator_level).centers
+    return poles * int(np.count_nonzero(-caps[:, 2] >= math.cos(math.radians(c.cap_deg)) - 1e-12))
+
+
+def _solves(c: Candidate, spec, costly: bool) -> bool:
+    """Whether the task of ``c`` may solve an iron table (``costly``, iron allowed, its ball or gap not the
+    prototype's)."""
+    scaled = c.gap_scale != 1.0 or not math.isclose(c.sphere_diameter, PROTOTYPE["sphere_diameter"], rel_tol=1e-9)
+    return costly and "iron" in spec.cores and scaled
+
+
 def cost_estimate(c: Candidate, spec, costly: bool = False) -> float:
     """A task's relative cost, for submitting the longest first (Dask ``priority``): the state enumeration's,
     ``(M N)²`` for ``M`` rotor poles and ``N`` stator caps within the cap (its candidate alignments grow so;
     measured: the 182-pole layout on 29 coils 247 s, the 92-pole one 68 s, ratio 3.6 against 3.9), twice that
     with a relay rung; a task that may solve an iron table (``costly``, and its ball or gap not the prototype's)
-    :data:`SOLVE_COST` more. Only the order matters."""
-    from ..packing import named
+    :data:`SOLVE_COST` more. Only the order matters (the ETA's estimate is :func:`task_seconds`)."""
+    cost = float(pairs(c)) ** 2 * (2.0 if spec.relays else 1.0)
+    return cost + (SOLVE_COST if _solves(c, spec, costly) else 0.0)
 
-    poles = len(named(c.rotor, c.rotor_level))
-    caps = named(c.stator, c.stator_level).centers
-    coils = int(np.count_nonzero(-caps[:, 2] >= math.cos(math.radians(c.cap_deg)) - 1e-12))
-    cost = float(poles * coils) ** 2 * (2.0 if spec.relays else 1.0)
-    scaled = c.gap_scale != 1.0 or not math.isclose(c.sphere_diameter, PROTOTYPE["sphere_diameter"], rel_tol=1e-9)
-    if costly and "iron" in spec.cores and scaled:
-        cost += SOLVE_COST
-    return cost
+
+def task_seconds(c: Candidate, spec, costly: bool = False) -> float:
+    """A ladder task's estimated seconds of one worker, for the ETA (:mod:`.eta`): as :func:`cost_estimate`,
+    :data:`~.eta.ALIGNMENT_SECONDS` × ``(M N)²``, twice that with a relay rung, and
+    :data:`~.eta.SOLVE_SECONDS` for a task that may solve an iron table."""
+    seconds = ALIGNMENT_SECONDS * float(pairs(c)) ** 2 * (2.0 if spec.relays else 1.0)
+    return seconds + (SOLVE_SECONDS if _solves(c, spec, costly) else 0.0)
 
 
 def relay_rung(candidate: Candidate, row: dict, spec, design=None) -> None:
@@ -470,8 +476,10 @@ def synthesize(spec, out, *, budget: str = "quick", scheduler: str | None = None
     return _search(spec, plan, out, store, client, todo, base, seed, started, say)
 
 
-def _climb(client, runner, spec, store, todo, say, label: str) -> None:
-    """Evaluate the candidates of ``todo`` that ``store`` lacks on ``client``; rows stream into ``store``."""
+def _climb(client, runner, spec, store, todo, say, bar: Progress, stage: str, passed: list, finalists: int) -> None:
+    """Evaluate the candidates of ``todo`` that ``store`` lacks on ``client`` as the progress ``bar``'s ``stage``;
+    rows stream into ``store``. ``passed`` collects the measured seconds of the rows that pass, from which the
+    later stages are estimated (:func:`~.eta.after_ladder`, for ``finalists`` finalists)."""
     from distributed import as_completed
 
     stored = store.read()
@@ -480,23 +488,34 @@ def _climb(client, runner, spec, store, todo, say, label: str) -> None:
     if not fresh:
         return
     cost = {c: cost_estimate(c, spec, runner.may_solve(c)) for c in fresh}  # the longest first
-    work = {c: cost_estimate(c, spec) for c in fresh}  # the ETA's weights: the enumeration's (a solve's is a guess)
+    work = {c: task_seconds(c, spec, runner.may_solve(c)) for c in fresh}  # the ETA's estimates (seconds)
     futures = {client.submit(runner, c, pure=False, retries=2, priority=cost[c]): c
                for c in sorted(fresh, key=lambda c: -cost[c])}
-    bar = Progress(len(fresh), cost=sum(work.values()))
+    slots = _slots(client)
+    bar.begin(stage, list(work.values()), slots=slots)
+    what = f"geometry → states → capability{' → relays' if spec.relays else ''}"
     batch: list = []
     last = time.perf_counter()
     try:
         for future in as_completed(list(futures)):
             c = futures[future]
+            took = None
             if future.status == "finished":
-                batch.extend(future.result())
+                rows = future.result()
+                batch.extend(rows)
+                took = _took(rows)  # its seconds pace the ETA unless it stopped at geometry or may solve
+                if all(r.get("stage") == "geometry" for r in rows) or _solves(c, spec, runner.may_solve(c)):
+                    took = None
+                ok = [float(r["seconds"]) for r in rows if r.get("status") == "ok" and not _missing(r.get("seconds"))]
+                if ok:
+                    passed.extend(ok)
+                    for later, seconds in after_ladder(passed, finalists, slots).items():
+                        bar.expect(later, seconds)
             else:  # the task itself failed on the cluster (e.g. its worker killed for memory): a row says so
                 batch.extend(failed_rows(c, spec, runner.baseline, future.exception()))
             future.release()
-            bar.advance(work[c])
-            say(f"{label}ladder: geometry → states → capability{' → relays' if spec.relays else ''} ({bar.eta()})",
-                done=bar.done, total=bar.total)
+            bar.advance(work[c], took)
+            say(bar.line(what), done=bar.done, total=bar.total)
             if len(batch) >= 32 or time.perf_counter() - last > 15:
                 store.append(batch)
                 batch, last = [], time.perf_counter()
@@ -504,12 +523,25 @@ def _climb(client, runner, spec, store, todo, say, label: str) -> None:
         store.append(batch)
 
 
+def _took(rows: list[dict]) -> float | None:
+    """A ladder task's measured seconds from its rows: each row carries the cheap rungs' shared time plus its own
+    relay rung's, so the task took their sum less all but one copy of the shared (the least row's) time."""
+    seconds = [float(r["seconds"]) for r in rows if not _missing(r.get("seconds"))]
+    if not seconds:
+        return None
+    return sum(seconds) - (len(seconds) - 1) * min(seconds)
+
+
 def _search(spec, plan: Budget, out: Path, store, client, todo, base, seed, started, say) -> SynthesisResult:
 
     from .outputs import write_outputs
 
     runner = Ladder(spec, plan.allow_costly, base, plan.costly_neighbourhood)
-    _climb(client, runner, spec, store, todo, say, "")
+    bar = Progress()
+    passed: list = []  # the measured seconds of the rows that pass the cheap rungs
+    for later, seconds in after_ladder(passed, plan.finalists, _slots(client)).items():
+        bar.expect(later, seconds)
+    _climb(client, runner, spec, store, todo, say, bar, "ladder", passed, plan.finalists)
     todo = list(todo)
     keys = {c.key(spec.digest, core) for c in todo for core in spec.cores}
     table = store.read()
@@ -524,7 +556,7 @@ def _search(spec, plan: Budget, out: Path, store, client, todo, base, seed, star
         if not more:
             break
         say(f"round {n + 1}: none passed; {len(more)} layouts one change from the {len(seeds)} closest")
-        _climb(client, runner, spec, store, more, say, f"round {n + 1}: ")
+        _climb(client, runner, spec, store, more, say, bar, f"round {n + 1}", passed, plan.finalists)
         todo += more
         keys |= {c.key(spec.digest, core) for c in more for core in spec.cores}
         table = store.read()
@@ -533,17 +565,25 @@ def _search(spec, plan: Budget, out: Path, store, client, todo, base, seed, star
               table.groupby(["stage", "status"]).size().items()}
     front = pareto(table, spec) if len(table) else table
     chosen = choose_finalists(front, spec, plan.finalists)
-    say(f"verifying {len(chosen)} finalists by full simulation")
+    ladder = [0.0 if _missing(v) else float(v) for v in chosen["seconds"]] if len(chosen) else []
+    bar.begin("finalists", [BUILD_SECONDS] * len(chosen))
+    bar.expect("verification", sum(map(verify_seconds, ladder)) / min(_slots(client), max(len(ladder), 1)))
+    bar.expect("report", REPORT_STATES * max(ladder, default=0.0) + REPORT_SECONDS)
+    what = f"building the design files of {len(chosen)} finalists"
+    say(bar.line(what), done=0, total=len(chosen))
     finalist_dir = out / "finalists"
     finalist_dir.mkdir(parents=True, exist_ok=True)
     texts, paths = [], []
     for n, row in enumerate(chosen.to_dict("records"), start=1):
+        begun = time.perf_counter()
         candidate = Candidate(**json.loads(row["params"]))
         design = build(candidate, row["core"], spec, name=f"{spec.name} finalist {n}")
         path = finalist_dir / f"{n:02d}-{row['key']}.yaml"
         design.save(path)
         paths.append(path)
         texts.append(path.read_text(encoding="utf-8"))
+        bar.advance(BUILD_SECONDS, time.perf_counter() - begun)
+        say(bar.line(what), done=bar.done, total=bar.total)
     cache = out / "verification"
     results: list = [None] * len(texts)
     need = []
@@ -555,8 +595,9 @@ def _search(spec, plan: Budget, out: Path, store, client, todo, base, seed, star
             need.append(n)
     if need:
         job = _Verify(spec, seed + 1, plan)
-        got = _submit_all(client, job, [(texts[n], str(paths[n])) for n in need], say=say,
-                          what="full simulation of the finalists")
+        got = _submit_all(client, job, [(texts[n], str(paths[n])) for n in need], say=say, bar=bar,
+                          stage="verification", what=f"full simulation of {len(need)} finalists",
+                          costs=[verify_seconds(ladder[n]) for n in need], seconds=lambda v: v.seconds)
         from ..atomic import write_text
 
         cache.mkdir(parents=True, exist_ok=True)
@@ -573,7 +614,10 @@ def _search(spec, plan: Budget, out: Path, store, client, todo, base, seed, star
         path = finalist_dir / f"closest-{closest['key']}.yaml"
         design.save(path)
         paths.append(path)
-    say("writing the answer and the report")
+    shown = (winner or (finalists[0] if finalists else None))  # the report's design (write_outputs)
+    shown = shown.row.get("seconds") if shown is not None else (closest or {}).get("seconds")
+    bar.begin("report", [REPORT_STATES * (0.0 if _missing(shown) else float(shown)) + REPORT_SECONDS])
+    say(bar.line("writing the answer and the report"))
     result = SynthesisResult(spec, plan.name, table, front, finalists, winner, statement, (), 0.0, counts)
     written = write_outputs(result, out, samples=plan.samples, closest=paths[-1] if closest is not None else None)
     final = SynthesisResult(spec, plan.name, table, front, finalists, winner, statement,
