@@ -21,6 +21,10 @@ Blocks on their own lines hold tables; inline blocks hold a sentence's numbers. 
                                                          # sweep (spherestep explore --budget-coils 32 --workers 2,
                                                          # ~15-40 min), or the summary of a finished FOLDER
                                                          # (these three rewrite only their own page's blocks)
+    python scripts/docs_numbers.py control-notes         # data/docs_control_notes.json: docs/control.md's numbers
+                                                         # outside the demo and the benchmarks (~3 min)
+    python scripts/docs_numbers.py sensing-notes         # data/docs_sensing_notes.json: docs/sensing.md's
+                                                         # (~5 min; these two rewrite only their own store's blocks)
     python scripts/docs_numbers.py all                   # demo + forces (the end-of-session run; not bench)
     python scripts/docs_numbers.py                       # rewrite every block from the stored files
     python scripts/docs_numbers.py --check               # list the blocks that differ, exit 1 if any
@@ -45,6 +49,7 @@ import statistics
 import subprocess
 import sys
 import tempfile
+import time
 from dataclasses import dataclass
 from pathlib import Path
 from collections.abc import Callable
@@ -61,6 +66,8 @@ STORES = {
     "explore": DATA / "explore_default.json",  # docs_numbers.py explore: spherestep explore, docs/explore.md's sweep
     "potential": DATA / "potential_numbers.json",  # docs_numbers.py potential (measure_potential)
     "dynamics": DATA / "dynamics_tune.json",  # docs_numbers.py dynamics (measure_dynamics)
+    "control-notes": DATA / "docs_control_notes.json",  # docs_numbers.py control-notes (measure_control_notes)
+    "sensing-notes": DATA / "docs_sensing_notes.json",  # docs_numbers.py sensing-notes (measure_sensing_notes)
 }
 # the demo summary's keys not stored: file lists and per-state lists (their counts are the numbers)
 DROP = ("escape_violation_states", "escape_violation_states_note", "files")
@@ -1357,6 +1364,770 @@ def dynamics_speed(b: dict) -> str:
             f"the same run {numpy}; all three at 5 ms: {at5}")
 
 
+# ------------------------------------------------------------------ the hand-written notes of control.md and sensing.md
+
+NOTES_AXIS = (1.0, 0.5, 2.0)  # the demo's 360° turn, from the stepper state nearest the identity
+
+
+def _run_header(mode: str) -> dict:
+    start = datetime.datetime.now(datetime.UTC)
+    return {"mode": mode, "measured": start.strftime("%Y-%m-%d %H:%M UTC"), "load": [round(os.getloadavg()[0], 1)],
+            "machine": _machine(), "_t0": time.perf_counter()}
+
+
+def _run_footer(run: dict) -> dict:
+    run["wall_s"] = round(time.perf_counter() - run.pop("_t0"), 1)
+    run["load"].append(round(os.getloadavg()[0], 1))
+    return run
+
+
+def _step(run: dict, label: str) -> None:
+    """A progress line on stderr: the part just measured and the run's time so far."""
+    print(f"{run['mode']}: {label} done ({time.perf_counter() - run['_t0']:.0f} s)", file=sys.stderr, flush=True)
+
+
+def _cpu(f, repeat: int = 200) -> float:
+    """Median CPU seconds of ``f()`` over ``repeat`` calls (after one warm-up call)."""
+    f()
+    ts = []
+    for _ in range(repeat):
+        t = time.process_time()
+        f()
+        ts.append(time.process_time() - t)
+    return statistics.median(ts)
+
+
+def measure_control_notes() -> dict:
+    """docs/control.md's numbers of today's code outside the demo and the benchmarks: the torque map's capability
+    (1000 orientations, seed 0), the iron coil's limits, the demo turn's plans and their servo runs
+    (``bench_time_optimal.py --servo --repeat 1``), ``drive_turn``'s wall time, the coupled model's cost per
+    orientation and which holds the weakest mismatched plant can reach. ~2–4 min of one core."""
+    import numpy as np
+
+    from spherestep import so3
+    from spherestep.commutation import turn
+    from spherestep.control import bang_bang_time, fastest_turn, plan_trapezoid, torque_capability
+    from spherestep.control.allocation import allocate_matrix
+    from spherestep.drive import drive_turn
+    from spherestep.dynamics import Rotor, simulate_servo
+    from spherestep.errors import InputError
+    from spherestep.magnetics import design_model, iron_model, torque_map
+    from spherestep.magnetics.mismatch import MISMATCH_CASES, scaled_model
+    from spherestep.motor import prototype
+    from spherestep.sensing import NoisySensor
+
+    run = _run_header("control-notes")
+    design = prototype()
+    t = time.perf_counter()
+    cap = torque_capability(design, torque_map(design), samples=1000, seed=0)
+    sv = cap.singular_values
+    run["capability"] = {"samples": 1000, "seed": 0, "seconds": time.perf_counter() - t,
+                         "percentiles": cap.percentiles(), "at_least_1": cap.fraction_at_least(1.0),
+                         "at_least_1_5": cap.fraction_at_least(1.5), "sigma3_median": float(np.median(sv[:, -1])),
+                         "condition_median": float(np.median(cap.condition)),
+                         "condition_p95": float(np.percentile(cap.condition, 95))}
+    iron, air = design_model(design, "iron"), design_model(design, "air")
+    lim = iron.limits
+    run["iron_coil"] = {"resistance_ohm": lim.resistance, "nominal_current_A": lim.nominal_current,
+                        "max_current_A": lim.max_current, "rho": lim.per_unit_power_radius,
+                        "inductance_H": lim.inductance, "time_constant_s": lim.time_constant,
+                        "air_inductance_H": air.limits.inductance}
+    axis = np.array(NOTES_AXIS)
+    R0 = turn(design, axis, 2 * math.pi).targets[0]
+    inertia = Rotor.from_design(design).inertia
+    run["turns"] = {}
+    for core, dm in (("iron", iron), ("air", air)):
+        row = {"model": dm.label}
+        t = time.perf_counter()
+        ft = fastest_turn(dm.model, R0, axis, 2 * math.pi, inertia, dm.limits)
+        row["fastest"] = {"duration_s": ft.duration, "plan_s": time.perf_counter() - t, "path": ft.path,
+                          "margin": ft.margin, "paths_tried": len(ft.candidates)}
+        t = time.perf_counter()
+        row["bound_s"] = bang_bang_time(dm.model, R0, axis, 2 * math.pi, inertia, dm.limits)
+        row["bound_plan_s"] = time.perf_counter() - t
+        try:
+            trap = plan_trapezoid(dm.model, R0, axis, 2 * math.pi, inertia, dm.limits)
+            row["trapezoid"] = {"duration_s": trap.duration}
+        except InputError as error:
+            trap, row["trapezoid"] = None, {"refused": str(error).splitlines()[0]}
+        for name, traj in (("trapezoid", trap), ("fastest", ft.trajectory)):
+            if traj is None:
+                continue
+            t = time.perf_counter()
+            r = simulate_servo(design, traj, dm.model, limits=dm.limits, sensor=NoisySensor(math.radians(0.02), rng=0))
+            row[name].update({"max_tracking_deg": math.degrees(float(r.tracking_error.max())),
+                              "final_deg": math.degrees(float(r.tracking_error[-1])),
+                              "peak_power_W": float(r.power.max()), "mean_power_W": float(r.power.mean()),
+                              "reachable": float(np.mean(r.reachable)), "wall_s": time.perf_counter() - t})
+        run["turns"][core] = row
+    t = time.perf_counter()
+    d = drive_turn(design, axis, 2 * math.pi, mode="servo", sensor_noise=math.radians(0.02))
+    run["move"] = {"wall_s": time.perf_counter() - t, "time_s": d.time, "final_deg": math.degrees(d.final_error)}
+    coupled, pairwise = iron_model(design, coupling=True), iron_model(design, coupling=False)
+    c = np.zeros(len(design.stator))
+    for key, model in (("coupled_cost_s", coupled), ("pairwise_cost_s", pairwise)):
+        model.torque(so3.random(1, 99)[0], c)  # compiled and tables built before timing
+        ts = []
+        for R in so3.random(20, 3):  # each orientation new to the model (no cache can answer)
+            t = time.process_time()
+            model.torque(R, c)
+            ts.append(time.process_time() - t)
+        run[key] = statistics.median(ts)
+    case = next(m for m in MISMATCH_CASES if m.winding != 1 and m.detent != 1)
+    plant, _ = case.build(design)
+    flat = scaled_model(pairwise, case.winding, case.detent)
+    holds = []
+    for i, R in enumerate(so3.random(20, 0)):
+        h = {"index": i}
+        for name, p in (("plant", plant), ("pairwise", flat)):
+            b = p.torque(R, np.zeros(p.coil_count))
+            a, _ = allocate_matrix(p.torque_matrix(R), np.zeros(3), lim, bias=b, failed=p.failed)
+            h[name] = {"detent_Nm": float(np.linalg.norm(b)), "reachable": bool(a.reachable), "unmet_Nm": float(a.error),
+                       "coil_fraction": float(np.max(np.abs(a.currents)) / lim.per_unit_bound),
+                       "copper_W": float(lim.copper_power(a.currents))}
+        holds.append(h)
+    run["weakest_plant"] = {"case": case.name, "holds": holds}
+    with tempfile.TemporaryDirectory() as folder:  # `spherestep calibrate --emulate`, its defaults (60 holds)
+        t = time.perf_counter()
+        out = subprocess.run([sys.executable, "-c", "from spherestep.cli import main; main()", "calibrate", "--emulate", "--json", "--out",
+                              str(Path(folder) / "calibration.yaml")], check=True, cwd=folder, capture_output=True,
+                             text=True)
+        wall = time.perf_counter() - t
+    cal = json.loads(out.stdout)
+    c = cal["calibration"]
+    run["emulated_calibration"] = {
+        "wall_s": wall, "holds": c["holds"], "plant_error": cal["plant_error"],
+        "torque_error_before": cal["torque_error_before"], "torque_error_after": cal["torque_error_after"],
+        "scale_detent": c["scale_detent"], "scale_winding": c["scale_winding"], "scale_std": c["scale_std"],
+        "max_hold_offset_deg": cal["holds"]["max_hold_offset_deg"], "max_drift_deg_s": cal["holds"]["max_drift_deg_s"]}
+    return _run_footer(run)
+
+
+SENSING_GLOBAL_TRIALS = 10  # per row of the global start (the 2026-11-23 one-off ran 50)
+
+
+def measure_sensing_notes() -> dict:
+    """docs/sensing.md's numbers of today's code outside ``bench_sensing.py --docs``: the field table against
+    magpylib, the placement, accuracy against sensor count, the global start (shortened), the model errors, the
+    self-calibration, the 2-s tracking run with the IMU and the fusion, the servo's 20° turn with each sensor, and on
+    the iron prototype the cores' cost, the estimator's error with and without them and ``accuracy``; the same
+    seeds and cases as ``benchmarks/bench_sensing.py`` and ``bench_sensing_iron.py``. ~3–5 min of one core."""
+    from dataclasses import replace
+
+    import numpy as np
+    from scipy.spatial.transform import Rotation
+
+    from spherestep import sensing, so3
+    from spherestep.sensing import iron as sensing_iron
+    from spherestep.control import Trajectory, plan_turn
+    from spherestep.drive import choose_model
+    from spherestep.drive.turn import Turn
+    from spherestep.dynamics import Rotor, simulate_servo
+    from spherestep.magnetics import rotor_collection, torque_map
+    from spherestep.motor import prototype
+
+    run = _run_header("sensing-notes")
+    design = prototype()
+    t = time.perf_counter()
+    placement = sensing.greedy_placement(design, 24)
+    run["placement"] = {"seconds": time.perf_counter() - t, "candidates": len(placement.candidates)}
+    array = placement.array(24)
+    R = so3.random(200, 1)
+    exact = np.asarray(rotor_collection(design, R).getB(array.positions))
+    run["table"] = []
+    for n in (4097, 16385, 65537):
+        t = time.perf_counter()
+        table = sensing.FieldTable.build(design, array.positions, nodes=n)
+        build = time.perf_counter() - t
+        d = table.field(R) - exact
+        run["table"].append({"nodes": n, "max_T": float(np.abs(d).max()), "rms_T": float(np.sqrt(np.mean(d ** 2))),
+                             "build_s": build})
+    table = sensing.FieldTable.build(design, array.positions)
+    coils = sensing.CoilField.build(design, array.positions)
+    est = sensing.Estimator(table, array.axes, array.part, (coils,))
+    rng = np.random.default_rng(2)
+    Ri = so3.random(1, rng)[0]
+    c = np.zeros(len(design.stator))
+    c[[1, 5, 9, 20]] = [1, -1, 1, -1]
+    m = sensing.sense(array, table.field(Ri) + coils.field(c), rng)
+    prev = so3.exp(np.radians(0.06) * np.array([0.6, 0.0, 0.8])) @ Ri
+    run["one_step_deg"] = math.degrees(so3.distance(est.track(m, prev, c).R, Ri))
+    run["solved_deg"] = math.degrees(so3.distance(est.solve(m, prev, c).R, Ri))
+    _step(run, "placement, table, one step")
+    # accuracy against sensor count (bench_sensing.accuracy_vs_count: seed k, 300 orientations) on the air-core
+    # prototype (same winding): on iron every array but the stored one needs its cores' and coils' tables (minutes)
+    air = replace(design, coil=replace(design.coil, core="air"))
+    cand = placement.candidates
+    run["accuracy"] = []
+    bounds = placement.bound_deg()
+    for k in (3, 4, 6, 8, 12, 16, 24):
+        spread = sensing.SensorArray.at(cand[np.linspace(0, len(cand) - 1, k).astype(int)])
+        for name, arr in (("greedy", placement.array(k)), ("spread", spread)):
+            a = sensing.accuracy(air, arr, samples=300, seed=k)
+            run["accuracy"].append({"sensors": k, "layout": name, "rms_deg": math.degrees(a.rms),
+                                    "worst_deg": math.degrees(a.worst), "predicted_deg": math.degrees(a.predicted_rms),
+                                    "bound_deg": float(bounds[k - 1]) if name == "greedy" else None,
+                                    "coil_residual_uT": a.coil_residual_T * 1e6})
+    _step(run, "accuracy against sensor count")
+    # global start (bench_sensing.global_start, shortened)
+    rng = np.random.default_rng(3)
+    marked = sensing.marked_design(design)
+    run["global"] = {"trials": SENSING_GLOBAL_TRIALS, "rows": []}
+    for d, name, G in ((design, "prototype, up to its 60 symmetries", sensing.symmetry_group(design)),
+                       (marked, "marked, exact", None)):
+        tab = sensing.FieldTable.build(d, array.positions)
+        e0 = sensing.Estimator(tab, array.axes, array.part)
+        near = sensing.symmetry_group(d, polarity=False) if G is None else None
+        for avg in (1, 32):
+            ok, times, fails = 0, [], []
+            for _ in range(SENSING_GLOBAL_TRIALS):
+                Rt = so3.random(1, rng)[0]
+                mt = np.mean([sensing.sense(array, tab.field(Rt), rng) for _ in range(avg)], axis=0)
+                t = time.perf_counter()
+                e = e0.initialise(mt, near_symmetry=near)
+                times.append(time.perf_counter() - t)
+                err = so3.distance(e.R[None], Rt @ G).min() if G is not None else so3.distance(e.R, Rt)
+                ok += bool(err < math.radians(0.05))
+                if err >= math.radians(0.05):
+                    fails.append(round(math.degrees(float(err)), 1))
+            run["global"]["rows"].append({"rotor": name, "averaged": avg, "success": ok,
+                                          "median_s": statistics.median(times), "failures_deg": fails})
+    _step(run, "global start")
+    # model errors (bench_sensing.model_error, 100 orientations)
+    rng = np.random.default_rng(7)
+    Rm = so3.random(100, rng)
+    e1 = sensing.Estimator(table, array.axes, array.part)
+
+    def errors(B, axes=array.axes):
+        mm = np.einsum("sji,ksj->ksi", axes, B)
+        return np.degrees([so3.distance(e1.solve(mm[k], Rm[k]).R, Rm[k]) for k in range(len(Rm))])
+
+    cases = []
+    moved = array.positions + rng.normal(0.0, 0.2e-3, array.positions.shape)
+    cases.append(("sensor positions off by 0.2 mm RMS per axis", errors(sensing.rotor_field(design, moved, Rm))))
+    rotor = rotor_collection(design)
+    for child in rotor.children:
+        child.polarization = np.asarray(child.polarization) * (1.0 + rng.normal(0.0, 0.01))
+    rotor.orientation = Rotation.from_matrix(Rm)
+    cases.append(("magnet remanence spread 1 % RMS", errors(np.asarray(rotor.getB(array.positions)))))
+    gain = 1.0 + rng.normal(0.0, 0.01, (len(array), 3))
+    mm = np.einsum("sji,ksj->ksi", array.axes, sensing.rotor_field(design, array.positions, Rm)) * gain
+    cases.append(("sensor gains off by 1 % RMS per axis",
+                  np.degrees([so3.distance(e1.solve(mm[k], Rm[k]).R, Rm[k]) for k in range(len(Rm))])))
+    run["model_error"] = [{"source": n, "rms_deg": float(np.sqrt(np.mean(e ** 2))), "worst_deg": float(e.max())}
+                          for n, e in cases]
+    _step(run, "model errors")
+    # self-calibration (bench_sensing.calibration: 200 poses, 5 rounds, 100 tests)
+    rng = np.random.default_rng(1)
+    true_pos = array.positions + rng.normal(0.0, 0.2e-3, array.positions.shape)
+    gain, offset = 1.0 + rng.normal(0.0, 0.01, (len(array), 3)), rng.normal(0.0, 50e-6, (len(array), 3))
+    Rc = so3.random(200, rng)
+    mc = sensing.sense(array, sensing.rotor_field(design, true_pos, Rc), rng) * gain + offset
+    start = np.stack([e1.solve(mc[k], Rc[k]).R for k in range(len(Rc))])
+    t = time.perf_counter()
+    cal = sensing.calibrate(design, array, mc, start, rounds=5, cores=False)
+    took = time.perf_counter() - t
+    e2 = sensing.Estimator(sensing.FieldTable.build(design, cal.array.positions), array.axes, array.part)
+    Rt = so3.random(100, rng)
+    mt = sensing.sense(array, sensing.rotor_field(design, true_pos, Rt), rng) * gain + offset
+    E0 = np.stack([so3.log(e1.solve(mt[k], Rt[k]).R @ Rt[k].T) for k in range(len(Rt))])
+    E1 = np.stack([so3.log(e2.solve(cal.correct(mt[k]), Rt[k]).R @ Rt[k].T) for k in range(len(Rt))])
+    rms = lambda E: math.degrees(float(np.sqrt(np.mean(np.sum(E ** 2, axis=1)))))  # noqa: E731
+    run["calibration"] = {"seconds": took, "residual_before_uT": float(cal.residual_T[0] * 1e6),
+                          "residual_after_uT": float(cal.residual_T[-1] * 1e6),
+                          "position_before_mm": float(1e3 * np.sqrt(np.mean((array.positions - true_pos) ** 2))),
+                          "position_after_mm": float(1e3 * np.sqrt(np.mean((cal.array.positions - true_pos) ** 2))),
+                          "orientation_before_deg": rms(E0), "orientation_after_deg": rms(E1),
+                          "common_deg": math.degrees(float(np.linalg.norm(E1.mean(0)))),
+                          "scatter_deg": rms(E1 - E1.mean(0))}
+    _step(run, "self-calibration")
+    # the 2-s run at 1 kHz (bench_sensing.loop)
+    rng = np.random.default_rng(6)
+    dt, ax = 1e-3, rng.normal(size=3)
+    ax /= np.linalg.norm(ax)
+    R0 = so3.random(1, rng)[0]
+    path = [R0 @ so3.exp(ax * dt * k) for k in range(2000)]
+    c3 = np.zeros(len(design.stator))
+    c3[[3, 7, 11]] = [1, -1, 1]
+    sensors = {"hall": sensing.HallSensor(design, array=array, current_error=0.01, seed=1),
+               "imu": sensing.ImuSensor(design, dt, seed=2),
+               "fused": sensing.FusedSensor(design, sensing.HallSensor(design, array=array, current_error=0.01,
+                                                                       seed=3), dt, seed=4)}
+    run["loop"] = {}
+    for name, s in sensors.items():
+        R_est, err = R0, []
+        t = time.perf_counter()
+        for k, Rk in enumerate(path):
+            R_est = s.estimate(Rk, c3, R0 if k == 0 else (R_est if name == "hall" else None))
+            err.append(so3.distance(R_est, Rk))
+        e = np.degrees(np.array(err[100:]))
+        run["loop"][name] = {"rms_deg": float(np.sqrt(np.mean(e ** 2))), "worst_deg": float(e.max()),
+                             "us_per_sample": (time.perf_counter() - t) / len(path) * 1e6}
+    _step(run, "2-s tracking run")
+    # the servo's 20° turn with each sensor (bench_sensing.servo)
+    tmap = torque_map(design)
+    R0 = so3.random(1, 4)[0]
+    traj = Trajectory.turn(R0, [1.0, 0.5, 2.0], math.radians(20), acceleration=10.0)
+    sensors = {"ideal": sensing.IdealSensor(),
+               "hall": sensing.HallSensor(design, array=array, current_error=0.01, seed=1, start=R0),
+               "fused": sensing.FusedSensor(design, sensing.HallSensor(design, array=array, current_error=0.01,
+                                                                       seed=2), 1e-3, seed=3, start=R0),
+               "imu": sensing.ImuSensor(design, 1e-3, seed=4)}
+    run["servo"] = {}
+    for name, s in sensors.items():
+        r = simulate_servo(design, traj, tmap, sensor=s, settle=0.15)
+        est_e = so3.distance(r.estimates, r.orientations)
+        run["servo"][name] = {"max_tracking_deg": math.degrees(float(r.tracking_error.max())),
+                              "final_deg": math.degrees(r.final_error),
+                              "estimate_rms_deg": math.degrees(float(np.sqrt(np.mean(est_e ** 2))))}
+    _step(run, "servo turns")
+    # iron: the stored cores' table read, its cost, the estimator's error (bench_sensing_iron.timing, static_error,
+    # in_the_loop) and accuracy() with and without the cores
+    iron_array = sensing.default_array(design)
+    on = sensing.HallSensor(design, iron_array, seed=2)
+    off = sensing.HallSensor(design, iron_array, seed=2, cores=False)
+    rng = np.random.default_rng(2)
+    Ri = so3.random(1, rng)[0]
+    mi = on.readings(Ri, c)
+    prev = so3.exp(np.radians(0.06) * np.array([0.6, 0.0, 0.8])) @ Ri
+    core = on.core_field
+    run["iron_cost_us"] = {k: 1e6 * _cpu(f) for k, f in (
+        ("rotor", lambda: on.rotor_table.field_and_jacobian(Ri)), ("cores field", lambda: core.field(Ri)),
+        ("cores jacobian", lambda: core.field_and_jacobian(Ri)), ("update without", lambda: off.estimator.track(mi, prev, c)),
+        ("update with", lambda: on.estimator.track(mi, prev, c)))}
+    run["iron_static"] = {}
+    for label, cores in (("with", True), ("without", False)):
+        s = sensing.HallSensor(design, iron_array, current_error=0.01, seed=4, cores=cores)
+        errs = [so3.distance(s.estimator.solve(s.readings(Rk, c), so3.exp(np.radians(0.06) * np.array([0.6, 0.0, 0.8]))
+                                               @ Rk, c).R, Rk) for Rk in so3.random(200, 7)]
+        e = np.degrees(errs)
+        run["iron_static"][label] = {"rms_deg": float(np.sqrt(np.mean(e ** 2))), "worst_deg": float(e.max())}
+    chosen = choose_model(design)
+    ax, angle = np.array([1.0, 0.0, 0.0]), math.radians(90.0)
+    job = Turn(design, ax, angle, chosen)
+    rotor = Rotor.from_design(design)
+    plan = plan_turn(chosen.model, job.start, ax, angle, rotor.inertia, chosen.limits, damping=rotor.damping)
+    run["iron_loop"] = {"model": chosen.label}
+    for name, traj in (("turn", plan), ("hold", Trajectory.hold(job.start))):
+        for label, cores in (("with", True), ("without", False)):
+            s = sensing.HallSensor(design, current_error=0.01, seed=0, rate=1000.0, start=traj.start, cores=cores)
+            t = time.perf_counter()
+            r = simulate_servo(design, traj, chosen.model, limits=chosen.limits, rotor=rotor, sensor=s, settle=0.5)
+            wall = time.perf_counter() - t
+            e = np.degrees(so3.distance(r.estimates, r.orientations))
+            run["iron_loop"][f"{name} {label}"] = {
+                "rms_deg": float(np.sqrt(np.mean(e ** 2))), "worst_deg": float(e.max()),
+                "tracking_deg": math.degrees(float(r.tracking_error.max())),
+                "final_deg": float(np.degrees(so3.distance(r.orientations[-1], traj.end))),
+                "final_sensor_deg": float(e[-1]), "wall_per_simulated": wall / float(r.times[-1])}
+    _step(run, "iron cost, static error, loop")
+    # self-calibration on iron (tests/test_sensing_model.py's case with 80 poses): with and without the cores
+    arr8 = sensing.default_array(design, 8)
+    rng = np.random.default_rng(21)
+    true_pos = arr8.positions + rng.normal(0.0, 0.2e-3, arr8.positions.shape)
+    gain, offset = 1.0 + rng.normal(0.0, 0.01, (len(arr8), 3)), rng.normal(0.0, 50e-6, (len(arr8), 3))
+    Rc = so3.random(80, rng)
+    cores8 = sensing_iron.iron_fields(design, arr8.positions)[0]
+    mc = sensing.sense(arr8, sensing.rotor_field(design, true_pos, Rc) + cores8.field(Rc), rng) * gain + offset
+    start = so3.exp(np.radians(0.5) * rng.normal(size=(len(Rc), 3)) / math.sqrt(3)) @ Rc
+    run["iron_calibration"] = {"sensors": 8, "poses": 80, "rounds": 5,
+                               "position_before_mm": float(1e3 * np.sqrt(np.mean((arr8.positions - true_pos) ** 2)))}
+    for label, cores in (("with", None), ("without", False)):
+        cal = sensing.calibrate(design, arr8, mc, start, rounds=5, cores=cores)
+        run["iron_calibration"][label] = {
+            "residual_mT": float(cal.residual_T[-1] * 1e3), "field_model": cal.field_model,
+            "position_after_mm": float(1e3 * np.sqrt(np.mean((cal.array.positions - true_pos) ** 2)))}
+    _step(run, "iron self-calibration")
+    run["iron_accuracy"] = {}
+    for label, cores in (("with", None), ("without", False)):
+        a = sensing.accuracy(design, iron_array, samples=200, cores=cores)
+        run["iron_accuracy"][label] = {"rms_deg": math.degrees(a.rms), "worst_deg": math.degrees(a.worst),
+                                       "field_model": a.field_model}
+    return _run_footer(run)
+
+
+def _notes_when(n: dict) -> str:
+    lo, hi = n["load"]
+    return f"`scripts/docs_numbers.py` {n['mode']}, {n['measured']}, load {lo:.1f} → {hi:.1f}"
+
+
+def notes_capability(n: dict) -> str:
+    """docs/control.md: the torque map's capability over SO(3)."""
+    c = n["capability"]
+    p = c["percentiles"]
+    return (f"torque available in every direction min {p['0']:.2f}, 5 % {p['5']:.2f}, median {p['50']:.2f}, 95 % "
+            f"{p['95']:.2f}, max {p['100']:.2f} N·m; at least 1 N·m on {100 * c['at_least_1']:.1f} % of SO(3), at least "
+            f"1.5 N·m on {100 * c['at_least_1_5']:.1f} %. `σ₃(K)` median {c['sigma3_median']:.2f} N·m per unit current "
+            f"(the issue's \"about 1.1\"), condition number median {c['condition_median']:.2f}, 95 % "
+            f"{c['condition_p95']:.2f} ({c['samples']} orientations, seed {c['seed']}, {c['seconds']:.1f} s; "
+            f"{_notes_when(n)})")
+
+
+def notes_iron_coil(n: dict) -> str:
+    """docs/control.md: the prototype's iron coil as ``DriveLimits``."""
+    c = n["iron_coil"]
+    eq = "= `V/R`" if abs(c["max_current_A"] - c["nominal_current_A"]) < 1e-9 else f"(`V/R` = {c['max_current_A']:.3f} A)"
+    return (f"{c['resistance_ohm']:.1f} Ω, `I_n` = {c['nominal_current_A']:.3f} A {eq}, ρ = {c['rho']:.2f}, and its own "
+            f"{c['inductance_H']:.3f} H (`L/R` = {1e3 * c['time_constant_s']:.1f} ms; Wheeler's air-core "
+            f"{1e3 * c['air_inductance_H']:.0f} mH for the same winding without the core)")
+
+
+def notes_fastest_table(n: dict) -> str:
+    """docs/control.md: the demo's turn planned each way on both cores, and the servo along each plan."""
+    lines = [f"Measured {n['measured']}, load {n['load'][0]:.1f} → {n['load'][1]:.1f} (`scripts/docs_numbers.py "
+             f"control-notes`; {n['machine']}):", "",
+             "| core | planner | time | bound (margin 1) | ratio | servo: max tracking | final | peak / mean power |",
+             "|---|---|---|---|---|---|---|---|"]
+    for core, row in n["turns"].items():
+        b = row["bound_s"]
+        for name, label in (("trapezoid", "trapezoid (`plan_trapezoid`)"), ("fastest", "**time-optimal**")):
+            r = row[name]
+            if "refused" in r:
+                lines.append(f"| {core} | {label} | refused: {r['refused']} | {b:.3f} s | — | — | — | — |")
+                continue
+            if name == "fastest":
+                label += f" ({r['path']}, margin {r['margin']:g})"
+            dur = f"{r['duration_s']:.3f} s"
+            lost = r["max_tracking_deg"] > 5
+            lines.append(f"| {core} | {label} | {f'**{dur}**' if name == 'fastest' else dur} | {b:.3f} s | "
+                         f"{r['duration_s'] / b:.2f} | {r['max_tracking_deg']:.{1 if lost else 3}f}°{' (lost)' if lost else ''} | "
+                         f"{r['final_deg']:.3f}° | "
+                         f"{r['peak_power_W']:.0f} / {r['mean_power_W']:.1f} W |")
+    return "\n".join(lines)
+
+
+def notes_fastest_summary(n: dict) -> str:
+    """docs/control.md, inline: the iron turn against the 1.5 s target."""
+    r, b = n["turns"]["iron"]["fastest"], n["turns"]["iron"]["bound_s"]
+    met = "met" if r["duration_s"] <= 1.5 else "**not** met"
+    return (f"The iron target of ≤ 1.5 s is {met}: {r['duration_s']:.3f} s, {r['duration_s'] / b:.2f} × the bound "
+            f"with the detent, tracked within {r['max_tracking_deg']:.3f}° and ended within {r['final_deg']:.3f}° "
+            f"(planned in {r['plan_s']:.1f} s; {_notes_when(n)})")
+
+
+def notes_move(n: dict) -> str:
+    m = n["move"]
+    return (f"{m['wall_s']:.0f} s wall time for `drive_turn` in one process, numba's kernels cached (arrival "
+            f"{m['time_s']:.2f} s, final error {m['final_deg']:.3f}°; {_notes_when(n)})")
+
+
+def notes_planning(n: dict) -> str:
+    i, a = n["turns"]["iron"], n["turns"]["air"]
+    return (f"iron {i['fastest']['plan_s']:.1f} s ({i['fastest']['paths_tried']} paths tried), air "
+            f"{a['fastest']['plan_s']:.1f} s ({a['fastest']['paths_tried']}); the bound {i['bound_plan_s']:.1f} s (iron) and "
+            f"{a['bound_plan_s']:.1f} s (air) ({_notes_when(n)}, one run each)")
+
+
+def notes_coupled_cost(n: dict) -> str:
+    return (f"the coupled model costs {1e3 * n['coupled_cost_s']:.2f} ms of CPU per orientation against "
+            f"{1e3 * n['pairwise_cost_s']:.3f} ms for the pairwise one ({_notes_when(n)})")
+
+
+def notes_weakest_hold(n: dict) -> str:
+    """docs/control.md, inline: which holds the weakest mismatched plant can reach at all."""
+    holds = n["weakest_plant"]["holds"]
+    miss = [h for h in holds if not h["plant"]["reachable"]]
+    ok = [h for h in holds if h["plant"]["reachable"]]
+    text = ", ".join(f"#{h['index'] + 1} (detent {h['plant']['detent_Nm']:.1f} N·m: {h['plant']['unmet_Nm']:.3f} N·m "
+                     f"unmet, {h['pairwise']['unmet_Nm']:.3f} on the pairwise plant)" for h in miss) or "none"
+    return (f"orientations the plant cannot hold within the limits at all: {text}; the other {len(ok)} need at most "
+            f"{100 * max(h['plant']['coil_fraction'] for h in ok):.0f} % of a coil and "
+            f"{max(h['plant']['copper_W'] for h in ok):.0f} W ({_notes_when(n)})")
+
+
+def notes_emulated_calibration(n: dict) -> str:
+    """docs/control.md, inline: ``spherestep calibrate --emulate`` with its defaults."""
+    e = n["emulated_calibration"]
+    b, a = e["torque_error_before"], e["torque_error_after"]
+    sd = e["scale_std"]
+    return (f"with the default **{e['holds']} holds** ({_notes_when(n)}, {e['wall_s']:.0f} s) the torque error against "
+            f"the plant at 200 held-out orientations and currents falls **{b:.4f} → {a:.4f} ({b / a:.1f}×)**, the "
+            f"scales come back as ×{e['scale_detent']:.3f} ± {sd[0]:.3f} (detent) and ×{e['scale_winding']:.3f} ± "
+            f"{sd[1]:.3f} (winding); the holds end up to {e['max_hold_offset_deg']:.1f}° from their targets, drifting "
+            f"at up to {e['max_drift_deg_s']:.0f}°/s")
+
+
+def robust_summary(r: dict) -> str:
+    """docs/control.md, inline: the robustness table's ranges (``data/servo_robust.json``)."""
+    on = [x for x in r["rows"] if x["observer"] == "on"]
+    off = {x["case"]: x for x in r["rows"] if x["observer"] == "off"}
+    mism = [x for x in on if x["case"] != "exact model"]
+    met = sum(x["passed"] for x in mism)
+    rng = lambda xs, f="{:.3f}": f"{f.format(min(xs))}–{f.format(max(xs))}"  # noqa: E731
+    d_power = [x["mean_power_W"] - off[x["case"]]["mean_power_W"] for x in on]
+    missed = "; ".join(f"{x['case']}: {x['holds_within']}/{x['holds']}, worst {x['worst_hold_deg']:.3f}°"
+                       for x in on if not x["passed"])
+    return (f"every target is met on {met} of the {len(mism)} mismatched plants and on the exact model "
+            f"{'' if all(x['passed'] for x in on if x['case'] == 'exact model') else 'not '}(run of {r['measured']}): "
+            f"holds worst {rng([x['worst_hold_deg'] for x in on if x['passed']])}° where met"
+            + (f" ({missed})" if missed else "") + ", turns end within "
+            f"{rng([x['final_error_deg'] for x in on])}° and track within "
+            f"{rng([x['max_tracking_error_deg'] for x in on], '{:.2f}')}°, "
+            f"{rng([x['mean_power_W'] for x in on], '{:.0f}')} W; the PD law alone misses every mismatched plant's "
+            f"holds by {rng([off[x['case']]['worst_hold_deg'] for x in mism], '{:.1f}')}° and ends the turn "
+            f"{rng([off[x['case']]['final_error_deg'] for x in mism], '{:.2f}')}° off; the estimate changes the mean "
+            f"power by {f'{min(d_power):+.1f}'.replace('-', '−')} to {f'{max(d_power):+.1f}'.replace('-', '−')} W")
+
+
+def calibration_fastest(run: dict) -> str:
+    """docs/control.md, inline: the fastest plan on the mismatched plants (``data/calibration_table.json``)."""
+    rows = run["rows"]
+    f = [(r["plant"].replace("-", "−"), r["turn"]["fastest"]) for r in rows]
+    misses = [(p, t) for p, t in f if t["exact_max_deg"] > 0.2]
+    meets = [(p, t) for p, t in f if t["exact_max_deg"] <= 0.2]
+    before = [(r["plant"].replace("-", "−"), r["turn"]["margin"]["before_max_deg"]) for r in rows
+              if r["turn"]["margin"]["before_max_deg"] > 0.2]
+    return (f"on the `MARGIN` plan before calibration {len(before)} of {len(rows)} plants miss 0.2°"
+            + (" (" + "; ".join(f"{p} {x:.3f}°" for p, x in before) + ")" if before else "")
+            + f"; on the fastest plan ({run['plans']['fastest']['duration_s']:.3f} s) the exact model itself misses 0.2° on "
+            f"{len(misses)} of {len(rows)} plants ("
+            + "; ".join(f"{p} {t['exact_max_deg']:.3f}°" for p, t in misses) + ") and meets it on "
+            + ("; ".join(f"{p} {t['exact_max_deg']:.3f}°" for p, t in meets) or "none")
+            + f", where the calibrated servo is within "
+            f"{max([abs(t['after_max_deg'] - t['exact_max_deg']) for _, t in meets] or [0]) + 0.0005:.3f}° of it "
+            f"(`data/calibration_table.json`, {run['measured']})")
+
+
+def _truth(plant: str) -> tuple[float, float, float] | None:
+    """The (detent, winding, coupling gain) a calibration should find for a plant of the calibration table (None for
+    the shells, whose change is a shape, not a scale)."""
+    if "shell" in plant:
+        return None
+    w, d = re.search(r"winding ×([0-9.]+)", plant), re.search(r"detent ×([0-9.]+)", plant)
+    return (float(d.group(1)) if d else 1.0, float(w.group(1)) if w else 1.0, 0.0 if plant.startswith("pairwise") else 1.0)
+
+
+def calibration_coupling(run: dict) -> str:
+    """docs/control.md, inline: the coupling's gain fitted both ways and how close the scales come back."""
+    rows = {r["plant"]: r for r in run["rows"]}
+    cp = next(r for p, r in rows.items() if p.startswith("coupled"))
+    pp = next(r for p, r in rows.items() if p.startswith("pairwise"))
+    z, rel = [], []
+    for p, r in rows.items():
+        t = _truth(p)
+        if t is None:
+            continue
+        fit = (r["scale_detent"], r["scale_winding"], r["coupling_gain"])
+        sd = (*r["scale_std"], r["coupling_std"])
+        z += [abs(f - x) / e for f, x, e in zip(fit, t, sd)]
+        rel += [abs(f - x) / x for f, x in zip(fit, t) if x]
+    return (f"the coupled plant calibrated from the pairwise model comes back at ×{cp['coupling_gain']:.4f} ± "
+            f"{cp['coupling_std']:.4f} and the pairwise plant from the coupled model at ×{pp['coupling_gain']:.4f} ± "
+            f"{pp['coupling_std']:.4f}; the scales and the gain of every plant whose truth is a scale come back within "
+            f"{max(z):.1f}σ of it (within {100 * max(rel):.2f} %)")
+
+
+def calibration_shell(run: dict) -> str:
+    ratios = [r["ratio"] for r in run["rows"] if "shell" in r["plant"]]
+    return f"{min(ratios):.0f}–{max(ratios):.0f}×"
+
+
+def iron_capability_least(s: dict) -> str:
+    return f"{_signed(s['capability']['available_torque_N_m']['0'], 2)} N·m"
+
+
+def relay_sweep(s: dict) -> str:
+    """docs/control.md, inline: the ramped rates the demo tried on the air-core map, and which lost a step."""
+    m = _mode(s["drives_other"], "ramped")
+    tried = sorted(m["details"]["tried"], key=lambda t: t["rate_steps_per_s"])
+    lost = [f"{t['rate_steps_per_s']:.3g}" for t in tried if t["lost_a_step"]]
+    kept = [f"{t['rate_steps_per_s']:.3g}" for t in tried if not t["lost_a_step"]]
+    return (f"on the demo's plan on the air-core map (the stored demo run) the cruise rates {', '.join(kept)} steps/s "
+            f"kept every step and {', '.join(lost)} steps/s lost one; the pull-out rate is "
+            f"{m['details']['pull_out_rate_steps_per_s']:.1f} steps/s")
+
+
+def _deg(x: float) -> str:
+    """Degrees to four decimals below 0.1°, two above (an error of degrees needs no more)."""
+    return f"{x:.4f}" if x < 0.1 else f"{x:.2f}"
+
+
+def _sn_when(n: dict) -> str:
+    return f"{_notes_when(n)}; {n['machine']}"
+
+
+def sensing_notes_run(n: dict) -> str:
+    return f"{n['measured']} (load {n['load'][0]:.1f} → {n['load'][1]:.1f}, {n['machine']}; {n['wall_s']:.0f} s)"
+
+
+def sensing_notes_table(n: dict) -> str:
+    lines = ["| nodes | max abs error | RMS error | build |", "|---|---|---|---|"]
+    for r in n["table"]:
+        b = "**" if r["nodes"] == 16385 else ""
+        name = f"{_thin(r['nodes'])} (default)" if r["nodes"] == 16385 else _thin(r["nodes"])
+        lines.append(f"| {b}{name}{b} | {b}{r['max_T'] * 1e6:.2g} µT{b} | {b}{r['rms_T'] * 1e6:.2g} µT{b} | "
+                     f"{r['build_s']:.2f} s |")
+    return "\n".join(lines)
+
+
+def sensing_notes_onestep(n: dict) -> str:
+    return (f"one-step error {n['one_step_deg']:.4f}° against {n['solved_deg']:.4f}° after full convergence, from a "
+            f"0.06° start (1 rad/s for 1 ms)")
+
+
+def sensing_notes_loop_cost(n: dict) -> str:
+    return f"{n['loop']['hall']['us_per_sample'] / 1e3:.1f} ms per sample"
+
+
+def sensing_notes_global(n: dict) -> str:
+    g = n["global"]
+    lines = [f"{g['trials']} Haar-random orientations per row (shortened from the 50 of the first run), 24 sensors, "
+             f"grid 2000; {_sn_when(n)}:", "",
+             "| rotor | readings averaged | success (error < 0.05°) | median time | failures |", "|---|---|---|---|---|"]
+    for r in g["rows"]:
+        fails = ", ".join(f"{x:g}°" for x in r["failures_deg"]) or "—"
+        lines.append(f"| {r['rotor']} | {r['averaged']} | {r['success']}/{g['trials']} | {r['median_s']:.2f} s | {fails} |")
+    return "\n".join(lines)
+
+
+def sensing_notes_global_short(n: dict) -> str:
+    g = n["global"]
+    rows = {(r["rotor"], r["averaged"]): r for r in g["rows"]}
+    p, m = rows[("prototype, up to its 60 symmetries", 1)], rows[("marked, exact", 32)]
+    return (f"{p['success']}/{g['trials']} (prototype, up to its symmetry), {m['success']}/{g['trials']} (marked rotor "
+            f"with 32 averaged readings), ≈ {statistics.median(r['median_s'] for r in g['rows']):.1f} s ({n['measured']})")
+
+
+def sensing_notes_placement(n: dict) -> str:
+    p = n["placement"]
+    return f"24 sensors from {p['candidates']} candidates in {p['seconds']:.1f} s ({_notes_when(n)})"
+
+
+def sensing_notes_accuracy(n: dict) -> str:
+    lines = [f"Measured {n['measured']}, load {n['load'][0]:.1f} → {n['load'][1]:.1f} (`scripts/docs_numbers.py "
+             "sensing-notes`):", "",
+             "| sensors | layout | RMS (°) | worst (°) | Cramér–Rao RMS (°) | worst-case bound (°) | coil residual RMS (µT) |",
+             "|---|---|---|---|---|---|---|"]
+    for r in n["accuracy"]:
+        b = "**" if r["sensors"] == 24 and r["layout"] == "greedy" else ""
+        bound = "" if r["bound_deg"] is None else f"{b}{r['bound_deg']:.4f}{b}"
+        lines.append(f"| {b}{r['sensors']}{b} | {b}{r['layout']}{b} | {b}{r['rms_deg']:.4f}{b} | {b}{r['worst_deg']:.4f}{b} "
+                     f"| {b}{r['predicted_deg']:.4f}{b} | {bound} | {r['coil_residual_uT']:.1f} |")
+    return "\n".join(lines)
+
+
+def _acc(n: dict, k: int, layout: str = "greedy") -> dict:
+    return next(r for r in n["accuracy"] if r["sensors"] == k and r["layout"] == layout)
+
+
+def sensing_notes_few(n: dict) -> str:
+    """docs/sensing.md, inline: what the greedy layout buys with few sensors."""
+    a3, s3, a12, s12 = _acc(n, 3), _acc(n, 3, "spread"), _acc(n, 12), _acc(n, 12, "spread")
+    return (f"3 sensors: worst {a3['worst_deg']:.3f}° against {s3['worst_deg']:.3f}°; 12: {a12['worst_deg']:.3f}° against "
+            f"{s12['worst_deg']:.3f}°")
+
+
+def sensing_notes_model_error(n: dict) -> str:
+    lines = ["| error source | RMS (°) | worst (°) |", "|---|---|---|"]
+    lines += [f"| {r['source']} | {r['rms_deg']:.3f} | {r['worst_deg']:.3f} |" for r in n["model_error"]]
+    return "\n".join(lines)
+
+
+def sensing_notes_calibration(n: dict) -> str:
+    c = n["calibration"]
+    return "\n".join([
+        f"5 rounds in {c['seconds']:.0f} s; {_sn_when(n)}:", "",
+        "| | nominal model | calibrated |", "|---|---|---|",
+        f"| residual per channel (µT) | {c['residual_before_uT']:.0f} | {c['residual_after_uT']:.0f} (the noise: 100 µT) |",
+        f"| sensor position error RMS per axis (mm) | {c['position_before_mm']:.3f} | {c['position_after_mm']:.3f} |",
+        f"| orientation error RMS (°) | {c['orientation_before_deg']:.4f} | {c['orientation_after_deg']:.4f} = a common "
+        f"turn of {c['common_deg']:.4f} + scatter {c['scatter_deg']:.4f} |"])
+
+
+def sensing_notes_common(n: dict) -> str:
+    c = n["calibration"]
+    return f"{c['common_deg']:.3f}° here"
+
+
+def sensing_notes_scatter(n: dict) -> str:
+    return f"{n['calibration']['scatter_deg']:.4f}°"
+
+
+def sensing_notes_imu(n: dict) -> str:
+    lo = n["loop"]
+    names = (("hall", "magnetometer array, 1 Gauss–Newton step per sample"), ("imu", "IMU alone (MEKF: gyro, gravity, field)"),
+             ("fused", "**fused: gyro + array (MEKF)**"))
+    lines = [f"{_sn_when(n)}:", "", "| sensor | RMS (°) | worst (°) | time per sample (µs, incl. simulation) |",
+             "|---|---|---|---|"]
+    for k, label in names:
+        r = lo[k]
+        lines.append(f"| {label} | {_deg(r['rms_deg'])} | {_deg(r['worst_deg'])} | {r['us_per_sample']:.0f} |")
+    return "\n".join(lines)
+
+
+def sensing_notes_servo(n: dict) -> str:
+    names = (("ideal", "ideal"), ("hall", "**array (24 × TMAG5273A2, 1 % current error)**"),
+             ("fused", "fused (gyro + array)"), ("imu", "IMU alone"))
+    lines = [f"{_sn_when(n)}:", "", "| sensor | max tracking error (°) | final error (°) | estimate error RMS (°) |",
+             "|---|---|---|---|"]
+    for k, label in names:
+        r = n["servo"][k]
+        lines.append(f"| {label} | {_deg(r['max_tracking_deg'])} | {_deg(r['final_deg'])} | {_deg(r['estimate_rms_deg'])} |")
+    return "\n".join(lines)
+
+
+def sensing_notes_iron_cost(n: dict) -> str:
+    c, s, lo = n["iron_cost_us"], n["iron_static"], n["iron_loop"]
+    rate = lambda us: _thin(int(round(1e6 / us, -2)))  # noqa: E731
+    w, wo = lo["turn with"], lo["turn without"]
+    hw, hwo = lo["hold with"], lo["hold without"]
+    return "\n".join([
+        f"CPU medians of 200 calls; {_sn_when(n)}:", "",
+        "| call | median | rate |", "|---|---|---|",
+        f"| rotor table: field + Jacobian | {c['rotor']:.0f} µs | {rate(c['rotor'])} /s |",
+        f"| cores: field / field + Jacobian (compiled B-spline, 92 poles × 24 sensors) | {c['cores field']:.0f} / "
+        f"{c['cores jacobian']:.0f} µs | {rate(c['cores field'])} / {rate(c['cores jacobian'])} /s |",
+        f"| update without the cores (`track`, one Gauss–Newton step) | {c['update without']:.0f} µs | "
+        f"{rate(c['update without'])} /s |",
+        f"| **update with the cores** | **{c['update with']:.0f} µs** | **{rate(c['update with'])} /s** |", "",
+        "| estimation error, iron prototype (24 × TMAG5273A2, 0.1 mT noise, 4 coils at ±1, 1 % current error) | cores "
+        "modelled (default) | cores ignored (`cores=False`) |", "|---|---|---|",
+        f"| 200 Haar orientations, LM from 0.06° off: RMS / worst | **{s['with']['rms_deg']:.4f}° / "
+        f"{s['with']['worst_deg']:.4f}°** | {s['without']['rms_deg']:.2f}° / {s['without']['worst_deg']:.2f}° |",
+        f"| in the loop, 90° turn about x (the drive's fastest turn on the iron model, 1 kHz, 0.5 s settle): sensor RMS "
+        f"/ worst | **{w['rms_deg']:.4f}° / {w['worst_deg']:.4f}°** | {wo['rms_deg']:.2f}° / {wo['worst_deg']:.2f}° |",
+        f"| same turn: tracking max / final | {w['tracking_deg']:.3f}° / {w['final_deg']:.4f}° | "
+        f"{wo['tracking_deg']:.2f}° / {wo['final_deg']:.2f}° |",
+        f"| in the loop, hold at the turn's start (0.5 s): sensor RMS / final | **{hw['rms_deg']:.4f}°** / "
+        f"{hw['final_sensor_deg']:.4f}° | {hwo['rms_deg']:.2f}° / {hwo['final_sensor_deg']:.2f}° |",
+        f"| wall time per simulated second (turn, hold) | {w['wall_per_simulated']:.1f}, {hw['wall_per_simulated']:.1f} | "
+        f"{wo['wall_per_simulated']:.1f}, {hwo['wall_per_simulated']:.1f} |"])
+
+
+def sensing_notes_iron_accuracy(n: dict) -> str:
+    a = n["iron_accuracy"]
+    return (f"**{a['with']['rms_deg']:.4f}° RMS, {a['with']['worst_deg']:.4f}° worst** with the cores modelled "
+            f"(`field_model` `\"{a['with']['field_model']}\"`), {a['without']['rms_deg']:.2f}° / "
+            f"{a['without']['worst_deg']:.2f}° ignoring them ({n['measured']})")
+
+
+def sensing_notes_iron_calibration(n: dict) -> str:
+    c = n["iron_calibration"]
+    w, wo = c["with"], c["without"]
+    return (f"{c['sensors']} sensors, {c['poses']} poses, {c['rounds']} rounds, the errors of "
+            f"`tests/test_sensing_model.py`; {n['measured']}: with the cores (`\"{w['field_model']}\"`) the residual "
+            f"falls to {w['residual_mT']:.3f} mT (noise 0.100) and the positions come back from "
+            f"{c['position_before_mm']:.3f} to {w['position_after_mm']:.3f} mm RMS; ignoring the cores (`cores=False`) the "
+            f"residual stays at {wo['residual_mT']:.1f} mT and the positions wander to {wo['position_after_mm']:.1f} mm")
+
+
+def sensing_notes_pub(key: str) -> Callable[[dict], str]:
+    """docs/sensing.md: one cell of the table beside the published numbers."""
+    def render(n: dict) -> str:
+        if key == "3":
+            a = _acc(n, 3)
+            return f"{a['rms_deg']:.3f}° RMS, {a['worst_deg']:.3f}° worst"
+        if key == "positions":
+            return f"{n['model_error'][0]['rms_deg']:.3f}° RMS"
+        if key == "calibrated":
+            c = n["calibration"]
+            return f"{c['orientation_after_deg']:.3f}° RMS ({c['scatter_deg']:.3f}° after one reference pose)"
+        if key == "fused":
+            return f"{n['loop']['fused']['rms_deg']:.4f}° RMS"
+        return f"{n['loop']['imu']['rms_deg']:.1f}° RMS"
+    return render
+
+
 # ------------------------------------------------------------------------------------------------------ blocks
 
 @dataclass(frozen=True)
@@ -1453,6 +2224,43 @@ BLOCKS = (
     Block("explore-prototype", "docs/explore.md", "explore", explore_prototype, inline=True),
     Block("explore-measured", "docs/explore.md", "explore", explore_measured, inline=True),
     Block("explore-family", "docs/explore.md", "explore", explore_family, inline=True),
+    Block("control-notes-iron-coil", "docs/control.md", "control-notes", notes_iron_coil, inline=True),
+    Block("control-notes-capability", "docs/control.md", "control-notes", notes_capability, inline=True),
+    Block("control-notes-fastest", "docs/control.md", "control-notes", notes_fastest_table),
+    Block("control-notes-fastest-summary", "docs/control.md", "control-notes", notes_fastest_summary, inline=True),
+    Block("control-notes-move", "docs/control.md", "control-notes", notes_move, inline=True),
+    Block("control-notes-planning", "docs/control.md", "control-notes", notes_planning, inline=True),
+    Block("control-notes-coupled-cost", "docs/control.md", "control-notes", notes_coupled_cost, inline=True),
+    Block("control-notes-weakest-hold", "docs/control.md", "control-notes", notes_weakest_hold, inline=True),
+    Block("control-notes-emulated-calibration", "docs/control.md", "control-notes", notes_emulated_calibration,
+          inline=True),
+    Block("robust-summary", "docs/control.md", "robust", robust_summary, inline=True),
+    Block("calibration-fastest", "docs/control.md", "calibration", calibration_fastest, inline=True),
+    Block("relay-sweep", "docs/control.md", "demo", relay_sweep, inline=True),
+    Block("calibration-coupling", "docs/control.md", "calibration", calibration_coupling, inline=True),
+    Block("calibration-shell", "docs/control.md", "calibration", calibration_shell, inline=True),
+    Block("iron-capability-least", "docs/control.md", "demo", iron_capability_least, inline=True),
+    Block("sensing-notes-run", "docs/sensing.md", "sensing-notes", sensing_notes_run, inline=True),
+    Block("sensing-notes-table", "docs/sensing.md", "sensing-notes", sensing_notes_table),
+    Block("sensing-notes-onestep", "docs/sensing.md", "sensing-notes", sensing_notes_onestep, inline=True),
+    Block("sensing-notes-loop-cost", "docs/sensing.md", "sensing-notes", sensing_notes_loop_cost, inline=True),
+    Block("sensing-notes-global", "docs/sensing.md", "sensing-notes", sensing_notes_global),
+    Block("sensing-notes-global-short", "docs/sensing.md", "sensing-notes", sensing_notes_global_short, inline=True),
+    Block("sensing-notes-placement", "docs/sensing.md", "sensing-notes", sensing_notes_placement, inline=True),
+    Block("sensing-notes-accuracy", "docs/sensing.md", "sensing-notes", sensing_notes_accuracy),
+    Block("sensing-notes-few", "docs/sensing.md", "sensing-notes", sensing_notes_few, inline=True),
+    Block("sensing-notes-model-error", "docs/sensing.md", "sensing-notes", sensing_notes_model_error),
+    Block("sensing-notes-calibration", "docs/sensing.md", "sensing-notes", sensing_notes_calibration),
+    Block("sensing-notes-common", "docs/sensing.md", "sensing-notes", sensing_notes_common, inline=True),
+    Block("sensing-notes-scatter", "docs/sensing.md", "sensing-notes", sensing_notes_scatter, inline=True),
+    Block("sensing-notes-imu", "docs/sensing.md", "sensing-notes", sensing_notes_imu),
+    Block("sensing-notes-servo", "docs/sensing.md", "sensing-notes", sensing_notes_servo),
+    Block("sensing-notes-iron-cost", "docs/sensing.md", "sensing-notes", sensing_notes_iron_cost),
+    Block("sensing-notes-iron-calibration", "docs/sensing.md", "sensing-notes", sensing_notes_iron_calibration,
+          inline=True),
+    Block("sensing-notes-iron-accuracy", "docs/sensing.md", "sensing-notes", sensing_notes_iron_accuracy, inline=True),
+    *(Block(f"sensing-notes-pub-{k}", "docs/sensing.md", "sensing-notes", sensing_notes_pub(k), inline=True)
+      for k in ("3", "positions", "calibrated", "fused", "imu")),
 )
 
 
@@ -1483,13 +2291,15 @@ def differing() -> list[str]:
     return bad
 
 
-def write(paths: set[str] | None = None) -> int:
-    """Rewrite every block from the stored measurements (only those in the files ``paths`` when given); the number
-    of blocks changed."""
+def write(paths: set[str] | None = None, sources: set[str] | None = None) -> int:
+    """Rewrite every block from the stored measurements (only those in the files ``paths``, or rendered from the
+    stores ``sources``, when given); the number of blocks changed."""
     cache: dict = {}
     changed = 0
     for b in BLOCKS:
         if paths is not None and b.path not in paths:
+            continue
+        if sources is not None and not set(b.sources) & sources:
             continue
         if b.missing():
             print(f"skipped {b.name}: {', '.join(b.missing())} missing")
@@ -1573,9 +2383,13 @@ def main(argv: list[str]) -> int:
             run_explore(arg)
         print(f"{write(own[cmd])} blocks rewritten")
         return 0
+    if cmd in ("control-notes", "sensing-notes"):  # pages shared with other stores: only this store's blocks
+        _store(cmd, measure_control_notes() if cmd == "control-notes" else measure_sensing_notes())
+        print(f"{write(sources={cmd})} blocks rewritten")
+        return 0
     if cmd not in ("demo", "forces", "robust", "iron", "calibration", "bench", "all", "write"):
         print(f"unknown command {cmd!r}: demo [SUMMARY], forces, robust [BENCH.json], iron, calibration, bench [NAME ...], "
-              "potential, dynamics, explore [FOLDER], all [SUMMARY], --check", file=sys.stderr)
+              "potential, dynamics, explore [FOLDER], control-notes, sensing-notes, all [SUMMARY], --check", file=sys.stderr)
         return 2
     print(f"{write()} blocks rewritten")
     return 0

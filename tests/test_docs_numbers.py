@@ -193,3 +193,74 @@ def test_the_stored_explore_sweep_is_the_default_grid():
     assert sum(e["models"].values()) == e["torques_measured"] and all(m.startswith("iron") for m in e["models"])
     assert e["pareto"] and all(r["coils"] <= 32 for r in e["pareto"])
     assert e["family"]["different"]["designs"] + e["family"]["same"]["designs"] == e["reach_all"]
+
+
+@pytest.mark.parametrize("name", ["control-notes", "sensing-notes"])
+def test_the_stored_notes_say_when_and_under_what_load(name):
+    """docs/control.md's and docs/sensing.md's hand-measured numbers are now ``scripts/docs_numbers.py NAME``'s
+    stored run: it states its date, load and machine, and the page's source says so; no dated one-off is left
+    outside the page's design record."""
+    n = SCRIPT.stored(name)
+    assert n["mode"] == name and re.fullmatch(r"\d{4}-\d\d-\d\d \d\d:\d\d UTC", n["measured"])
+    assert len(n["load"]) == 2 and "cores" in n["machine"] and n["wall_s"] > 0
+    page = {"control-notes": "docs/control.md", "sensing-notes": "docs/sensing.md"}[name]
+    text = (ROOT / page).read_text(encoding="utf-8")
+    body, record = text.split("## Design record (dated experiments, not regenerated)")
+    assert "one-off" not in body, f"{page}: a one-off measurement outside the design record"
+    assert n["measured"] in text
+
+
+def test_a_notes_mode_rewrites_only_its_own_blocks(tmp_path, monkeypatch):
+    """``control-notes`` stores its measurement and rewrites the blocks rendered from it, not the demo's blocks on
+    the same page (the lead regenerates those)."""
+    import json
+
+    own = next(b for b in SCRIPT.BLOCKS if b.name == "control-notes-iron-coil")
+    other = next(b for b in SCRIPT.BLOCKS if b.name == "move-servo")
+    n = SCRIPT.stored("control-notes")
+    n["iron_coil"]["resistance_ohm"] += 1.0
+    stale_other = other.text(SCRIPT.stored("demo")).replace("in 1.", "in 9.")
+    doc = tmp_path / "docs" / "control.md"
+    doc.parent.mkdir()
+    doc.write_text(f"{own.text(SCRIPT.stored('control-notes'))}\n{stale_other}\n", encoding="utf-8")
+    store = tmp_path / "notes.json"
+    monkeypatch.setattr(SCRIPT, "ROOT", tmp_path)
+    monkeypatch.setitem(SCRIPT.STORES, "control-notes", store)
+    monkeypatch.setattr(SCRIPT, "measure_control_notes", lambda: n)
+    monkeypatch.setattr(SCRIPT, "BLOCKS", (own, other))
+    assert SCRIPT.main(["control-notes"]) == 0
+    assert json.loads(store.read_text(encoding="utf-8")) == n
+    assert doc.read_text(encoding="utf-8") == f"{own.text(n)}\n{stale_other}\n"
+
+
+def test_the_stored_control_notes_agree_with_the_code():
+    """The iron coil's limits are the live ``design_model``'s; the fastest iron plan is the one the calibration table
+    ran (same code, same turn); the weakest plant misses at least one hold, as the robustness table says."""
+    from spherestep.magnetics import design_model
+    from spherestep.motor import prototype
+
+    n = SCRIPT.stored("control-notes")
+    lim = design_model(prototype(), "iron").limits
+    c = n["iron_coil"]
+    assert c["resistance_ohm"] == pytest.approx(lim.resistance, rel=1e-9)
+    assert c["inductance_H"] == pytest.approx(lim.inductance, rel=1e-9)
+    assert c["rho"] == pytest.approx(lim.per_unit_power_radius, rel=1e-9)
+    fastest = n["turns"]["iron"]["fastest"]["duration_s"]
+    assert fastest == pytest.approx(SCRIPT.stored("calibration")["plans"]["fastest"]["duration_s"], abs=1e-3)
+    assert n["turns"]["iron"]["bound_s"] < fastest <= 1.5
+    missed = [h for h in n["weakest_plant"]["holds"] if not h["plant"]["reachable"]]
+    robust = next(r for r in SCRIPT.stored("robust")["rows"] if r["case"] == n["weakest_plant"]["case"]
+                  and r["observer"] == "on")
+    assert len(missed) >= robust["holds"] - robust["holds_within"]
+
+
+def test_the_stored_sensing_notes_agree_with_the_code():
+    """The placement's candidates are the live ``candidate_positions``; the rows are the stated cases."""
+    from spherestep.motor import prototype
+    from spherestep.sensing import candidate_positions
+
+    n = SCRIPT.stored("sensing-notes")
+    assert n["placement"]["candidates"] == len(candidate_positions(prototype()))
+    assert n["global"]["trials"] == SCRIPT.SENSING_GLOBAL_TRIALS and len(n["global"]["rows"]) == 4
+    assert [(r["sensors"], r["layout"]) for r in n["accuracy"]][-2:] == [(24, "greedy"), (24, "spread")]
+    assert n["iron_accuracy"]["with"]["field_model"] == "rotor + cores"

@@ -12,8 +12,8 @@ of the calibration (issue 26).
   (``spherestep/data/iron_shell_table.csv``, ``python scripts/iron_shell_tables.py``, a minute); any other shell or
   design is solved on first use (minutes) and cached.
 * :class:`CoupledPlant` — the iron model with the coupling through the cores (``iron_model(design,
-  coupling=True)``, ~0.16 s per orientation: too slow to integrate a rotor with) as a plant: the pairwise model
-  plus the coupling's torque ``Δ(R) = T_coupled(R, 0) − T_pairwise(R, 0)`` (independent of the currents: a magnet
+  coupling=True)``; made when that model cost 0.16 s per orientation, before it was compiled) as a plant: the
+  pairwise model plus the coupling's torque ``Δ(R) = T_coupled(R, 0) − T_pairwise(R, 0)`` (independent of the currents: a magnet
   acting on another through a core) expanded to first order about anchors, ``Δ(R) ≈ Δ(A) + J_A log(R Aᵀ)``
   (``J_A`` by central differences of 1e-3 rad), an anchor added wherever the rotor goes farther than ``reach``
   from every anchor so far (7 coupled evaluations each).
