@@ -1547,6 +1547,18 @@ def measure_sensing_notes() -> dict:
         run["table"].append({"nodes": n, "max_T": float(np.abs(d).max()), "rms_T": float(np.sqrt(np.mean(d ** 2))),
                              "build_s": build})
     table = sensing.FieldTable.build(design, array.positions)
+    # symmetry (bench_sensing.symmetry): magpylib over the 60 copies; the marked rotor's nearest wrong copy
+    G = sensing.symmetry_group(design)
+    spread = max(float(np.abs(B - B[0]).max()) for B in
+                 (sensing.rotor_field(design, array.positions, Rk @ G) for Rk in so3.random(5, 4)))
+    marked_table = sensing.FieldTable.build(sensing.marked_design(design), array.positions)
+    Gp = sensing.symmetry_group(sensing.marked_design(design), polarity=False)
+    d = np.array([np.sqrt(np.sum((marked_table.field(Rk @ Gp[1:]) - marked_table.field(Rk)) ** 2, axis=(1, 2))).min()
+                  for Rk in so3.random(300, 5)]) / array.part.effective_noise_T
+    run["symmetry"] = {"order": len(G), "smallest_turn_deg": float(np.degrees(so3.angle(G[1:])).min()),
+                       "copies_spread_T": spread, "marked_order": len(sensing.symmetry_group(sensing.marked_design(design))),
+                       "margin_min": float(d.min()), "margin_p5": float(np.percentile(d, 5)),
+                       "margin_median": float(np.median(d))}
     coils = sensing.CoilField.build(design, array.positions)
     est = sensing.Estimator(table, array.axes, array.part, (coils,))
     rng = np.random.default_rng(2)
@@ -1930,6 +1942,13 @@ def iron_capability_least(s: dict) -> str:
     return f"{_signed(s['capability']['available_torque_N_m']['0'], 2)} N·m"
 
 
+def servo_drag(s: dict) -> str:
+    """docs/control.md, inline: the relay simulation's damping at one turn per second (the air core's and iron's)."""
+    a = _mode(s["drives_other"], "settled")["details"]["damping_N_m_s_per_rad"]
+    i = _mode(s["drives"], "settled")["details"]["damping_N_m_s_per_rad"]
+    return f"{2 * math.pi * a:.1f} N·m of drag on the air core ({2 * math.pi * i:.0f} N·m with the iron's damping)"
+
+
 def relay_sweep(s: dict) -> str:
     """docs/control.md, inline: the ramped rates the demo tried on the air-core map, and which lost a step."""
     m = _mode(s["drives_other"], "ramped")
@@ -2132,6 +2151,16 @@ def sensing_notes_field(n: dict) -> str:
             f"sensors over 200 orientations)")
 
 
+def sensing_notes_symmetry(n: dict) -> str:
+    y = n["symmetry"]
+    return f"**{y['copies_spread_T']:.1e} T**"
+
+
+def sensing_notes_marker(n: dict) -> str:
+    y = n["symmetry"]
+    return f"{y['margin_min']:.1f} (min), {y['margin_p5']:.1f} (5th percentile), {y['margin_median']:.1f} (median)"
+
+
 def sensing_notes_pub(key: str) -> Callable[[dict], str]:
     """docs/sensing.md: one cell of the table beside the published numbers."""
     def render(n: dict) -> str:
@@ -2257,6 +2286,7 @@ BLOCKS = (
           inline=True),
     Block("robust-summary", "docs/control.md", "robust", robust_summary, inline=True),
     Block("calibration-fastest", "docs/control.md", "calibration", calibration_fastest, inline=True),
+    Block("servo-drag", "docs/control.md", "demo", servo_drag, inline=True),
     Block("relay-sweep", "docs/control.md", "demo", relay_sweep, inline=True),
     Block("calibration-coupling", "docs/control.md", "calibration", calibration_coupling, inline=True),
     Block("calibration-shell", "docs/control.md", "calibration", calibration_shell, inline=True),
@@ -2280,6 +2310,8 @@ BLOCKS = (
     Block("sensing-notes-iron-calibration", "docs/sensing.md", "sensing-notes", sensing_notes_iron_calibration,
           inline=True),
     Block("sensing-notes-field", "docs/sensing.md", "sensing-notes", sensing_notes_field, inline=True),
+    Block("sensing-notes-symmetry", "docs/sensing.md", "sensing-notes", sensing_notes_symmetry, inline=True),
+    Block("sensing-notes-marker", "docs/sensing.md", "sensing-notes", sensing_notes_marker, inline=True),
     Block("sensing-notes-iron-bias", "docs/sensing.md", "sensing-notes", sensing_notes_iron_bias, inline=True),
     Block("sensing-notes-iron-margin", "docs/sensing.md", "sensing-notes", sensing_notes_iron_margin, inline=True),
     Block("sensing-notes-iron-accuracy", "docs/sensing.md", "sensing-notes", sensing_notes_iron_accuracy, inline=True),
