@@ -1487,6 +1487,19 @@ def measure_control_notes() -> dict:
                        "copper_W": float(lim.copper_power(a.currents))}
         holds.append(h)
     run["weakest_plant"] = {"case": case.name, "holds": holds}
+    # along the demo's turn on the design's model: each coil's back-EMF per rad/s and the share of a coil's current
+    # that holding the rotor at rest takes, every 1° (the time-optimal planner's constraints)
+    n_axis = axis / np.linalg.norm(axis)
+    path = [so3.exp(math.radians(a) * n_axis) @ R0 for a in range(360)]
+    emf = [float(np.max(np.abs(n_axis @ iron.model.torque_matrix(R))) / lim.nominal_current) for R in path]
+    hold = []
+    for R in path:
+        a, _ = allocate_matrix(iron.model.torque_matrix(R), np.zeros(3), lim,
+                               bias=iron.model.torque(R, np.zeros(len(design.stator))))
+        hold.append(float(np.max(np.abs(a.currents)) / lim.per_unit_bound) if a.reachable else 1.0)
+    run["path"] = {"emf_V_per_rad_s": max(emf), "supply_V": lim.supply_voltage, "hold_fraction": hold}
+    delta = [float(np.linalg.norm(coupled.torque(R, c) - pairwise.torque(R, c))) for R in so3.random(200, 11)]
+    run["coupling_torque_max_Nm"] = max(delta)
     with tempfile.TemporaryDirectory() as folder:  # `spherestep calibrate --emulate`, its defaults (60 holds)
         t = time.perf_counter()
         out = subprocess.run([sys.executable, "-c", "from spherestep.cli import main; main()", "calibrate", "--emulate", "--json", "--out",
@@ -1559,6 +1572,7 @@ def measure_sensing_notes() -> dict:
                        "copies_spread_T": spread, "marked_order": len(sensing.symmetry_group(sensing.marked_design(design))),
                        "margin_min": float(d.min()), "margin_p5": float(np.percentile(d, 5)),
                        "margin_median": float(np.median(d))}
+    run["marker"] = sensing.marker_effect(design, sensing.marked_design(design), states=2, samples=300).to_dict()
     coils = sensing.CoilField.build(design, array.positions)
     est = sensing.Estimator(table, array.axes, array.part, (coils,))
     rng = np.random.default_rng(2)
@@ -1837,6 +1851,30 @@ def notes_planning(n: dict) -> str:
 def notes_coupled_cost(n: dict) -> str:
     return (f"the coupled model costs {1e3 * n['coupled_cost_s']:.2f} ms of CPU per orientation against "
             f"{1e3 * n['pairwise_cost_s']:.3f} ms for the pairwise one ({_notes_when(n)})")
+
+
+def notes_emf(n: dict) -> str:
+    p = n["path"]
+    return (f"{p['emf_V_per_rad_s']:.1f} V per rad/s against the {p['supply_V']:.0f} V supply, so the coils add little "
+            f"torque above ≈ {p['supply_V'] / p['emf_V_per_rad_s']:.0f} rad/s")
+
+
+def notes_hold_stretch(n: dict) -> str:
+    """docs/control.md, inline: the longest stretch of the demo's turn where holding takes more than 80 % of a coil."""
+    h = n["path"]["hold_fraction"]
+    best, start = (0, 0), None
+    for i, f in enumerate([*h, 0.0]):
+        if f > 0.8 and start is None:
+            start = i
+        elif f <= 0.8 and start is not None:
+            best, start = max(best, (i - start, start)), None
+    length, first = best
+    return (f"more than 80 % of a coil's current from {first}° to {first + length - 1}° of the demo's turn (its most, "
+            f"{100 * max(h):.0f} %)")
+
+
+def notes_coupling(n: dict) -> str:
+    return f"up to {n['coupling_torque_max_Nm']:.2f} N·m at 200 random orientations"
 
 
 def notes_weakest_hold(n: dict) -> str:
@@ -2161,6 +2199,25 @@ def sensing_notes_marker(n: dict) -> str:
     return f"{y['margin_min']:.1f} (min), {y['margin_p5']:.1f} (5th percentile), {y['margin_median']:.1f} (median)"
 
 
+def sensing_notes_marker_cost(n: dict) -> str:
+    """docs/sensing.md: ``marker_effect`` on the torque map (2 random states each, 300 random drives)."""
+    m = n["marker"]
+    pair = lambda xs: ", ".join(f"{x:.3f}" for x in xs)  # noqa: E731
+    change = [100 * (a / b - 1) for a, b in zip(m["holding_marker_after_Nm"], m["holding_marker_before_Nm"])]
+    other = max(abs(a - b) for a, b in zip(m["holding_other_after_Nm"], m["holding_other_before_Nm"]))
+    return "\n".join([
+        f"{_sn_when(n)}:", "", "| | before | after |", "|---|---|---|",
+        f"| share of stepper states that hold the marked pole | — | {100 * m['states_holding_marker']:.1f} % |",
+        f"| holding torque, states holding the marked pole (N·m) | {pair(m['holding_marker_before_Nm'])} | "
+        f"{pair(m['holding_marker_after_Nm'])} ({_signed(min(change), 0)} to {_signed(max(change), 0)} %) |",
+        f"| holding torque, other states (N·m) | {pair(m['holding_other_before_Nm'])} | {pair(m['holding_other_after_Nm'])} "
+        f"(changed by at most {other:.1g} N·m) |",
+        f"| net dipole of the rotor (A·m²) | {m['dipole_before_Am2']:.0e} | {m['dipole_after_Am2']:.1f} (an Earth-field "
+        f"torque of at most {m['dipole_after_Am2'] * 65e-6:.0e} N·m in 65 µT) |",
+        f"| RMS torque change, 300 random orientations × random drives (±1 on 40 % of coils) | | "
+        f"{100 * m['torque_change_rms']:.0f} % of the RMS torque |"])
+
+
 def sensing_notes_pub(key: str) -> Callable[[dict], str]:
     """docs/sensing.md: one cell of the table beside the published numbers."""
     def render(n: dict) -> str:
@@ -2281,6 +2338,9 @@ BLOCKS = (
     Block("control-notes-move", "docs/control.md", "control-notes", notes_move, inline=True),
     Block("control-notes-planning", "docs/control.md", "control-notes", notes_planning, inline=True),
     Block("control-notes-coupled-cost", "docs/control.md", "control-notes", notes_coupled_cost, inline=True),
+    Block("control-notes-emf", "docs/control.md", "control-notes", notes_emf, inline=True),
+    Block("control-notes-hold-stretch", "docs/control.md", "control-notes", notes_hold_stretch, inline=True),
+    Block("control-notes-coupling", "docs/control.md", "control-notes", notes_coupling, inline=True),
     Block("control-notes-weakest-hold", "docs/control.md", "control-notes", notes_weakest_hold, inline=True),
     Block("control-notes-emulated-calibration", "docs/control.md", "control-notes", notes_emulated_calibration,
           inline=True),
@@ -2312,6 +2372,7 @@ BLOCKS = (
     Block("sensing-notes-field", "docs/sensing.md", "sensing-notes", sensing_notes_field, inline=True),
     Block("sensing-notes-symmetry", "docs/sensing.md", "sensing-notes", sensing_notes_symmetry, inline=True),
     Block("sensing-notes-marker", "docs/sensing.md", "sensing-notes", sensing_notes_marker, inline=True),
+    Block("sensing-notes-marker-cost", "docs/sensing.md", "sensing-notes", sensing_notes_marker_cost),
     Block("sensing-notes-iron-bias", "docs/sensing.md", "sensing-notes", sensing_notes_iron_bias, inline=True),
     Block("sensing-notes-iron-margin", "docs/sensing.md", "sensing-notes", sensing_notes_iron_margin, inline=True),
     Block("sensing-notes-iron-accuracy", "docs/sensing.md", "sensing-notes", sensing_notes_iron_accuracy, inline=True),
