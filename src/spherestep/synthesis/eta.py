@@ -14,15 +14,16 @@ time. The time left is the current stage's plus every later stage's:
   verification and the report from the ladder's measured seconds of the rows that pass (:func:`after_ladder`).
 
 The constants were measured on this 2-core machine (2026-11-26, the camera gimbal's ``normal`` search, 1296 tasks
-on 2 workers, load 1–5; docs/synthesis.md). A ladder task costs :data:`ALIGNMENT_SECONDS` × ``(M N)²`` (``M``
-rotor poles, ``N`` stator caps within the cap: the enumeration's candidate alignments, as
+on 2 workers, load 1–5; docs/synthesis.md, *Progress and its ETA*). A ladder task costs :data:`ALIGNMENT_SECONDS`
+× ``(M N)²`` (``M`` rotor poles, ``N`` stator caps within the cap: the enumeration's candidate alignments, as
 :func:`~spherestep.synthesis.run.cost_estimate` orders the tasks): 909 s over the 1196 tasks that passed the
-geometry rung. Paced so, the ETA replays that run within 1.5× of the time left from 10 % on; paced by the same
-weights with the geometry rung's tasks included, as before, the biggest layouts — too many coils, milliseconds
-each, finished first — set the pace near zero (it said 1 min with 6 left). A finalist's verification costs its
-ladder time plus :data:`VERIFY_SECONDS` (the servo turn and the holds; 3.9–31 s measured against 0.1–30 s of
-ladder), the report the shown design's states again (:data:`REPORT_STATES` of its ladder time: 21 s against 30 s
-in one run, 14 s against 46 s in the next, its ladder task slowed by the run's start) plus :data:`REPORT_SECONDS`.
+geometry rung. Paced by the same weights with the geometry rung's tasks included, as before, the biggest layouts —
+too many coils, milliseconds each, finished first — set the pace near zero (the ETA said 64 s with 7 min left,
+and counted the ladder alone). A finalist's verification costs its ladder time plus :data:`VERIFY_SECONDS` (the servo
+turn and the holds; 2–31 s measured against 0.1–46 s of ladder), the report the shown design's states again
+(:data:`REPORT_STATES` of its ladder time: 21 s against 30 s in one run, 14 s against 46 s in another, its ladder
+task slowed at the run's start) plus :data:`REPORT_SECONDS`. Three measured runs replay through this ETA
+(tests/test_synthesis_eta.py) within 1.8× of the time left from 10 % of the run on.
 """
 
 from __future__ import annotations
@@ -32,7 +33,7 @@ from collections.abc import Callable, Sequence
 
 ALIGNMENT_SECONDS = 6e-7  # s of one worker per (rotor pole × coil in the cap)² (909 s over 1.53e9, 1196 tasks)
 SOLVE_SECONDS = 180.0  # s of a task that solves an iron table first (docs/synthesis.md: a minute idle, 4-12 loaded)
-BUILD_SECONDS = 1.0  # s to build and write one finalist's design file (4.1 s for 4)
+BUILD_SECONDS = 0.1  # s to build and write one finalist's design file (4 in under 0.1 s)
 VERIFY_SECONDS = 4.0  # s of a finalist's verification beyond its ladder time (3.9-8 s measured)
 REPORT_SECONDS = 3.0  # s of the report's figures and tables (the quick budget's report: 3.4 s)
 REPORT_STATES = 0.45  # the report's states over the shown design's ladder time (21 s of 30 s; 14 s of 46 s)
