@@ -1599,29 +1599,11 @@ def measure_sensing_notes() -> dict:
                                     "bound_deg": float(bounds[k - 1]) if name == "greedy" else None,
                                     "coil_residual_uT": a.coil_residual_T * 1e6})
     _step(run, "accuracy against sensor count")
-    # global start (bench_sensing.global_start, shortened)
-    rng = np.random.default_rng(3)
-    marked = sensing.marked_design(design)
-    run["global"] = {"trials": SENSING_GLOBAL_TRIALS, "rows": []}
-    for d, name, G in ((design, "prototype, up to its 60 symmetries", sensing.symmetry_group(design)),
-                       (marked, "marked, exact", None)):
-        tab = sensing.FieldTable.build(d, array.positions)
-        e0 = sensing.Estimator(tab, array.axes, array.part)
-        near = sensing.symmetry_group(d, polarity=False) if G is None else None
-        for avg in (1, 32):
-            ok, times, fails = 0, [], []
-            for _ in range(SENSING_GLOBAL_TRIALS):
-                Rt = so3.random(1, rng)[0]
-                mt = np.mean([sensing.sense(array, tab.field(Rt), rng) for _ in range(avg)], axis=0)
-                t = time.perf_counter()
-                e = e0.initialise(mt, near_symmetry=near)
-                times.append(time.perf_counter() - t)
-                err = so3.distance(e.R[None], Rt @ G).min() if G is not None else so3.distance(e.R, Rt)
-                ok += bool(err < math.radians(0.05))
-                if err >= math.radians(0.05):
-                    fails.append(round(math.degrees(float(err)), 1))
-            run["global"]["rows"].append({"rotor": name, "averaged": avg, "success": ok,
-                                          "median_s": statistics.median(times), "failures_deg": fails})
+    # global start (bench_sensing's, shortened)
+    sys.path.insert(0, str(ROOT / "benchmarks"))
+    from bench_sensing import global_start_rows
+
+    run["global"] = {"trials": SENSING_GLOBAL_TRIALS, "rows": global_start_rows(design, array, SENSING_GLOBAL_TRIALS)}
     _step(run, "global start")
     # model errors (bench_sensing.model_error, 100 orientations)
     rng = np.random.default_rng(7)
