@@ -355,3 +355,31 @@ def test_move_on_hardware_refuses_bad_input_with_exit_2(tmp_path):
                                "--out", str(tmp_path), *args], capture_output=True, text=True, timeout=120)
         assert run_.returncode == 2, run_.stderr
         assert "Traceback" not in run_.stderr and run_.stderr.count("\n") == 1, run_.stderr
+
+
+def test_an_interrupt_inside_a_compiled_call_stops_the_loop_with_every_coil_off(rig, monkeypatch):
+    """Ctrl-C or SIGTERM landing inside a numba call of the law surfaces as ``SystemError`` with the interrupt as
+    its context (seen in the fresh-clone CI: ``move --emulate`` then said no word of the coils): the loop takes it
+    as the interrupt, switches every coil off and reports ``INTERRUPT``; any other SystemError is not swallowed."""
+    from spherestep.drive import session
+
+    class Interrupted(session.ServoLaw):
+        calls = 0
+        error = KeyboardInterrupt
+
+        def step(self, t, measurement=None, measured_at=None):
+            type(self).calls += 1
+            if type(self).calls == 50:
+                try:
+                    raise self.error()
+                except BaseException as exc:
+                    raise SystemError("CPUDispatcher(<function ...>) returned a result with an exception set") from exc
+            return super().step(t, measurement, measured_at)
+
+    monkeypatch.setattr(session, "ServoLaw", Interrupted)
+    s = run(rig, hold(np.eye(3)), 1.0, lockstep=True, watchdog_ms=100, max_late=0.05)
+    assert s.report.outcome == "INTERRUPT" and s.report.off_acknowledged and s.report.cycles == 48, s.report.to_dict()
+    assert not s.final.enabled
+    Interrupted.calls, Interrupted.error = 0, ValueError
+    with pytest.raises(SystemError):
+        run(rig, hold(np.eye(3)), 1.0, lockstep=True, watchdog_ms=100, max_late=0.05)

@@ -55,6 +55,7 @@ import numpy as np
 
 from .. import checks, so3
 from ..errors import ComputationError, bad_value
+from ..outputs import interrupt_of
 from .backend import LinkError
 from .drive_link import DriveLink
 from .limits import CurrentLimits, ThermalLimitError
@@ -383,6 +384,10 @@ def run_servo(link: DriveLink, estimate, law, *, duration: float, rate: float = 
     except LinkError as exc:
         report.outcome, report.message = "LINK", str(exc)
     except KeyboardInterrupt:
+        report.outcome, report.message = "INTERRUPT", "interrupted"
+    except SystemError as exc:  # Ctrl-C or SIGTERM inside a compiled (numba) call surfaces so
+        if interrupt_of(exc) is None:
+            raise
         report.outcome, report.message = "INTERRUPT", "interrupted"
     finally:
         if collecting:
