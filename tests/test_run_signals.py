@@ -107,3 +107,23 @@ def test_relay_masks_that_disagree_with_the_coils_are_refused(tmp_path, capsys):
     assert main(["run", str(plan), "--rate", "5", "--dry-run"]) == 2
     err = capsys.readouterr().err
     assert "plan.steps[1].enable_mask must be 0x" in err and "disagrees" in err
+
+
+def test_an_interrupt_inside_a_compiled_call_is_reported_as_the_interrupt(tmp_path, monkeypatch, capsys):
+    """A Ctrl-C landing in a numba call (``run --simulate`` steps a compiled plant) surfaces as ``SystemError``
+    with the interrupt as its context: ``run`` says it was interrupted and notes it in the log, exit 130."""
+    import spherestep.hardware as hardware
+
+    def interrupted(*args, **kwargs):
+        try:
+            raise KeyboardInterrupt
+        except KeyboardInterrupt as exc:
+            raise SystemError("CPUDispatcher(<function ...>) returned a result with an exception set") from exc
+
+    monkeypatch.setattr(hardware, "play", interrupted)
+    plan = write_plan(tmp_path / "plan.json", 4)
+    log = tmp_path / "run.log"
+    code = main(["run", str(plan), "--dry-run", "--rate", "10", "--log", str(log)])
+    err = capsys.readouterr().err
+    assert code == 130 and err.strip().splitlines()[-1] == "spherestep: interrupted (SIGINT): all coils off", err
+    assert log.read_text().splitlines()[-1].split(None, 2)[1:] == ["NOTE", "interrupted by Ctrl-C: KeyboardInterrupt"]

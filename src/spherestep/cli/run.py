@@ -17,7 +17,7 @@ import typer
 from ..errors import InputError, bad_value
 from .app import app
 from .common import console, number, print_json
-from .signals import Terminated, sigterm_as_interrupt, told
+from .signals import Terminated, interrupt_of, sigterm_as_interrupt, told
 
 LOG_LINE = re.compile(r"^\s*-?\d+\.\d{6} (TX|RX|NOTE) ")  # a line of Transcript.lines()
 
@@ -160,17 +160,18 @@ def run(
         acknowledged = "all coils off, acknowledged by the device" if not (dry_run or simulate) else outcome
         transcript.add(backend.clock(), "NOTE", f"end: {len(steps.steps)} frames streamed; {acknowledged}")
     except BaseException as exc:
-        why = {Terminated: "stopped by SIGTERM", KeyboardInterrupt: "interrupted by Ctrl-C"}.get(type(exc), None)
+        interrupt = interrupt_of(exc)  # also one inside a compiled call (a SystemError with it as its context)
+        why = {Terminated: "stopped by SIGTERM", KeyboardInterrupt: "interrupted by Ctrl-C"}.get(type(interrupt), None)
         transcript.add(transcript.entries[-1][0] if transcript.entries else 0.0, "NOTE",
-                       f"{why or 'failed'}: {' '.join(str(exc).split()) or type(exc).__name__}")
+                       f"{why or 'failed'}: {' '.join(str(interrupt or exc).split()) or type(interrupt or exc).__name__}")
         if sink is not None:
             sink.close()
-        if isinstance(exc, KeyboardInterrupt):  # the coils are off by now (the driver switched them off)
+        if interrupt is not None:  # the coils are off by now (the driver switched them off)
             off = "all coils off, acknowledged by the device" if not (dry_run or simulate) else outcome
-            signame = "SIGTERM" if isinstance(exc, Terminated) else "SIGINT"
+            signame = "SIGTERM" if isinstance(interrupt, Terminated) else "SIGINT"
             print(f"spherestep: interrupted ({signame}): {off}", file=sys.stderr)
             told()
-            raise typer.Exit(143 if isinstance(exc, Terminated) else 130) from None
+            raise typer.Exit(143 if isinstance(interrupt, Terminated) else 130) from None
         raise
     if sink is not None:
         sink.close()
