@@ -1525,6 +1525,8 @@ def measure_sensing_notes() -> dict:
     self-calibration, the 2-s tracking run with the IMU and the fusion, the servo's 20° turn with each sensor, and on
     the iron prototype the cores' cost, the estimator's error with and without them and ``accuracy``; the same
     seeds and cases as ``benchmarks/bench_sensing.py`` and ``bench_sensing_iron.py``. ~3–5 min of one core."""
+    sys.path.insert(0, str(ROOT / "benchmarks"))
+    from bench_sensing import global_start_rows, loop_rows  # the benchmark's own trials, stored here
     from dataclasses import replace
 
     import numpy as np
@@ -1600,9 +1602,6 @@ def measure_sensing_notes() -> dict:
                                     "coil_residual_uT": a.coil_residual_T * 1e6})
     _step(run, "accuracy against sensor count")
     # global start (bench_sensing's, shortened)
-    sys.path.insert(0, str(ROOT / "benchmarks"))
-    from bench_sensing import global_start_rows
-
     run["global"] = {"trials": SENSING_GLOBAL_TRIALS, "rows": global_start_rows(design, array, SENSING_GLOBAL_TRIALS)}
     _step(run, "global start")
     # model errors (bench_sensing.model_error, 100 orientations)
@@ -1653,28 +1652,8 @@ def measure_sensing_notes() -> dict:
                           "common_deg": math.degrees(float(np.linalg.norm(E1.mean(0)))),
                           "scatter_deg": rms(E1 - E1.mean(0))}
     _step(run, "self-calibration")
-    # the 2-s run at 1 kHz (bench_sensing.loop)
-    rng = np.random.default_rng(6)
-    dt, ax = 1e-3, rng.normal(size=3)
-    ax /= np.linalg.norm(ax)
-    R0 = so3.random(1, rng)[0]
-    path = [R0 @ so3.exp(ax * dt * k) for k in range(2000)]
-    c3 = np.zeros(len(design.stator))
-    c3[[3, 7, 11]] = [1, -1, 1]
-    sensors = {"hall": sensing.HallSensor(design, array=array, current_error=0.01, seed=1),
-               "imu": sensing.ImuSensor(design, dt, seed=2),
-               "fused": sensing.FusedSensor(design, sensing.HallSensor(design, array=array, current_error=0.01,
-                                                                       seed=3), dt, seed=4)}
-    run["loop"] = {}
-    for name, s in sensors.items():
-        R_est, err = R0, []
-        t = time.perf_counter()
-        for k, Rk in enumerate(path):
-            R_est = s.estimate(Rk, c3, R0 if k == 0 else (R_est if name == "hall" else None))
-            err.append(so3.distance(R_est, Rk))
-        e = np.degrees(np.array(err[100:]))
-        run["loop"][name] = {"rms_deg": float(np.sqrt(np.mean(e ** 2))), "worst_deg": float(e.max()),
-                             "us_per_sample": (time.perf_counter() - t) / len(path) * 1e6}
+    # the 2-s run at 1 kHz (bench_sensing's)
+    run["loop"] = loop_rows(design, array)
     _step(run, "2-s tracking run")
     # the servo's 20° turn with each sensor (bench_sensing.servo)
     tmap = torque_map(design)
