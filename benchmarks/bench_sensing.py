@@ -44,8 +44,10 @@ def table_accuracy(design, array):
     print(f"max |B| at the sensors: {np.abs(exact).max() * 1e3:.1f} mT")
 
 
-def timing(design, array):
-    print("\n## Time per call (median, one orientation, 24 sensors)")
+def one_step_case(design, array):
+    """The tracking step's case: ``(table, coils, est, R, c, m, R_prev)`` — the field tables, the estimator with the
+    coils' field, a random orientation ``R`` with 4 coils on (``c``), its noisy reading ``m``, and the prior
+    ``R_prev`` 1 ms earlier at 1 rad/s. Also docs_numbers' sensing-notes."""
     table = sensing.FieldTable.build(design, array.positions)
     coils = sensing.CoilField.build(design, array.positions)
     est = sensing.Estimator(table, array.axes, array.part, (coils,))
@@ -55,6 +57,12 @@ def timing(design, array):
     c[[1, 5, 9, 20]] = [1, -1, 1, -1]
     m = sensing.sense(array, table.field(R) + coils.field(c), rng)
     R_prev = so3.exp(np.radians(0.06) * np.array([0.6, 0.0, 0.8])) @ R  # 1 rad/s for 1 ms
+    return table, coils, est, R, c, m, R_prev
+
+
+def timing(design, array):
+    print("\n## Time per call (median, one orientation, 24 sensors)")
+    table, coils, est, R, c, m, R_prev = one_step_case(design, array)
     rotor = rotor_collection(design)
     rows = [("magpylib rotor field (1 call)", lambda: rotor.getB(array.positions)),
             ("table field", lambda: table.field(R)),

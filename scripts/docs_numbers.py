@@ -1526,7 +1526,7 @@ def measure_sensing_notes() -> dict:
     the iron prototype the cores' cost, the estimator's error with and without them and ``accuracy``; the same
     seeds and cases as ``benchmarks/bench_sensing.py`` and ``bench_sensing_iron.py``. ~3–5 min of one core."""
     sys.path.insert(0, str(ROOT / "benchmarks"))
-    from bench_sensing import global_start_rows, loop_rows  # the benchmark's own trials, stored here
+    from bench_sensing import global_start_rows, loop_rows, one_step_case  # the benchmark's own trials, stored here
     from dataclasses import replace
 
     import numpy as np
@@ -1575,14 +1575,7 @@ def measure_sensing_notes() -> dict:
                        "margin_min": float(d.min()), "margin_p5": float(np.percentile(d, 5)),
                        "margin_median": float(np.median(d))}
     run["marker"] = sensing.marker_effect(design, sensing.marked_design(design), states=2, samples=300).to_dict()
-    coils = sensing.CoilField.build(design, array.positions)
-    est = sensing.Estimator(table, array.axes, array.part, (coils,))
-    rng = np.random.default_rng(2)
-    Ri = so3.random(1, rng)[0]
-    c = np.zeros(len(design.stator))
-    c[[1, 5, 9, 20]] = [1, -1, 1, -1]
-    m = sensing.sense(array, table.field(Ri) + coils.field(c), rng)
-    prev = so3.exp(np.radians(0.06) * np.array([0.6, 0.0, 0.8])) @ Ri
+    _, _, est, Ri, c, m, prev = one_step_case(design, array)
     run["one_step_deg"] = math.degrees(so3.distance(est.track(m, prev, c).R, Ri))
     run["solved_deg"] = math.degrees(so3.distance(est.solve(m, prev, c).R, Ri))
     _step(run, "placement, table, one step")
