@@ -61,3 +61,31 @@ def test_a_failure_after_a_swallowed_signal_removes_the_set_too(tmp_path):
             write_text(out / "a.csv", "1\n")
             raise RuntimeError("a failure of its own")
     assert (out / "a.csv").exists()
+
+
+def test_an_interrupt_python_could_not_propagate_is_raised_again(monkeypatch, capsys):
+    """llvmlite's callback during numba's first compile swallows a Ctrl-C (Python hands it to
+    ``sys.unraisablehook``): the CLI's hook delivers the signal to the main thread again, so the command stops
+    instead of running on (a fresh install's ``calibrate`` did), and prints no 'Exception ignored' traceback."""
+    import sys
+    import time
+
+    from spherestep.cli import main
+    from spherestep.cli.signals import sigterm_as_interrupt
+
+    monkeypatch.setattr(sys, "unraisablehook", sys.unraisablehook)  # restored after the test
+    main(["packings"])  # any command: main installs the CLI's hook
+    capsys.readouterr()
+
+    class Swallowed:
+        def __del__(self):
+            raise KeyboardInterrupt
+
+    with sigterm_as_interrupt() as received:
+        with pytest.raises(KeyboardInterrupt):
+            Swallowed()  # dropped at once: its __del__'s interrupt cannot propagate
+            deadline = time.monotonic() + 2.0
+            while time.monotonic() < deadline:  # the signal comes back at a bytecode boundary
+                pass
+    assert received.name == "SIGINT"
+    assert "Exception ignored" not in capsys.readouterr().err
