@@ -63,10 +63,11 @@ def test_a_failure_after_a_swallowed_signal_removes_the_set_too(tmp_path):
     assert (out / "a.csv").exists()
 
 
-def test_an_interrupt_python_could_not_propagate_is_raised_again(monkeypatch, capsys):
+def test_an_interrupt_python_could_not_propagate_is_raised_again(monkeypatch, capsys, request):
     """llvmlite's callback during numba's first compile swallows a Ctrl-C (Python hands it to
     ``sys.unraisablehook``): the CLI's hook delivers the signal to the main thread again, so the command stops
     instead of running on (a fresh install's ``calibrate`` did), and prints no 'Exception ignored' traceback."""
+    import signal
     import sys
     import time
 
@@ -74,6 +75,10 @@ def test_an_interrupt_python_could_not_propagate_is_raised_again(monkeypatch, ca
     from spherestep.cli.signals import sigterm_as_interrupt
 
     monkeypatch.setattr(sys, "unraisablehook", sys.unraisablehook)  # restored after the test
+    # Ctrl-C's default handler, as a command started from a terminal has it (make test may run with SIGINT
+    # ignored by inheritance: a background job of a non-interactive shell)
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+    request.addfinalizer(lambda: signal.signal(signal.SIGINT, previous))
     main(["packings"])  # any command: main installs the CLI's hook
     capsys.readouterr()
 
