@@ -83,10 +83,9 @@ def other_cpu(run):
 def test_turns_360_degrees_about_the_demo_axis_at_500_hz(rig):
     """Over the pseudo-terminal on the wall clock: 500 Hz, no deadline missed, never slowed, back within 0.05°.
 
-    This VM stalls now and then whatever runs in it: measured on an idle machine over 40 such turns (60,000
-    cycles), 36 missed nothing; the others lost 13 ticks in all — 3 while the loop slept with its work done
-    (``late_wakeups``: the OS woke it over a period late) and 10 in one cycle whose thread was charged 17 ms of
-    CPU for ~0.5 ms of work (the vCPU held up). So the turn is judged on the better of two runs (a loop that
+    This VM stalls now and then whatever runs in it: ``bench_hardware.py --repeat 40`` (load 0.6–1.2) had 37 of
+    40 such turns miss nothing and 3 ticks missed in all (1 while the loop slept with its work done:
+    ``late_wakeups``, the OS woke it over a period late). So the turn is judged on the better of two runs (a loop that
     misses deadlines of its own misses them in both), and skipped, saying why, only when both fail while other
     processes kept more than a quarter of the machine busy (the loop runs with SCHED_FIFO where permitted, which
     holds it on a busy machine, but not on one whose two cores other processes fill: measured 4–5 deadlines
