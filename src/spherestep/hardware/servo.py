@@ -33,10 +33,11 @@ trajectory time ``reference_times`` of every cycle, and the last estimate's ``en
 end.
 Whatever ends the run — done, a fault seen by the host, a trip reported by the device, a lost link, Ctrl-C —
 the loop sends ``OFF`` and reports whether the device acknowledged it (if the link is gone, the device's
-watchdog switches the coils off within its period). A cycle's reading is waited for until ``RESERVE`` of its period is left; a later one is not used (the law
-runs that cycle on its own prediction, ``late_readings`` counts them, and the log's ``stale`` column, otherwise
-the magnetometers' stale mask in hex, is ``-``) — a link's delay then never costs a deadline, and sustained
-late readings count against the budget as late cycles do. Each cycle is one line of the log, streamed to
+watchdog switches the coils off within its period). A cycle's reading is waited for until ``RESERVE`` of its
+period is left; a later one is not used (the law runs that cycle on its own prediction, ``late_readings`` counts
+them, and the log's ``stale`` column, otherwise the magnetometers' stale mask in hex, is ``-``), so one late
+answer never costs a deadline; not twice in a row, so a link that keeps answering late costs deadlines and meets
+the budget above. Each cycle is one line of the log, streamed to
 ``log + ".part"`` and renamed to ``log`` at the end (a log is whole or marked partial, never half-written in
 place).
 """
@@ -78,8 +79,8 @@ RT_PRIORITY = 20  # SCHED_FIFO priority the loop asks for (1–99; the kernel's 
 MISS_WINDOW = 25  # cycles: deadlines missed within the last this many count against the budget
 MIN_SCALE = 0.125  # the slowest pace a starved loop follows the trajectory at before it stops
 RECOVER_AFTER = 2.0  # s without a missed deadline before a slowed loop doubles its pace and rate again ...
-RESERVE = 0.25  # share of the period kept for the estimate and the law: a reading later than that is not waited for
 RECOVER_BUSY = 0.8  # ... if every cycle since ended within this share of the doubled rate's period
+RESERVE = 0.25  # share of the period kept for the estimate and the law: a reading later than that is not waited for
 ON_MISSED = ("slow", "stop")
 
 
@@ -309,15 +310,13 @@ def run_servo(link: DriveLink, estimate, law, *, duration: float, rate: float = 
             if late > max_late:
                 raise ServoFault(f"cycle {k} started {late * 1e3:.1f} ms late, over max_late = {max_late * 1e3:.0f} "
                                  f"ms: the host is too slow for this rate ({_where(report, planned)})", "SLOW")
-            missed_now = late > period
-            if missed_now:  # missed deadlines: skip the ticks that passed, do not burst to catch up
+            if late > period:  # missed deadlines: skip the ticks that passed, do not burst to catch up
                 skipped = int(late // period)
                 report.missed += skipped
                 report.late_wakeups += skipped if asleep else 0
                 sched += skipped * period
                 late -= skipped * period
-            if missed_now:  # one late cycle, however many ticks it skipped
-                window.append(1)
+                window.append(1)  # one late cycle, however many ticks it skipped
                 clean = sched
                 if sum(window) >= miss_budget:
                     if on_missed == "stop" or paced.scale * 0.5 < MIN_SCALE:
