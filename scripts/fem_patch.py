@@ -92,24 +92,44 @@ def patch_coils(design) -> tuple:
     return tuple(int(k) for k in np.argsort(-(v @ v[0]))[:4])
 
 
+# The eight orientations of the stored solves as scipy quaternions (x, y, z, w): four stepper states holding only
+# patch coils, drawn at random (seed SEED) on 2026-11-25, then each turned by TILT_DEG about a random axis. Frozen
+# here because that draw named the states by their index, which the CPU's BLAS kernel decided then (issue 35); each
+# state is found again among ``design.states()`` by its rotation, which no numbering changes.
+STATE_QUATERNIONS = (
+    (0.122140152603, 0.884396556799, -0.361091825166, 0.269327323608),
+    (-0.0747214466668, 0.984688349294, -0.10024439424, -0.121476835637),
+    (-0.514451857489, -0.115443110477, 0.53584083058, 0.659459459598),
+    (-0.0403614303491, 0.784752649358, 0.612314369607, 0.0872086408436),
+)
+TILTED_QUATERNIONS = (
+    (0.10411869227, 0.907613629008, -0.350078234286, 0.206983159312),
+    (-0.0454266919988, 0.975287690648, -0.156362407552, -0.149335640856),
+    (-0.482435628882, -0.176776922086, 0.544298459179, 0.66313269497),
+    (0.00932666635933, 0.810918240547, 0.582122564704, 0.0588042524445),
+)
+
+
 def orientations(design, coils):
-    """``STATES`` stepper states whose held coils all belong to the patch (≥ 2 of them; random, seed ``SEED``)
-    and, for each, an intermediate orientation (the state turned by ``TILT_DEG`` about a random axis): a list of
-    ``(R, kind, currents on the patch)`` — the intermediate one carries its state's currents."""
+    """The ``STATES`` stored stepper states (:data:`STATE_QUATERNIONS`, each a state of ``design`` holding ≥ 2 coils,
+    all in the patch) and their intermediate orientations (:data:`TILTED_QUATERNIONS`, the state turned by
+    ``TILT_DEG``): a list of ``(R, kind, currents on the patch)`` — the intermediate one carries its state's
+    currents."""
     states = design.states()
     patch = set(coils)
-    ok = [i for i in range(len(states)) if states.counts[i] >= 2 and set(states.coils(i)) <= patch]
-    rng = np.random.default_rng(SEED)
-    chosen = rng.choice(ok, STATES, replace=False)
     out, tilted = [], []
-    for i in chosen:
-        held = states.coils(int(i))
+    for q, q_tilt in zip(STATE_QUATERNIONS, TILTED_QUATERNIONS):
+        R = Rotation.from_quat(q).as_matrix()
+        i = int(np.argmin(np.abs(states.rotations - R).max(axis=(1, 2))))
+        held = states.coils(i)
+        if np.abs(states.rotations[i] - R).max() > 1e-9 or len(held) < 2 or not set(held) <= patch:
+            raise ValueError(f"orientation {q} is not a state of the design holding only patch coils {coils}")
         c = tuple(float(held.get(k, 0)) for k in coils)
-        R = states.rotations[int(i)]
         out.append((R, "state", c))
-        axis = rng.normal(size=3)
-        turn = Rotation.from_rotvec(math.radians(TILT_DEG) * axis / np.linalg.norm(axis)).as_matrix()
-        tilted.append((turn @ R, "intermediate", c))
+        turned = Rotation.from_quat(q_tilt).as_matrix()
+        if not math.isclose(math.degrees(Rotation.from_matrix(turned @ R.T).magnitude()), TILT_DEG, abs_tol=1e-6):
+            raise ValueError(f"intermediate orientation {q_tilt} is not its state turned by {TILT_DEG} deg")
+        tilted.append((turned, "intermediate", c))
     return out + tilted
 
 

@@ -249,10 +249,21 @@ coil:
 """
 
 
+def fingerprinted(text: str) -> str:
+    """``text`` with the fingerprint of the motor it builds as its last line (the numbering its coil and pole
+    lists and every plan or calibration made for it rely on: a machine that numbers otherwise refuses the file)."""
+    from spherestep.motor import MotorDesign
+
+    design = MotorDesign.loads(text)
+    return text + f"# the coil and magnet numbering this file relies on (MotorDesign.fingerprint)\nfingerprint: " \
+                  f"{design.fingerprint}\n"
+
+
 def texts() -> dict[str, str]:
     """File name → text of every generated gallery design file."""
-    return {"jhu-as-built.yaml": jhu_text(), "ncsu-goldberg.yaml": ncsu_text(),
-            "dodecahedral-hobby.yaml": HOBBY, "gimbal-40mm.yaml": GIMBAL}
+    return {name: fingerprinted(text) for name, text in (
+        ("jhu-as-built.yaml", jhu_text()), ("ncsu-goldberg.yaml", ncsu_text()),
+        ("dodecahedral-hobby.yaml", HOBBY), ("gimbal-40mm.yaml", GIMBAL))}
 
 
 def main(argv: list[str]) -> int:

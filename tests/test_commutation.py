@@ -119,9 +119,17 @@ def test_plan_round_trips_through_json_and_masks(proto, tmp_path):
     ("{", "plan"),
     ('{"format": "other"}', "plan.format"),
     ('{"format": "spherestep-plan", "version": 9}', "plan.version"),
-    ('{"format": "spherestep-plan", "version": 1, "coil_count": 2, "channel_map": [], "steps": []}', "channel_map"),
-    ('{"format": "spherestep-plan", "version": 1, "coil_count": 1, "channel_map": [{"enable": 0, "polarity": 1}],'
-     ' "steps": [{"index": 0, "coils": {"5": 1}, "target": [], "achieved": [], "error_deg": 0}]}', "coils"),
+    ('{"format": "spherestep-plan", "version": 1, "coil_count": 2, "channel_map": [], "steps": []}',
+     "plan.version must be 2 .*plan the turn again"),
+    ('{"format": "spherestep-plan", "version": 2, "coil_count": 2, "channel_map": [], "steps": []}',
+     "plan.design_fingerprint"),
+    ('{"format": "spherestep-plan", "version": 2, "design_fingerprint": null, "coil_count": 2, "channel_map": [], '
+     '"steps": []}', "channel_map"),
+    ('{"format": "spherestep-plan", "version": 2, "design_fingerprint": "md5:1", "coil_count": 2, "channel_map": [], '
+     '"steps": []}', "plan.design_fingerprint"),
+    ('{"format": "spherestep-plan", "version": 2, "design_fingerprint": null, "coil_count": 1, "channel_map": '
+     '[{"enable": 0, "polarity": 1}], "steps": [{"index": 0, "coils": {"5": 1}, "target": [], "achieved": [], '
+     '"error_deg": 0}]}', "coils"),
 ])
 def test_bad_plan_files_raise_input_errors(tmp_path, text, field):
     path = tmp_path / "bad.json"

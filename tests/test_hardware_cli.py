@@ -72,7 +72,8 @@ def test_bad_port_is_one_line_and_exit_2(tmp_path, capsys):
 
 @pytest.mark.parametrize("content, message", [
     ("{not json", "plan must be a JSON plan file"),
-    (json.dumps({"format": "spherestep-plan", "version": 1, "coil_count": 4}), "plan.channel_map must be present"),
+    (json.dumps({"format": "spherestep-plan", "version": 2, "coil_count": 4}), "plan.channel_map must be present"),
+    (json.dumps({"format": "spherestep-plan", "version": 1, "coil_count": 4}), "plan.version must be 2"),
     (json.dumps({"format": "something-else"}), "plan.format must be"),
 ])
 def test_malformed_plan_is_one_line_and_exit_2(tmp_path, capsys, content, message):

@@ -280,6 +280,35 @@ def circle_in_corner(p, q, r) -> tuple[np.ndarray, np.ndarray]:
     return center, rho
 
 
+ORDER_TOL = 1e-7
+
+
+def tolerant_ranks(values, tol: float = ORDER_TOL) -> np.ndarray:
+    """Dense integer ranks of ``values`` (ascending) in which values closer than ``tol`` along a chain share a
+    rank: sort, then start a new rank at every gap ``> tol``. Values equal in exact arithmetic but a few ulps apart
+    (as another BLAS kernel computes them) get the same rank; the ranks depend neither on the input's order nor
+    on its last bits, unless a true gap lies within rounding of ``tol`` itself."""
+    v = np.asarray(values, dtype=float).ravel()
+    order = np.argsort(v, kind="stable")
+    ranks = np.empty(len(v), dtype=np.int64)
+    ranks[order] = np.concatenate([[0], np.cumsum(np.diff(v[order]) > tol)]) if len(v) else []
+    return ranks
+
+
+def canonical_order(points, tol: float = ORDER_TOL) -> np.ndarray:
+    """The project's one order for points on the sphere: indices that sort ``points (n, 3)`` from the north pole
+    down in bands of height ``z`` (:func:`tolerant_ranks`, ``tol``), and within a band by azimuth
+    ``φ = atan2(y, x)`` in ``(−π, π]`` from ``+x`` counter-clockwise seen from ``+z`` (``φ`` within ``tol`` of
+    ``−π`` counts as ``π``; ``φ = 0`` at a pole). No rounding boundary is involved, so rounding differences of
+    the inputs (another CPU's BLAS kernel) or a permutation of them cannot change the order of distinct points."""
+    p = np.asarray(points, dtype=float).reshape(-1, 3)
+    band = tolerant_ranks(-p[:, 2], tol)
+    phi = np.arctan2(p[:, 1], p[:, 0])
+    phi = np.where(phi <= -np.pi + tol, phi + 2 * np.pi, phi)
+    phi = np.where(np.hypot(p[:, 0], p[:, 1]) < tol, 0.0, phi)
+    return np.lexsort((phi, band))
+
+
 def shell_voxels(n: int, eps: float = 1e-12) -> np.ndarray:
     """Sorted ids ``(i n + j) n + k`` of the voxels of ``[−1, 1]³`` cut into ``n³`` that meet the unit sphere.
 

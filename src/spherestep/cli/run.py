@@ -36,6 +36,19 @@ def check_log(path: Path, force: bool) -> Path:
     return path
 
 
+def _design_for(design_path, plan):
+    """The design of ``--design`` (default the prototype), refused unless ``plan`` was made for it: its coil count
+    and its fingerprint (the coil and magnet numbering, :meth:`Plan.check_design`)."""
+    from .common import design_from
+
+    design = design_from(design_path)
+    if len(design.stator) != plan.coil_count:
+        raise bad_value("--design", f"the design the plan was made for ({plan.coil_count} coils)",
+                        f"a design with {len(design.stator)} coils")
+    plan.check_design(design)
+    return design
+
+
 def _simulated(design_path, plan):
     """The :class:`Simulated` back end for ``plan``: the design's rotor under its own torque model
     (:func:`spherestep.magnetics.design_model`: iron for the prototype), tuned, starting at rest at the plan's
@@ -43,13 +56,9 @@ def _simulated(design_path, plan):
     from ..dynamics import tune
     from ..hardware import Simulated
     from ..magnetics import design_model
-    from .common import design_from, usable
+    from .common import usable
 
-    design = design_from(design_path)
-    if len(design.stator) != plan.coil_count:
-        raise bad_value("--design", f"the design the plan was made for ({plan.coil_count} coils)",
-                        f"a design with {len(design.stator)} coils")
-    design = usable(design, "--design", design_path)
+    design = usable(_design_for(design_path, plan), "--design", design_path)
     model = design_model(design).model
     tuning = tune(design, model)
     return Simulated(design, model, plan.steps[0].achieved, rotor=tuning.rotor, dt=tuning.dt)
@@ -82,8 +91,9 @@ def run(
                                                           "controller with --channels channels."),
     simulate: bool = typer.Option(False, "--simulate", help="Run the plan on the simulated rotor (the design's own torque "
                                                             "model, tuned damping) instead of a device."),
-    design_path: Path = typer.Option(None, "--design", help="With --simulate: the design file (default the "
-                                                            "built-in prototype)."),
+    design_path: Path = typer.Option(None, "--design", help="The design the plan was made for (default the "
+                                                            "built-in prototype with --simulate): the plan is refused "
+                                                            "unless it names this design's coil numbering."),
     channels: int = typer.Option(None, "--channels", help="With --dry-run: relay channels of the controller it "
                                                            "stands in for, 1..64 (default: as many as the plan "
                                                            "uses; a device reports its own)."),
@@ -114,8 +124,6 @@ def run(
     """
     if dry_run and simulate:
         raise bad_value("--dry-run/--simulate", "at most one of the two", "both")
-    if design_path is not None and not simulate:
-        raise bad_value("--design", "given only with --simulate", str(design_path))
     if simulate:
         port = port or "simulated"
     if not dry_run and port is None:
@@ -132,6 +140,8 @@ def run(
     if log is not None:
         log = check_log(log, force)
     steps = Plan.from_json(plan)
+    if design_path is not None and not simulate:
+        _design_for(design_path, steps)  # refused before anything is switched
     given = {"max_on": max_on, "max_duty": max_duty, "window": duty_window}
     limits = ThermalLimits(**{k: v for k, v in given.items() if v is not None})
     limits.check_plan(steps, rate)  # refused before a log is opened or the device touched

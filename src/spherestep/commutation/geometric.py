@@ -132,4 +132,4 @@ def _build_plan(design, states, targets, chosen, status, planner: str) -> Plan:
         steps.append(Step(index=i, target=targets[i], achieved=achieved[i], error=float(errors[i]),
                           coils=states.coils(s), held=held, next_pole=next_pole, status=status[i]))
     return Plan(steps=steps, coil_count=len(design.stator), channel_map=design.channel_map,
-                design=design.name, planner=planner)
+                design=design.name, planner=planner, design_fingerprint=design.fingerprint)

@@ -1,8 +1,10 @@
 """The commutation plan: per step the coils to energise, with polarity, and where the rotor should land.
 
 A :class:`Plan` is what every planner returns and what the hardware streams. Its file format (JSON,
-``"format": "spherestep-plan"``, ``"version": 1``) is documented in ``docs/commutation.md``; CSV holds the
-same steps one per row with the relay masks.
+``"format": "spherestep-plan"``, ``"version": 2``) is documented in ``docs/commutation.md``; CSV holds the
+same steps one per row with the relay masks. Version 2 records the design's fingerprint (its coil and magnet
+numbering, :attr:`~spherestep.motor.MotorDesign.fingerprint`); version 1 plans, whose coil indices may have been
+numbered by the planning machine's CPU (issue 35), are refused with a line saying to plan again.
 
 Relay channels: coil ``k`` has an *enable* channel and a *polarity* channel (``channel_map[k] = (enable,
 polarity)``). A step's ``enable_mask`` has bit ``enable`` set for every energised coil; ``polarity_mask``
@@ -26,7 +28,8 @@ from ..channels import as_channel_map
 from ..errors import bad_value
 
 FORMAT = "spherestep-plan"
-VERSION = 1
+VERSION = 2
+AGAIN = "plan the turn again with `spherestep plan` (or commutation.turn)"
 
 
 def coil_masks(coils: dict[int, int], channel_map: np.ndarray) -> tuple[int, int]:
@@ -114,6 +117,14 @@ class Plan:
     channel_map: np.ndarray
     design: str = "design"
     planner: str = "geometric"
+    design_fingerprint: str | None = None
+
+    def check_design(self, design) -> None:
+        """Refuse to drive ``design`` with a plan made for another motor or numbering (InputError naming
+        ``plan.design_fingerprint``)."""
+        from ..motor import check_fingerprint
+
+        check_fingerprint(design, self.design_fingerprint, "plan.design_fingerprint", AGAIN)
 
     @property
     def achieved(self) -> np.ndarray:
@@ -183,6 +194,7 @@ class Plan:
             "format": FORMAT,
             "version": VERSION,
             "design": self.design,
+            "design_fingerprint": self.design_fingerprint,
             "planner": self.planner,
             "coil_count": self.coil_count,
             "channel_map": [{"coil": k, "enable": int(e), "polarity": int(p)}
@@ -223,11 +235,13 @@ class Plan:
         if not isinstance(data, dict) or data.get("format") != FORMAT:
             raise bad_value("plan.format", f'"{FORMAT}"', data.get("format") if isinstance(data, dict) else data)
         if data.get("version") != VERSION:
-            raise bad_value("plan.version", str(VERSION), data.get("version"))
-        for key in ("coil_count", "channel_map", "steps"):
+            raise bad_value("plan.version", f"{VERSION} (a version 1 plan names coils in a numbering that could "
+                            f"depend on the planning machine's CPU: {AGAIN})", data.get("version"))
+        for key in ("coil_count", "channel_map", "steps", "design_fingerprint"):
             if key not in data:
                 raise bad_value(f"plan.{key}", "present (write plans with Plan.to_json or `spherestep plan`)",
                                 "nothing")
+        fingerprint = _fingerprint(data["design_fingerprint"])
         coil_count = checks.count(data["coil_count"], "plan.coil_count", 1, 4096,
                                   expected="a whole number of coils 1..4096")
         cmap = _channel_map(data["channel_map"], coil_count)
@@ -236,7 +250,8 @@ class Plan:
             raise bad_value("plan.steps", "a non-empty list of steps", raw if not isinstance(raw, list) else [])
         steps = [_step(s, f"plan.steps[{i}]", coil_count, cmap) for i, s in enumerate(raw)]
         return cls(steps=steps, coil_count=coil_count, channel_map=cmap,
-                   design=str(data.get("design", "design")), planner=str(data.get("planner", "geometric")))
+                   design=str(data.get("design", "design")), planner=str(data.get("planner", "geometric")),
+                   design_fingerprint=fingerprint)
 
     @classmethod
     def from_json(cls, path: str | Path) -> Plan:
@@ -255,6 +270,15 @@ class Plan:
         except json.JSONDecodeError as exc:
             raise bad_value("plan", "a JSON plan file", f"{path} (line {exc.lineno}: {exc.msg})") from None
         return cls.from_dict(data)
+
+
+def _fingerprint(value) -> str | None:
+    """A plan's recorded design fingerprint: ``"sha256:…"`` or null (a plan made without a design)."""
+    if value is None:
+        return None
+    if not isinstance(value, str) or not value.startswith("sha256:"):
+        raise bad_value("plan.design_fingerprint", 'null or "sha256:" and hex digits (MotorDesign.fingerprint)', value)
+    return value
 
 
 def _channel_map(entries, coil_count: int) -> np.ndarray:

@@ -134,4 +134,4 @@ def _assemble(design, rows) -> Plan:
         new = [j for j, _ in b.held if j not in mine]
         a.next_pole = new[0] if new else None
     return Plan(steps=steps, coil_count=len(design.stator), channel_map=design.channel_map,
-                design=design.name, planner="potential")
+                design=design.name, planner="potential", design_fingerprint=design.fingerprint)

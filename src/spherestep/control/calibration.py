@@ -410,6 +410,7 @@ class Calibration:
     label: str = "calibrated"
     coupling_gain: float = 1.0
     coupling_std: float = 0.0
+    design_fingerprint: str | None = None
 
     @property
     def consistent(self) -> bool:
@@ -443,7 +444,8 @@ class Calibration:
 
     def to_dict(self, degrees: bool = True) -> dict:
         k = 180.0 / math.pi if degrees else 1.0
-        return {"label": self.label, "backend": self.backend, "holds": self.holds, "equations": self.equations,
+        return {"label": self.label, "design_fingerprint": self.design_fingerprint, "backend": self.backend,
+                "holds": self.holds, "equations": self.equations,
                 "coupling": self.coupling, "coupling_gain": self.coupling_gain, "coupling_std": self.coupling_std,
                 "consistent": self.consistent,
                 ("nodes_deg" if degrees else "nodes_rad"): [float(x * k) for x in self.nodes],
@@ -494,6 +496,10 @@ class Calibration:
             raise bad_value("calibration", "tables with one value per increasing node", str(path))
         if design.coil.core != "iron":
             raise bad_value("calibration", "used with an iron-cored design", design.coil.core)
+        from ..motor import check_fingerprint
+
+        check_fingerprint(design, data.get("design_fingerprint"), "calibration.design_fingerprint",
+                          f"calibrate again with `spherestep calibrate` ({path})")
         coupling = bool(data.get("coupling", False))
         gain = float(data.get("coupling_gain", 1.0))
         cross = scaled_coupling(iron_model(design, coupling=True).coupling, gain) if coupling else None
@@ -503,7 +509,7 @@ class Calibration:
                    float(data["residual_after_Nm"]), float(data["sigma_Nm"]), int(data["holds"]),
                    int(data["equations"]), moved, tuple(str(u) for u in data["unseen"]), coupling,
                    str(data["backend"]), str(data.get("label", "calibrated")), gain,
-                   float(data.get("coupling_std", 0.0)))
+                   float(data.get("coupling_std", 0.0)), design.fingerprint)
 
 
 def calibration_beside(design_path) -> Path | None:
@@ -676,7 +682,8 @@ def calibrate(design, model, holds: Holds, *, prior: dict | None = None, scales:
     return Calibration(fitted, nodes.copy(), det, win, std[:n], std[n:], d0.copy(), l0.copy(),
                        float(eff[0]), float(eff[1]), (float(eff_std[0]), float(eff_std[1])),
                        rms_before, rms_after, sigma, len(holds), E, tuple(moved), tuple(unseen),
-                       cross is not None, holds.backend, coupling_gain=gain, coupling_std=gain_std)
+                       cross is not None, holds.backend, coupling_gain=gain, coupling_std=gain_std,
+                       design_fingerprint=design.fingerprint)
 
 
 def scaled_coupling(coupling, gain: float):

@@ -129,7 +129,16 @@ def to_dict(design: MotorDesign) -> dict:
     if design.failed_coils:
         data["failed_coils"] = list(design.failed_coils)
     data["coil"] = _coil_dict(design.coil)
+    if _names_indices(data):
+        data["fingerprint"] = design.fingerprint
     return data
+
+
+def _names_indices(data: dict) -> bool:
+    """Whether a document names caps by index (a coil list, failed coils, a channel map, a polarity list): then it
+    records the design's fingerprint, so a machine or version that numbers the caps otherwise refuses it."""
+    return (isinstance(data["stator"].get("coils"), list) or isinstance(data["rotor"].get("polarity"), list)
+            or "failed_coils" in data or "channel_map" in data)
 
 
 class _Dumper(yaml.SafeDumper):

@@ -20,7 +20,7 @@ import yaml
 from pydantic import ValidationError
 
 from .. import packing as pk
-from ..errors import InputError
+from ..errors import InputError, bad_value
 from ..sphere import disc_angle
 from .quantities import show
 from .schema import MAX_BYTES, DesignFileError, DesignSpec, Direction, translate
@@ -187,8 +187,15 @@ def build(document: Document, design_type):
     """``design_type.from_packings(**document.arguments())`` (``design_type`` is
     :class:`~spherestep.motor.MotorDesign` or a subclass); its InputErrors become DesignFileErrors that name
     the file and the file's field path."""
+    recorded = document.spec.fingerprint
     try:
-        return design_type.from_packings(**document.arguments())
+        design = design_type.from_packings(**document.arguments())
+        if recorded is not None and recorded != design.fingerprint:
+            raise bad_value("fingerprint", f"{design.fingerprint}, the numbering of the coils and magnets this file "
+                            "builds today: the file was written for another numbering (its coil and magnet indices "
+                            "would name other caps); write it again from its construction, or remove the "
+                            "fingerprint line once its indices are checked", recorded)
+        return design
     except InputError as exc:
         message, field = str(exc), file_field(exc.field)
         if exc.field is not None and message.startswith(exc.field + " must be "):

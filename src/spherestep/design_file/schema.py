@@ -295,6 +295,7 @@ class DesignSpec(_Model):
     overrides: Overrides = Overrides()
     failed_coils: Annotated[list[Index], Field(max_length=MAX_POLES)] = []
     coil: CoilSection | None = None
+    fingerprint: Annotated[str, Field(pattern=r"^sha256:[0-9a-f]{16}$")] | None = None
 
     @field_validator("coil")
     @classmethod

@@ -179,6 +179,8 @@ def simulate(design, plan, model, dwell: float | None = None, *, rotor: Rotor | 
                         type(model).__name__)
     if plan.coil_count != len(design.stator):
         raise bad_value("plan", f"a plan for this design's {len(design.stator)} coils", f"{plan.coil_count} coils")
+    if plan.design_fingerprint is not None:  # a plan made for a design names its numbering (a hand-built one may not)
+        plan.check_design(design)
     if dwell is None or rotor is None or dt is None:
         from .tuning import tune
 

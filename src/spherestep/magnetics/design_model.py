@@ -80,6 +80,11 @@ def _calibrated(design, coil, calibration, limits) -> DesignModel:
     if coil.core != "iron":
         raise bad_value("calibration", "used with the iron core (it fits the iron model's tables)", coil.core)
     cal = calibration if isinstance(calibration, Calibration) else Calibration.load(calibration, design)
+    if cal.design_fingerprint is not None and cal.design_fingerprint != design.fingerprint:
+        from ..motor import check_fingerprint
+
+        check_fingerprint(design, cal.design_fingerprint, "calibration.design_fingerprint",
+                          "calibrate this design (spherestep.control.calibrate)")
     label = (f"iron ({'coupled' if cal.coupling else 'pairwise'}), calibrated from {cal.holds} holds "
              f"({cal.backend})")
     return DesignModel(cal.model, limits, coil.core, label)

@@ -410,6 +410,21 @@ class MotorDesign:
         u = self.rotor.centers
         return (2.0 / 3.0) * shell_mass * self.radius ** 2 * np.eye(3) + m * r ** 2 * (len(u) * np.eye(3) - u.T @ u)
 
+    @cached_property
+    def fingerprint(self) -> str:
+        """What the coil and magnet *numbering* of this motor is: ``"sha256:"`` and the first 16 hex digits of the
+        SHA-256 of the rotor's centres, its polarities and the stator's coil centres, in index order, each
+        coordinate as a whole number of micro-units (``rint(1e6 x)``, int64). Plans, calibrations and design
+        files record it; a file whose fingerprint differs names coils or magnets of another motor, or of this one
+        numbered otherwise, and is refused (:func:`check_fingerprint`)."""
+        import hashlib
+
+        digest = hashlib.sha256()
+        for part in (self.rotor.centers, self.polarity, self.stator.centers):
+            digest.update(np.rint(1e6 * np.asarray(part, dtype=float)).astype(np.int64).tobytes())
+            digest.update(b"|")
+        return "sha256:" + digest.hexdigest()[:16]
+
     # --- stepper states and metrics ---------------------------------------------------------------------
     @cached_property
     def _states(self):
@@ -484,3 +499,17 @@ def check_fits(design: MotorDesign) -> None:
             raise bad_value(label, f"{part}s that do not overlap (use smaller {part}s, {part}_diameter, or fewer "
                             "of them)", f"{part}s {k} and {int(idx[k, 1])} {np.degrees(sep[k]):.3f}° apart, each "
                             f"face spanning {np.degrees(half):.3f}°")
+
+
+def check_fingerprint(design: MotorDesign, recorded, field: str, again: str) -> None:
+    """Refuse a file made for another numbering: InputError naming ``field`` unless ``recorded`` is this design's
+    :attr:`MotorDesign.fingerprint`; ``again`` says how to make the file anew (e.g. "plan the turn again with
+    `spherestep plan`")."""
+    if recorded is None:
+        raise bad_value(field, f"the fingerprint of the motor the file was made for; this file has none (written "
+                        f"before spherestep numbered coils and magnets alike on every machine): {again}", "nothing")
+    if recorded != design.fingerprint:
+        raise bad_value(field, f"{design.fingerprint}, the fingerprint of design {design.name!r} (its coil and "
+                        f"magnet numbering): the file names coils or magnets of another motor or numbering; {again}",
+                        recorded)
+

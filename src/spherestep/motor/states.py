@@ -21,7 +21,7 @@ from scipy.spatial import cKDTree
 from .. import checks
 from ..errors import bad_value
 from ..so3 import as_rotations, to_quaternion
-from ..sphere import NearestPointGrid
+from ..sphere import NearestPointGrid, tolerant_ranks
 
 CHUNK = 2048
 MAX_REFITS = 6
@@ -285,7 +285,9 @@ def find_states(design, tol: float) -> StepperStates:
     R, n_pairs = R[good], n_pairs[good]
     R, n_pairs = _merge_close(R, n_pairs, 0.05 * tol)
     angle = np.arccos(np.clip((np.trace(R, axis1=1, axis2=2) - 1) / 2, -1, 1))
-    order = np.lexsort((angle, -n_pairs))  # canonical order: most pairs first, then by rotation angle
+    # canonical order: most pairs first, then by rotation angle (equal angles within ORDER_TOL, as symmetric states
+    # have, keep the order of their held sets' integer keys rather than their last bits)
+    order = np.lexsort((tolerant_ranks(angle), -n_pairs))
     R = R[order]
     state, pole, coil = held_pairs(R, u, v, tol, grid)
     pairs = np.stack([pole, coils[coil]], axis=1)

@@ -9,7 +9,8 @@ Each vertex carries a cap of radius half the nearest-neighbour arc, so neighbour
   solving ``d(e3, u(0,β)) = d(u(0,β), u(2π/5,β))`` (``β = tan⁻¹ 2 ≈ 63.4349°``). The printed azimuths
   ``kπ/5`` and ``(2k+1)π/10`` are each half of what a regular icosahedron needs (five points π/5 apart span
   only half a turn); we read them as ``2kπ/5`` and ``(2k+1)π/5``, the only reading that closes the ring;
-* dodecahedron: the normalised sums of the icosahedron's triples of mutually nearest vertices (its faces).
+* dodecahedron: the normalised sums of the icosahedron's triples of mutually nearest vertices (its faces), in
+  canonical order (:func:`~spherestep.sphere.canonical_order`); the other four keep the listing order above.
 """
 
 from __future__ import annotations
@@ -18,7 +19,7 @@ import numpy as np
 from scipy.optimize import brentq
 
 from ..errors import bad_value
-from ..sphere import arc_distance, point
+from ..sphere import arc_distance, canonical_order, point
 from .core import Packing
 
 PLATONIC = ("tetrahedron", "octahedron", "cube", "icosahedron", "dodecahedron")
@@ -47,7 +48,8 @@ def icosahedron_faces(vertices: np.ndarray) -> np.ndarray:
 def _dodecahedron() -> np.ndarray:
     ico = _icosahedron()
     centers = ico[icosahedron_faces(ico)].sum(axis=1)
-    return centers / np.linalg.norm(centers, axis=1, keepdims=True)
+    centers /= np.linalg.norm(centers, axis=1, keepdims=True)
+    return centers[canonical_order(centers)]  # not Qhull's facet order, which the last bit of the input decides
 
 
 def _vertices(name: str) -> np.ndarray:

@@ -20,7 +20,7 @@ from scipy.spatial import ConvexHull
 
 from .. import checks
 from ..errors import bad_value
-from ..sphere import circle_in_gap, circle_in_ring
+from ..sphere import canonical_order, circle_in_gap, circle_in_ring
 from .core import Packing
 
 PLANE_TOL = 1e-9
@@ -28,7 +28,9 @@ PLANE_TOL = 1e-9
 
 def holes(packing: Packing) -> list[np.ndarray]:
     """The rings of caps around the uncovered regions: a list of index arrays, one per hole, in order
-    around it (counter-clockwise seen from outside)."""
+    around it (counter-clockwise seen from outside). The holes come in canonical order of their axes, the
+    outward normals of the planes through their rings' poles (:func:`~spherestep.sphere.canonical_order`), not in
+    Qhull's facet order, which the last bit of the input (and so the CPU's BLAS kernel) decides."""
     if np.any(packing.radii >= np.pi / 2 - 1e-9):
         raise bad_value("packing", "caps of radius below 90° (a hemisphere has no pole to lift)",
                         f"a cap of {np.degrees(packing.radii.max()):.4g}°")
@@ -48,7 +50,7 @@ def holes(packing: Packing) -> list[np.ndarray]:
     merge = diagonal & coplanar
     graph = coo_matrix((np.ones(int(merge.sum())), (i[merge], nb[merge])), shape=(n, n))
     count, label = connected_components(graph, directed=False)
-    rings = []
+    rings, axes = [], []
     order = np.argsort(label, kind="stable")
     bounds = np.searchsorted(label[order], np.arange(count + 1))
     for g in range(count):
@@ -61,11 +63,13 @@ def holes(packing: Packing) -> list[np.ndarray]:
         e2 = np.cross(normal, e1)
         ring = ring[np.argsort(np.arctan2(pts @ e2, pts @ e1))]
         rings.append(ring)
-    return rings
+        axes.append(normal)
+    return [rings[k] for k in canonical_order(np.array(axes))]
 
 
 def fill_holes(packing: Packing) -> tuple[np.ndarray, np.ndarray]:
-    """Centres ``(H, 3)`` and radii ``(H,)`` of the caps inscribed in every hole of ``packing``."""
+    """Centres ``(H, 3)`` and radii ``(H,)`` of the caps inscribed in every hole of ``packing``, in the order of
+    :func:`holes`."""
     rings = holes(packing)
     sizes = np.array([len(r) for r in rings])
     centers = np.zeros((len(rings), 3))
@@ -83,8 +87,8 @@ def fill_holes(packing: Packing) -> tuple[np.ndarray, np.ndarray]:
 
 def refine(packing: Packing, levels: int | None = None, target: int | None = None) -> Packing:
     """Fill holes level by level: stop after ``levels`` levels, or at the first level with ``>= target``
-    caps (whichever is given; default one level). New caps are appended after the old ones, so the
-    indices of existing caps never change."""
+    caps (whichever is given; default one level). New caps are appended after the old ones in canonical order
+    (:func:`fill_holes`), so the indices of existing caps never change and every machine numbers them alike."""
     levels = None if levels is None else checks.count(levels, "levels", minimum=0, expected="a non-negative integer")
     target = None if target is None else checks.count(target, "target", minimum=0, expected="a non-negative integer")
     if levels is None and target is None:

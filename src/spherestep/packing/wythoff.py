@@ -18,7 +18,7 @@ import numpy as np
 from scipy.spatial import ConvexHull, cKDTree
 
 from ..errors import bad_value
-from ..sphere import great_circle_normal, triangle_incircle
+from ..sphere import canonical_order, great_circle_normal, triangle_incircle
 from .core import Packing
 from .platonic import PLATONIC, congruent_caps, platonic
 
@@ -38,8 +38,9 @@ def fundamental_triangle(family: str) -> np.ndarray:
     """Corners ``P`` (solid vertex), ``Q`` (face centre), ``R`` (edge midpoint) as rows of a ``(3, 3)`` array."""
     verts = platonic(SOLID[family]).centers
     faces = ConvexHull(verts).simplices
-    face = next(f for f in faces if 0 in f)
-    other = next(int(v) for v in face if v != 0)
+    faces = faces[(faces == 0).any(axis=1)]  # the faces around P = vertex 0; the first in canonical order
+    face = faces[canonical_order(verts[faces].sum(axis=1))[0]]
+    other = min(int(v) for v in face if v != 0)
     P = verts[0]
     Q = verts[face].sum(axis=0)
     R = P + verts[other]
@@ -92,7 +93,8 @@ def generator(family: str, construction: str) -> np.ndarray:
 
 
 def orbit(points: np.ndarray, group: np.ndarray, tol: float = 1e-9) -> np.ndarray:
-    """Distinct images ``g x`` of ``points (k, 3)`` under ``group (G, 3, 3)``, sorted by height then azimuth."""
+    """Distinct images ``g x`` of ``points (k, 3)`` under ``group (G, 3, 3)`` in canonical order
+    (:func:`~spherestep.sphere.canonical_order`: from the north pole down, then by azimuth)."""
     images = np.einsum("gij,kj->gki", group, np.atleast_2d(points)).reshape(-1, 3)
     tree = cKDTree(images)
     pairs = tree.query_pairs(tol, output_type="ndarray")
@@ -100,9 +102,7 @@ def orbit(points: np.ndarray, group: np.ndarray, tol: float = 1e-9) -> np.ndarra
     if len(pairs):
         keep[pairs.max(axis=1)] = False  # keep the first of every cluster of coincident images
     unique = images[keep]
-    # canonical order: from the north pole down, then by azimuth
-    order = np.lexsort((np.round(np.arctan2(unique[:, 1], unique[:, 0]), 9), -np.round(unique[:, 2], 9)))
-    return unique[order]
+    return unique[canonical_order(unique)]
 
 
 def wythoff(family: str, construction: str) -> Packing:
