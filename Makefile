@@ -27,10 +27,17 @@ $(VENV)/.installed-test: pyproject.toml | $(BIN)/python
 demo: $(VENV)/.installed
 	$(BIN)/spherestep demo
 
-# everything (CI): ruff, the suite on both cores, then the real-time tests alone
+# the tests whose verdict depends on how caps are numbered: make test runs them again under a second OpenBLAS kernel
+# (issue 35: the numbering, hence coil and magnet indices, must not depend on the CPU)
+NUMBERING_TESTS := tests/test_numbering.py tests/test_packing.py tests/test_gallery.py tests/test_iron_fem_patch.py \
+	tests/test_design_file.py tests/test_docs_numbers.py
+
+# everything (CI): ruff, the suite on both cores, the numbering under another BLAS kernel, then the real-time tests
 test: $(VENV)/.installed-test browser
 	$(RUFF)
 	$(BIN)/python -m pytest -q -n $(WORKERS) -m "not realtime"
+	OPENBLAS_CORETYPE=$$($(BIN)/python scripts/blas_kernel.py --other) \
+		$(BIN)/python -m pytest -q -n $(WORKERS) -m "not realtime" $(NUMBERING_TESTS)
 	$(BIN)/python -m pytest -q -m realtime
 
 # the edit loop: ruff and every test not marked slow or realtime (a few minutes)
