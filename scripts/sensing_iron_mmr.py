@@ -13,7 +13,7 @@ level 2): each level's column is the cores solved each on its own, and the coupl
 coupling within 50°, its own check against one moment system is in docs/sensing.md) taken from
 ``sensing_iron_reference.csv`` (level 2).
 
-``apply_demag`` itself (``apply-demag``): the two cores nearest sensor 8 (26 and 22, 1124 cells at level 2) and the
+``apply_demag`` itself (``apply-demag``): the two cores nearest sensor 8 (28 and 22, 1124 cells at level 2) and the
 92 magnets as χ = 0 cells in one ``apply_demag(solver="direct")`` at orientation 0, against the factorised joint
 solve of the same two cores in ``sensing_iron_reference.csv`` (``cluster_joint``); writes
 ``data/sensing_iron_mmr_apply_demag.csv``.
@@ -77,7 +77,7 @@ def independent(design, positions, Rs, level: int) -> tuple[np.ndarray, int]:
     return out, n
 
 
-def apply_demag_check(cores=(26, 22), level: int = 2, k: int = 0) -> None:
+def apply_demag_check(cores=(28, 22), level: int = 2, k: int = 0) -> None:
     """``apply_demag`` of ``cores`` (one moment system) with the whole rotor at orientation ``k``, written beside
     the factorised solve of ``sensing_iron_reference.csv`` (``cluster_joint``, the same cores at level 2)."""
     from magpylib_material_response.demag import apply_demag

@@ -192,3 +192,17 @@ def test_a_calibration_for_another_numbering_is_refused(tmp_path):
         bad.write_text(yaml.safe_dump(data))
         with pytest.raises(InputError, match=f"calibration.design_fingerprint.*{why}"):
             design_model(proto, calibration=bad)
+
+
+def test_the_prototypes_stored_tables_are_found():
+    """The stored table keyed by the stator's numbering is the prototype's: the sensing cores' table
+    (``sensing_iron_cores.npz``) is read, not rebuilt for minutes, as it silently was while another numbering made
+    its key miss. (Its per-coil field was re-keyed by geometry; checked once against a live
+    ``IronCoilField.build``, 310 s: within 2.7e-5 T of a 1.47e-3 T peak, 2026-11-28.)"""
+    from spherestep.sensing import iron
+    from spherestep.sensing.placement import default_array
+
+    proto = prototype()
+    p = np.ascontiguousarray(default_array(proto).positions)
+    stored = iron._stored(iron.design_key(proto), p, iron.GRID_STEP_DEG)
+    assert stored is not None and stored[1].shape == (len(proto.stator), len(p), 3)
