@@ -37,11 +37,10 @@ def check_log(path: Path, force: bool) -> Path:
 
 
 def _simulated(design_path, plan):
-    """The :class:`Simulated` back end for ``plan``: the design's rotor under its own torque model
-    (:func:`spherestep.magnetics.design_model`: iron for the prototype), tuned, starting at rest at the plan's
-    first orientation."""
+    """The simulated relay back end's options for ``plan`` (:func:`spherestep.drive.connect`, kind
+    ``"simulated"``): the design's rotor under its own torque model (:func:`spherestep.magnetics.design_model`:
+    iron for the prototype), tuned, starting at rest at the plan's first orientation."""
     from ..dynamics import tune
-    from ..hardware import Simulated
     from ..magnetics import design_model
     from .common import design_from, usable
 
@@ -52,7 +51,7 @@ def _simulated(design_path, plan):
     design = usable(design, "--design", design_path)
     model = design_model(design).model
     tuning = tune(design, model)
-    return Simulated(design, model, plan.steps[0].achieved, rotor=tuning.rotor, dt=tuning.dt)
+    return design, {"plant": model, "R0": plan.steps[0].achieved, "rotor": tuning.rotor, "dt": tuning.dt}
 
 
 def _progress(total: int, show: bool):
@@ -127,7 +126,8 @@ def run(
     if max_duty is not None and not (0 < max_duty <= 1):
         raise bad_value("--max-duty", "a fraction in (0, 1], such as 0.5", max_duty)
     from ..commutation import Plan
-    from ..hardware import DryRun, Serial, ThermalLimits, Transcript, play
+    from ..drive.connect import connect
+    from ..hardware import ThermalLimits, Transcript, play
 
     if log is not None:
         log = check_log(log, force)
@@ -145,18 +145,22 @@ def run(
     try:
         with sigterm_as_interrupt():
             if dry_run:
-                backend = DryRun(channels=needed if channels is None else channels, transcript=transcript)
+                design, options = None, {"channels": needed if channels is None else channels,
+                                         "transcript": transcript}
             elif simulate:
-                backend = _simulated(design_path, steps)
+                design, options = _simulated(design_path, steps)
             else:
-                backend = Serial(port, transcript=transcript)
-            if live is not None:
-                live.start()
-            try:
-                report = play(steps, backend, rate, limits, on_step=on_step)
-            finally:
+                design, options = None, {"port": port, "transcript": transcript}
+            kind = "dry run" if dry_run else "simulated" if simulate else "relay port"
+            with connect(design, kind, **options) as conn:
+                backend = conn.link
                 if live is not None:
-                    live.stop()
+                    live.start()
+                try:
+                    report = play(steps, backend, rate, limits, on_step=on_step)
+                finally:
+                    if live is not None:
+                        live.stop()
         acknowledged = "all coils off, acknowledged by the device" if not (dry_run or simulate) else outcome
         transcript.add(backend.clock(), "NOTE", f"end: {len(steps.steps)} frames streamed; {acknowledged}")
     except BaseException as exc:

@@ -71,7 +71,7 @@ from ..errors import bad_value
 from ..statics import TorqueModel, is_torque_model
 from .allocation import allocate_matrix
 from .controller import SPEED_MEMORY, GeometricPD, Observer, disturbance_bandwidths
-from .limits import DriveLimits
+from ..electrics import DriveLimits
 from .trajectory import Trajectory
 
 K_REUSE = 2e-3  # rad: K(R) and b(R) are re-evaluated when the orientation has turned further than this
@@ -287,9 +287,9 @@ class ServoLaw:
         N = model.coil_count
         self._box = (np.zeros(N), np.zeros(N))
         self._failed_idx = np.array(self._failed, dtype=np.int64)
-        self._emf = 1.0 / (lim.resistance * lim.nominal_current ** 2)  # K·ω (N·m·rad/s) → per-unit volts
+        self._emf = lim.emf_factor  # K·ω (N·m·rad/s) → per-unit volts
         self._u = lim.per_unit_bound
-        self._uv = lim.supply_voltage / (lim.resistance * lim.nominal_current)
+        self._uv = lim.voltage_bound
         period = 1.0 / controller.rate
         self._slew = math.exp(-period / lim.time_constant) if slew else 0.0
         self._last = np.zeros(N)
@@ -313,8 +313,8 @@ class ServoLaw:
         return self._theta
 
     def amperes(self, currents) -> np.ndarray:
-        """Per-unit ``currents`` in amperes: ``I_n c`` (the drive's wire unit)."""
-        return np.asarray(currents, dtype=float) * self.limits.nominal_current
+        """Per-unit ``currents`` in amperes: ``I_n c`` (the drive's wire unit; :meth:`DriveLimits.amperes`)."""
+        return self.limits.amperes(currents)
 
     def predicted(self, t: float) -> np.ndarray:
         """The observer's orientation carried on to ``t`` at its rate of turn, ``exp((t − t̂) ω̂) R̂`` (a search's

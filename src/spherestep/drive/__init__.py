@@ -13,6 +13,7 @@ names it. The simulation itself (rotor, integrator, coil electrics, the servo an
 :mod:`spherestep.dynamics`.
 """
 
+from .calibration import Emulated, Port, collect_holds
 from .compare import DEMO_AXIS, SENSOR_NOISE, DriveComparison, compare_drives
 from .session import Session, move_on_hardware, servo_session, turn_reference
 from .result import DriveResult, HardwareDetails, RampedDetails, ServoDetails, SettledDetails, figure_drive
@@ -20,6 +21,6 @@ from .turn import BACKENDS, FIXED_SERVO_TIME, MODES, SENSORS, TOLERANCE, check_o
     fixed_servo_time
 
 __all__ = ["BACKENDS", "DEMO_AXIS", "FIXED_SERVO_TIME", "MODES", "SENSORS", "SENSOR_NOISE", "TOLERANCE",
-           "DriveComparison", "DriveResult", "HardwareDetails", "RampedDetails", "ServoDetails", "Session",
+           "DriveComparison", "Emulated", "Port", "collect_holds", "DriveResult", "HardwareDetails", "RampedDetails", "ServoDetails", "Session",
            "SettledDetails", "check_options", "choose_model", "compare_drives", "drive_turn", "figure_drive", "fixed_servo_time",
            "move_on_hardware", "servo_session", "turn_reference"]

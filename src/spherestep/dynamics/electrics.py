@@ -23,7 +23,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..control.limits import DriveLimits
+from ..electrics import DriveLimits
 from .. import checks
 
 PWM_RATE = 10_000.0  # Hz, the PWM period is the current loop's period

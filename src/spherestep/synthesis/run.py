@@ -296,7 +296,7 @@ def relay_rung(candidate: Candidate, row: dict, spec, design=None) -> None:
     errors = np.asarray(sim.step_errors[1:], dtype=float)  # the steps, not the start
     on_plan = int(np.count_nonzero(errors <= sim.tolerance))
     limits = job.chosen.limits
-    peak = max(len(s.coils) for s in plan.steps) * limits.supply_voltage * limits.nominal_current
+    peak = max(len(s.coils) for s in plan.steps) * limits.relay_power
     row.update(relay_steps=len(errors), relay_steps_on_plan=on_plan, relay_executed=bool(sim.executed),
                relay_worst_deg=math.degrees(float(errors.max())) if len(errors) else 0.0, relay_peak_W=peak)
     if not sim.executed:
