@@ -1491,7 +1491,7 @@ def measure_control_notes() -> dict:
     # that holding the rotor at rest takes, every 1° (the time-optimal planner's constraints)
     n_axis = axis / np.linalg.norm(axis)
     path = [so3.exp(math.radians(a) * n_axis) @ R0 for a in range(360)]
-    emf = [float(np.max(np.abs(n_axis @ iron.model.torque_matrix(R))) / lim.nominal_current) for R in path]
+    emf = [float(np.max(np.abs(lim.back_emf(n_axis @ iron.model.torque_matrix(R))))) for R in path]
     hold = []
     for R in path:
         a, _ = allocate_matrix(iron.model.torque_matrix(R), np.zeros(3), lim,
