@@ -17,7 +17,7 @@ import typer
 from ..errors import InputError, bad_value
 from .app import app
 from .common import console, number, print_json
-from .signals import Terminated, interrupt_of, sigterm_as_interrupt, told
+from .signals import Terminated, exit_code, interrupt_of, sigterm_as_interrupt, signal_name, told
 
 LOG_LINE = re.compile(r"^\s*-?\d+\.\d{6} (TX|RX|NOTE) ")  # a line of Transcript.lines()
 
@@ -172,10 +172,9 @@ def run(
             sink.close()
         if interrupt is not None:  # the coils are off by now (the driver switched them off)
             off = "all coils off, acknowledged by the device" if not (dry_run or simulate) else outcome
-            signame = "SIGTERM" if isinstance(interrupt, Terminated) else "SIGINT"
-            print(f"spherestep: interrupted ({signame}): {off}", file=sys.stderr)
+            print(f"spherestep: interrupted ({signal_name(interrupt)}): {off}", file=sys.stderr)
             told()
-            raise typer.Exit(143 if isinstance(interrupt, Terminated) else 130) from None
+            raise typer.Exit(exit_code(interrupt)) from None
         raise
     if sink is not None:
         sink.close()

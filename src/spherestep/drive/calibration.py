@@ -16,6 +16,7 @@ from .. import checks, so3
 from ..control import Trajectory
 from ..electrics import DriveLimits
 from ..errors import bad_value
+from ..interrupts import interrupt_for, last_signal
 from ..statics import is_torque_model
 
 if TYPE_CHECKING:
@@ -138,7 +139,7 @@ def _session(design, backend, traj, settle: float, start, model, limits, rate: f
                             drive=limits, R0=start, **options)
     rep = session.report
     if rep.outcome == "INTERRUPT":  # the loop caught Ctrl-C or SIGTERM and switched every coil off: unwind on
-        raise KeyboardInterrupt
+        raise interrupt_for(last_signal())
     if rep.outcome != "done" or len(rep.times) < 4:
         raise bad_value("backend", "a motor that runs the servo to the end of each hold",
                         f"outcome {rep.outcome} ({rep.message})")

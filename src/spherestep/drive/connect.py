@@ -134,7 +134,7 @@ def connect(design, kind: str, *, port: str | None = None, plant=None, limits=No
             return
         motor = emulated_motor(design, plant, sensors, drive=limits, R0=start, faults=faults, rotor=rotor)
         if kind == "lockstep":
-            link = hardware.LockstepLink(motor, **device)
+            link = stack.enter_context(hardware.LockstepLink(motor, **device))
             yield Connection(kind, link, motor, link.truth, {"clock": link.clock, "sleep": link.sleep},
                              link.device.watchdog_ms / 1000, 0.0)
             return

@@ -236,7 +236,7 @@ def matching_device_options(motor: EmulatedMotor) -> dict:
 
 
 class LockstepLink:
-    """A :class:`~spherestep.hardware.DriveLink` stand-in without a line or a wall clock: frames go as bytes
+    """A :class:`~spherestep.hardware.Link` like :class:`~spherestep.hardware.DriveLink`, without a line or a wall clock: frames go as bytes
     to a :class:`CurrentDevice` on an :class:`EmulatedMotor` in this process, and :meth:`sleep` advances the
     motor and runs the device's control steps. Pass ``clock=link.clock, sleep=link.sleep`` to
     :func:`~spherestep.hardware.run_servo`: the loop then keeps its rate exactly, whatever the machine's load,
@@ -248,6 +248,16 @@ class LockstepLink:
                                     **{**matching_device_options(motor), **device_options})
         self._seq = 0
         self.info = device_info(self._transact("HELLO", VERSION2), "lockstep")
+
+    def __enter__(self) -> LockstepLink:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        """``OFF`` (a :class:`~spherestep.hardware.Link`: every coil off on leaving) if the device answers."""
+        try:
+            self.off()
+        except LinkError:
+            pass
 
     def clock(self) -> float:
         return self.motor.t
