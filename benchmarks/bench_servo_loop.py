@@ -49,6 +49,7 @@ class Unpacked:
     def __init__(self, model):
         self.model = model
         self.coil_count, self.failed, self.has_bias = model.coil_count, model.failed, model.has_bias
+        self.affine_in_currents = False  # declared with packed_terms: none
 
     def __getattr__(self, name):
         return getattr(self.model, name)

@@ -186,3 +186,48 @@ def test_the_low_rooms_import_the_electrics_not_each_other(room):
     assert not (SRC / "control" / "limits.py").exists()
     uses = [(p, t) for p in (SRC / room).rglob("*.py") for t, _ in _imports(p) if t.endswith(".DriveLimits")]
     assert all(t == "spherestep.electrics.DriveLimits" for _, t in uses), uses
+
+
+def test_every_current_link_is_a_link():
+    """The serial link and the lockstep link both offer the one ``Link`` protocol (drive, read, off, info, a
+    context manager), and the servo loop is typed by it, not by one of them."""
+    import inspect
+
+    from spherestep.hardware import DriveLink, Link, LockstepLink, run_servo
+
+    members = ("drive", "read", "off", "__enter__", "__exit__")
+    for cls in (DriveLink, LockstepLink):
+        assert all(callable(getattr(cls, m, None)) for m in members), cls
+    assert "Link" in str(inspect.signature(run_servo).parameters["link"].annotation)
+    assert "DriveLink" not in str(inspect.signature(run_servo).parameters["link"].annotation)
+    assert isinstance(Link, type)
+
+
+def test_one_quaternion_order_in_every_file():
+    """Files carry quaternions scalar first under the columns ``qw qx qy qz`` (``so3.quaternion_rows``), checked
+    on a known rotation (a turn θ about z is ``(cos θ/2, 0, 0, sin θ/2)``), and no module but so3 converts a
+    rotation to a quaternion by SciPy itself."""
+    import math
+
+    import numpy as np
+
+    from spherestep import so3
+
+    theta = 0.7
+    q = so3.quaternion_rows(so3.exp(np.array([0.0, 0.0, theta])))
+    assert np.allclose(q, [math.cos(theta / 2), 0.0, 0.0, math.sin(theta / 2)], atol=1e-15)
+    assert so3.QUATERNION_COLUMNS == ("qw", "qx", "qy", "qz")
+    found = [f"{p.relative_to(ROOT)}:{line}" for p in SRC.rglob("*.py") if p != SRC / "so3.py"
+             for name, line in _calls(p) if name == "as_quat"]
+    assert found == ["src/spherestep/magnetics/_ironforce.py:34"] or not found, found  # magpylib's, a count
+
+
+def test_numba_lives_in_the_fast_path():
+    """Only ``spherestep._fast`` imports numba (docs/conventions.md, the fast path)."""
+    found = [f"{p.relative_to(ROOT)}:{line}" for p in SRC.rglob("*.py") if "_fast" not in p.parts
+             for target, line in [(a.name, n.lineno) for n in ast.walk(ast.parse(p.read_text(encoding="utf-8")))
+                                  if isinstance(n, ast.Import) for a in n.names]
+             + [(n.module or "", n.lineno) for n in ast.walk(ast.parse(p.read_text(encoding="utf-8")))
+                if isinstance(n, ast.ImportFrom)]
+             if target.split(".")[0] == "numba"]
+    assert not found, "numba imported outside spherestep._fast: " + "; ".join(found)
