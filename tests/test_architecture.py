@@ -231,3 +231,29 @@ def test_numba_lives_in_the_fast_path():
                 if isinstance(n, ast.ImportFrom)]
              if target.split(".")[0] == "numba"]
     assert not found, "numba imported outside spherestep._fast: " + "; ".join(found)
+
+
+def test_the_selector_refuses_bad_input_and_builds_the_light_backends():
+    """``drive.connect``: an unknown kind, a port kind without a port and an emulated kind without a plant are each one
+    InputError naming the field; ``dry run`` is protocol 1's back end with the channels asked for, ``simulated`` the
+    relay back end on the design's rotor at its start."""
+    import numpy as np
+
+    from spherestep.drive import KINDS, connect
+    from spherestep.errors import InputError
+    from spherestep.hardware import Backend
+    from spherestep.magnetics import torque_map
+    from spherestep.motor import prototype
+
+    design = prototype()
+    for kind, options, field in (("serial", {}, "kind"), ("port", {}, "port"), ("relay port", {}, "port"),
+                                 ("lockstep", {}, "plant"), ("simulated", {"plant": object()}, "R0")):
+        with pytest.raises(InputError, match=f"^{field} must be"):
+            with connect(design, kind, **options):
+                pass
+    assert set(KINDS) == {"port", "lockstep", "pty", "relay port", "dry run", "simulated"}
+    with connect(None, "dry run", channels=12) as conn:
+        assert isinstance(conn.link, Backend) and conn.link.open().channels == 12 and conn.truth is None
+    with connect(design, "simulated", plant=torque_map(design), R0=np.eye(3)) as conn:
+        assert isinstance(conn.link, Backend) and conn.link.coil_count == len(design.stator)
+        assert np.array_equal(conn.link.R, np.eye(3))

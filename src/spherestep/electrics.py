@@ -25,7 +25,8 @@ Conversions, each written once here: per unit → A, ``i = I_n c`` (:meth:`Drive
 (:meth:`DriveLimits.per_unit`); A ↔ mA on the wire (:func:`milliamperes`, :func:`from_milliamperes`). The
 per-unit voltage bound ``V / (R I_n)`` (:attr:`DriveLimits.voltage_bound`: the supply in volts per the volts
 that drive the nominal current through the coil) and the back-EMF factor ``1 / (R I_n²)``
-(:attr:`DriveLimits.emf_factor`: a torque-per-unit-current times a speed, N·m·rad/s, in per-unit volts).
+(:attr:`DriveLimits.emf_factor`: a torque-per-unit-current times a speed, N·m·rad/s, in per-unit volts). The coil
+as a circuit over an interval with its voltage held, exactly: :func:`rl_step`.
 """
 
 from __future__ import annotations
@@ -214,3 +215,16 @@ def milliamperes(amperes) -> np.ndarray:
 def from_milliamperes(milliamperes) -> np.ndarray:
     """Currents in mA as A: ``i_mA / 1000``."""
     return np.divide(np.asarray(milliamperes, dtype=float), 1000.0)
+
+
+def rl_step(i, v, emf, resistance: float, inductance: float, h: float) -> tuple[np.ndarray, np.ndarray]:
+    """One coil as an R–L circuit, ``L di/dt = v − R i − e``, over ``h`` s with ``v`` and ``emf`` held: the exact
+    current at the end, ``i∞ + (i − i∞) e^{−x}`` (``i∞ = (v − e)/R``, ``x = h R / L``), and its mean over the
+    interval, ``i∞ + (i − i∞)(1 − e^{−x})/x``; arrays broadcast. The coil model of the simulation's drive
+    (:class:`spherestep.dynamics.CoilDrive`) and of the emulated motor (:class:`spherestep.hardware.EmulatedMotor`)."""
+    i_inf = (np.asarray(v) - np.asarray(emf)) / resistance
+    x = h * resistance / inductance
+    decay = math.exp(-x)
+    mean_factor = -math.expm1(-x) / x
+    i = np.asarray(i, dtype=float)
+    return i_inf + (i - i_inf) * decay, i_inf + (i - i_inf) * mean_factor

@@ -5,7 +5,8 @@
 
 * Coils: ``L di/dt = d V − R i`` per coil (``R``, ``L``, ``V`` of a :class:`spherestep.electrics.DriveLimits`),
   solved exactly over each control period with the duty ``d`` held (``i ← a i + (1 − a) d V / R``,
-  ``a = e^{−R h / L}``; the back-EMF of the turning rotor is neglected). Asleep (``enabled`` False) the bridges'
+  ``a = e^{−R h / L}``: :func:`spherestep.electrics.rl_step`, the simulation's coil model too; the back-EMF of the
+  turning rotor is neglected here). Asleep (``enabled`` False) the bridges'
   diodes return the current to the supply, ``L di/dt = −V sign(i) − R i``, until it is zero. The sense reads
   ``round(1000 (i + noise))`` mA, ``current_noise`` A RMS.
 * Rotor: a :class:`spherestep.dynamics.Rotor` (passed in) under the torque model's ``b(R) + K(R) ī`` (currents per unit of
@@ -36,13 +37,12 @@ nor sensing.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
 
 from .. import so3
-from ..electrics import DriveLimits, milliamperes
+from ..electrics import DriveLimits, milliamperes, rl_step
 from .backend import LinkError
 from .current_device import CurrentDevice
 from .drive_link import DeviceTrip, device_info
@@ -177,16 +177,15 @@ class EmulatedMotor:
 
     def _advance_coils(self, h: float) -> None:
         e = self.drive_limits
-        a = math.exp(-h / e.time_constant)
         i0 = self.i
         stuck = self._fault("stuck_coil")
         if self.enabled:
             v = self.duty * e.supply_voltage
             if stuck is not None:
                 v[stuck] = e.supply_voltage
-            i1 = a * i0 + (1.0 - a) * v / e.resistance
+            i1 = rl_step(i0, v, 0.0, e.resistance, e.inductance, h)[0]
         else:
-            i1 = a * i0 - (1.0 - a) * np.sign(i0) * e.supply_voltage / e.resistance
+            i1 = rl_step(i0, -np.sign(i0) * e.supply_voltage, 0.0, e.resistance, e.inductance, h)[0]
             i1 = np.where(np.sign(i1) != np.sign(i0), 0.0, i1)  # the diodes stop at zero
         opened = self._fault("open_coil")
         if opened is not None:
