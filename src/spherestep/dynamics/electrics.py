@@ -2,7 +2,7 @@
 
 Per coil, ``L di/dt = v − R i − e`` (A, V, Ω, H). ``e`` is the back-EMF the moving rotor induces: by energy
 balance the mechanical power a coil delivers, ``τ_k·ω = (K_k c_k)·ω``, equals ``e_k i_k``, so with per-unit
-currents ``c = i / I_n`` (see :mod:`spherestep.control.limits`) ``e_k = K_k(R)·ω / I_n`` — exact for a model
+currents ``c = i / I_n`` (see :mod:`spherestep.electrics`) ``e_k = K_k(R)·ω / I_n`` — exact for a model
 linear in the currents. With ``v`` and ``e`` constant over a PWM period ``h`` the solution is exact:
 
     i(h) = i∞ + (i(0) − i∞) e^{−h/T},   i∞ = (v − e)/R,   T = L/R,
