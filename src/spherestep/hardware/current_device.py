@@ -323,8 +323,9 @@ class CurrentDevice:
     def _set(self, ma) -> bool:
         """Take setpoints in mA if within the current and power limits; False (nothing changed) otherwise."""
         lim = self.limits
-        amps = [float(from_milliamperes(m)) for m in ma]
-        if any(abs(m) > milliamperes(lim.max_current) for m in ma):
+        amps = from_milliamperes(ma).tolist()  # each float(m) / 1000, as the firmware's
+        limit = milliamperes(lim.max_current)
+        if any(abs(m) > limit for m in ma):
             return False
         if lim.resistance * sum(a * a for a in amps) > lim.max_power:  # summed in order, as the firmware does
             return False
