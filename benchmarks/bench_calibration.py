@@ -13,7 +13,7 @@ built (each an :class:`~spherestep.magnetics.IronTorqueMap`, so each can also be
 The fit has the coupling's gain as a parameter on every plant (``calibrate(..., coupling=True)``; by default only
 a pairwise model's is fitted).
 
-Per plant: ``control.collect_holds`` on the simulated plant (the servo on the controller's model, 1 kHz, a random
+Per plant: ``drive.collect_holds`` on the simulated plant (the servo on the controller's model, 1 kHz, a random
 walk of 25° moves), ``control.calibrate``, then
 
 * the model's relative RMS torque error against the plant at 200 held-out random orientations with random currents
@@ -46,7 +46,8 @@ from pathlib import Path
 import numpy as np
 
 from spherestep.commutation import turn_targets
-from spherestep.control import calibrate, collect_holds, plan_turn, torque_error
+from spherestep.control import calibrate, plan_turn, torque_error
+from spherestep.drive import collect_holds
 from spherestep.control.trajectory import MARGIN
 from spherestep.dynamics import Rotor, simulate_servo
 from spherestep.magnetics import design_model

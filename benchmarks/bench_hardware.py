@@ -97,7 +97,8 @@ def servo() -> None:
     from spherestep import so3
     from spherestep.control import DriveLimits, Trajectory
     from spherestep.drive import servo_session, turn_reference
-    from spherestep.hardware import CurrentDevice, DriveLink, EmulatedMotor, MotorFaults, MotorPty
+    from spherestep.drive.connect import emulated_motor
+    from spherestep.hardware import CurrentDevice, DriveLink, MotorFaults, MotorPty
     from spherestep.hardware.protocol import _shift8
     from spherestep.hardware.protocol2 import MAX_FRAME2, encode_block, frame_bytes, parse_state
     from spherestep.magnetics import torque_map
@@ -118,7 +119,7 @@ def servo() -> None:
     answer = encode(0, "ACK", "DRIVE", "00000000", "0", encode_block(np.arange(n)), encode_block(np.arange(3 * S)),
                     max_frame=MAX_FRAME2)
     body = answer[1:-1]
-    motor = EmulatedMotor(design, model, sensors, drive=drive)
+    motor = emulated_motor(design, model, sensors, drive=drive)
     device = CurrentDevice(motor, n, S)
     device.receive(encode(0, "HELLO", 2), 0)
     device.receive(encode(1, "DRIVE", encode_block(np.full(n, 100)), max_frame=MAX_FRAME2), 0)
@@ -147,7 +148,7 @@ def servo() -> None:
         print(f"{name:<34} {sec * 1e6:>10.1f} {sec / base:>13.2f}")
     RECORD.put("per frame us", {name: sec * 1e6 for name, sec in costs.items()})
 
-    with MotorPty(EmulatedMotor(design, model, sensors, drive=drive), watchdog_ms=1000) as dev, \
+    with MotorPty(emulated_motor(design, model, sensors, drive=drive), watchdog_ms=1000) as dev, \
             DriveLink(dev.port, timeout=0.5) as link:
         block = np.zeros(n)
         rounds = []

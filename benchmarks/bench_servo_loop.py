@@ -36,6 +36,7 @@ from spherestep import so3
 from spherestep.control import GeometricPD, ModelCache, ServoLaw, Trajectory
 from spherestep.control import allocation as alloc_module
 from spherestep.dynamics import simulate_servo
+from spherestep.electrics import DriveLimits
 from spherestep.magnetics import iron_model, torque_map
 from spherestep.motor import prototype
 
@@ -48,6 +49,7 @@ class Unpacked:
     def __init__(self, model):
         self.model = model
         self.coil_count, self.failed, self.has_bias = model.coil_count, model.failed, model.has_bias
+        self.affine_in_currents = False  # declared with packed_terms: none
 
     def __getattr__(self, name):
         return getattr(self.model, name)
@@ -146,7 +148,7 @@ def tracker_us(design, trajectory) -> float:
         def __init__(self, field):
             self.field, self.currents = field, np.zeros(len(design.stator))
     states = [State(f) for f in fields]
-    tracker = FieldTracker(estimator, R[0], 1.0)
+    tracker = FieldTracker(estimator, R[0], DriveLimits())
     return cpu_us(lambda k: tracker(states[k], R[k]), PERIODS)
 
 
@@ -158,10 +160,11 @@ def simulate_us(design, model, trajectory, settle: float) -> tuple[float, np.nda
 
 
 def emulator_tick_us(design, model) -> tuple[float, float]:
-    from spherestep.hardware import EmulatedMotor, LockstepLink
+    from spherestep.drive.connect import emulated_motor
+    from spherestep.hardware import LockstepLink
     from spherestep.sensing import default_array
 
-    motor = EmulatedMotor(design, model, default_array(design, 8), R0=np.eye(3))
+    motor = emulated_motor(design, model, default_array(design, 8), drive=DriveLimits(), R0=np.eye(3))
     link = LockstepLink(motor)
     link.drive(np.full(motor.i.shape, 0.2))
     step = cpu_us(lambda k: link.sleep(motor.period), 500)

@@ -16,8 +16,9 @@ import pytest
 
 from spherestep import so3
 from spherestep.cli import main
-from spherestep.control import (Calibration, Holds, Trajectory, calibrate, calibration_beside, collect_holds,
-                                hold_orientations, torque_error)
+from spherestep.control import (Calibration, Holds, Trajectory, calibrate, calibration_beside, hold_orientations,
+                                torque_error)
+from spherestep.drive import collect_holds
 from spherestep.control.calibration import regression
 from spherestep.dynamics import simulate_servo
 from spherestep.errors import InputError

@@ -191,14 +191,14 @@ def test_planner_activations_are_the_trimmed_state_activations(proto):
 
 
 def test_planner_distinct_keeps_each_activation_at_its_last_offer():
-    from spherestep.commutation._potential_kernels import distinct
+    from spherestep._fast.relays import distinct
 
     options = np.array([[1.0, 0], [0, 1], [1, 0], [0, -1], [0, 1], [1, 0]])
     assert distinct(options).tolist() == [5, 4, 3]
 
 
 def test_planner_best_is_the_nearest_strict_minimum_within_reach():
-    from spherestep.commutation._potential_kernels import best
+    from spherestep._fast.relays import best
 
     here, target = np.eye(3), so3.rot([0, 0, 1], 0.1)
     R = np.array([so3.rot([0, 0, 1], a) for a in (0.09, 0.05, 0.5, 0.1, 0.05)])

@@ -352,7 +352,7 @@ def test_servo_law_units_cache_and_warm_start():
 
 
 def test_limits_from_a_coil_spec():
-    from spherestep.control.limits import wheeler_inductance
+    from spherestep.electrics import wheeler_inductance
     from spherestep.motor.coil import iron_coil
 
     design = prototype()

@@ -296,3 +296,27 @@ def test_models_declare_their_fast_path_and_bias(proto, model, torque_map):
             assert abs(e - m.energy(R[0], c)) <= 1e-12 * max(1.0, abs(m.energy(R[0], c)))
             assert np.max(np.abs(tau - m.torque(R[0], c))) <= 1e-12 * m.torque_reference(c)
     assert TorqueModelBase.has_bias is True and TorqueModelBase.packed_terms(model, c) is None
+    assert TorqueModelBase.affine_in_currents is False
+
+
+def _sampled_affine(m) -> bool:
+    """The probe the declaration replaced: packed terms at 0, 1 and 2 per unit in every live coil lie on a line."""
+    live = np.ones(m.coil_count)
+    live[list(m.failed)] = 0.0
+    packs = [m.packed_terms(x * live) for x in (0.0, 1.0, 2.0)]
+    if any(p is None for p in packs):
+        return False
+    p0, p1, p2 = packs
+    return bool(np.allclose(p2.C, 2.0 * p1.C - p0.C, rtol=0.0, atol=1e-14) and np.array_equal(p0.params, p1.params)
+                and np.array_equal(p0.signs, p1.signs))
+
+
+def test_models_declare_whether_their_terms_are_affine(proto, model, torque_map):
+    """``affine_in_currents`` (what the servo law's cache reads instead of sampling) agrees with a sample at 0, 1 and
+    2 per unit for every model kind: the potential (fast and not), the torque map, the iron model pairwise and
+    coupled."""
+    from spherestep.magnetics import iron_model
+
+    pairwise = iron_model(proto)
+    for m in (model, MotorPotential(proto, fast=False), torque_map, pairwise, iron_model(proto, coupling=True)):
+        assert m.affine_in_currents is _sampled_affine(m), type(m).__name__

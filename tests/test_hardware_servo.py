@@ -149,8 +149,8 @@ def starved(rig, faults, duration=3.0, rate=200.0, lockstep=True, **options):
     ...): ``(report, final truth)``, the session assembled as the drive room does, run_servo called directly."""
     from spherestep.control import GeometricPD, ServoLaw
     from spherestep.dynamics import Rotor
-    from spherestep.hardware import (DriveLink, EmulatedMotor, FieldTracker, LockstepLink, MotorPty, run_servo,
-                                     wire_limits)
+    from spherestep.drive.connect import emulated_motor
+    from spherestep.hardware import DriveLink, FieldTracker, LockstepLink, MotorPty, run_servo, wire_limits
     from spherestep.sensing import field_model
 
     design, sensors, drive = rig["design"], rig["sensors"], rig["drive"]
@@ -160,8 +160,8 @@ def starved(rig, faults, duration=3.0, rate=200.0, lockstep=True, **options):
     law = ServoLaw(rig["model"], traj, GeometricPD(rotor.inertia, bandwidth=2 * math.pi * 3, rate=rate,
                                                    damping=rotor.damping),
                    limits=wire_limits(drive), sensor_rate=rate, delay=1, observer_bandwidth=rate)
-    motor = EmulatedMotor(design, rig["model"], sensors, rotor=rotor, drive=drive, faults=faults)
-    tracker = FieldTracker(estimator, np.eye(3), drive.nominal_current)
+    motor = emulated_motor(design, rig["model"], sensors, rotor=rotor, drive=drive, faults=faults)
+    tracker = FieldTracker(estimator, np.eye(3), drive)
     if lockstep:
         link = LockstepLink(motor, watchdog_ms=100)
         report = run_servo(link, tracker, law, duration=duration, rate=rate, clock=link.clock, sleep=link.sleep,
@@ -314,13 +314,14 @@ def test_relay_plans_still_play_on_the_current_device(rig):
     coils carry ± the nominal current (1 A asked; 0.95 A reached, the 24 V / 24 Ω drive at its 0.95 duty limit),
     the others nothing, and the run ends all off."""
     from spherestep.commutation import Plan, Step, default_channel_map
-    from spherestep.hardware import EmulatedMotor, MotorPty, Serial, play
+    from spherestep.drive.connect import emulated_motor
+    from spherestep.hardware import MotorPty, Serial, play
 
     n = len(rig["design"].stator)
     I3 = np.eye(3)
     plan = Plan(steps=[Step(index=i, target=I3, achieved=I3, error=0.0, coils={i: 1, i + 5: -1}) for i in range(3)],
                 coil_count=n, channel_map=default_channel_map(n))
-    motor = EmulatedMotor(rig["design"], rig["model"], rig["sensors"], drive=rig["drive"])
+    motor = emulated_motor(rig["design"], rig["model"], rig["sensors"], drive=rig["drive"])
     seen = []
     with MotorPty(motor, watchdog_ms=500) as dev:
         link = Serial(dev.port)

@@ -9,7 +9,8 @@ from spherestep import so3
 from spherestep.cli import main
 from spherestep.commutation import about_axis, plan_geometric
 from spherestep.dynamics import tune
-from spherestep.hardware import Simulated, ThermalLimits, play
+from spherestep.drive.connect import simulated_relays
+from spherestep.hardware import ThermalLimits, play
 from spherestep.magnetics import torque_map
 
 
@@ -17,7 +18,7 @@ def test_play_on_the_simulated_rotor_follows_the_plan(proto):
     plan = plan_geometric(proto, about_axis([0, 0, 1], math.radians(20), 3, start=proto.states().rotations[0]))
     model = torque_map(proto)
     tuning = tune(proto, model)
-    backend = Simulated(proto, model, plan.steps[0].achieved, rotor=tuning.rotor)
+    backend = simulated_relays(proto, model, plan.steps[0].achieved, rotor=tuning.rotor)
     rate = 1.0 / tuning.dwell
     report = play(plan, backend, rate, ThermalLimits(max_on=60, max_duty=1.0, window=60))
     assert report.steps == len(plan.steps)

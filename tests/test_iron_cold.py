@@ -14,8 +14,8 @@ import pytest
 import spherestep.magnetics as magnetics
 from spherestep import so3
 from spherestep._fast import coupling as fast_coupling
-from spherestep.control import limits
-from spherestep.magnetics import _coupling, _ironcoupling, _ironmap, _ironscale, design_model, scaled_design
+from spherestep import electrics
+from spherestep.magnetics import _coupling, _inductance, _ironcoupling, _ironmap, _ironscale, design_model, scaled_design
 from spherestep.motor import prototype
 
 INCH = 0.0254
@@ -29,9 +29,10 @@ def _no_solve(*args, **kwargs):
 def no_solve(monkeypatch):
     """Every path to a solve or a per-design cache raises; the in-process tables are emptied (a new process)."""
     for module, name in ((_ironscale, "solve_pair_tables"), (_ironscale, "cached"),
-                         (_ironcoupling, "cross_energy_table"), (magnetics, "coil_inductance")):
+                         (_ironcoupling, "cross_energy_table"), (magnetics, "coil_inductance"),
+                         (_inductance, "coil_inductance")):
         monkeypatch.setattr(module, name, _no_solve)
-    monkeypatch.setattr(limits, "_SOLVED", {})
+    monkeypatch.setattr(_inductance, "_SOLVED", {})
     _ironmap._tables.cache_clear()
     _ironmap._coupling_table.cache_clear()
     monkeypatch.setattr(_coupling, "_TABLES", {})
@@ -57,17 +58,17 @@ def test_new_design_model_builds_without_a_solve(no_solve, which):
 def test_scaled_core_inductance_follows_the_law():
     """``L / N²`` of a core ×s is ``s ×`` the stored core's (no solve); another core is not found."""
     p = prototype()
-    key = limits.core_key(p.coil, p)
-    base = limits.IRON_PERMEANCE[key]
+    key = electrics.core_key(p.coil, p)
+    base = electrics.IRON_PERMEANCE[key]
     for s in (0.5, 1.5, 2.0):
         d = scaled_design(p, s)
-        assert limits.stored_permeance(limits.core_key(d.coil, d)) == pytest.approx(s * base, rel=1e-12)
+        assert electrics.stored_permeance(electrics.core_key(d.coil, d)) == pytest.approx(s * base, rel=1e-12)
         turns = d.coil.turns(d.coil_diameter, d.coil_length)
-        assert limits.iron_inductance(d.coil, d) == pytest.approx(turns ** 2 * s * base, rel=1e-12)
+        assert magnetics.iron_inductance(d.coil, d) == pytest.approx(turns ** 2 * s * base, rel=1e-12)
     other = replace(p, coil_length=1.1 * p.coil_length)
-    assert limits.stored_permeance(limits.core_key(other.coil, other)) is None
+    assert electrics.stored_permeance(electrics.core_key(other.coil, other)) is None
     wider = replace(p.coil, material=replace(p.coil.material, relative_permeability=2000.0))
-    assert limits.stored_permeance(limits.core_key(wider, p)) is None
+    assert electrics.stored_permeance(electrics.core_key(wider, p)) is None
 
 
 def test_table_builders_do_not_depend_on_the_thread_split(monkeypatch):

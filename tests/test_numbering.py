@@ -176,7 +176,7 @@ def test_a_calibration_for_another_numbering_is_refused(tmp_path):
     ``design_model(calibration=...)`` naming ``calibration.design_fingerprint``."""
     import yaml
 
-    from spherestep.control.calibration import Calibration
+    from spherestep.magnetics.calibrated import Calibration
     from spherestep.magnetics import design_model
 
     proto = prototype()

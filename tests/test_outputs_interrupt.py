@@ -44,7 +44,7 @@ def test_a_failure_after_a_swallowed_signal_removes_the_set_too(tmp_path):
     """A Ctrl-C during numba's first compile is swallowed by llvmlite's callback and the compile then fails with
     an unrelated error ("no compiled object yet"): with the signal recorded (spherestep.cli.signals records every
     one), that failure removes the set like the interrupt itself; without a signal it leaves the files it wrote."""
-    from spherestep.outputs import note_signal
+    from spherestep.interrupts import note_signal
 
     out = tmp_path / "new"
     note_signal("SIGINT")

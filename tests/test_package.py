@@ -29,6 +29,9 @@ def test_every_room_is_reachable_from_the_top():
     assert ss.motor.prototype().name
     for room in ss.__all__:
         assert getattr(ss, room).__name__ == f"spherestep.{room}"
+    for room in ss.PLUMBING:  # reachable, not advertised (issue 36 §6)
+        assert getattr(ss, room).__name__ == f"spherestep.{room}" and room not in ss.__all__
+    assert set(ss.__all__) <= set(dir(ss)) and not set(ss.PLUMBING) & set(dir(ss))
     assert ss.magnetics.TorqueMap is not None and ss.statics.TorqueModel is not None
     with pytest.raises(AttributeError, match="no attribute 'nonexistent'"):
         ss.nonexistent  # noqa: B018

@@ -55,15 +55,15 @@ def test_emulated_motor_reads_the_cores_as_the_simulated_sensor_does(design, arr
     """The emulated motor's magnetometer counts at an orientation and coil currents are the rotor's table, the
     cores' field and the iron coils' (iron_fields) to half an LSB, and the simulation's HallSensor reads the same;
     the rotor-only field misses them by millitesla."""
-    from spherestep.hardware import EmulatedMotor
+    from spherestep.drive.connect import emulated_motor
     from spherestep.magnetics import design_model
 
     own = design_model(design)
     R = so3.random(1, 11)[0]
-    motor = EmulatedMotor(design, own.model, array8, drive=own.limits, R0=R)
+    motor = emulated_motor(design, own.model, array8, drive=own.limits, R0=R)
     c = np.zeros(len(design.stator))
     c[[0, 4, 13]] = [0.8, -1.0, 0.4]
-    motor.i = c * motor.nominal
+    motor.i = own.limits.amperes(c)
     counts, stale = motor.sense()
     m = counts * array8.part.lsb_T
     cores, coils = iron.iron_fields(design, array8.positions)

@@ -177,6 +177,7 @@ class SpringDetent:
     fixed torque per unit current ``K`` (linear), for the servo's bias path."""
 
     has_bias = True  # the spring: torque at zero current
+    affine_in_currents = False  # no packed terms
 
     def __init__(self, K, k=2.0, failed=()):
         self.K, self.k, self.failed, self.coil_count = np.asarray(K), k, tuple(failed), K.shape[1]

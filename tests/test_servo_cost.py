@@ -67,6 +67,7 @@ def test_a_model_without_packed_terms_takes_its_own_methods(models):
         def __init__(self, model):
             self.m = model
             self.coil_count, self.failed, self.has_bias = model.coil_count, model.failed, model.has_bias
+            self.affine_in_currents = False  # declared with packed_terms: none
 
         def __getattr__(self, name):
             return getattr(self.m, name)

@@ -207,7 +207,8 @@ def test_supply_power_ball_bounds_copper_and_back_emf_power():
 def test_iron_coil_limits_carry_its_own_inductance():
     from dataclasses import replace
 
-    from spherestep.control.limits import core_key, iron_inductance, wheeler_inductance
+    from spherestep.electrics import core_key, wheeler_inductance
+    from spherestep.magnetics import iron_inductance
     from spherestep.motor import prototype
     from spherestep.motor.coil import iron_coil
 

@@ -269,7 +269,7 @@ def test_quick_search_end_to_end(quick):
     page = (out / "report.html").read_text()
     assert "required / achieved" in page and "Beside the gallery" in page and "jhu-as-built" in page
     # the front: no feasible row dominates a front row
-    from spherestep.synthesis.run import objectives
+    from spherestep.synthesis.front import objectives
 
     cols = objectives(spec)
     ok = result.table[result.table["status"] == "ok"]

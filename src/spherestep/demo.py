@@ -230,15 +230,16 @@ def calibration(design, own, axis, angle: float, *, holds: int = CALIBRATION_HOL
     """The calibration on the emulated motor (issue 26): the plant the design's own model ``own``
     (:func:`~spherestep.magnetics.design_model`) with :data:`CALIBRATION_ERROR`
     (:func:`~spherestep.magnetics.mismatch.scaled_model`), run by the hardware emulator
-    (:class:`~spherestep.control.Emulated`, lockstep); ``holds`` holds on a random walk collected by the servo on
-    ``own`` (:func:`~spherestep.control.collect_holds`), the fit (:func:`~spherestep.control.calibrate`), the
+    (:class:`~spherestep.drive.Emulated`, lockstep); ``holds`` holds on a random walk collected by the servo on
+    ``own`` (:func:`~spherestep.drive.collect_holds`), the fit (:func:`~spherestep.control.calibrate`), the
     relative RMS torque error against the plant at 200 held-out orientations (:func:`~spherestep.control.torque_error`)
     and the turn of ``angle`` rad about ``axis`` on the plant (:func:`spherestep.dynamics.robustness.turn_run`)
     with the servo on the model before and after, one plan for both: within
     :data:`~spherestep.control.trajectory.MARGIN` on the pairwise model, as the robustness table's (the coupled
     one is refused within it; benchmarks/bench_calibration.py); an exact sensor, as the benchmark's (with the
     robustness line's 0.02° noise the noise's tracking error, ~0.8–0.9° on the plant, hides the model's)."""
-    from .control import Emulated, calibrate, collect_holds, hold_orientations, torque_error
+    from .control import calibrate, hold_orientations, torque_error
+    from .drive import Emulated, collect_holds
     from .control.trajectory import MARGIN
     from .dynamics import Rotor
     from .dynamics.robustness import turn_run

@@ -25,6 +25,7 @@ from pathlib import Path
 
 from .atomic import remove_stale
 from .errors import ComputationError, InputError
+from .interrupts import interrupt_of, last_signal
 
 DISK_FULL = (errno.ENOSPC, errno.EDQUOT, errno.EFBIG)
 
@@ -61,31 +62,6 @@ def _nearest_existing(path: Path) -> Path:
         if candidate.exists():
             return candidate
     return Path(".")
-
-
-_SIGNALS: list[str] = []  # the signals received while a command runs (recorded by spherestep.cli.signals)
-
-
-def note_signal(name: str | None) -> None:
-    """Record that the running command received signal ``name`` (None: a new command starts, forget them): a
-    failure after it is an interrupt even when the ``KeyboardInterrupt`` itself was swallowed (llvmlite's
-    callback during numba's first compile drops it, and the compile fails later with an unrelated error)."""
-    if name is None:
-        _SIGNALS.clear()
-    else:
-        _SIGNALS.append(name)
-
-
-def interrupt_of(exc: BaseException | None) -> KeyboardInterrupt | None:
-    """The Ctrl-C or SIGTERM behind ``exc``: itself, or one in its chain of causes (a compiled numba call
-    interrupted mid-way surfaces as ``SystemError`` with the ``KeyboardInterrupt`` as its context)."""
-    seen = set()
-    while exc is not None and id(exc) not in seen:
-        if isinstance(exc, KeyboardInterrupt):
-            return exc
-        seen.add(id(exc))
-        exc = exc.__cause__ or exc.__context__
-    return None
 
 
 def output_folder(path: str | os.PathLike, name: str = "--out") -> Path:
@@ -180,7 +156,7 @@ class Outputs:
             pass
 
     def __exit__(self, kind, exc, tb) -> bool:
-        if interrupt_of(exc) is not None or (exc is not None and _SIGNALS):  # Ctrl-C or SIGTERM: complete or absent
+        if interrupt_of(exc) is not None or (exc is not None and last_signal()):  # Ctrl-C or SIGTERM: complete or absent
             for path in self.written():
                 try:
                     path.unlink()

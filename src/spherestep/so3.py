@@ -143,10 +143,22 @@ def distance(R1, R2, *, trusted: bool = False) -> np.ndarray:
     return np.arctan2(sin, 0.5 * (M[..., 0, 0] + M[..., 1, 1] + M[..., 2, 2] - 1.0))
 
 
+QUATERNION_COLUMNS = ("qw", "qx", "qy", "qz")  # every file the package writes: scalar first, columns named
+
+
+def quaternion_rows(R) -> np.ndarray:
+    """The unit quaternions ``(w, x, y, z)`` (scalar first: the files' order, :data:`QUATERNION_COLUMNS`) of
+    rotations ``(..., 3, 3)``, by SciPy (its sign). What every writer of a quaternion column calls; in memory,
+    :func:`to_quaternion` keeps SciPy's scalar-last order."""
+    R = np.asarray(R, dtype=float)
+    return Rotation.from_matrix(R.reshape(-1, 3, 3)).as_quat(scalar_first=True).reshape(R.shape[:-2] + (4,))
+
+
 def to_quaternion(R) -> np.ndarray:
     """Unit quaternions ``(x, y, z, w)`` (SciPy's scalar-last order) of rotations ``(..., 3, 3)``, up to sign, by
     Shepperd's method: of the four forms ``4 q_i q`` (``i = x, y, z, w``) the one with the largest ``q_i²``,
-    normalised. Trusted input (no contract check): for the package's KD-trees of states."""
+    normalised. Trusted input (no contract check): for the package's KD-trees of states (files use
+    :func:`quaternion_rows`, scalar first)."""
     R = np.asarray(R, dtype=float)
     if R.size == 9:  # one matrix: plain floats
         a, b, c, d, e, f, g, h, i = R.ravel().tolist()

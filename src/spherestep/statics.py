@@ -23,12 +23,16 @@ model offers, so that no caller probes it:
   ``torque(R, 0) ≠ 0``), ``False`` when ``torque(R, 0) ≡ 0`` (the air-core map, the potential);
 * ``packed_terms(c)``: the model's energy as compiled zonal terms (a :class:`spherestep._fast.Packed`, built by
   :func:`spherestep.rotor_field.pack_terms`) for currents ``c (..., N)``, or ``None``: the compiled descent and
-  integrator run on it, any model answering ``None`` takes the NumPy path.
+  integrator run on it, any model answering ``None`` takes the NumPy path;
+* ``affine_in_currents``: ``True`` when those packed terms' coefficients are affine in each coil's own current
+  (``C(c) = C(0) + Σ_k c_k ∂C/∂c_k``, the same parameters and signs at every ``c``): the servo law's cache then
+  evaluates ``K(R)`` and the bias in one compiled call from ``C(0)`` and ``C(1) − C(0)``
+  (:class:`spherestep.control.ModelCache`); ``False`` (the default) for a model without packed terms.
 
 :class:`TorqueModelBase` supplies what a model need not write itself: the combined ``evaluate`` (energy, torque
 and Hessian in one call), the Hessian by central differences of the torque, ``torque_matrix`` by central
-differences in the currents, the current check, and the cautious declarations ``has_bias = True`` and
-``packed_terms(c) = None``.
+differences in the currents, the current check, and the cautious declarations ``has_bias = True``,
+``packed_terms(c) = None`` and ``affine_in_currents = False``.
 
 Equilibria
 ----------
@@ -81,6 +85,7 @@ class TorqueModel(Protocol):
     coil_count: int
     failed: tuple[int, ...]
     has_bias: bool
+    affine_in_currents: bool
 
     def energy(self, R, currents) -> np.ndarray: ...
 
@@ -112,6 +117,7 @@ class TorqueModelBase:
     coil_count: int
     failed: tuple[int, ...]
     has_bias: bool = True
+    affine_in_currents: bool = False
 
     def packed_terms(self, currents) -> Packed | None:
         """The energy as compiled zonal terms for ``currents (..., N)``; ``None``: this model has none."""
@@ -201,8 +207,8 @@ _MODEL_TYPES: set[type] = set()  # types that passed the protocol check (a runti
 
 
 def is_torque_model(model) -> bool:
-    """Whether ``model`` is a :class:`TorqueModel` (answers the protocol and declares ``has_bias`` and
-    ``packed_terms``); the check, ~0.1 ms, runs once per type."""
+    """Whether ``model`` is a :class:`TorqueModel` (answers the protocol and declares ``has_bias``,
+    ``affine_in_currents`` and ``packed_terms``); the check, ~0.1 ms, runs once per type."""
     if type(model) in _MODEL_TYPES:
         return True
     if isinstance(model, TorqueModel):

@@ -29,6 +29,10 @@ What is where:
   (:class:`spherestep.control.ModelCache`: the servo law's model and the simulation's plant);
 * :mod:`.allocation` — the allocation's semismooth Newton and the closest reachable torque
   (:func:`spherestep.control.allocation.allocate_matrix`; the NumPy Newton and Clarabel stay the references).
+* :mod:`.relays` — one step of the potential planner's bookkeeping (candidate currents, distinct activations,
+  the choice; :func:`spherestep.commutation.plan_potential`);
+* :mod:`.ironfield` — the iron cores' field at the magnetometers: a magnet's field at the cores' cells and the
+  cores' B-spline response table summed over the poles, with its Jacobian (:mod:`spherestep.sensing.iron`);
 * :mod:`.threads` — :func:`~.threads.single_blas_thread`, the decorator that runs the package's long entry points
   (equilibria, planners, tuning, simulation, calibration) on one BLAS thread.
 

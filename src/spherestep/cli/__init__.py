@@ -29,7 +29,7 @@ from . import gallery  # noqa: F401 (registers)
 from . import synthesize  # noqa: F401 (registers)
 from . import calibrate  # noqa: F401 (registers)
 from .app import app
-from .signals import Terminated, interrupt_of, sigterm_as_interrupt
+from .signals import Terminated, exit_code, interrupt_for, interrupt_of, sigterm_as_interrupt, signal_name
 
 DISK_FULL = (errno.ENOSPC, errno.EDQUOT, errno.EFBIG)
 
@@ -64,7 +64,7 @@ def main(argv: list[str] | None = None) -> int:
         # outside standalone mode Typer returns the code of an Exit (130 for Ctrl-C) instead of exiting
         code = result if isinstance(result, int) else 0
         if code == 130 and received.name and not received.told:  # Typer's silent 130 for Ctrl-C or SIGTERM
-            code = _interrupted(Terminated() if received.name == "SIGTERM" else KeyboardInterrupt())
+            code = _interrupted(interrupt_for(received.name))
     except NoArgsIsHelpError as exc:  # `spherestep` or `spherestep design` alone: the usage
         print(exc.ctx.get_help())
         code = 0
@@ -86,7 +86,8 @@ def main(argv: list[str] | None = None) -> int:
         _error("error", exc)
         code = 2
     except (KeyboardInterrupt, typer.Abort) as exc:  # a re-raised interrupt says which signal it was
-        code = _interrupted(Terminated() if received is not None and received.name == "SIGTERM" else exc)
+        code = _interrupted(interrupt_for(received.name) if received is not None and received.name == "SIGTERM"
+                            else exc)
     except OSError as exc:  # a path the command did not check (it should have): still one line
         if debug:
             raise
@@ -105,7 +106,7 @@ def main(argv: list[str] | None = None) -> int:
             return _exit(code, argv)
         if received is not None and received.name:  # the signal's interrupt was swallowed (e.g. by llvmlite's
             # callback during numba's first compile) and the run failed for it later: still the signal's exit
-            code = _interrupted(Terminated() if received.name == "SIGTERM" else KeyboardInterrupt())
+            code = _interrupted(interrupt_for(received.name))
             return _exit(code, argv)
         if debug:
             raise
@@ -139,9 +140,8 @@ def _quiet_interrupts(unraisable) -> None:
 
 def _interrupted(exc: BaseException) -> int:
     """One line for Ctrl-C (exit 130) or SIGTERM (exit 143)."""
-    term = isinstance(exc, Terminated)
-    print(f"spherestep: interrupted ({'SIGTERM' if term else 'SIGINT'})", file=sys.stderr)
-    return 143 if term else 130
+    print(f"spherestep: interrupted ({signal_name(exc)})", file=sys.stderr)
+    return exit_code(exc)
 
 
 def _exit(code: int, argv) -> int:

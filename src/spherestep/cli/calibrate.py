@@ -57,7 +57,8 @@ def calibrate(
 
     Example: [bold]spherestep calibrate --emulate --plant-error detent=1.2,winding=0.85 --out calibration.yaml[/bold]
     """
-    from ..control import Emulated, Port, calibrate as fit, collect_holds, hold_orientations, torque_error
+    from ..control import calibrate as fit, hold_orientations, torque_error
+    from ..drive import Emulated, Port, collect_holds
     from ..errors import bad_value
     from ..magnetics import design_model
     from ..magnetics.mismatch import scaled_model

@@ -14,7 +14,7 @@ from ..outputs import output_folder
 from .app import app
 from .common import check_axis, check_core, console, design_from, number, parse_vector, print_json, usable
 from .motor import ANGLE
-from .signals import Terminated, sigterm_as_interrupt, told
+from .signals import exit_code, interrupt_for, sigterm_as_interrupt, told
 
 MODES = ("servo", "ramped", "settled")
 
@@ -142,7 +142,7 @@ def move(
                                     port=port, rate=rate, tolerance=math.radians(tolerance),
                                     log=out / "servo-log.csv" if backend != "simulated" else None, progress=say)
                 if backend != "simulated" and result.details.outcome == "INTERRUPT":  # the loop caught it, coils off
-                    raise Terminated() if received.name == "SIGTERM" else KeyboardInterrupt()
+                    raise interrupt_for(received.name)
                 written = result.write(out)
         except KeyboardInterrupt as exc:  # the files removed (Outputs); say whether the device confirmed all off
             if backend == "simulated" or received is None or received.name is None or result is None:
@@ -152,7 +152,7 @@ def move(
                 f"all off NOT acknowledged; {d.message.rpartition('OFF was not acknowledged: ')[2]}"
             print(f"spherestep: interrupted ({received.name}): {off}", file=sys.stderr)
             told()
-            raise typer.Exit(143 if isinstance(exc, Terminated) else 130) from None
+            raise typer.Exit(exit_code(exc)) from None
     if backend != "simulated":
         written.append(out / "servo-log.csv")
     if as_json:

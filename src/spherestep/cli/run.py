@@ -17,7 +17,7 @@ import typer
 from ..errors import InputError, bad_value
 from .app import app
 from .common import console, number, print_json
-from .signals import Terminated, interrupt_of, sigterm_as_interrupt, told
+from .signals import Terminated, exit_code, interrupt_of, sigterm_as_interrupt, signal_name, told
 
 LOG_LINE = re.compile(r"^\s*-?\d+\.\d{6} (TX|RX|NOTE) ")  # a line of Transcript.lines()
 
@@ -50,18 +50,17 @@ def _design_for(design_path, plan):
 
 
 def _simulated(design_path, plan):
-    """The :class:`Simulated` back end for ``plan``: the design's rotor under its own torque model
-    (:func:`spherestep.magnetics.design_model`: iron for the prototype), tuned, starting at rest at the plan's
-    first orientation."""
+    """The simulated relay back end's options for ``plan`` (:func:`spherestep.drive.connect`, kind
+    ``"simulated"``): the design's rotor under its own torque model (:func:`spherestep.magnetics.design_model`:
+    iron for the prototype), tuned, starting at rest at the plan's first orientation."""
     from ..dynamics import tune
-    from ..hardware import Simulated
     from ..magnetics import design_model
     from .common import usable
 
     design = usable(_design_for(design_path, plan), "--design", design_path)
     model = design_model(design).model
     tuning = tune(design, model)
-    return Simulated(design, model, plan.steps[0].achieved, rotor=tuning.rotor, dt=tuning.dt)
+    return design, {"plant": model, "R0": plan.steps[0].achieved, "rotor": tuning.rotor, "dt": tuning.dt}
 
 
 def _progress(total: int, show: bool):
@@ -135,7 +134,8 @@ def run(
     if max_duty is not None and not (0 < max_duty <= 1):
         raise bad_value("--max-duty", "a fraction in (0, 1], such as 0.5", max_duty)
     from ..commutation import Plan
-    from ..hardware import DryRun, Serial, ThermalLimits, Transcript, play
+    from ..drive.connect import connect
+    from ..hardware import ThermalLimits, Transcript, play
 
     if log is not None:
         log = check_log(log, force)
@@ -155,18 +155,22 @@ def run(
     try:
         with sigterm_as_interrupt():
             if dry_run:
-                backend = DryRun(channels=needed if channels is None else channels, transcript=transcript)
+                design, options = None, {"channels": needed if channels is None else channels,
+                                         "transcript": transcript}
             elif simulate:
-                backend = _simulated(design_path, steps)
+                design, options = _simulated(design_path, steps)
             else:
-                backend = Serial(port, transcript=transcript)
-            if live is not None:
-                live.start()
-            try:
-                report = play(steps, backend, rate, limits, on_step=on_step)
-            finally:
+                design, options = None, {"port": port, "transcript": transcript}
+            kind = "dry run" if dry_run else "simulated" if simulate else "relay port"
+            with connect(design, kind, **options) as conn:
+                backend = conn.link
                 if live is not None:
-                    live.stop()
+                    live.start()
+                try:
+                    report = play(steps, backend, rate, limits, on_step=on_step)
+                finally:
+                    if live is not None:
+                        live.stop()
         acknowledged = "all coils off, acknowledged by the device" if not (dry_run or simulate) else outcome
         transcript.add(backend.clock(), "NOTE", f"end: {len(steps.steps)} frames streamed; {acknowledged}")
     except BaseException as exc:
@@ -178,10 +182,9 @@ def run(
             sink.close()
         if interrupt is not None:  # the coils are off by now (the driver switched them off)
             off = "all coils off, acknowledged by the device" if not (dry_run or simulate) else outcome
-            signame = "SIGTERM" if isinstance(interrupt, Terminated) else "SIGINT"
-            print(f"spherestep: interrupted ({signame}): {off}", file=sys.stderr)
+            print(f"spherestep: interrupted ({signal_name(interrupt)}): {off}", file=sys.stderr)
             told()
-            raise typer.Exit(143 if isinstance(interrupt, Terminated) else 130) from None
+            raise typer.Exit(exit_code(interrupt)) from None
         raise
     if sink is not None:
         sink.close()

@@ -1,5 +1,6 @@
 """Signals for the command: SIGTERM unwinds like Ctrl-C, so every command switches coils off and cleans up the same
-way for both (exit 130 for SIGINT, 143 for SIGTERM)."""
+way for both (exit 130 for SIGINT, 143 for SIGTERM). The handlers live here; the record of what arrived, the
+interrupt each raises and the exit codes are :mod:`spherestep.interrupts`' (one registry)."""
 
 from __future__ import annotations
 
@@ -7,20 +8,22 @@ import signal
 import threading
 from contextlib import contextmanager
 
-from ..outputs import interrupt_of, note_signal  # noqa: F401  (interrupt_of: the CLI's name for it; outputs' own)
-
-
-class Terminated(KeyboardInterrupt):
-    """SIGTERM, raised in the main thread so that it unwinds like Ctrl-C (every coil switched off)."""
+from ..interrupts import (Terminated, exit_code, interrupt_for, interrupt_of, last_signal,  # noqa: F401
+                          note_signal, signal_name)
 
 
 class Received:
-    """The signal that arrived while inside :func:`sigterm_as_interrupt` (``name``: "SIGINT", "SIGTERM" or None) and
-    whether the command already said so on stderr (``told``, set by :func:`told`)."""
+    """The signal that arrived while inside :func:`sigterm_as_interrupt` (``name``: "SIGINT", "SIGTERM" or None,
+    read from :func:`spherestep.interrupts.last_signal`) and whether the command already said so on stderr
+    (``told``, set by :func:`told`)."""
 
     def __init__(self):
-        self.name: str | None = None
         self.told = False
+        self._left: tuple[str | None] | None = None  # the name when the block was left (the record is reset then)
+
+    @property
+    def name(self) -> str | None:
+        return last_signal() if self._left is None else self._left[0]
 
 
 _CURRENT: list[Received] = []
@@ -32,18 +35,10 @@ def told() -> None:
         received.told = True
 
 
-def _raise_terminated(signum, frame):
-    for received in _CURRENT:
-        received.name = "SIGTERM"
-    note_signal("SIGTERM")
-    raise Terminated()
-
-
-def _raise_interrupt(signum, frame):
-    for received in _CURRENT:
-        received.name = "SIGINT"
-    note_signal("SIGINT")
-    raise KeyboardInterrupt()
+def _raise(signum, frame):
+    name = signal.Signals(signum).name
+    note_signal(name)
+    raise interrupt_for(name)
 
 
 @contextmanager
@@ -52,19 +47,21 @@ def sigterm_as_interrupt():
     KeyboardInterrupt), and either is recorded in the :class:`Received` yielded (Typer turns an interrupt into a
     silent exit status 130; the CLI says which signal it was); the previous handlers are restored on leaving."""
     received = Received()
-    if threading.current_thread() is not threading.main_thread():
+    if threading.current_thread() is not threading.main_thread():  # no handlers there: nothing is received
+        received._left = (None,)
         yield received
         return
-    previous = signal.signal(signal.SIGTERM, _raise_terminated)
+    previous = signal.signal(signal.SIGTERM, _raise)
     previous_int = signal.getsignal(signal.SIGINT)
     if previous_int is signal.default_int_handler:  # not when ignored or when a caller installed its own
-        signal.signal(signal.SIGINT, _raise_interrupt)
+        signal.signal(signal.SIGINT, _raise)
     if not _CURRENT:  # the outermost command: a fresh record
         note_signal(None)
     _CURRENT.append(received)
     try:
         yield received
     finally:
+        received._left = (last_signal(),)
         _CURRENT.pop()
         if not _CURRENT:
             note_signal(None)

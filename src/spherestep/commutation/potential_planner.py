@@ -15,7 +15,7 @@ pairs within the design's tolerance at the equilibrium. An activation offered tw
 Cost: the inputs are checked once per plan (the model's failed coils at every step); each step's candidates
 descend together in one call of :func:`spherestep.statics.equilibrium`'s own descent
 (:func:`spherestep.statics.descend`); the bookkeeping around
-it — candidate currents, distinct activations, the choice — runs compiled (:mod:`._potential_kernels`) on
+it — candidate currents, distinct activations, the choice — runs compiled (:mod:`spherestep._fast.relays`) on
 NumPy's products ``R1ᵀ R2``, so that Park distances, and their ties, come out bit for bit as
 :func:`spherestep.so3.distance`'s.
 """
@@ -48,7 +48,7 @@ def _activations(states, design, target, ids: np.ndarray, max_coils: int, ranked
     """The currents ``(len(ids), N)`` of :func:`_trim` applied to each of the states ``ids``, in one pass: every
     held pair ranked within its state by closeness ``−(R u_j)·v_k`` at ``target``, the first ``max_coils`` kept.
     ``ranked=False`` skips the ranking, for states none of which holds more than ``max_coils`` pairs."""
-    from ._potential_kernels import closest_pairs
+    from .._fast.relays import closest_pairs
 
     closeness = np.zeros(0)
     if ranked:
@@ -66,7 +66,7 @@ def plan_potential(design, targets, model, *, max_coils: int = DEFAULT_MAX_COILS
     """Commutate ``targets (n+1, 3, 3)`` with the energy ``model`` (a
     :class:`~spherestep.potential.MotorPotential` of ``design``); see the module docstring."""
     from ..statics import as_currents, descend, equilibrium
-    from ._potential_kernels import angles, best, distinct
+    from .._fast.relays import angles, best, distinct
 
     targets = check_targets(targets)
     max_coils = checks.count(max_coils, "max_coils", minimum=2,

@@ -43,7 +43,7 @@ import numpy as np
 from .. import checks, so3
 from ..errors import bad_value
 from ..statics import TorqueModel
-from .limits import DriveLimits
+from ..electrics import DriveLimits
 
 RELAY_MAX_COILS = 4  # exact enumeration up to four coils on (1.7 k half-sets, 2.8 M pairs for 29 coils)
 
@@ -319,7 +319,7 @@ def allocate_matrix(K, torque, limits: DriveLimits | None = None, *, bias=None, 
         if float(c @ c) > limits.per_unit_power_radius ** 2 * (1 + 1e-12):  # the copper's own bound (the device's)
             return allocate_matrix(K, torque, limits, bias=bias, failed=failed, lam0=lam0, bounds=bounds)
     achieved = b + K @ c
-    power = limits.resistance * limits.nominal_current ** 2 * float(c @ c)
+    power = limits.nominal_power * float(c @ c)
     return Allocation(c, achieved, target, reachable, power, method), lam
 
 

@@ -51,22 +51,18 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field, replace
-from pathlib import Path
 
 import numpy as np
 from scipy.interpolate import CubicSpline
 
 from .. import checks, so3
 from ..errors import bad_value
-from ..statics import is_torque_model
-from .limits import DriveLimits
+from ..magnetics.calibrated import Calibration, Moved, calibration_beside, scaled_coupling  # noqa: F401
 
-CALIBRATION_FILE = "calibration.yaml"  # beside the design file
 PRIOR = {"scale": 0.3, "node": 0.3, "curvature": 0.1, "coupling": 1.0}  # prior standard deviations (relative)
 ENVELOPE_DEG = 5.0  # the envelope of a table: the largest |τ| within this many degrees of a node
 UNSEEN = 0.5  # a parameter is not seen when its posterior variance exceeds this fraction of its prior's
 SIGMA_FLOOR = 1e-6  # of the peak detent: the least noise assumed
-CONSISTENT = 0.05  # a fit whose residual RMS is above this fraction of the uncorrected model's does not explain the data
 
 
 # -- the regression ------------------------------------------------------------------------------------------------
@@ -128,7 +124,7 @@ def regression(model, R, currents, weights=None, equation=None, equations: int |
 # -- the measurements ----------------------------------------------------------------------------------------------
 @dataclass(frozen=True, eq=False)
 class Holds:
-    """What :func:`collect_holds` recorded. Per hold ``i``: ``targets (H, 3, 3)``, the measured rest
+    """What :func:`spherestep.drive.collect_holds` recorded. Per hold ``i``: ``targets (H, 3, 3)``, the measured rest
     ``orientations (H, 3, 3)`` (the last sample) and the mean ``currents (H, N)`` per unit over the hold window.
     The equations (module docstring), ``E`` of them: ``kinds`` (``"hold"``/``"move"``), ``rhs (E, 3)`` N·m and
     the samples ``sample_R (S, 3, 3)``, ``sample_c (S, N)`` per unit, ``sample_w (S,)`` and ``sample_eq (S,)``
@@ -186,24 +182,7 @@ def hold_orientations(count: int, *, step: float = math.radians(25.0), seed=0) -
     return out
 
 
-@dataclass(frozen=True)
-class Emulated:
-    """The emulated motor as a backend of :func:`collect_holds`: ``plant`` the torque model the emulated rotor
-    obeys (it should differ from the controller's), on the lockstep link (``lockstep``, the default) or a
-    pseudo-terminal."""
-
-    plant: object
-    lockstep: bool = True
-
-
-@dataclass(frozen=True)
-class Port:
-    """A coil controller on a serial ``device`` as a backend of :func:`collect_holds` (the drive room's session)."""
-
-    device: str
-
-
-def _series_equations(t, R, c, window: float, inertia: float, damping: float, every: int):
+def series_equations(t, R, c, window: float, inertia: float, damping: float, every: int):
     """The hold and move equations (module docstring) of one session's series ``t (T,)``, ``R (T, 3, 3)``,
     ``c (T, N)`` (``c[n]`` the current over ``[t_n, t_{n+1}]``; the rotor at rest at ``t_0``), the move's
     quadrature on groups of ``every`` periods: ``[(kind, rhs, R_s, c_s, w_s)]`` and the rotor's speed at the end
@@ -244,280 +223,7 @@ def _groups(R, c, t, h, idx: np.ndarray, every: int):
     return so3.exp(half) @ R[first], mean_c, length, 0.5 * (t[first] + t[last])
 
 
-def collect_holds(design, backend, orientations, *, model=None, limits: DriveLimits | None = None,
-                  move_time: float = 0.4, settle: float = 0.5, window: float = 0.25, moves: bool = True,
-                  rate: float = 1000.0, quadrature: float = 0.004, progress=None) -> Holds:
-    """Drive the servo (controller on ``model``, default the design's own) to each of ``orientations``
-    (``(H, 3, 3)``, or a count for :func:`hold_orientations`) in turn and record the holds and moves (module
-    docstring). ``backend``: a torque model (the simulated plant, :func:`spherestep.dynamics.simulate_servo` at
-    ``rate`` Hz), an :class:`Emulated` motor or a :class:`Port` (the drive room's
-    :func:`~spherestep.drive.session.servo_session`, 200 Hz, the magnetometers' estimate as the measurement and
-    the commanded currents). Each move takes ``move_time`` s per 20° (at least ``move_time``), then ``settle``
-    s at the target; the hold equation is the last ``window`` s; ``moves=False`` keeps only the holds.
-    ``quadrature`` s: the move's integral by the midpoint rule on groups of periods this long (fewer samples
-    to regress; 4 ms keeps it within 0.1 % at 1 kHz). ``progress(text, done, total)`` is told of each hold."""
-    from ..dynamics import Rotor
-    from ..magnetics import design_model
-
-    if isinstance(orientations, (int, np.integer)) and not isinstance(orientations, bool):
-        orientations = hold_orientations(int(orientations))
-    targets = so3.as_rotations(orientations, "orientations").reshape(-1, 3, 3)
-    if len(targets) == 0:
-        raise bad_value("orientations", "at least one orientation", "none")
-    own = design_model(design)
-    model = own.model if model is None else model
-    limits = own.limits if limits is None else limits
-    if not is_torque_model(model):
-        raise bad_value("model", "a torque model (spherestep.statics.TorqueModel)", type(model).__name__)
-    move_time = checks.positive(move_time, "move_time", "a positive time in seconds")
-    settle = checks.positive(settle, "settle", "a positive time in seconds")
-    window = checks.positive(window, "window", "a positive time in seconds, shorter than settle")
-    if window >= settle:
-        raise bad_value("window", f"shorter than settle ({settle} s)", window)
-    quadrature = checks.positive(quadrature, "quadrature", "a positive time in seconds")
-    if is_torque_model(backend):
-        name = "simulated"
-        rotor = Rotor.from_design(design)
-    elif isinstance(backend, Emulated):
-        if not is_torque_model(backend.plant):
-            raise bad_value("backend.plant", "a torque model", type(backend.plant).__name__)
-        name = "emulated"
-        rotor = Rotor.from_design(design, damping=0.01)  # the drive room's emulated rotor
-    elif isinstance(backend, Port):
-        name = f"port {backend.device}"
-        rotor = Rotor.from_design(design, damping=0.01)
-    else:
-        raise bad_value("backend", "a torque model (the simulated plant), control.calibration.Emulated(plant) or "
-                        "control.calibration.Port(device)", type(backend).__name__)
-    rows, rest_R, rest_c, drift = [], [], [], []
-    here = np.eye(3)
-    for i, target in enumerate(targets):
-        if progress is not None:
-            progress(f"holding at orientation {i + 1} of {len(targets)} ({name})", i, len(targets))
-        traj, _ = _move(here, target, move_time)
-        t, R, c = _session(design, backend, traj, settle, here, model, limits, rate)
-        every = max(1, round(quadrature / float(np.median(np.diff(t)))))
-        eqs, speed = _series_equations(t, R, c, window, rotor.inertia, rotor.damping, every)
-        rows.extend(e for e in eqs if moves or e[0] == "hold")
-        here = R[-1]
-        rest_R.append(R[-1])
-        sel = t[:-1] >= t[-1] - window
-        rest_c.append(c[:-1][sel].mean(axis=0))
-        drift.append(speed)
-    if progress is not None:
-        progress(f"holding at orientation {len(targets)} of {len(targets)} ({name})", len(targets), len(targets))
-    kinds = tuple(r[0] for r in rows)
-    sample_eq = np.concatenate([np.full(len(r[4]), k) for k, r in enumerate(rows)])
-    return Holds(targets, np.array(rest_R), np.array(rest_c), kinds, np.array([r[1] for r in rows]),
-                 np.concatenate([r[2] for r in rows]), np.concatenate([r[3] for r in rows]),
-                 np.concatenate([r[4] for r in rows]), sample_eq, rotor.inertia, rotor.damping, name,
-                 np.array(drift))
-
-
-def _move(start: np.ndarray, target: np.ndarray, move_time: float):
-    """The triangular turn from ``start`` to ``target`` (``move_time`` per 20°, at least ``move_time``)."""
-    from .trajectory import Trajectory
-
-    rv = so3.log_single(target @ start.T)
-    angle = float(np.linalg.norm(rv))
-    if angle < 1e-9:
-        return Trajectory.hold(target), 0.0
-    T = move_time * max(1.0, math.sqrt(angle / math.radians(20.0)))
-    return Trajectory.turn(start, rv / angle, angle, 4.0 * angle / T ** 2), T
-
-
-def _session(design, backend, traj, settle: float, start, model, limits, rate: float):
-    """``(t, R, c)``: one run of the servo along ``traj`` and ``settle`` s on: times (s), measured orientations
-    and the currents per unit over each period."""
-    if is_torque_model(backend):
-        from ..dynamics import simulate_servo
-
-        run = simulate_servo(design, traj, backend, limits=limits, controller_model=model, settle=settle,
-                             start=start, rate=rate)
-        return run.times, run.orientations, run.currents / limits.nominal_current
-    from ..drive.session import servo_session
-
-    port = backend.device if isinstance(backend, Port) else None
-    emulate = isinstance(backend, Emulated)
-    options = {"plant": backend.plant, "lockstep": backend.lockstep} if emulate else {}
-    session = servo_session(design, traj, traj.duration + settle, port=port, emulate=emulate, model=model,
-                            drive=limits, R0=start, **options)
-    rep = session.report
-    if rep.outcome == "INTERRUPT":  # the loop caught Ctrl-C or SIGTERM and switched every coil off: unwind on
-        raise KeyboardInterrupt
-    if rep.outcome != "done" or len(rep.times) < 4:
-        raise bad_value("backend", "a motor that runs the servo to the end of each hold",
-                        f"outcome {rep.outcome} ({rep.message})")
-    t = np.asarray(rep.times, dtype=float)
-    R = np.asarray(rep.orientations, dtype=float)
-    c = np.asarray(rep.currents, dtype=float) / limits.nominal_current
-    # the currents commanded in a cycle are driven from the next cycle's start (the session's one-period delay)
-    c = np.vstack([np.zeros((1, c.shape[1])), c[:-1]])
-    return t, R, c
-
-
 # -- the fit -------------------------------------------------------------------------------------------------------
-@dataclass(frozen=True)
-class Moved:
-    """A node the fit moved beyond two standard deviations: ``table`` (``"detent"``/``"winding"``), ``angle``
-    (rad), ``nominal``, ``fitted`` and ``std`` (N·m)."""
-
-    table: str
-    angle: float
-    nominal: float
-    fitted: float
-    std: float
-
-    def to_dict(self, degrees: bool = True) -> dict:
-        return {"table": self.table, ("angle_deg" if degrees else "angle_rad"):
-                math.degrees(self.angle) if degrees else self.angle,
-                "nominal_Nm": self.nominal, "fitted_Nm": self.fitted, "std_Nm": self.std}
-
-
-@dataclass(frozen=True, eq=False)
-class Calibration:
-    """A fitted torque model (module docstring): ``model`` the corrected
-    :class:`~spherestep.magnetics.IronTorqueMap` (the base model's coupling kept); ``nodes`` (rad); the fitted
-    tables ``detent``, ``winding`` and their standard deviations ``detent_std``, ``winding_std`` (N·m), the
-    ``nominal_detent``/``nominal_winding`` they started from; the effective scales ``scale_detent``,
-    ``scale_winding`` (``θ⁰·θ / θ⁰·θ⁰`` per table: what the global scale and the shape did together) and their
-    ``scale_std``; the equations' residual RMS (N·m)
-    ``residual_before`` (the base model) and ``residual_after``, ``sigma`` the noise it assumed; ``holds`` and
-    ``equations`` counted; ``moved`` the nodes moved beyond 2σ; ``unseen`` what the data cannot see;
-    ``coupling`` whether the fitted model has the cores' coupling, ``coupling_gain`` ± ``coupling_std`` its
-    gain against the design's coupling (1: as modelled; 0: none); ``backend``; ``label``."""
-
-    model: object
-    nodes: np.ndarray
-    detent: np.ndarray
-    winding: np.ndarray
-    detent_std: np.ndarray
-    winding_std: np.ndarray
-    nominal_detent: np.ndarray
-    nominal_winding: np.ndarray
-    scale_detent: float
-    scale_winding: float
-    scale_std: tuple[float, float]
-    residual_before: float
-    residual_after: float
-    sigma: float
-    holds: int
-    equations: int
-    moved: tuple[Moved, ...]
-    unseen: tuple[str, ...]
-    coupling: bool
-    backend: str
-    label: str = "calibrated"
-    coupling_gain: float = 1.0
-    coupling_std: float = 0.0
-    design_fingerprint: str | None = None
-
-    @property
-    def consistent(self) -> bool:
-        """Whether the fitted model explains the data: the residual RMS after the fit within
-        :data:`CONSISTENT` of the uncorrected model's (else the holds were not at rest or the measurements are off,
-        and the fit should not be used)."""
-        return self.residual_after <= CONSISTENT * self.residual_before
-
-    def summary(self) -> str:
-        """Lines for people: residuals, scales, parameters moved, what was not seen."""
-        lines = [] if self.consistent else [
-            f"WARNING: the fit does not explain the data (residual {self.residual_after / self.residual_before:.0%} "
-            "of the uncorrected model's): the rotor was not at rest in the holds or the measurements are off; do "
-            "not use this calibration"]
-        lines += [f"{self.holds} holds, {self.equations} equations ({self.backend}): residual RMS "
-                 f"{self.residual_before * 1e3:.3g} -> {self.residual_after * 1e3:.3g} mN·m (noise taken "
-                 f"{self.sigma * 1e3:.2g} mN·m)",
-                 f"detent table ×{self.scale_detent:.4f} ± {self.scale_std[0]:.4f}, winding table "
-                 f"×{self.scale_winding:.4f} ± {self.scale_std[1]:.4f} (fitted against nominal, θ⁰·θ / θ⁰·θ⁰)",
-                 ("no coupling through the cores" if not self.coupling else
-                  f"the cores' coupling ×{self.coupling_gain:.4f} ± {self.coupling_std:.4f}" if self.coupling_std > 0
-                  else f"the cores' coupling kept as modelled (×{self.coupling_gain:g})"),
-                 f"{len(self.moved)} table nodes moved beyond 2σ"]
-        for m in self.moved[:8]:
-            lines.append(f"  {m.table} at {math.degrees(m.angle):g}°: {m.nominal:+.4g} -> {m.fitted:+.4g} "
-                         f"± {m.std:.2g} N·m")
-        if len(self.moved) > 8:
-            lines.append(f"  ... and {len(self.moved) - 8} more")
-        lines += [f"not seen: {u}" for u in self.unseen] or ["every parameter seen by the data"]
-        return "\n".join(lines)
-
-    def to_dict(self, degrees: bool = True) -> dict:
-        k = 180.0 / math.pi if degrees else 1.0
-        return {"label": self.label, "design_fingerprint": self.design_fingerprint, "backend": self.backend,
-                "holds": self.holds, "equations": self.equations,
-                "coupling": self.coupling, "coupling_gain": self.coupling_gain, "coupling_std": self.coupling_std,
-                "consistent": self.consistent,
-                ("nodes_deg" if degrees else "nodes_rad"): [float(x * k) for x in self.nodes],
-                "detent_Nm": [float(x) for x in self.detent], "winding_Nm": [float(x) for x in self.winding],
-                "detent_std_Nm": [float(x) for x in self.detent_std],
-                "winding_std_Nm": [float(x) for x in self.winding_std],
-                "nominal_detent_Nm": [float(x) for x in self.nominal_detent],
-                "nominal_winding_Nm": [float(x) for x in self.nominal_winding],
-                "scale_detent": self.scale_detent, "scale_winding": self.scale_winding,
-                "scale_std": [float(x) for x in self.scale_std],
-                "residual_before_Nm": self.residual_before, "residual_after_Nm": self.residual_after,
-                "sigma_Nm": self.sigma, "moved": [m.to_dict(degrees) for m in self.moved],
-                "unseen": list(self.unseen)}
-
-    def save(self, path) -> Path:
-        """Write the calibration as YAML (atomically; ``calibration.yaml`` beside the design file is what
-        :func:`spherestep.magnetics.design_model` reads with ``calibration=``); returns the path."""
-        import yaml
-
-        from ..atomic import write_text
-
-        text = "# spherestep torque calibration (spherestep.control.calibrate); tables in N·m at nodes in degrees\n"
-        return write_text(path, text + yaml.safe_dump(self.to_dict(degrees=True), sort_keys=False))
-
-    @classmethod
-    def load(cls, path, design) -> Calibration:
-        """The calibration saved at ``path`` for ``design`` (its model rebuilt from the tables; the coupling
-        re-read from the design's own when it had one). InputError naming ``calibration`` when the file is not
-        one or does not fit the design."""
-        import yaml
-
-        from ..magnetics import IronTorqueMap, iron_model
-
-        path = Path(path)
-        try:
-            data = yaml.safe_load(path.read_text(encoding="utf-8"))
-            nodes = np.radians(np.asarray(data["nodes_deg"], dtype=float))
-            det = np.asarray(data["detent_Nm"], dtype=float)
-            win = np.asarray(data["winding_Nm"], dtype=float)
-            arrays = [np.asarray(data[k], dtype=float) for k in ("detent_std_Nm", "winding_std_Nm",
-                                                                 "nominal_detent_Nm", "nominal_winding_Nm")]
-            moved = tuple(Moved(m["table"], math.radians(m["angle_deg"]), m["nominal_Nm"], m["fitted_Nm"],
-                                m["std_Nm"]) for m in data["moved"])
-        except (OSError, yaml.YAMLError, KeyError, TypeError, ValueError) as exc:
-            raise bad_value("calibration", "a calibration file written by spherestep calibrate",
-                            f"{path} ({type(exc).__name__}: {exc})") from None
-        if not (len(nodes) == len(det) == len(win)) or not np.all(np.diff(nodes) > 0):
-            raise bad_value("calibration", "tables with one value per increasing node", str(path))
-        if design.coil.core != "iron":
-            raise bad_value("calibration", "used with an iron-cored design", design.coil.core)
-        from ..motor import check_fingerprint
-
-        check_fingerprint(design, data.get("design_fingerprint"), "calibration.design_fingerprint",
-                          f"calibrate again with `spherestep calibrate` ({path})")
-        coupling = bool(data.get("coupling", False))
-        gain = float(data.get("coupling_gain", 1.0))
-        cross = scaled_coupling(iron_model(design, coupling=True).coupling, gain) if coupling else None
-        model = IronTorqueMap.from_tables(design, design.coil, nodes, det, win, coupling=cross)
-        return cls(model, nodes, det, win, *arrays, float(data["scale_detent"]), float(data["scale_winding"]),
-                   tuple(float(x) for x in data["scale_std"]), float(data["residual_before_Nm"]),
-                   float(data["residual_after_Nm"]), float(data["sigma_Nm"]), int(data["holds"]),
-                   int(data["equations"]), moved, tuple(str(u) for u in data["unseen"]), coupling,
-                   str(data["backend"]), str(data.get("label", "calibrated")), gain,
-                   float(data.get("coupling_std", 0.0)), design.fingerprint)
-
-
-def calibration_beside(design_path) -> Path | None:
-    """The calibration file beside a design file (``calibration.yaml`` in its folder), or None if there is none."""
-    path = Path(design_path).parent / CALIBRATION_FILE
-    return path if path.is_file() else None
-
-
 def _envelope(nodes: np.ndarray, table: np.ndarray) -> np.ndarray:
     """The largest ``|τ|`` within :data:`ENVELOPE_DEG` of each node (never 0: at least 1e-9 of the peak)."""
     near = np.abs(nodes[:, None] - nodes[None, :]) <= math.radians(ENVELOPE_DEG) + 1e-12
@@ -549,7 +255,8 @@ def _ranges(nodes_deg: np.ndarray, mask: np.ndarray) -> list[str]:
 def calibrate(design, model, holds: Holds, *, prior: dict | None = None, scales: bool = True,
               coupling: bool | None = None) -> Calibration:
     """Fit the pair tables of the iron ``model`` (an :class:`~spherestep.magnetics.IronTorqueMap`, the
-    controller's) to ``holds`` (:func:`collect_holds`) and return the :class:`Calibration` (module docstring).
+    controller's) to ``holds`` (:func:`spherestep.drive.collect_holds`) and return the :class:`Calibration`
+    (module docstring).
     ``prior`` overrides the prior's standard deviations :data:`PRIOR` (keys ``scale``, ``node``, ``curvature``,
     ``coupling``); ``scales=False`` fits the shape corrections alone. ``coupling``: whether to fit the gain of the
     cores' coupling (the model's from 1, or the design's own from 0 for a pairwise model); default (None) only for
@@ -684,22 +391,6 @@ def calibrate(design, model, holds: Holds, *, prior: dict | None = None, scales:
                        rms_before, rms_after, sigma, len(holds), E, tuple(moved), tuple(unseen),
                        cross is not None, holds.backend, coupling_gain=gain, coupling_std=gain_std,
                        design_fingerprint=design.fingerprint)
-
-
-def scaled_coupling(coupling, gain: float):
-    """The cores' coupling (a :class:`~spherestep.magnetics.IronTorqueMap`'s ``coupling``) with its energy, hence
-    its torque, ×``gain``: its series' spline coefficients scaled (the same splines otherwise)."""
-    import copy
-
-    if gain == 1.0:
-        return coupling
-    series = []
-    for spline in coupling.series:
-        out = copy.copy(spline)
-        tx, ty, c = spline.tck
-        out.tck = (tx, ty, np.asarray(c) * gain)
-        series.append(out)
-    return replace(coupling, series=tuple(series))
 
 
 def torque_error(model, plant, *, count: int = 200, seed=1) -> float:

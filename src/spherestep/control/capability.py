@@ -29,7 +29,7 @@ import numpy as np
 from .. import checks, so3
 from ..errors import bad_value
 from ..statics import TorqueModel
-from .limits import DriveLimits
+from ..electrics import DriveLimits
 
 PERCENTILES = (0, 5, 25, 50, 75, 95, 100)
 THRESHOLDS = (0.5, 1.0, 1.5, 2.0)  # N·m

@@ -71,7 +71,7 @@ from ..errors import bad_value
 from ..statics import TorqueModel, is_torque_model
 from .allocation import allocate_matrix
 from .controller import SPEED_MEMORY, GeometricPD, Observer, disturbance_bandwidths
-from .limits import DriveLimits
+from ..electrics import DriveLimits
 from .trajectory import Trajectory
 
 K_REUSE = 2e-3  # rad: K(R) and b(R) are re-evaluated when the orientation has turned further than this
@@ -92,9 +92,9 @@ class ModelCache:
     judged from ``tr(R Aᵀ)``, to about 1e-7 rad). Serves the servo law (at the estimate) and the emulated motor
     (at the true orientation).
 
-    A model whose energy packs into compiled zonal terms with currents affine in each coil's own current
-    (:meth:`~spherestep.statics.TorqueModel.packed_terms`: the torque map, the iron model without the
-    coupling) is evaluated by one compiled call, ``K`` and ``b`` together (:mod:`spherestep._fast.linear`,
+    A model that declares its packed terms affine in each coil's own current
+    (:attr:`~spherestep.statics.TorqueModel.affine_in_currents`: the torque map, the iron model, the fast
+    potential) is evaluated by one compiled call, ``K`` and ``b`` together (:mod:`spherestep._fast.linear`,
     equal to ``model.torque_matrix``/``model.torque`` to rounding; ``compiled`` tells); any other through the
     model's own methods."""
 
@@ -189,20 +189,16 @@ class ModelCache:
 
 
 def _affine_terms(model: TorqueModel):
-    """The compiled ``call(R, K, bias)`` for ``model`` (:func:`spherestep._fast.linear.affine_call`), or ``None`` when the model has no packed terms or their currents are not affine in each coil's
-    own current (checked on 0, 1 and 2 per unit in every live coil)."""
-    N = model.coil_count
-    live = np.ones(N)
-    live[list(model.failed)] = 0.0
-    packs = [model.packed_terms(x * live) for x in (0.0, 1.0, 2.0)]
-    if any(p is None for p in packs):
+    """The compiled ``call(R, K, bias)`` for ``model`` (:func:`spherestep._fast.linear.affine_call`) from its packed
+    terms at 0 and 1 per unit in every live coil, when the model declares them affine in the currents
+    (:attr:`~spherestep.statics.TorqueModel.affine_in_currents`); else ``None``."""
+    if not model.affine_in_currents:
         return None
-    p0, p1, p2 = packs
+    live = np.ones(model.coil_count)
+    live[list(model.failed)] = 0.0
+    p0, p1 = model.packed_terms(0.0 * live), model.packed_terms(live)
     C0 = np.ascontiguousarray(p0.C, dtype=float)
     D = np.ascontiguousarray(p1.C - p0.C, dtype=float)
-    if C0.ndim != 2 or not np.allclose(p2.C, C0 + 2.0 * D, rtol=0.0, atol=1e-14) \
-            or not np.array_equal(p0.params, p1.params) or not np.array_equal(p0.signs, p1.signs):
-        return None
     from .._fast.linear import affine_call
 
     return affine_call(p0, C0, D)
@@ -287,9 +283,9 @@ class ServoLaw:
         N = model.coil_count
         self._box = (np.zeros(N), np.zeros(N))
         self._failed_idx = np.array(self._failed, dtype=np.int64)
-        self._emf = 1.0 / (lim.resistance * lim.nominal_current ** 2)  # K·ω (N·m·rad/s) → per-unit volts
+        self._emf = lim.emf_factor  # K·ω (N·m·rad/s) → per-unit volts
         self._u = lim.per_unit_bound
-        self._uv = lim.supply_voltage / (lim.resistance * lim.nominal_current)
+        self._uv = lim.voltage_bound
         period = 1.0 / controller.rate
         self._slew = math.exp(-period / lim.time_constant) if slew else 0.0
         self._last = np.zeros(N)
@@ -313,8 +309,8 @@ class ServoLaw:
         return self._theta
 
     def amperes(self, currents) -> np.ndarray:
-        """Per-unit ``currents`` in amperes: ``I_n c`` (the drive's wire unit)."""
-        return np.asarray(currents, dtype=float) * self.limits.nominal_current
+        """Per-unit ``currents`` in amperes: ``I_n c`` (the drive's wire unit; :meth:`DriveLimits.amperes`)."""
+        return self.limits.amperes(currents)
 
     def predicted(self, t: float) -> np.ndarray:
         """The observer's orientation carried on to ``t`` at its rate of turn, ``exp((t − t̂) ω̂) R̂`` (a search's

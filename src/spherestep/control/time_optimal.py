@@ -78,7 +78,7 @@ import numpy as np
 
 from .. import checks, so3
 from ..errors import InputError, bad_value
-from .limits import DriveLimits
+from ..electrics import DriveLimits
 from .trajectory import MARGIN, TimeLaw, Trajectory
 
 GRID_STEP = math.radians(0.5)  # the phase plane's largest step along the path (rad)
@@ -102,9 +102,9 @@ def current_box(K, direction, limits: DriveLimits, *, failed=(), speed: float = 
     coils 0. The rest, ``(1 − scale)`` of the current and of the voltage, is the feedback's (and the
     inductance's, ``L di/dt``)."""
     n = checks.axis(direction, "direction")
-    g = np.einsum("man,a->mn", np.asarray(K, dtype=float), n) / (limits.resistance * limits.nominal_current ** 2)
+    g = np.einsum("man,a->mn", np.asarray(K, dtype=float), n) * limits.emf_factor
     u = scale * limits.per_unit_bound
-    uv = scale * limits.supply_voltage / (limits.resistance * limits.nominal_current)
+    uv = scale * limits.voltage_bound
     keep = headroom * np.abs(g)
     upper = np.minimum(u, uv - (np.maximum(g, 0.0) + keep) * speed)
     lower = np.maximum(-u, -uv + (np.maximum(-g, 0.0) + keep) * speed)
@@ -508,8 +508,8 @@ def speed_levels(model, start, axis, angle: float, limits: DriveLimits, top: flo
     s = np.linspace(0.0, angle, samples)
     R = so3.exp(s[:, None] * axis) @ start
     g = np.abs(np.einsum("man,a->mn", np.asarray(model.torque_matrix(R), float), axis))
-    g /= limits.resistance * limits.nominal_current ** 2
-    v0 = limits.supply_voltage / (limits.resistance * limits.nominal_current) / float(np.median(g.max(axis=1)))
+    g *= limits.emf_factor
+    v0 = limits.voltage_bound / float(np.median(g.max(axis=1)))
     cap = top * v0 if speed is None else min(speed, top * v0)
     return tuple(cap * (j + 1) / SPEED_BANDS for j in range(SPEED_BANDS))
 

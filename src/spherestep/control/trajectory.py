@@ -26,7 +26,7 @@ import numpy as np
 from .. import checks, so3
 from ..errors import bad_value
 from .capability import available_torque, feasible_support
-from .limits import DriveLimits
+from ..electrics import DriveLimits
 
 MARGIN = 0.7  # share of the guaranteed torque the trajectory may use; the rest is the feedback's
 

@@ -6,13 +6,19 @@ one result type.
 * :func:`compare_drives` (:mod:`.compare`): the same turn every mode → :class:`DriveComparison` (the demo's table);
 * :mod:`.hardware`: the servo on a coil controller or the emulated motor, judged like a simulation;
   :mod:`.session` assembles that session for a design (:func:`servo_session`, :func:`move_on_hardware`,
-  :func:`turn_reference`) from the hardware room's links, devices and emulators.
+  :func:`turn_reference`) from the hardware room's links, devices and emulators;
+* :func:`connect` (:mod:`.connect`): the one place a backend is chosen and built (``port``, ``lockstep``, ``pty``,
+  ``relay port``, ``dry run``, ``simulated``) → a :class:`Connection`;
+* :func:`collect_holds` (:mod:`.calibration`): the servo sessions a calibration fits (:class:`Emulated`,
+  :class:`Port`, or a torque model: the simulated plant).
 
 The model is the design's own (:func:`spherestep.magnetics.design_model`) unless one is given; every result
 names it. The simulation itself (rotor, integrator, coil electrics, the servo and ramped loops) is
 :mod:`spherestep.dynamics`.
 """
 
+from .calibration import Emulated, Port, collect_holds
+from .connect import KINDS, Connection, connect  # the function shadows its module's name (as design_model)
 from .compare import DEMO_AXIS, SENSOR_NOISE, DriveComparison, compare_drives
 from .session import Session, move_on_hardware, servo_session, turn_reference
 from .result import DriveResult, HardwareDetails, RampedDetails, ServoDetails, SettledDetails, figure_drive
@@ -20,6 +26,6 @@ from .turn import BACKENDS, FIXED_SERVO_TIME, MODES, SENSORS, TOLERANCE, check_o
     fixed_servo_time
 
 __all__ = ["BACKENDS", "DEMO_AXIS", "FIXED_SERVO_TIME", "MODES", "SENSORS", "SENSOR_NOISE", "TOLERANCE",
-           "DriveComparison", "DriveResult", "HardwareDetails", "RampedDetails", "ServoDetails", "Session",
+           "DriveComparison", "Emulated", "Port", "collect_holds", "KINDS", "Connection", "connect", "DriveResult", "HardwareDetails", "RampedDetails", "ServoDetails", "Session",
            "SettledDetails", "check_options", "choose_model", "compare_drives", "drive_turn", "figure_drive", "fixed_servo_time",
            "move_on_hardware", "servo_session", "turn_reference"]

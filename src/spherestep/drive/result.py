@@ -250,13 +250,11 @@ class DriveResult:
 
     def trajectory_csv(self) -> str:
         """``t_s``, rotor quaternion ``qw…qz`` (scalar first), target quaternion, error (degrees)."""
-        from scipy.spatial.transform import Rotation
-
-        q = Rotation.from_matrix(self.orientations).as_quat(scalar_first=True)
-        qt = Rotation.from_matrix(self.targets).as_quat(scalar_first=True)
+        q = so3.quaternion_rows(self.orientations)
+        qt = so3.quaternion_rows(self.targets)
         buf = io.StringIO()
         w = csv.writer(buf, lineterminator="\n")
-        w.writerow(["t_s", "qw", "qx", "qy", "qz", "target_qw", "target_qx", "target_qy", "target_qz", "error_deg"])
+        w.writerow(["t_s", *so3.QUATERNION_COLUMNS, *(f"target_{c}" for c in so3.QUATERNION_COLUMNS), "error_deg"])
         for row in zip(self.times, q, qt, np.degrees(self.tracking_error)):
             w.writerow([f"{row[0]:.6f}", *(f"{x:.12f}" for x in row[1]), *(f"{x:.12f}" for x in row[2]),
                         f"{row[3]:.6f}"])

@@ -15,14 +15,13 @@ serves :class:`~spherestep.hardware.motor_emulator.MotorPty` and returns the emu
 from __future__ import annotations
 
 import math
-import time
 from dataclasses import dataclass
-
 
 from .. import checks, so3
 from ..control import GeometricPD, ServoLaw, Trajectory
 from ..errors import bad_value
-from ..hardware import LOOP_RATE, DriveLink, FieldTracker, ServoReport, run_servo, wire_limits
+from ..hardware import LOOP_RATE, FieldTracker, ServoReport, run_servo, wire_limits
+from .connect import EMULATED_DAMPING, connect
 
 DELAY = 1  # control periods: the currents computed in a cycle are driven at the next cycle's start
 # The observer's bandwidth on hardware is the loop's rate in rad/s, ω_o = 1/h: its gains are then l₁ = 1, l₂ h = 1
@@ -121,54 +120,33 @@ def servo_session(design, trajectory: Trajectory, duration: float, *, port: str 
         model = own.model if model is None else model
         drive = own.limits if drive is None else drive
     R0 = trajectory.start if R0 is None else so3.as_rotations(R0).reshape(3, 3)
-    rotor = Rotor.from_design(design, damping=0.01)
+    rotor = Rotor.from_design(design, damping=EMULATED_DAMPING)
     estimator = field_model(design, sensors.positions, cores).estimator(sensors)
-    estimate = FieldTracker(estimator, R0, drive.nominal_current)
+    estimate = FieldTracker(estimator, R0, drive)
     controller = GeometricPD(rotor.inertia, bandwidth=BANDWIDTH, rate=rate, damping=rotor.damping)
     law = ServoLaw(model, trajectory, controller, limits=wire_limits(drive), sensor_rate=rate, delay=DELAY,
                    observer_bandwidth=rate)
     options = {} if max_late is None else {"max_late": max_late}
-    if not emulate:
-        with DriveLink(port) as link:
-            report = run_servo(link, estimate, law, duration=duration, rate=rate, log=log, status=status,
-                               **options)
-        return Session(report, trajectory, [], None)
-
-    from ..hardware import EmulatedMotor, LockstepLink, MotorPty
-
-    motor = EmulatedMotor(design, model if plant is None else plant, sensors, rotor=rotor, drive=drive, R0=R0,
-                          faults=faults)
+    kind = "port" if not emulate else "lockstep" if lockstep else "pty"
     truth: list = []
     held: list = [None]  # the truth at the latest cycle
-    device = {} if watchdog_ms is None else {"watchdog_ms": watchdog_ms}
-    if lockstep:
-        link = LockstepLink(motor, **device)
+    with connect(design, kind, port=port, plant=model if plant is None else plant, limits=drive, sensors=sensors,
+                 R0=R0, faults=faults, watchdog_ms=watchdog_ms, rotor=rotor) as conn:
+        observe = status
+        if conn.truth is not None:
+            def observe(t, R, w, currents):
+                held[0] = conn.truth()
+                if len(truth) <= int(t / truth_every):
+                    truth.append((t, held[0]))
+                if status is not None:
+                    status(t, R, w, currents)
 
-        def observe_here(t, R, w, currents):
-            held[0] = link.truth()
-            if len(truth) <= int(t / truth_every):
-                truth.append((t, held[0]))
-            if status is not None:
-                status(t, R, w, currents)
-
-        report = run_servo(link, estimate, law, duration=duration, rate=rate, log=log, status=observe_here,
-                           clock=link.clock, sleep=link.sleep, **options)
-        link.sleep(0.15)
-        return Session(report, trajectory, truth, link.truth(), link.device.watchdog_ms / 1000, 0.0, held[0])
-    with MotorPty(motor, **device) as dev:
-        def observe(t, R, w, currents):
-            held[0] = dev.truth()
-            if len(truth) <= int(t / truth_every):
-                truth.append((t, held[0]))
-            if status is not None:
-                status(t, R, w, currents)
-
-        with DriveLink(dev.port) as link:
-            report = run_servo(link, estimate, law, duration=duration, rate=rate, log=log, status=observe,
-                               **options)
-        time.sleep(0.15)  # the device runs on: a watchdog trip after a lost link lands in the truth
-        final = dev.truth()
-    return Session(report, trajectory, truth, final, dev.device.watchdog_ms / 1000, dev.started, held[0])
+        report = run_servo(conn.link, estimate, law, duration=duration, rate=rate, log=log, status=observe,
+                           **conn.timing, **options)
+        if conn.truth is None:
+            return Session(report, trajectory, [], None)
+        final = conn.release(0.15)  # the device runs on: a watchdog trip after a lost link lands in the truth
+    return Session(report, trajectory, truth, final, conn.watchdog, conn.started, held[0])
 
 
 def move_on_hardware(design, axis, angle: float, *, duration: float | None = None, port: str | None = None,

@@ -70,7 +70,7 @@ def choose_model(design, model=None, limits=None) -> Chosen:
         raise bad_value("model", "a torque model (spherestep.statics.TorqueModel) or a magnetics.DesignModel",
                         type(model).__name__)
     if limits is None:  # as torque_capability: a bare model gets the paper's 24 V / 100 W supply at 1 A
-        from ..control import DriveLimits
+        from ..electrics import DriveLimits
 
         limits = DriveLimits()
     return Chosen(model, limits, f"{type(model).__name__} (given)")
@@ -140,9 +140,9 @@ class Turn:
                                         f"last state ({on_plan} of {len(plan.steps) - 1} steps settled on the plan)")
         details = SettledDetails(len(plan.steps) - 1, tuning.dwell, tuning.rotor.damping, sim.executed, on_plan,
                                  sim.tolerance)
-        In, V = limits.nominal_current, limits.supply_voltage
         return self.result("settled", "simulated", sim.times, sim.orientations, targets, np.zeros(len(sim.times)),
-                           sim.active_coils * In, V * In * np.count_nonzero(sim.active_coils, axis=1),
+                           limits.amperes(sim.active_coils),
+                           limits.relay_power * np.count_nonzero(sim.active_coils, axis=1),
                            float(sim.times[-1]) if ends_on_plan else math.inf, note,
                            float(so3.distance(sim.settled[-1], self.end)),
                            float(so3.distance(sim.orientations, targets).max()), details)
@@ -165,7 +165,7 @@ class Turn:
             note = f"not within {math.degrees(run.tolerance):g}° of the plan's last state at the end"
         details = RampedDetails(pull.rate, s.last_step, tuple((float(r), bool(lost)) for r, lost in pull.tried))
         return self.result("ramped", "simulated", run.times, run.orientations, run.step_targets,
-                           np.zeros(len(run.times)), run.currents * self.chosen.limits.nominal_current, run.power,
+                           np.zeros(len(run.times)), self.chosen.limits.amperes(run.currents), run.power,
                            s.arrival_time if pull.run is not None else math.inf, note, s.final_error,
                            s.max_tracking_error, details)
 

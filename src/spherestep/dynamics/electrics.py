@@ -2,7 +2,7 @@
 
 Per coil, ``L di/dt = v − R i − e`` (A, V, Ω, H). ``e`` is the back-EMF the moving rotor induces: by energy
 balance the mechanical power a coil delivers, ``τ_k·ω = (K_k c_k)·ω``, equals ``e_k i_k``, so with per-unit
-currents ``c = i / I_n`` (see :mod:`spherestep.control.limits`) ``e_k = K_k(R)·ω / I_n`` — exact for a model
+currents ``c = i / I_n`` (see :mod:`spherestep.electrics`) ``e_k = K_k(R)·ω / I_n`` — exact for a model
 linear in the currents. With ``v`` and ``e`` constant over a PWM period ``h`` the solution is exact:
 
     i(h) = i∞ + (i(0) − i∞) e^{−h/T},   i∞ = (v − e)/R,   T = L/R,
@@ -23,23 +23,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..control.limits import DriveLimits
+from ..electrics import DriveLimits, rl_step  # noqa: F401  (rl_step: the room's name for it too)
 from .. import checks
 
 PWM_RATE = 10_000.0  # Hz, the PWM period is the current loop's period
 PWM_BITS = 10
 LOOP_BANDWIDTH = 2 * math.pi * 1000.0  # rad/s
-
-
-def rl_step(i, v, emf, resistance: float, inductance: float, h: float) -> tuple[np.ndarray, np.ndarray]:
-    """Exact current after ``h`` s and its mean over the interval, for constant ``v`` and ``emf`` (see the
-    module); arrays broadcast."""
-    i_inf = (np.asarray(v) - np.asarray(emf)) / resistance
-    x = h * resistance / inductance
-    decay = math.exp(-x)
-    mean_factor = -math.expm1(-x) / x
-    i = np.asarray(i, dtype=float)
-    return i_inf + (i - i_inf) * decay, i_inf + (i - i_inf) * mean_factor
 
 
 @dataclass(frozen=True)

@@ -26,7 +26,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .. import so3
-from ..control.limits import DriveLimits
+from ..electrics import DriveLimits
 from ..errors import bad_value
 from ..motor import coil_currents
 from .._fast.threads import single_blas_thread
@@ -175,7 +175,7 @@ def run_ramped(design, plan, model, max_rate: float, *, rotor: Rotor, start_rate
     target = plan.targets[-1] if target is None else so3.as_rotations(target, "target")
     return RampedRun(np.concatenate(times), np.concatenate(Rs), np.concatenate(cs), np.array(step_times),
                      np.array(lag[:-1] + [0.0]), plan.achieved, target, float(design.max_step), float(tolerance),
-                     limits.supply_voltage * limits.nominal_current)
+                     limits.relay_power)
 
 
 def _run(integ: Integrator, R, w, c, n_sub: int):

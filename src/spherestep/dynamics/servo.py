@@ -24,7 +24,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from .. import checks, so3
-from ..control import DriveLimits, GeometricPD, ModelCache, ServoLaw, Trajectory
+from ..control import GeometricPD, ModelCache, ServoLaw, Trajectory
+from ..electrics import DriveLimits
 from ..control.controller import CONTROL_RATE
 from ..errors import bad_value
 from ..statics import TorqueModel, is_torque_model
@@ -180,7 +181,7 @@ def simulate_servo(design, trajectory: Trajectory, model: TorqueModel | None = N
                    sensor_rate=sensor.rate, observer_bandwidth=observer_bandwidth,
                    disturbance_bandwidth=disturbance_bandwidth, motion_bandwidth=motion_bandwidth)
     h = 1.0 / rate
-    N, In = model.coil_count, limits.nominal_current
+    N = model.coil_count
     plant = ModelCache(model, reuse=0.0)  # the true K(R) and bias, exact; compiled for a packed affine model
     R = trajectory.start.copy() if start is None else so3.as_rotations(start, "start").copy()
     w = np.zeros(3)
@@ -193,13 +194,13 @@ def simulate_servo(design, trajectory: Trajectory, model: TorqueModel | None = N
     latency = sensor.latency
     for n in range(steps):
         t = n * h
-        meas = sensor.measure(t, R, i / In)
+        meas = sensor.measure(t, R, limits.per_unit(i))
         cmd = law.step(t, meas, t - latency)
         i_ref = law.amperes(cmd.currents)
         K_true, b_true = plant.at(R) if plant.compiled else (np.asarray(model.torque_matrix(R), dtype=float), None)
-        emf = (w @ K_true) / In
+        emf = limits.back_emf(w @ K_true)
         i, integral, i_mean, v_mean, energy = drive.run(i, integral, i_ref, emf, h)
-        c_mean = i_mean / In
+        c_mean = limits.per_unit(i_mean)
         rec["Rh"].append(cmd.estimate)
         rec["R"].append(R)
         rec["w"].append(w)

@@ -92,13 +92,11 @@ class Simulation:
         import csv
         import io
 
-        from scipy.spatial.transform import Rotation
-
-        q = Rotation.from_matrix(self.orientations).as_quat(scalar_first=True)
+        q = so3.quaternion_rows(self.orientations)
         turned = None if axis is None else np.degrees(so3.turned_angle(self.orientations, axis))
         buf = io.StringIO()
         w = csv.writer(buf, lineterminator="\n")
-        w.writerow(["t_s", "qw", "qx", "qy", "qz", "wx_rad_s", "wy_rad_s", "wz_rad_s"]
+        w.writerow(["t_s", *so3.QUATERNION_COLUMNS, "wx_rad_s", "wy_rad_s", "wz_rad_s"]
                    + ([] if axis is None else ["turned_deg"]) + ["coils"])
         for i, (t, qq, om, c) in enumerate(zip(self.times, q, self.angular_velocity, self.active_coils)):
             coils = ";".join(f"{k}:{int(c[k]):+d}" for k in np.flatnonzero(c))

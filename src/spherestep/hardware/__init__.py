@@ -17,7 +17,7 @@ room's, :mod:`spherestep.drive.session`. See ``docs/protocol.md`` and ``docs/har
 from __future__ import annotations
 
 from . import protocol, protocol2
-from .backend import Backend, DeviceInfo, LinkError
+from .backend import Backend, DeviceInfo, Link, LinkError
 from .driver import CoilDriver, coil_masks
 from .dryrun import DryRun, Sent
 from .current_device import CurrentDevice
@@ -34,7 +34,7 @@ from .transcript import Transcript
 
 __all__ = [
     "LOOP_RATE", "Backend", "CoilDriver", "CurrentDevice", "CurrentLimits", "DeviceInfo", "DeviceTrip", "DriveInfo", "DriveLink",
-    "DryRun", "EmulatedMotor", "LockstepLink", "Faults", "FieldTracker", "LinkError", "MotorFaults", "MotorPty",
+    "DryRun", "EmulatedMotor", "LockstepLink", "Faults", "FieldTracker", "Link", "LinkError", "MotorFaults", "MotorPty",
     "NakError", "PlayReport", "PtyDevice", "Sent", "Serial", "ServoFault", "ServoReport",
     "Simulated", "ThermalGuard", "ThermalLimitError", "ThermalLimits", "Transcript", "Truth", "coil_masks",
     "heating_step", "play", "protocol", "protocol2", "run_servo", "wire_limits",

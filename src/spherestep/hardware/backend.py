@@ -1,4 +1,12 @@
-"""The back-end interface: where the coil driver's relay states go.
+"""The two interfaces a motor is reached by: :class:`Link` (coil currents, protocol 2) and :class:`Backend` (relay
+states, protocol 1).
+
+:class:`Link` is what the servo loop (:func:`~spherestep.hardware.run_servo`) drives: ``info`` (a
+:class:`~spherestep.hardware.DriveInfo`), ``drive(currents)`` (A per coil) and ``read()`` → the device's
+:class:`~spherestep.hardware.protocol2.State`, ``off()``, and a context manager that leaves every coil off. The
+serial :class:`~spherestep.hardware.DriveLink` (a board, or the emulated motor's pseudo-terminal) and the in-process
+:class:`~spherestep.hardware.LockstepLink` implement it; :func:`spherestep.drive.connect` is the one place either
+is built.
 
 A back end is one class implementing :class:`Backend`: :meth:`~Backend.open` returns a :class:`DeviceInfo`,
 :meth:`~Backend.write` drives relay masks, :meth:`~Backend.hold` lets time pass with the outputs unchanged and
@@ -14,6 +22,7 @@ import time
 from abc import ABC, abstractmethod
 from collections.abc import Mapping
 from dataclasses import dataclass
+from typing import Protocol, runtime_checkable
 
 from ..errors import ComputationError
 
@@ -30,6 +39,26 @@ class DeviceInfo:
     protocol: int
     channels: int
     watchdog: float | None
+
+
+@runtime_checkable
+class Link(Protocol):
+    """A current-mode coil controller as the servo loop sees it (module docstring)."""
+
+    info: object
+
+    def drive(self, currents, *, within: float | None = None):
+        """Set every coil's current (A) and return the device's state (None: no answer ``within`` s)."""
+
+    def read(self):
+        """The device's state, the currents unchanged."""
+
+    def off(self) -> None:
+        """Every coil off."""
+
+    def __enter__(self): ...
+
+    def __exit__(self, *exc) -> None: ...
 
 
 class Backend(ABC):

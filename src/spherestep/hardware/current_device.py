@@ -40,8 +40,9 @@ from typing import Protocol
 import numpy as np
 
 from .. import checks
+from ..electrics import from_milliamperes, milliamperes
 from ..errors import bad_value
-from .limits import CurrentLimits
+from .limits import DRIVE, CurrentLimits
 from .protocol import MAX_FRAME, MAX_MASK_DIGITS, FrameError, LineReader, decode, encode, format_mask, \
     parse_decimal, parse_hex
 from .protocol2 import MAX_COILS, MAX_FRAME2, MAX_SENSORS, VERSION2, decode_block, format_state
@@ -81,8 +82,9 @@ class CurrentDevice:
 
     def __init__(self, bridges: Bridges | None, coils: int, sensors: int, *, relays: int | None = None,
                  watchdog_ms: int = 100, period_us: int = 1000, limits: CurrentLimits | None = None,
-                 supply: float = 24.0, inductance: float = 18.7e-3, bandwidth: float = 2 * math.pi * 100,
-                 nominal_ma: int = 1000, field_lsb_nt: int = 8118, name: str = "spherestep-t41"):
+                 supply: float = DRIVE.supply_voltage, inductance: float = DRIVE.inductance,
+                 bandwidth: float = 2 * math.pi * 100, nominal_ma: int = round(milliamperes(DRIVE.nominal_current)),
+                 field_lsb_nt: int = 8118, name: str = "spherestep-t41"):
         if relays is None:
             if bridges is None:
                 raise bad_value("bridges", "the coils' bridges (or relays=channels for a relay board)", bridges)
@@ -104,7 +106,7 @@ class CurrentDevice:
         lim = self.limits
         self.nominal_ma = int(nominal_ma)
         self.field_lsb_nt = int(field_lsb_nt)
-        if not 0 < self.nominal_ma <= lim.max_current * 1000:
+        if not 0 < self.nominal_ma <= milliamperes(lim.max_current):
             raise bad_value("nominal_ma", "a current in mA within the current limit", nominal_ma)
         h = period_us * 1e-6
         self.kp = bandwidth * inductance / supply
@@ -193,12 +195,12 @@ class CurrentDevice:
             return
         lim = self.limits
         ma = np.asarray(self.bridges.measure(), dtype=np.int64)
-        i = ma / 1000.0
+        i = from_milliamperes(ma)
         self.heat = self.decay * self.heat + (1.0 - self.decay) * (i / lim.continuous_current) ** 2
         if not self.session or not self.driving:
             self.measured = ma
             return
-        over = np.flatnonzero(np.abs(ma) > lim.trip_ratio * lim.max_current * 1000)
+        over = np.flatnonzero(np.abs(ma) > lim.trip_ratio * milliamperes(lim.max_current))
         if len(over):
             return self._trip("OVER", int(over[0]), now_us)
         hot = np.flatnonzero(self.heat > 1.0)
@@ -275,7 +277,7 @@ class CurrentDevice:
                 return accepted(1, self.channels, self.watchdog_ms, self.name)
             lim = self.limits
             return accepted(VERSION2, self.coils, self.sensors, self.watchdog_ms, self.period_us,
-                            round(lim.max_current * 1000), round(lim.max_power), self.field_lsb_nt, self.name)
+                            round(milliamperes(lim.max_current)), round(lim.max_power), self.field_lsb_nt, self.name)
         if verb == "OFF":
             if args:
                 return nak("ARGS")
@@ -321,8 +323,9 @@ class CurrentDevice:
     def _set(self, ma) -> bool:
         """Take setpoints in mA if within the current and power limits; False (nothing changed) otherwise."""
         lim = self.limits
-        amps = [float(m) / 1000.0 for m in ma]
-        if any(abs(m) > lim.max_current * 1000 for m in ma):
+        amps = from_milliamperes(ma).tolist()  # each float(m) / 1000, as the firmware's
+        limit = milliamperes(lim.max_current)
+        if any(abs(m) > limit for m in ma):
             return False
         if lim.resistance * sum(a * a for a in amps) > lim.max_power:  # summed in order, as the firmware does
             return False

@@ -19,6 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 import serial as pyserial
 
+from ..electrics import from_milliamperes, milliamperes
 from ..errors import bad_value
 from .backend import LinkError
 from .protocol import BAUDRATE, NAK_CODES, RETRYABLE, Frame, FrameError, LineReader, decode, encode, \
@@ -57,7 +58,7 @@ def device_info(ack: Frame, port: str) -> DriveInfo:
         raise LinkError(f"device on {port} answered HELLO,2 with {','.join(d)!r}; expected version 2, coils, "
                         "sensors, watchdog_ms, period_us, max_mA, max_W, field_nT, name")
     _, coils, sensors, wd, period, ma, watts, lsb = nums
-    return DriveInfo(d[8], coils, sensors, wd / 1000, period * 1e-6, ma / 1000, float(watts), lsb * 1e-9)
+    return DriveInfo(d[8], coils, sensors, wd / 1000, period * 1e-6, float(from_milliamperes(ma)), float(watts), lsb * 1e-9)
 
 
 class DriveLink:
@@ -122,8 +123,8 @@ class DriveLink:
         if c.shape != (self.info.coils,) or not np.all(np.isfinite(c)):
             raise bad_value("currents", f"{self.info.coils} finite coil currents in A", f"shape {c.shape}")
         if within is None:
-            return self._state(self._transact("DRIVE", encode_block(1000.0 * c)))
-        ack = self._transact("DRIVE", encode_block(1000.0 * c), attempts=1, timeout=within, late_ok=True)
+            return self._state(self._transact("DRIVE", encode_block(milliamperes(c))))
+        ack = self._transact("DRIVE", encode_block(milliamperes(c)), attempts=1, timeout=within, late_ok=True)
         return None if ack is None else self._state(ack)
 
     def read(self) -> State:

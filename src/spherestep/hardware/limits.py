@@ -15,7 +15,10 @@ from collections.abc import Iterable
 from dataclasses import dataclass
 
 from .. import checks
+from ..electrics import DriveLimits
 from ..errors import InputError
+
+DRIVE = DriveLimits()  # the default coils and supply: the device's defaults are built from them
 
 
 class ThermalLimitError(InputError):
@@ -111,22 +114,22 @@ class CurrentLimits:
     ``continuous_current`` A (the current the coil carries forever at its rated temperature rise) and
     ``thermal_time`` s (the winding's thermal time constant). ``resistance`` Ω per coil.
 
-    Defaults: the drive of :class:`spherestep.control.DriveLimits` (1000-turn 24 Ω coils, 1 A nominal, 24 V,
-    100 W); :meth:`from_drive` takes any other.
+    Defaults: those of :meth:`from_drive` for the default :class:`spherestep.electrics.DriveLimits` (1000-turn
+    24 Ω coils, 1 A nominal, 24 V, 100 W); :meth:`from_drive` takes any other.
     """
 
-    max_current: float = 1.0
+    max_current: float = DRIVE.max_current
     max_duty: float = 0.95
-    max_power: float = 100.0
-    continuous_current: float = 1.0
+    max_power: float = DRIVE.supply_power
+    continuous_current: float = DRIVE.nominal_current
     thermal_time: float = 60.0
-    resistance: float = 24.0
+    resistance: float = DRIVE.resistance
     trip_ratio: float = 1.25
 
     @classmethod
     def from_drive(cls, drive, *, max_duty: float = 0.95, thermal_time: float = 60.0,
                    trip_ratio: float = 1.25) -> CurrentLimits:
-        """The device limits for a :class:`spherestep.control.DriveLimits`: its current, power and resistance;
+        """The device limits for a :class:`spherestep.electrics.DriveLimits`: its current, power and resistance;
         the coil is rated for its nominal current continuously."""
         return cls(max_current=drive.max_current, max_duty=max_duty, max_power=drive.supply_power,
                    continuous_current=drive.nominal_current, thermal_time=thermal_time,

@@ -3,21 +3,22 @@
 
 :class:`EmulatedMotor` is the device's :class:`~spherestep.hardware.current_device.Bridges`:
 
-* Coils: ``L di/dt = d V − R i`` per coil (``R``, ``L``, ``V`` of a :class:`spherestep.control.DriveLimits`),
+* Coils: ``L di/dt = d V − R i`` per coil (``R``, ``L``, ``V`` of a :class:`spherestep.electrics.DriveLimits`),
   solved exactly over each control period with the duty ``d`` held (``i ← a i + (1 − a) d V / R``,
-  ``a = e^{−R h / L}``; the back-EMF of the turning rotor is neglected). Asleep (``enabled`` False) the bridges'
+  ``a = e^{−R h / L}``: :func:`spherestep.electrics.rl_step`, the simulation's coil model too; the back-EMF of the
+  turning rotor is neglected here). Asleep (``enabled`` False) the bridges'
   diodes return the current to the supply, ``L di/dt = −V sign(i) − R i``, until it is zero. The sense reads
   ``round(1000 (i + noise))`` mA, ``current_noise`` A RMS.
-* Rotor: :class:`spherestep.dynamics.Rotor` under the torque model's ``b(R) + K(R) ī`` (currents per unit of
+* Rotor: a :class:`spherestep.dynamics.Rotor` (passed in) under the torque model's ``b(R) + K(R) ī`` (currents per unit of
   the nominal current; ``b`` the bias, zero for the air-core magnets), one step per ``torque_refresh`` s (2 ms: the
   servo's period at 500 Hz; at 20 ms the rotor's acceleration answered the coils up to 20 ms late on the
   pseudo-terminal, where nothing else brings the rotor up to date, and the servo on iron tracked within ~10°
   there, while in lockstep, whose truth is read every cycle, it did not),
-  with ``K`` and ``b`` at the orientation predicted for the middle of the step (the control room's
-  :class:`~spherestep.control.ModelCache`, the servo law's cache: re-evaluated when that orientation has turned
-  more than ``K_REUSE``) and ``ī`` the coils' mean current over it; in between, the sensors see
+  with ``K`` and ``b`` at the orientation predicted for the middle of the step (``torque_cache``, passed in: the
+  control room's :class:`~spherestep.control.ModelCache`, the servo law's cache, re-evaluated when that
+  orientation has turned more than ``K_REUSE``) and ``ī`` the coils' mean current over it; in between, the sensors see
   :meth:`EmulatedMotor.orientation`, the last step continued to second order.
-* Magnetometers: the sensing room's :func:`~spherestep.sensing.field_model` of the design, the one the
+* Magnetometers: ``field`` (passed in): the sensing room's :func:`~spherestep.sensing.field_model` of the design, the one the
   simulated Hall sensor reads and the session's estimator fits: the rotor's field table, on an iron design the
   cores it magnetises, and the coils at the measured currents (on iron each winding with its own core), read in
   each sensor's own axes, with the part's noise, quantised to its LSB and clipped to ±32767 counts.
@@ -28,16 +29,20 @@ or returns garbage, link loss (the device vanishes, or stops reading), and a sta
 :class:`MotorPty` is the one pseudo-terminal server (:class:`~spherestep.hardware.pty_device.PtyDevice`) built for
 a motor: a host opens :attr:`MotorPty.port` like a USB serial device; :class:`LockstepLink` talks to the same
 device in this process on a simulated clock.
+
+The room assembles no application: the rotor, the field model and the torque cache are built by the drive room
+(:func:`spherestep.drive.connect.emulated_motor`) and passed in, so this module imports neither dynamics, control
+nor sensing.
 """
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
 
 from .. import so3
+from ..electrics import DriveLimits, milliamperes, rl_step
 from .backend import LinkError
 from .current_device import CurrentDevice
 from .drive_link import DeviceTrip, device_info
@@ -82,24 +87,22 @@ class MotorFaults:
 
 class EmulatedMotor:
     """Coils, rotor and magnetometers of ``design`` under ``model`` (a torque model with ``torque_matrix``);
-    see the module. ``sensors`` a :class:`~spherestep.sensing.SensorArray`; ``R0`` the start orientation."""
+    see the module. ``sensors`` a :class:`~spherestep.sensing.SensorArray`; ``rotor`` (``step``, ``inertia``,
+    ``damping``), ``field`` (``field(R, c) -> (S, 3)`` T at the sensors, currents per unit) and ``torque_cache``
+    (``at(R) -> (K, b)``) the parts the drive room builds (:func:`spherestep.drive.connect.emulated_motor`);
+    ``drive`` the :class:`~spherestep.electrics.DriveLimits`; ``R0`` the start orientation."""
 
-    def __init__(self, design, model, sensors, *, rotor=None, drive=None, current_noise: float = 0.002,
-                 R0=None, faults: MotorFaults | None = None, period: float = 2.5e-4, torque_refresh: float = 2e-3,
-                 seed: int = 0):
-        from ..control import DriveLimits, ModelCache
-        from ..dynamics import Rotor
-        from ..sensing import field_model
-
+    def __init__(self, design, model, sensors, *, rotor, field, torque_cache, drive=None,
+                 current_noise: float = 0.002, R0=None, faults: MotorFaults | None = None, period: float = 2.5e-4,
+                 torque_refresh: float = 2e-3, seed: int = 0):
         self.design, self.model, self.sensors = design, model, sensors
-        self.rotor = rotor if rotor is not None else Rotor.from_design(design, damping=0.01)
+        self.rotor = rotor
         self.drive_limits = drive if drive is not None else DriveLimits()
         self.current_noise = float(current_noise)
         self.faults = faults if faults is not None else MotorFaults()
-        self.nominal = self.drive_limits.nominal_current  # A per unit current
         self.period, self.torque_refresh = float(period), float(torque_refresh)
         self.rng = np.random.default_rng(seed)
-        self.field = field_model(design, sensors.positions)  # rotor (+ the cores on iron) and the coils
+        self.field = field  # rotor (+ the cores on iron) and the coils
         n = len(design.stator)
         self.t = 0.0
         self.R = np.eye(3) if R0 is None else so3.as_rotations(R0).reshape(3, 3).copy()
@@ -110,7 +113,7 @@ class EmulatedMotor:
         self._rotor_t = 0.0
         self._charge = np.zeros(n)
         self.alpha = np.zeros(3)
-        self.torque_cache = ModelCache(model)
+        self.torque_cache = torque_cache
         self._struck: dict[str, int] = {}
         self._last_ma = np.zeros(n, dtype=np.int64)
         self._last_counts = np.zeros((len(sensors), 3), dtype=np.int64)
@@ -129,7 +132,7 @@ class EmulatedMotor:
     # -- the device's view (Bridges) --------------------------------------------------------------------------------
     def measure(self) -> np.ndarray:
         noise = self.current_noise * self.rng.standard_normal(len(self.i))
-        ma = np.rint(1000.0 * (self.i + noise)).astype(np.int64)
+        ma = np.rint(milliamperes(self.i + noise)).astype(np.int64)
         frozen = self._fault("frozen_reading")
         if frozen is not None:
             ma[frozen] = self._last_ma[frozen]
@@ -142,7 +145,7 @@ class EmulatedMotor:
 
     def sense(self) -> tuple[np.ndarray, int]:
         part = self.sensors.part
-        B = self.field.field(self.orientation(), self.i / self.nominal)  # (S, 3), fixed frame
+        B = self.field.field(self.orientation(), self.drive_limits.per_unit(self.i))  # (S, 3), fixed frame
         local = np.einsum("sab,sa->sb", self.sensors.axes, B)  # A_sᵀ B
         local = local + part.noise_T * self.rng.standard_normal(local.shape)
         counts = np.clip(np.rint(local / part.lsb_T), -FULL_SCALE, FULL_SCALE).astype(np.int64)
@@ -174,16 +177,15 @@ class EmulatedMotor:
 
     def _advance_coils(self, h: float) -> None:
         e = self.drive_limits
-        a = math.exp(-h / e.time_constant)
         i0 = self.i
         stuck = self._fault("stuck_coil")
         if self.enabled:
             v = self.duty * e.supply_voltage
             if stuck is not None:
                 v[stuck] = e.supply_voltage
-            i1 = a * i0 + (1.0 - a) * v / e.resistance
+            i1 = rl_step(i0, v, 0.0, e.resistance, e.inductance, h)[0]
         else:
-            i1 = a * i0 - (1.0 - a) * np.sign(i0) * e.supply_voltage / e.resistance
+            i1 = rl_step(i0, -np.sign(i0) * e.supply_voltage, 0.0, e.resistance, e.inductance, h)[0]
             i1 = np.where(np.sign(i1) != np.sign(i0), 0.0, i1)  # the diodes stop at zero
         opened = self._fault("open_coil")
         if opened is not None:
@@ -201,7 +203,7 @@ class EmulatedMotor:
             return
         mid = so3.exp(0.5 * h * self.w) @ self.R
         K, b = self.torque_cache.at(mid)
-        tau = (b + K @ (self._charge / (h * self.nominal)))[None]
+        tau = (b + K @ self.drive_limits.per_unit(self._charge / h))[None]
         R, w, _ = self.rotor.step(self.R[None], self.w[None], lambda _R: tau, h, tau)
         self.alpha = (w[0] - self.w) / h
         self.R, self.w = R[0], w[0]
@@ -229,11 +231,11 @@ def matching_device_options(motor: EmulatedMotor) -> dict:
     e = motor.drive_limits
     return dict(limits=CurrentLimits.from_drive(e), supply=e.supply_voltage, inductance=e.inductance,
                 period_us=round(motor.period * 1e6), bandwidth=CURRENT_BANDWIDTH / motor.period,
-                nominal_ma=round(1000 * motor.nominal), field_lsb_nt=round(motor.sensors.part.lsb_T * 1e9))
+                nominal_ma=round(milliamperes(e.nominal_current)), field_lsb_nt=round(motor.sensors.part.lsb_T * 1e9))
 
 
 class LockstepLink:
-    """A :class:`~spherestep.hardware.DriveLink` stand-in without a line or a wall clock: frames go as bytes
+    """A :class:`~spherestep.hardware.Link` like :class:`~spherestep.hardware.DriveLink`, without a line or a wall clock: frames go as bytes
     to a :class:`CurrentDevice` on an :class:`EmulatedMotor` in this process, and :meth:`sleep` advances the
     motor and runs the device's control steps. Pass ``clock=link.clock, sleep=link.sleep`` to
     :func:`~spherestep.hardware.run_servo`: the loop then keeps its rate exactly, whatever the machine's load,
@@ -245,6 +247,16 @@ class LockstepLink:
                                     **{**matching_device_options(motor), **device_options})
         self._seq = 0
         self.info = device_info(self._transact("HELLO", VERSION2), "lockstep")
+
+    def __enter__(self) -> LockstepLink:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        """``OFF`` (a :class:`~spherestep.hardware.Link`: every coil off on leaving) if the device answers."""
+        try:
+            self.off()
+        except LinkError:
+            pass
 
     def clock(self) -> float:
         return self.motor.t
@@ -275,7 +287,7 @@ class LockstepLink:
 
     def drive(self, currents, *, within: float | None = None):
         """As :meth:`DriveLink.drive`; ``within`` does not apply (the answer comes at once on the simulated clock)."""
-        return self._state(self._transact("DRIVE", encode_block(1000.0 * np.asarray(currents, dtype=float))))
+        return self._state(self._transact("DRIVE", encode_block(milliamperes(currents))))
 
     def read(self):
         return self._state(self._transact("READ"))

@@ -23,6 +23,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..electrics import from_milliamperes
 from .protocol import FrameError, parse_hex
 
 _HEX = frozenset("0123456789ABCDEFabcdef")
@@ -95,7 +96,7 @@ def parse_state(args: tuple[str, ...], coils: int, sensors: int, field_lsb: floa
     if time_us is None or stale is None or currents is None or field is None:
         raise FrameError("ARGS", f"malformed state for {coils} coils and {sensors} sensors")
     counts = field.reshape(sensors, 3)
-    return State(time_us, stale, currents / 1000.0, counts * field_lsb, np.any(np.abs(counts) >= FULL_SCALE, axis=1))
+    return State(time_us, stale, from_milliamperes(currents), counts * field_lsb, np.any(np.abs(counts) >= FULL_SCALE, axis=1))
 
 
 def frame_bytes(coils: int, sensors: int) -> dict[str, int]:

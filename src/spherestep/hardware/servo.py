@@ -1,7 +1,8 @@
 """The servo loop on hardware: read sensors, estimate, control, allocate, send currents, at a fixed rate.
 
-:func:`run_servo` drives a :class:`~spherestep.hardware.drive_link.DriveLink` (a real board, or
-:class:`~spherestep.hardware.motor_emulator.MotorPty`) with two callables:
+:func:`run_servo` drives a :class:`~spherestep.hardware.Link` (a :class:`~spherestep.hardware.DriveLink` to a real
+board or :class:`~spherestep.hardware.motor_emulator.MotorPty`, or a :class:`~spherestep.hardware.LockstepLink`)
+with two callables:
 
 * ``estimate(state, prior) -> R``: the measured orientation (3×3) from a
   :class:`~spherestep.hardware.protocol2.State` (magnetometers and measured coil currents), searched from
@@ -56,9 +57,8 @@ import numpy as np
 
 from .. import checks, so3
 from ..errors import ComputationError, bad_value
-from ..outputs import interrupt_of
-from .backend import LinkError
-from .drive_link import DriveLink
+from ..interrupts import interrupt_of
+from .backend import Link, LinkError
 from .limits import CurrentLimits, ThermalLimitError
 from .serialport import NakError
 
@@ -227,7 +227,7 @@ def _check_state(state) -> None:
         raise ServoFault(f"magnetometer {int(np.argmax(state.saturated))} reads full scale", "SENSOR")
 
 
-def run_servo(link: DriveLink, estimate, law, *, duration: float, rate: float = LOOP_RATE,
+def run_servo(link: Link, estimate, law, *, duration: float, rate: float = LOOP_RATE,
               limits: CurrentLimits | None = None, log: str | Path | None = None, status=None,
               max_late: float | None = None, clock=time.monotonic, sleep=time.sleep,
               device_time: bool = True, on_missed: str = "slow", miss_budget: int = 3,
@@ -249,7 +249,7 @@ def run_servo(link: DriveLink, estimate, law, *, duration: float, rate: float = 
     device's first pages, caches) fall outside it. Never raises for a fault of the motor, the sensors, the host
     or the link: the report says what ended the run."""
     if link.info is None:
-        raise bad_value("link", "an open DriveLink (call open() or use it in a with block)", link)
+        raise bad_value("link", "an open Link (call open() or use it in a with block)", link)
     max_late = 0.5 * link.info.watchdog if max_late is None else max_late
     duration, rate = checks.positive(duration, "duration"), checks.positive(rate, "rate")
     max_late = checks.positive(max_late, "max_late")

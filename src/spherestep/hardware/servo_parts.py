@@ -39,23 +39,24 @@ def wire_limits(drive):
 
 class FieldTracker:
     """``estimate(state, prior=None) -> R`` (see the module) for a :class:`~spherestep.sensing.Estimator` whose
-    known fields take currents per unit of ``nominal_current`` (A); ``R0`` the start (the search starts from the
+    known fields take currents per unit of the nominal current of ``drive`` (a
+    :class:`~spherestep.electrics.DriveLimits`: the state's amperes converted by its :meth:`per_unit`); ``R0`` the start (the search starts from the
     last estimate when no ``prior`` is given). ``last`` is the last :class:`~spherestep.sensing.Estimate`."""
 
     latency = 0.0  # s: the estimate is of the rotor at the state's device time
 
-    def __init__(self, estimator, R0, nominal_current: float, *, iterations: int = 1, max_iterations: int = 4,
+    def __init__(self, estimator, R0, drive, *, iterations: int = 1, max_iterations: int = 4,
                  residual_limit: float | None = None):
         self.estimator = estimator
         self.R = so3.as_rotations(R0).reshape(3, 3).copy()
-        self.nominal = float(nominal_current)
+        self.drive = drive
         self.iterations, self.max_iterations = int(iterations), max(int(iterations), int(max_iterations))
         self.residual_limit = 10 * estimator.noise_T if residual_limit is None else float(residual_limit)
         self.last = None
         estimator.table.field_and_jacobian(self.R)  # first call here, not in the loop
 
     def __call__(self, state, prior: np.ndarray | None = None) -> np.ndarray:
-        est = self.estimator.track_until(state.field, self.R if prior is None else prior, state.currents / self.nominal,
+        est = self.estimator.track_until(state.field, self.R if prior is None else prior, self.drive.per_unit(state.currents),
                                          self.iterations, self.max_iterations, self.residual_limit)
         self.last = est
         if est.residual_T > self.residual_limit:

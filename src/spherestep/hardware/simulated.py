@@ -1,7 +1,8 @@
 """The simulated back end: a plan runs "on hardware" against the rotor dynamics.
 
 Every state written energises the coils it names (``coils``: coil → ±1) on a simulated rotor
-(:mod:`spherestep.dynamics`); :meth:`Simulated.hold` integrates the rotor for that long. The clock is the
+(an integrator of :mod:`spherestep.dynamics`, built by the drive room's :func:`spherestep.drive.connect` and passed
+in); :meth:`Simulated.hold` integrates the rotor for that long. The clock is the
 simulated time, so thermal limits and the schedule follow it and a long plan takes only the integration's
 time. ``orientations`` records the orientation at the end of every hold, ``trajectory`` every integrator
 sample, for comparison with the plan.
@@ -13,8 +14,7 @@ from collections.abc import Mapping
 
 import numpy as np
 
-from .. import so3
-from ..dynamics import Integrator, Rotor
+from .. import checks, so3
 from ..errors import bad_value
 from ..motor import coil_currents
 from .backend import Backend, DeviceInfo
@@ -22,19 +22,18 @@ from .protocol import VERSION
 
 
 class Simulated(Backend):
-    """A back end driving a simulated rotor: ``design`` (its coils and inertia), torque ``model``
-    (``torque``/``energy`` of ``(R, c)``, e.g. ``magnetics.torque_map(design)``), ``rotor`` (damping,
-    friction), starting orientation ``start`` (3×3, at rest), time step ``dt`` (s) and ``channels`` (the
-    relay channels it stands in for; default two per coil)."""
+    """A back end driving a simulated rotor: ``integrator`` (a :class:`spherestep.dynamics.Integrator` of the
+    design's rotor under its torque model: ``run(R, ω, c, seconds, record_every)``), ``coil_count`` coils,
+    starting orientation ``start`` (3×3, at rest) and ``channels`` (the relay channels it stands in for; default
+    two per coil)."""
 
-    def __init__(self, design, model, start, rotor: Rotor | None = None, dt: float = 5e-3,
-                 channels: int | None = None):
+    def __init__(self, integrator, coil_count: int, start, channels: int | None = None):
         start = so3.as_rotations(start, "start")
         if start.shape != (3, 3):
             raise bad_value("start", "a 3×3 rotation matrix", f"shape {start.shape}")
-        self.coil_count = len(design.stator)
+        self.coil_count = checks.count(coil_count, "coil_count")
         self.channels = 2 * self.coil_count if channels is None else int(channels)
-        self.integrator = Integrator(model, Rotor.from_design(design) if rotor is None else rotor, dt)
+        self.integrator = integrator
         self.R = start.copy()
         self.w = np.zeros(3)
         self.currents = np.zeros(self.coil_count)

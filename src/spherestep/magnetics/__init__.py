@@ -10,7 +10,8 @@
   for the dynamics.
 * Iron cores (:mod:`._iron` the solve, :mod:`._ironforce`, :mod:`._ironcoupling`, :mod:`._inductance`,
   :mod:`._ironmap`, :mod:`._ironsummary`): pot-core coils solved by the method of moments
-  (magpylib-material-response), :func:`iron_pair_torques`, :func:`iron_force_curve`, :func:`coil_inductance`;
+  (magpylib-material-response), :func:`iron_pair_torques`, :func:`iron_force_curve`, :func:`coil_inductance`,
+  :func:`iron_inductance`;
   the torque model with detent :class:`IronTorqueMap` from :func:`iron_model`
   (``coil=CoilSpec(core="air")`` gives today's map); :func:`iron_summary` (detent, states, polarity, saturation).
 * Statics (:mod:`._statics`): :func:`equilibrium` with the map's settings, :func:`state_torques`; holding and
@@ -32,7 +33,7 @@ _MODULES = {
     "_curve": ("ForceCurve", "force_curve"),
     "_figures": ("figure_comparison", "figure_force_curve"),
     "_direct": ("MESHING", "coil_wrenches", "force", "force_torque", "reaction", "torque"),
-    "_inductance": ("coil_inductance",),
+    "_inductance": ("coil_inductance", "iron_inductance"),
     "_iron": ("IRON_LEVEL", "CoreGeometry", "CoreSolver", "core_solver", "magnet_face_radius"),  # sensing too
     "_ironmap": ("IronTorqueMap", "iron_model"),
     "_ironscale": ("iron_source", "scaled_design", "solve_needed"),

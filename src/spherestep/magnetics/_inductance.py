@@ -7,7 +7,10 @@ import math
 import magpylib as magpy
 import numpy as np
 
+from ..electrics import core_key, stored_permeance
 from ._iron import IRON_LEVEL, WINDING_GRID, CoreGeometry, core_solver, winding_loops
+
+_SOLVED: dict = {}  # L / N² of the cores solved in this process, by core_key
 
 
 def coil_inductance(design, coil, level: int = IRON_LEVEL, samples: int = 24) -> float:
@@ -35,3 +38,15 @@ def coil_inductance(design, coil, level: int = IRON_LEVEL, samples: int = 24) ->
         phi = (Bz * (0.5 * r * w * 2 * math.pi * rho)[None]).sum(axis=1)
         lam += (turns / (nr * nz)) * phi.sum()
     return float(lam / current)
+
+
+def iron_inductance(spec, design) -> float:
+    """The iron-cored coil's own inductance (H) for ``design`` wound as ``spec``: ``N² ·`` the core's stored
+    ``L / N²`` (:func:`spherestep.electrics.stored_permeance`: a stored core or a scaled copy of one), else
+    :func:`coil_inductance` solved once per core in the process (~17 s)."""
+    key = core_key(spec, design)
+    turns = spec.turns(design.coil_diameter, design.coil_length)
+    permeance = stored_permeance(key)
+    if permeance is None and key not in _SOLVED:
+        _SOLVED[key] = coil_inductance(design, spec) / turns ** 2
+    return turns ** 2 * (permeance if permeance is not None else _SOLVED[key])

@@ -150,6 +150,7 @@ class IronTorqueMap(TorqueModelBase):
         return self.detent.torque(R, self._ones(R))
 
     has_bias = True  # the detent: torque with every coil off
+    affine_in_currents = True  # the detent's terms and c_k times the winding's; the coupling's tables likewise
 
     def zonal_terms(self, currents) -> list | None:
         """The detent's and the coils' zonal terms (:func:`spherestep.rotor_field.pack_terms`); with the coupling

@@ -118,6 +118,7 @@ class TorqueMap(TorqueModelBase):
     meshing: int
 
     has_bias = False  # linear in the currents: no torque with every coil off
+    affine_in_currents = True  # packed terms Σ c_k F(x_k)
 
     def __post_init__(self):
         tau = CubicSpline(self.nodes, self.tau)

@@ -10,7 +10,7 @@ magnets' :class:`~spherestep.magnetics.TorqueMap` at the coil's own nominal ampe
 the coil's nominal current ``I_n`` in both, and the limits are :meth:`DriveLimits.from_spec` of the coil as built
 (its winding's resistance and nominal current, the supply, and the coil's own inductance: for an iron core
 :func:`~spherestep.magnetics.coil_inductance`'s value, 4× Wheeler's for the prototype, stored per core by
-:func:`spherestep.control.limits.iron_inductance`).
+:func:`~spherestep.magnetics.iron_inductance`).
 
 ``core`` overrides the design's choice where a comparison is wanted (``--core air|iron``): the same winding
 either way, so the two differ only by the iron.
@@ -28,7 +28,7 @@ CORES = ("air", "iron")
 @dataclass(frozen=True)
 class DesignModel:
     """A design's torque ``model`` (a :class:`~spherestep.statics.TorqueModel`, currents per unit of
-    ``limits.nominal_current``), the ``limits`` of its coil as built (a :class:`~spherestep.control.DriveLimits`),
+    ``limits.nominal_current``), the ``limits`` of its coil as built (a :class:`~spherestep.electrics.DriveLimits`),
     the ``core`` (``"air"`` or ``"iron"``) and ``label``, the one line that says which model it is."""
 
     model: object
@@ -44,9 +44,11 @@ def design_model(design, core: str | None = None, *, coupling: bool | None = Non
     """The torque model and drive limits of ``design`` as its file states them (module docstring); ``core``
     ``"air"``/``"iron"`` overrides the design's core (same winding); ``coupling`` (default: with an iron core)
     the iron's coupling term (:func:`~spherestep.magnetics.iron_model`; ``False``: the pairwise model). ``calibration`` (a path, e.g.
-    :func:`spherestep.control.calibration_beside` of the design file, or a :class:`spherestep.control.Calibration`)
+    :func:`spherestep.control.calibration_beside` of the design file, or a
+    :class:`spherestep.magnetics.calibrated.Calibration`, the control room's fit)
     replaces the iron model by the one fitted to the motor's holds; the label then says "calibrated"."""
-    from ..control import DriveLimits
+    from ..electrics import DriveLimits
+    from ._inductance import iron_inductance
     from ._ironmap import iron_model
 
     coil = design.coil
@@ -59,7 +61,7 @@ def design_model(design, core: str | None = None, *, coupling: bool | None = Non
         raise bad_value("coupling", "False for an air-core coil (the coupling is through the iron)", coupling)
     coupling = coil.core == "iron" if coupling is None else bool(coupling)
     model = iron_model(design, coil, coupling=coupling)
-    limits = DriveLimits.from_spec(coil, design)
+    limits = DriveLimits.from_spec(coil, design, iron_inductance(coil, design) if coil.core == "iron" else None)
     if calibration is not None:
         return _calibrated(design, coil, calibration, limits)
     if coil.core == "iron":
@@ -73,9 +75,8 @@ def design_model(design, core: str | None = None, *, coupling: bool | None = Non
 
 
 def _calibrated(design, coil, calibration, limits) -> DesignModel:
-    """The design's model from ``calibration`` (a path or a Calibration; the control room's fit, imported here
-    lazily as :class:`DriveLimits` is)."""
-    from ..control.calibration import Calibration
+    """The design's model from ``calibration`` (a path or a :class:`~.calibrated.Calibration`)."""
+    from .calibrated import Calibration
 
     if coil.core != "iron":
         raise bad_value("calibration", "used with the iron core (it fits the iron model's tables)", coil.core)

@@ -224,6 +224,12 @@ class MotorPotential(TorqueModelBase):
 
     has_bias = False  # no current, no stator field: V = ‖Â‖² for every R
 
+    @property
+    def affine_in_currents(self) -> bool:
+        """The packed term's coefficients are ``−2 c_k`` (its constant ``‖Â‖² + cᵀSc`` carries no torque): affine
+        when there are packed terms (``fast``)."""
+        return self.fast
+
     def packed_terms(self, currents) -> Packed | None:
         """The energy ``‖Â‖² + cᵀSc − 2 Σ_k c_k F(x_k)`` as one compiled zonal term and its constant
         (:func:`spherestep.rotor_field.pack_terms`), ``None`` with ``fast=False``."""

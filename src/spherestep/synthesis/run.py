@@ -25,6 +25,8 @@ from .. import checks
 from ..errors import InputError, bad_value
 from .eta import (ALIGNMENT_SECONDS, BUILD_SECONDS, REPORT_SECONDS, REPORT_STATES, SOLVE_SECONDS, Progress,
                   after_ladder, verify_seconds)
+from .answer import _answer, closest_row, nearest_rows
+from .front import Finalist, _json, _missing, choose_finalists, pareto
 from .ladder import GRADES, N42, PROTOTYPE, WINDINGS, Candidate, _row, baseline_layout, build, climb
 
 STORE = "results"
@@ -296,7 +298,7 @@ def relay_rung(candidate: Candidate, row: dict, spec, design=None) -> None:
     errors = np.asarray(sim.step_errors[1:], dtype=float)  # the steps, not the start
     on_plan = int(np.count_nonzero(errors <= sim.tolerance))
     limits = job.chosen.limits
-    peak = max(len(s.coils) for s in plan.steps) * limits.supply_voltage * limits.nominal_current
+    peak = max(len(s.coils) for s in plan.steps) * limits.relay_power
     row.update(relay_steps=len(errors), relay_steps_on_plan=on_plan, relay_executed=bool(sim.executed),
                relay_worst_deg=math.degrees(float(errors.max())) if len(errors) else 0.0, relay_peak_W=peak)
     if not sim.executed:
@@ -308,110 +310,6 @@ def relay_rung(candidate: Candidate, row: dict, spec, design=None) -> None:
     else:
         row["stage"] = "relays"
     row["seconds"] = row.get("seconds", 0.0) + time.perf_counter() - start
-
-
-def objectives(spec) -> list[tuple[str, bool]]:
-    """The Pareto objectives, ``(column, maximise)``: what the spec leaves free — magnet mass, coils, drive power,
-    resolution, torque in every direction (servo) or step torque (relays), the turn's time estimate (with a speed),
-    the change from the baseline (with one)."""
-    out = [("magnet_mass_kg", False), ("coils", False), ("power_W", False), ("resolution_median_deg", False)]
-    if spec.servo:
-        out.append(("torque_quantile_Nm", True))
-        if spec.speed is not None:
-            out.append(("time_estimate_s", False))
-    if spec.relays and spec.torque.step is not None:
-        out.append(("step_torque_Nm", True))
-    if spec.baseline is not None:
-        out.append(("change", False))
-    return out
-
-
-PREFER = {"mass": ("magnet_mass_kg", False), "power": ("power_W", False), "time": ("time_estimate_s", False),
-          "precision": ("resolution_median_deg", False), "torque": ("torque_quantile_Nm", True),
-          "coils": ("coils", False), "change": ("change", False)}
-
-
-def pareto(table, spec):
-    """The feasible rows (status ``ok``) that no other feasible row dominates on :func:`objectives`, each motor
-    once, in the order of the spec's ``prefer``."""
-    from ..explore import pareto_mask
-
-    ok = table[table["status"] == "ok"].copy()
-    if "motor" in ok and ok["motor"].notna().any():
-        ok = ok.drop_duplicates("motor")
-    cols = objectives(spec)
-    values = ok[[c for c, _ in cols]].astype("float64").to_numpy()
-    values = np.where(np.isnan(values), np.inf, values)  # an objective not measured never wins
-    front = ok[pareto_mask(values, maximize=[n for n, (_, mx) in enumerate(cols) if mx])]
-    return sort_preferred(front, spec)
-
-
-def sort_preferred(frame, spec):
-    column, maximise = PREFER[spec.prefer]
-    if column not in frame:
-        column, maximise = "magnet_mass_kg", False
-    return frame.sort_values([column, "coils", "key"], ascending=[not maximise, True, True]).reset_index(drop=True)
-
-
-def choose_finalists(front, spec, count: int):
-    """Up to ``count`` rows of the front: the preferred best first, then the best in each other objective, then the
-    rest in preferred order."""
-    if len(front) <= count:
-        return front
-    picks = [0]
-    for column, maximise in objectives(spec):
-        series = front[column].astype("float64")
-        if series.notna().any():
-            picks.append(int(series.idxmax() if maximise else series.idxmin()))
-    picks += list(range(len(front)))
-    seen = list(dict.fromkeys(picks))[:count]
-    return front.loc[sorted(seen)].reset_index(drop=True)
-
-
-@dataclass(frozen=True)
-class Finalist:
-    """A finalist: its ``row`` of the search (a dict), its design file ``path`` and ``verification``."""
-
-    row: dict
-    path: str
-    verification: object
-
-    def to_dict(self) -> dict:
-        return {"key": self.row["key"], "layout": _layout(self.row), "design_file": self.path,
-                "search": {k: _json(v) for k, v in self.row.items() if k not in ("params",)},
-                "verification": self.verification.to_dict()}
-
-
-def _json(v):
-    if isinstance(v, (np.integer,)):
-        return int(v)
-    if isinstance(v, (float, np.floating)):
-        return None if not math.isfinite(float(v)) else float(v)
-    if v is None or isinstance(v, (str, bool, int)):
-        return v
-    try:
-        import pandas as pd
-
-        if pd.isna(v):
-            return None
-    except (TypeError, ValueError):
-        pass
-    return str(v)
-
-
-def _missing(v) -> bool:
-    return v is None or (isinstance(v, float) and math.isnan(v))
-
-
-def _layout(row) -> str:
-    gap = row.get("gap_scale") or 1.0
-    params = json.loads(row["params"]) if row.get("params") else {}
-    grade, wound = float(params.get("remanence", N42)), int(params.get("wound_for", 0))
-    return (f"{row['rotor']}/L{row['rotor_level']} × {row['stator']}/L{row['stator_level']}, cap "
-            f"{row['cap_deg']:g}°, ball {row['sphere_diameter_mm']:.4g} mm, {row['core']}"
-            + (f", air gap ×{gap:g}" if gap != 1.0 else "")
-            + (f", {GRADES.get(grade, 'magnets')} {grade:g} T" if grade != N42 else "")
-            + (f", rewound for {wound} coils on" if wound else ""))
 
 
 @dataclass(frozen=True)
@@ -646,92 +544,3 @@ def _verification_from(data: dict):
     return Verification(data["design"], tuple(Check(c["name"], c["required"], c["achieved"], c["met"], c["margin"])
                                               for c in data["checks"]), data["numbers"], data["seed"],
                         data["seconds"])
-
-
-def describe_change(row: dict, base: dict) -> str:
-    """What differs between the layout of ``row`` and the baseline layout ``base``, for people."""
-    parts = []
-    for key, label in (("rotor", "rotor packing"), ("rotor_level", "rotor refinement"), ("stator", "stator packing"),
-                       ("stator_level", "stator refinement"), ("core", "core")):
-        if row[key] != base[key]:
-            parts.append(f"{label} {base[key]} → {row[key]}")
-    if not math.isclose(row["cap_deg"], base["cap_deg"]):
-        parts.append(f"stator cap {base['cap_deg']:g}° → {row['cap_deg']:g}°")
-    if not math.isclose(row["sphere_diameter_mm"], 1e3 * base["sphere_diameter"], rel_tol=1e-9):
-        parts.append(f"ball {1e3 * base['sphere_diameter']:.4g} → {row['sphere_diameter_mm']:.4g} mm")
-    if (row.get("gap_scale") or 1.0) != 1.0:
-        parts.append(f"air gap ×{row['gap_scale']:g} ({row['air_gap_mm']:.3g} mm)")
-    params = json.loads(row["params"]) if row.get("params") else {}
-    grade = float(params.get("remanence", N42))
-    if not math.isclose(grade, base.get("remanence", N42), rel_tol=1e-9):
-        was = base.get("remanence", N42)
-        parts.append(f"magnets {GRADES.get(was, 'B_r')} {was:g} T → {GRADES.get(grade, 'B_r')} {grade:g} T")
-    if params.get("wound_for"):
-        at = row.get("ampere_turns")
-        parts.append(f"coils rewound to draw the supply's share with {params['wound_for']} on"
-                     + (f" ({at:.0f} ampere-turns)" if at is not None and not _missing(at) else ""))
-    return ", ".join(parts) or "none (the baseline itself)"
-
-
-RUNGS = ("geometry", "states", "capability", "relays")
-
-
-def nearest_rows(table, count: int) -> list[dict]:
-    """The ``count`` candidates that came nearest when none passed: the furthest rung reached, then (relays) the
-    most steps on the plan, reaching all orientations, the finest resolution, the smallest change from the
-    baseline, then the key."""
-    if not len(table):
-        return []
-    frame = table.assign(_rung=table["stage"].map({r: n for n, r in enumerate(RUNGS)}).fillna(-1),
-                         _steps=table["relay_steps_on_plan"].astype("Float64").fillna(-1),
-                         _reach=table["reaches_all"].astype("boolean").fillna(False).astype(int),
-                         _res=table["resolution_median_deg"].astype("Float64").fillna(math.inf),
-                         _change=table["change"].astype("Float64").fillna(math.inf))
-    frame = frame[frame["status"].isin(["ok", "pruned"])]
-    extra = ["_rung", "_steps", "_reach", "_res", "_change"]
-    order = frame.sort_values(extra + ["key"], ascending=[False, False, False, True, True, True])
-    return [{k: _json(v) for k, v in row.drop(extra).items()} for _, row in order.head(count).iterrows()]
-
-
-def closest_row(table, spec) -> dict | None:
-    """The nearest candidate (:func:`nearest_rows`), or None."""
-    rows = nearest_rows(table, 1)
-    return rows[0] if rows else None
-
-
-def _answer(spec, finalists, counts, total, closest=None) -> tuple[Finalist | None, str]:
-    """The winner (the preferred finalist meeting every requirement) and the sentence that says why."""
-    passing = [f for f in finalists if f.verification.met]
-    column, maximise = PREFER[spec.prefer]
-    if not passing:
-        if not finalists:
-            near = ""
-            if closest is not None:
-                near = f" The closest: {_layout(closest)}, stopped at {closest['stage']}: {closest['reason']}."
-            return None, (f"Not found in the budget: none of the {total} candidates passed the cheap rungs "
-                          f"({', '.join(f'{k} {v}' for k, v in sorted(counts.items()))}).{near}")
-        def closeness(f):
-            margins = [c.margin for c in f.verification.checks if c.margin is not None]
-            return sum(c.met for c in f.verification.checks), min(margins, default=0.0)
-
-        best = max(finalists, key=closeness)
-        missed = [c for c in best.verification.checks if not c.met]
-        return None, (f"Not found in the budget: {len(finalists)} finalists passed the cheap rungs but none met every "
-                      f"requirement under full simulation; the closest ({_layout(best.row)}) misses "
-                      + "; ".join(f"{c.name} (required {c.required}, achieved {c.achieved})" for c in missed) + ".")
-
-    def score(f):
-        v = f.row.get(column)
-        v = math.inf if v is None else float(v)
-        return (-v if maximise else v, f.row["key"])
-
-    winner = min(passing, key=score)
-    b = winner.verification.binding
-    binding = (f"the binding requirement is {b.name}: required {b.required}, achieved {b.achieved} (margin "
-               f"{b.margin:.2f}×)") if b is not None else "no requirement has a graded margin"
-    change = ""
-    base = baseline_layout(spec)
-    if base is not None:
-        change = f" Change from the baseline ({spec.baseline}): {describe_change(winner.row, base)}."
-    return winner, (f"Winner ({spec.prefer} preferred, of {len(passing)} of {len(finalists)} finalists meeting every "
-                    f"requirement): {_layout(winner.row)}; {binding}.{change}")

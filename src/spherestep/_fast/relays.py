@@ -1,4 +1,4 @@
-"""Compiled (numba) bookkeeping of one step of the potential planner (:mod:`.potential_planner`).
+"""Compiled (numba) bookkeeping of one step of the potential planner (:mod:`spherestep.commutation.potential_planner`).
 
 The step's arithmetic that decides which candidate comes first stays NumPy's — the closeness of pole–coil
 pairs and the products ``R1ᵀ R2`` behind Park's metric — so these loops order ties exactly as the NumPy form

@@ -1,4 +1,7 @@
-"""What the drive can give the coils: currents, supply voltage and power, and the coils' resistance and inductance.
+"""The coil as a circuit: what the drive can give the coils (currents, supply voltage and power), the coils'
+resistance and inductance, and the one place a current changes unit.
+
+The room sits below magnetics, control, dynamics and hardware and imports none of them.
 
 Units. The torque models take currents *per unit of the coil's nominal current* ``c`` (``+1`` = nominal, the
 current at which the magnets' torque map was built: ``coil_ampere_turns`` ampere-turns); amperes are
@@ -13,8 +16,17 @@ on 24 V can hold in a coil is ``V / R`` = 1 A. The inductance is Wheeler's multi
 ``L = 31.6 µH · N² r̄² / (6 r̄ + 9 l + 10 d)`` (metres) for 1000 turns wound from half the coil's radius to its
 outer radius (``r̄`` the mean radius, ``d`` the winding depth, ``l`` the coil's length): 18.7 mH for the
 prototype's 2 in × 1.625 in coil, an electrical time constant ``L/R`` of 0.78 ms. An iron-cored coil's own
-inductance (:func:`iron_inductance`, stored per core) is the default of :meth:`DriveLimits.from_spec` for it.
-:meth:`DriveLimits.from_coil` takes the numbers from a coil specification instead (``spherestep.motor.coil``).
+inductance (``L / N²`` stored per core in :data:`IRON_PERMEANCE`; a core not stored is solved by
+:func:`spherestep.magnetics.iron_inductance`, which passes its value in) is the default of
+:meth:`DriveLimits.from_spec` for it. :meth:`DriveLimits.from_coil` takes the numbers from a coil specification
+instead (``spherestep.motor.coil``).
+
+Conversions, each written once here: per unit → A, ``i = I_n c`` (:meth:`DriveLimits.amperes`); A → per unit
+(:meth:`DriveLimits.per_unit`); A ↔ mA on the wire (:func:`milliamperes`, :func:`from_milliamperes`). The
+per-unit voltage bound ``V / (R I_n)`` (:attr:`DriveLimits.voltage_bound`: the supply in volts per the volts
+that drive the nominal current through the coil) and the back-EMF factor ``1 / (R I_n²)``
+(:attr:`DriveLimits.emf_factor`: a torque-per-unit-current times a speed, N·m·rad/s, in per-unit volts). The coil
+as a circuit over an interval with its voltage held, exactly: :func:`rl_step`.
 """
 
 from __future__ import annotations
@@ -24,7 +36,8 @@ from dataclasses import asdict, dataclass, replace
 
 import numpy as np
 
-from .. import checks
+from . import checks
+from .errors import bad_value
 
 SUPPLY_VOLTAGE = 24.0  # V, Sec. IV-B
 SUPPLY_POWER = 100.0  # W, Sec. IV-B
@@ -40,7 +53,6 @@ TURNS = 1000
 IRON_PERMEANCE = {
     (0.0508, 0.041275, 0.0127, 0.022225, 0.03175, 1000.0): 8.153331960424327e-08,
 }
-_SOLVED: dict = {}
 
 
 def core_key(spec, design) -> tuple:
@@ -62,20 +74,6 @@ def stored_permeance(key: tuple) -> float | None:
         if key[5] == base[5] and all(math.isclose(k, s * b, rel_tol=1e-7) for k, b in zip(key[:5], base[:5])):
             return s * value
     return None
-
-
-def iron_inductance(spec, design) -> float:
-    """The iron-cored coil's own inductance (H) for ``design`` wound as ``spec``: ``N² ·`` the core's stored
-    ``L / N²`` (:func:`stored_permeance`: a stored core or a scaled copy of one), else
-    :func:`spherestep.magnetics.coil_inductance` solved once per core in the process (~17 s)."""
-    key = core_key(spec, design)
-    turns = spec.turns(design.coil_diameter, design.coil_length)
-    permeance = stored_permeance(key)
-    if permeance is None and key not in _SOLVED:
-        from ..magnetics import coil_inductance
-
-        _SOLVED[key] = coil_inductance(design, spec) / turns ** 2
-    return turns ** 2 * (permeance if permeance is not None else _SOLVED[key])
 
 
 def wheeler_inductance(turns: float, outer_radius: float, length: float, inner_radius: float) -> float:
@@ -125,12 +123,17 @@ class DriveLimits:
         """Limits for the coils of ``design`` wound as ``spec`` (a coil-as-built specification such as
         ``spherestep.motor.coil.CoilSpec``: its ``resistance``, ``nominal_current`` and ``turns`` for the design's
         coil diameter and length, its ``supply_voltage`` and ``supply_power``). ``inductance`` (H) defaults to
-        the coil's own: for an iron core (``spec.core == "iron"``) :func:`iron_inductance` (stored for the
-        prototype's core), else Wheeler's air-core value for the spec's turns and groove
-        (:func:`wheeler_inductance`). The torque model must then be built at ``N I_n`` ampere-turns."""
+        the coil's own: for an iron core (``spec.core == "iron"``) ``N²`` times the stored ``L / N²`` of its core
+        (:func:`stored_permeance`; a core not stored: pass :func:`spherestep.magnetics.iron_inductance`), else
+        Wheeler's air-core value for the spec's turns and groove (:func:`wheeler_inductance`). The torque model
+        must then be built at ``N I_n`` ampere-turns."""
         d, length = design.coil_diameter, design.coil_length
         if inductance is None and spec.core == "iron":
-            inductance = iron_inductance(spec, design)
+            permeance = stored_permeance(core_key(spec, design))
+            if permeance is None:
+                raise bad_value("inductance", "the iron coil's own inductance in H for a core not stored "
+                                "(spherestep.magnetics.iron_inductance(spec, design) solves it)", None)
+            inductance = spec.turns(d, length) ** 2 * permeance
         elif inductance is None:
             r_p, r_w, depth = spec.groove(d, length)
             inductance = wheeler_inductance(spec.turns(d, length), r_w, depth, r_p)
@@ -152,6 +155,39 @@ class DriveLimits:
         return math.sqrt(self.supply_power / self.resistance) / self.nominal_current
 
     @property
+    def voltage_bound(self) -> float:
+        """The supply in per-unit volts, ``V / (R I_n)``: the largest steady ``|c_k + e_k/(R I_n)|``."""
+        return self.supply_voltage / (self.resistance * self.nominal_current)
+
+    @property
+    def nominal_power(self) -> float:
+        """``R I_n²`` (W): one coil's copper loss at the nominal current."""
+        return self.resistance * self.nominal_current ** 2
+
+    @property
+    def emf_factor(self) -> float:
+        """The back-EMF factor ``1 / (R I_n²)``: ``K_k·ω`` (N·m·rad/s per unit current) → per-unit volts
+        (``e_k / (R I_n)`` with ``e_k = K_k·ω / I_n``)."""
+        return 1.0 / self.nominal_power
+
+    @property
+    def relay_power(self) -> float:
+        """``V I_n`` (W): what one coil switched onto the supply at its nominal current draws from it."""
+        return self.supply_voltage * self.nominal_current
+
+    def amperes(self, currents) -> np.ndarray:
+        """Per-unit ``currents`` in amperes, ``i = I_n c`` (the drive's wire unit)."""
+        return np.asarray(currents, dtype=float) * self.nominal_current
+
+    def per_unit(self, amperes) -> np.ndarray:
+        """Currents in amperes per unit of the nominal current, ``c = i / I_n``."""
+        return np.asarray(amperes, dtype=float) / self.nominal_current
+
+    def back_emf(self, torque_speed) -> np.ndarray:
+        """The back-EMF ``e_k = K_k·ω / I_n`` (V) of ``torque_speed`` ``K_k·ω`` (N·m·rad/s per unit current)."""
+        return np.asarray(torque_speed, dtype=float) / self.nominal_current
+
+    @property
     def time_constant(self) -> float:
         """``L / R`` (s)."""
         return self.inductance / self.resistance
@@ -159,7 +195,7 @@ class DriveLimits:
     def copper_power(self, currents):
         """``Σ R (I_n c_k)²`` (W) for per-unit ``currents (..., N)``."""
         c = np.asarray(currents, dtype=float)
-        return self.resistance * self.nominal_current ** 2 * np.sum(c * c, axis=-1)
+        return self.nominal_power * np.sum(c * c, axis=-1)
 
     def to_dict(self) -> dict:
         """The limits (SI, keys with units) and the per-unit bounds."""
@@ -169,3 +205,26 @@ class DriveLimits:
                 "resistance_ohm": d["resistance"], "inductance_H": d["inductance"],
                 "time_constant_s": self.time_constant, "per_unit_bound": self.per_unit_bound,
                 "per_unit_power_radius": self.per_unit_power_radius}
+
+
+def milliamperes(amperes) -> np.ndarray:
+    """Currents in A as mA (the wire's and the device's unit): ``1000 i``."""
+    return np.multiply(1000.0, np.asarray(amperes, dtype=float))
+
+
+def from_milliamperes(milliamperes) -> np.ndarray:
+    """Currents in mA as A: ``i_mA / 1000``."""
+    return np.divide(np.asarray(milliamperes, dtype=float), 1000.0)
+
+
+def rl_step(i, v, emf, resistance: float, inductance: float, h: float) -> tuple[np.ndarray, np.ndarray]:
+    """One coil as an R–L circuit, ``L di/dt = v − R i − e``, over ``h`` s with ``v`` and ``emf`` held: the exact
+    current at the end, ``i∞ + (i − i∞) e^{−x}`` (``i∞ = (v − e)/R``, ``x = h R / L``), and its mean over the
+    interval, ``i∞ + (i − i∞)(1 − e^{−x})/x``; arrays broadcast. The coil model of the simulation's drive
+    (:class:`spherestep.dynamics.CoilDrive`) and of the emulated motor (:class:`spherestep.hardware.EmulatedMotor`)."""
+    i_inf = (np.asarray(v) - np.asarray(emf)) / resistance
+    x = h * resistance / inductance
+    decay = math.exp(-x)
+    mean_factor = -math.expm1(-x) / x
+    i = np.asarray(i, dtype=float)
+    return i_inf + (i - i_inf) * decay, i_inf + (i - i_inf) * mean_factor

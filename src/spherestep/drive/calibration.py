@@ -1,0 +1,151 @@
+"""Collecting the holds and moves a calibration fits: the servo sessions on the simulated plant, the emulated motor
+or a coil controller on a port (:func:`collect_holds`), the maths of each hold's equations and the fit itself in
+the control room (:mod:`spherestep.control.calibration`: :func:`~spherestep.control.calibration.series_equations`,
+:func:`~spherestep.control.calibrate`).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from .. import checks, so3
+from ..control import Trajectory
+from ..electrics import DriveLimits
+from ..errors import bad_value
+from ..interrupts import interrupt_for, last_signal
+from ..statics import is_torque_model
+
+if TYPE_CHECKING:
+    from ..control.calibration import Holds
+
+
+@dataclass(frozen=True)
+class Emulated:
+    """The emulated motor as a backend of :func:`collect_holds`: ``plant`` the torque model the emulated rotor
+    obeys (it should differ from the controller's), on the lockstep link (``lockstep``, the default) or a
+    pseudo-terminal."""
+
+    plant: object
+    lockstep: bool = True
+
+
+@dataclass(frozen=True)
+class Port:
+    """A coil controller on a serial ``device`` as a backend of :func:`collect_holds` (the drive room's session)."""
+
+    device: str
+
+
+def collect_holds(design, backend, orientations, *, model=None, limits: DriveLimits | None = None,
+                  move_time: float = 0.4, settle: float = 0.5, window: float = 0.25, moves: bool = True,
+                  rate: float = 1000.0, quadrature: float = 0.004, progress=None) -> Holds:
+    """Drive the servo (controller on ``model``, default the design's own) to each of ``orientations``
+    (``(H, 3, 3)``, or a count for :func:`hold_orientations`) in turn and record the holds and moves (module
+    docstring). ``backend``: a torque model (the simulated plant, :func:`spherestep.dynamics.simulate_servo` at
+    ``rate`` Hz), an :class:`Emulated` motor or a :class:`Port` (the drive room's
+    :func:`~spherestep.drive.session.servo_session`, 200 Hz, the magnetometers' estimate as the measurement and
+    the commanded currents). Each move takes ``move_time`` s per 20° (at least ``move_time``), then ``settle``
+    s at the target; the hold equation is the last ``window`` s; ``moves=False`` keeps only the holds.
+    ``quadrature`` s: the move's integral by the midpoint rule on groups of periods this long (fewer samples
+    to regress; 4 ms keeps it within 0.1 % at 1 kHz). ``progress(text, done, total)`` is told of each hold."""
+    from ..control.calibration import Holds, hold_orientations, series_equations  # the fit's maths: magnetics
+    from ..dynamics import Rotor
+    from ..magnetics import design_model
+
+    if isinstance(orientations, (int, np.integer)) and not isinstance(orientations, bool):
+        orientations = hold_orientations(int(orientations))
+    targets = so3.as_rotations(orientations, "orientations").reshape(-1, 3, 3)
+    if len(targets) == 0:
+        raise bad_value("orientations", "at least one orientation", "none")
+    own = design_model(design)
+    model = own.model if model is None else model
+    limits = own.limits if limits is None else limits
+    if not is_torque_model(model):
+        raise bad_value("model", "a torque model (spherestep.statics.TorqueModel)", type(model).__name__)
+    move_time = checks.positive(move_time, "move_time", "a positive time in seconds")
+    settle = checks.positive(settle, "settle", "a positive time in seconds")
+    window = checks.positive(window, "window", "a positive time in seconds, shorter than settle")
+    if window >= settle:
+        raise bad_value("window", f"shorter than settle ({settle} s)", window)
+    quadrature = checks.positive(quadrature, "quadrature", "a positive time in seconds")
+    if is_torque_model(backend):
+        name = "simulated"
+        rotor = Rotor.from_design(design)
+    elif isinstance(backend, Emulated):
+        if not is_torque_model(backend.plant):
+            raise bad_value("backend.plant", "a torque model", type(backend.plant).__name__)
+        name = "emulated"
+        rotor = Rotor.from_design(design, damping=0.01)  # the drive room's emulated rotor
+    elif isinstance(backend, Port):
+        name = f"port {backend.device}"
+        rotor = Rotor.from_design(design, damping=0.01)
+    else:
+        raise bad_value("backend", "a torque model (the simulated plant), spherestep.drive.Emulated(plant) or "
+                        "spherestep.drive.Port(device)", type(backend).__name__)
+    rows, rest_R, rest_c, drift = [], [], [], []
+    here = np.eye(3)
+    for i, target in enumerate(targets):
+        if progress is not None:
+            progress(f"holding at orientation {i + 1} of {len(targets)} ({name})", i, len(targets))
+        traj, _ = _move(here, target, move_time)
+        t, R, c = _session(design, backend, traj, settle, here, model, limits, rate)
+        every = max(1, round(quadrature / float(np.median(np.diff(t)))))
+        eqs, speed = series_equations(t, R, c, window, rotor.inertia, rotor.damping, every)
+        rows.extend(e for e in eqs if moves or e[0] == "hold")
+        here = R[-1]
+        rest_R.append(R[-1])
+        sel = t[:-1] >= t[-1] - window
+        rest_c.append(c[:-1][sel].mean(axis=0))
+        drift.append(speed)
+    if progress is not None:
+        progress(f"holding at orientation {len(targets)} of {len(targets)} ({name})", len(targets), len(targets))
+    kinds = tuple(r[0] for r in rows)
+    sample_eq = np.concatenate([np.full(len(r[4]), k) for k, r in enumerate(rows)])
+    return Holds(targets, np.array(rest_R), np.array(rest_c), kinds, np.array([r[1] for r in rows]),
+                 np.concatenate([r[2] for r in rows]), np.concatenate([r[3] for r in rows]),
+                 np.concatenate([r[4] for r in rows]), sample_eq, rotor.inertia, rotor.damping, name,
+                 np.array(drift))
+
+
+def _move(start: np.ndarray, target: np.ndarray, move_time: float):
+    """The triangular turn from ``start`` to ``target`` (``move_time`` per 20°, at least ``move_time``)."""
+    rv = so3.log_single(target @ start.T)
+    angle = float(np.linalg.norm(rv))
+    if angle < 1e-9:
+        return Trajectory.hold(target), 0.0
+    T = move_time * max(1.0, math.sqrt(angle / math.radians(20.0)))
+    return Trajectory.turn(start, rv / angle, angle, 4.0 * angle / T ** 2), T
+
+
+def _session(design, backend, traj, settle: float, start, model, limits, rate: float):
+    """``(t, R, c)``: one run of the servo along ``traj`` and ``settle`` s on: times (s), measured orientations
+    and the currents per unit over each period."""
+    if is_torque_model(backend):
+        from ..dynamics import simulate_servo
+
+        run = simulate_servo(design, traj, backend, limits=limits, controller_model=model, settle=settle,
+                             start=start, rate=rate)
+        return run.times, run.orientations, limits.per_unit(run.currents)
+    from .session import servo_session
+
+    port = backend.device if isinstance(backend, Port) else None
+    emulate = isinstance(backend, Emulated)
+    options = {"plant": backend.plant, "lockstep": backend.lockstep} if emulate else {}
+    session = servo_session(design, traj, traj.duration + settle, port=port, emulate=emulate, model=model,
+                            drive=limits, R0=start, **options)
+    rep = session.report
+    if rep.outcome == "INTERRUPT":  # the loop caught Ctrl-C or SIGTERM and switched every coil off: unwind on
+        raise interrupt_for(last_signal())
+    if rep.outcome != "done" or len(rep.times) < 4:
+        raise bad_value("backend", "a motor that runs the servo to the end of each hold",
+                        f"outcome {rep.outcome} ({rep.message})")
+    t = np.asarray(rep.times, dtype=float)
+    R = np.asarray(rep.orientations, dtype=float)
+    c = limits.per_unit(rep.currents)
+    # the currents commanded in a cycle are driven from the next cycle's start (the session's one-period delay)
+    c = np.vstack([np.zeros((1, c.shape[1])), c[:-1]])
+    return t, R, c

@@ -1,0 +1,144 @@
+"""The one place a backend is chosen and built: :func:`connect` ``(design, kind, ...)``.
+
+Kinds (:data:`KINDS`):
+
+* ``"port"``: a current-mode coil controller on a serial device (:class:`~spherestep.hardware.DriveLink`,
+  protocol 2);
+* ``"lockstep"``: the emulated motor and its device in this process on a simulated clock
+  (:class:`~spherestep.hardware.LockstepLink`): the servo keeps its rate exactly, whatever the machine's load;
+* ``"pty"``: the emulated motor behind its device in a forked process on a real pseudo-terminal
+  (:class:`~spherestep.hardware.MotorPty`), reached by a :class:`~spherestep.hardware.DriveLink` on its port;
+* ``"relay port"``: a relay board on a serial device (:class:`~spherestep.hardware.Serial`, protocol 1);
+* ``"dry run"``: nothing is sent, every frame recorded (:class:`~spherestep.hardware.DryRun`, protocol 1);
+* ``"simulated"``: a relay plan on the design's simulated rotor (:class:`~spherestep.hardware.Simulated`,
+  protocol 1, the dynamics room's integrator).
+
+The protocol-2 kinds yield a link with ``drive(currents A)``, ``read()``, ``off()`` and ``info``; the protocol-1
+kinds a :class:`~spherestep.hardware.Backend` for :func:`~spherestep.hardware.play`. The emulated motor is
+assembled here from the rooms that know its parts (:func:`emulated_motor`: the dynamics room's rotor, the sensing
+room's field model, the control room's torque cache), so the hardware room imports none of them.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Iterator
+from contextlib import ExitStack, contextmanager
+from dataclasses import dataclass
+
+from .. import so3
+from ..errors import bad_value
+
+KINDS = ("port", "lockstep", "pty", "relay port", "dry run", "simulated")
+EMULATED_DAMPING = 0.01  # N·m·s/rad: the emulated rotor's viscous damping (the drive room's emulated motor)
+
+
+@dataclass
+class Connection:
+    """What :func:`connect` yields: the ``kind``, the ``link`` (protocol 2: ``drive``/``read``/``off``/``info``;
+    protocol 1: a :class:`~spherestep.hardware.Backend`), for an emulated motor ``motor`` and its device's
+    ``truth()`` (the :class:`~spherestep.hardware.Truth` now), ``timing`` (``clock``/``sleep`` for
+    :func:`~spherestep.hardware.run_servo`: the simulated clock of ``"lockstep"``, else empty: the wall clock),
+    the device's ``watchdog`` (s) and when it ``started`` (``time.monotonic()``; 0 on the simulated clock)."""
+
+    kind: str
+    link: object
+    motor: object | None = None
+    truth: Callable | None = None
+    timing: dict | None = None
+    watchdog: float | None = None
+    started: float | None = None
+    _release: Callable | None = None
+
+    def release(self, seconds: float = 0.0):
+        """Let go of the link (``OFF`` if it still answers, then close) and let ``seconds`` pass — emulated time
+        in lockstep, the wall clock otherwise — so a watchdog trip after a lost link lands in the truth; returns
+        the emulated motor's truth then (None on a real device)."""
+        if self._release is not None:
+            self._release()
+            self._release = None
+        if self.kind == "lockstep":
+            self.link.sleep(seconds)
+        elif seconds > 0:
+            time.sleep(seconds)
+        return None if self.truth is None else self.truth()
+
+
+def emulated_motor(design, plant, sensors, *, drive, R0=None, faults=None, rotor=None):
+    """The :class:`~spherestep.hardware.EmulatedMotor` of ``design`` obeying the torque model ``plant``, its
+    magnetometers ``sensors`` (:class:`~spherestep.sensing.SensorArray`), with the drive's limits ``drive``:
+    ``rotor`` (default the design's, damping :data:`EMULATED_DAMPING`), the sensing room's
+    :func:`~spherestep.sensing.field_model` at the sensors and the servo law's :class:`~spherestep.control.ModelCache`
+    of ``plant``; ``R0`` the start, ``faults`` a :class:`~spherestep.hardware.MotorFaults`."""
+    from ..control import ModelCache
+    from ..dynamics import Rotor
+    from ..hardware import EmulatedMotor
+    from ..sensing import field_model
+
+    rotor = Rotor.from_design(design, damping=EMULATED_DAMPING) if rotor is None else rotor
+    return EmulatedMotor(design, plant, sensors, rotor=rotor, field=field_model(design, sensors.positions),
+                         torque_cache=ModelCache(plant), drive=drive, R0=R0, faults=faults)
+
+
+def simulated_relays(design, model, start, *, rotor=None, dt: float = 5e-3, channels: int | None = None):
+    """The :class:`~spherestep.hardware.Simulated` relay back end: the dynamics room's
+    :class:`~spherestep.dynamics.Integrator` of ``design``'s rotor (``rotor``, default the design's) under
+    ``model`` at step ``dt`` (s), at rest at ``start``, standing in for ``channels`` relays."""
+    from ..dynamics import Integrator, Rotor
+    from ..hardware import Simulated
+
+    rotor = Rotor.from_design(design) if rotor is None else rotor
+    return Simulated(Integrator(model, rotor, dt), len(design.stator), start, channels=channels)
+
+
+@contextmanager
+def connect(design, kind: str, *, port: str | None = None, plant=None, limits=None, sensors=None, R0=None,
+            faults=None, watchdog_ms: int | None = None, rotor=None, channels: int | None = None, transcript=None,
+            dt: float = 5e-3) -> Iterator[Connection]:
+    """A :class:`Connection` of ``kind`` (module docstring) for ``design``, closed on leaving (every coil off).
+
+    ``port``: the serial device (``"port"``, ``"relay port"``). The emulated motor (``"lockstep"``, ``"pty"``):
+    ``plant`` the torque model it obeys, ``limits`` its :class:`~spherestep.electrics.DriveLimits`, ``sensors``
+    its magnetometers, ``R0`` its start, ``faults`` (:class:`~spherestep.hardware.MotorFaults`), ``watchdog_ms``
+    its device's watchdog, ``rotor`` (default the design's, damping :data:`EMULATED_DAMPING`). ``"simulated"``:
+    ``plant`` the rotor's torque model, ``R0`` its start, ``rotor``, ``dt``, ``channels``. ``"dry run"``:
+    ``channels``, ``transcript``; ``"relay port"``: ``transcript``."""
+    from .. import hardware
+
+    if kind not in KINDS:
+        raise bad_value("kind", f"one of {', '.join(KINDS)}", kind)
+    if kind in ("port", "relay port") and not port:
+        raise bad_value("port", f"a serial device for kind {kind!r}, such as /dev/ttyUSB0", port)
+    device = {} if watchdog_ms is None else {"watchdog_ms": watchdog_ms}
+    with ExitStack() as stack:
+        inner = ExitStack()  # the host's link, let go before the device (Connection.release)
+        if kind == "port":
+            stack.callback(inner.close)
+            link = inner.enter_context(hardware.DriveLink(port))
+            yield Connection(kind, link, timing={}, watchdog=link.info.watchdog, _release=inner.close)
+            return
+        if kind == "relay port":
+            yield Connection(kind, hardware.Serial(port, transcript=transcript))
+            return
+        if kind == "dry run":
+            yield Connection(kind, hardware.DryRun(**({} if channels is None else {"channels": channels}),
+                                                   transcript=transcript))
+            return
+        if plant is None:
+            raise bad_value("plant", f"the torque model the rotor obeys (kind {kind!r})", plant)
+        start = None if R0 is None else so3.as_rotations(R0, "R0").reshape(3, 3)
+        if kind == "simulated":
+            if start is None:
+                raise bad_value("R0", "the simulated rotor's start (3×3, at rest)", R0)
+            yield Connection(kind, simulated_relays(design, plant, start, rotor=rotor, dt=dt, channels=channels))
+            return
+        motor = emulated_motor(design, plant, sensors, drive=limits, R0=start, faults=faults, rotor=rotor)
+        if kind == "lockstep":
+            link = stack.enter_context(hardware.LockstepLink(motor, **device))
+            yield Connection(kind, link, motor, link.truth, {"clock": link.clock, "sleep": link.sleep},
+                             link.device.watchdog_ms / 1000, 0.0)
+            return
+        dev = stack.enter_context(hardware.MotorPty(motor, **device))
+        stack.callback(inner.close)  # after the device's exit is registered: the link closes first
+        link = inner.enter_context(hardware.DriveLink(dev.port))
+        yield Connection(kind, link, motor, dev.truth, {}, dev.device.watchdog_ms / 1000, dev.started, inner.close)

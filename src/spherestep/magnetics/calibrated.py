@@ -1,0 +1,198 @@
+"""The iron model calibrated from the motor's own holds, as a value and as a file: :class:`Calibration`.
+
+The fit that makes one is the control room's :func:`spherestep.control.calibrate` (the regression on the pair
+tables' node values, ``spherestep.control.calibration``); the holds it fits are collected by the drive room's
+:func:`spherestep.drive.collect_holds`. This module keeps what the torque model needs to be rebuilt from the
+file (:meth:`Calibration.load`, read by :func:`spherestep.magnetics.design_model` with ``calibration=``), so the
+magnetics room imports neither control nor drive.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import bad_value
+
+CALIBRATION_FILE = "calibration.yaml"  # beside the design file
+CONSISTENT = 0.05  # a fit whose residual RMS is above this fraction of the uncorrected model's does not explain the data
+
+
+@dataclass(frozen=True)
+class Moved:
+    """A node the fit moved beyond two standard deviations: ``table`` (``"detent"``/``"winding"``), ``angle``
+    (rad), ``nominal``, ``fitted`` and ``std`` (N·m)."""
+
+    table: str
+    angle: float
+    nominal: float
+    fitted: float
+    std: float
+
+    def to_dict(self, degrees: bool = True) -> dict:
+        return {"table": self.table, ("angle_deg" if degrees else "angle_rad"):
+                math.degrees(self.angle) if degrees else self.angle,
+                "nominal_Nm": self.nominal, "fitted_Nm": self.fitted, "std_Nm": self.std}
+
+
+@dataclass(frozen=True, eq=False)
+class Calibration:
+    """A fitted torque model (:func:`spherestep.control.calibrate`): ``model`` the corrected
+    :class:`~spherestep.magnetics.IronTorqueMap` (the base model's coupling kept); ``nodes`` (rad); the fitted
+    tables ``detent``, ``winding`` and their standard deviations ``detent_std``, ``winding_std`` (N·m), the
+    ``nominal_detent``/``nominal_winding`` they started from; the effective scales ``scale_detent``,
+    ``scale_winding`` (``θ⁰·θ / θ⁰·θ⁰`` per table: what the global scale and the shape did together) and their
+    ``scale_std``; the equations' residual RMS (N·m)
+    ``residual_before`` (the base model) and ``residual_after``, ``sigma`` the noise it assumed; ``holds`` and
+    ``equations`` counted; ``moved`` the nodes moved beyond 2σ; ``unseen`` what the data cannot see;
+    ``coupling`` whether the fitted model has the cores' coupling, ``coupling_gain`` ± ``coupling_std`` its
+    gain against the design's coupling (1: as modelled; 0: none); ``backend``; ``label``."""
+
+    model: object
+    nodes: np.ndarray
+    detent: np.ndarray
+    winding: np.ndarray
+    detent_std: np.ndarray
+    winding_std: np.ndarray
+    nominal_detent: np.ndarray
+    nominal_winding: np.ndarray
+    scale_detent: float
+    scale_winding: float
+    scale_std: tuple[float, float]
+    residual_before: float
+    residual_after: float
+    sigma: float
+    holds: int
+    equations: int
+    moved: tuple[Moved, ...]
+    unseen: tuple[str, ...]
+    coupling: bool
+    backend: str
+    label: str = "calibrated"
+    coupling_gain: float = 1.0
+    coupling_std: float = 0.0
+    design_fingerprint: str | None = None
+
+    @property
+    def consistent(self) -> bool:
+        """Whether the fitted model explains the data: the residual RMS after the fit within
+        :data:`CONSISTENT` of the uncorrected model's (else the holds were not at rest or the measurements are off,
+        and the fit should not be used)."""
+        return self.residual_after <= CONSISTENT * self.residual_before
+
+    def summary(self) -> str:
+        """Lines for people: residuals, scales, parameters moved, what was not seen."""
+        lines = [] if self.consistent else [
+            f"WARNING: the fit does not explain the data (residual {self.residual_after / self.residual_before:.0%} "
+            "of the uncorrected model's): the rotor was not at rest in the holds or the measurements are off; do "
+            "not use this calibration"]
+        lines += [f"{self.holds} holds, {self.equations} equations ({self.backend}): residual RMS "
+                 f"{self.residual_before * 1e3:.3g} -> {self.residual_after * 1e3:.3g} mN·m (noise taken "
+                 f"{self.sigma * 1e3:.2g} mN·m)",
+                 f"detent table ×{self.scale_detent:.4f} ± {self.scale_std[0]:.4f}, winding table "
+                 f"×{self.scale_winding:.4f} ± {self.scale_std[1]:.4f} (fitted against nominal, θ⁰·θ / θ⁰·θ⁰)",
+                 ("no coupling through the cores" if not self.coupling else
+                  f"the cores' coupling ×{self.coupling_gain:.4f} ± {self.coupling_std:.4f}" if self.coupling_std > 0
+                  else f"the cores' coupling kept as modelled (×{self.coupling_gain:g})"),
+                 f"{len(self.moved)} table nodes moved beyond 2σ"]
+        for m in self.moved[:8]:
+            lines.append(f"  {m.table} at {math.degrees(m.angle):g}°: {m.nominal:+.4g} -> {m.fitted:+.4g} "
+                         f"± {m.std:.2g} N·m")
+        if len(self.moved) > 8:
+            lines.append(f"  ... and {len(self.moved) - 8} more")
+        lines += [f"not seen: {u}" for u in self.unseen] or ["every parameter seen by the data"]
+        return "\n".join(lines)
+
+    def to_dict(self, degrees: bool = True) -> dict:
+        k = 180.0 / math.pi if degrees else 1.0
+        return {"label": self.label, "design_fingerprint": self.design_fingerprint, "backend": self.backend,
+                "holds": self.holds, "equations": self.equations,
+                "coupling": self.coupling, "coupling_gain": self.coupling_gain, "coupling_std": self.coupling_std,
+                "consistent": self.consistent,
+                ("nodes_deg" if degrees else "nodes_rad"): [float(x * k) for x in self.nodes],
+                "detent_Nm": [float(x) for x in self.detent], "winding_Nm": [float(x) for x in self.winding],
+                "detent_std_Nm": [float(x) for x in self.detent_std],
+                "winding_std_Nm": [float(x) for x in self.winding_std],
+                "nominal_detent_Nm": [float(x) for x in self.nominal_detent],
+                "nominal_winding_Nm": [float(x) for x in self.nominal_winding],
+                "scale_detent": self.scale_detent, "scale_winding": self.scale_winding,
+                "scale_std": [float(x) for x in self.scale_std],
+                "residual_before_Nm": self.residual_before, "residual_after_Nm": self.residual_after,
+                "sigma_Nm": self.sigma, "moved": [m.to_dict(degrees) for m in self.moved],
+                "unseen": list(self.unseen)}
+
+    def save(self, path) -> Path:
+        """Write the calibration as YAML (atomically; ``calibration.yaml`` beside the design file is what
+        :func:`spherestep.magnetics.design_model` reads with ``calibration=``); returns the path."""
+        import yaml
+
+        from ..atomic import write_text
+
+        text = "# spherestep torque calibration (spherestep.control.calibrate); tables in N·m at nodes in degrees\n"
+        return write_text(path, text + yaml.safe_dump(self.to_dict(degrees=True), sort_keys=False))
+
+    @classmethod
+    def load(cls, path, design) -> Calibration:
+        """The calibration saved at ``path`` for ``design`` (its model rebuilt from the tables; the coupling
+        re-read from the design's own when it had one). InputError naming ``calibration`` when the file is not
+        one or does not fit the design."""
+        import yaml
+
+        from ._ironmap import IronTorqueMap, iron_model
+
+        path = Path(path)
+        try:
+            data = yaml.safe_load(path.read_text(encoding="utf-8"))
+            nodes = np.radians(np.asarray(data["nodes_deg"], dtype=float))
+            det = np.asarray(data["detent_Nm"], dtype=float)
+            win = np.asarray(data["winding_Nm"], dtype=float)
+            arrays = [np.asarray(data[k], dtype=float) for k in ("detent_std_Nm", "winding_std_Nm",
+                                                                 "nominal_detent_Nm", "nominal_winding_Nm")]
+            moved = tuple(Moved(m["table"], math.radians(m["angle_deg"]), m["nominal_Nm"], m["fitted_Nm"],
+                                m["std_Nm"]) for m in data["moved"])
+        except (OSError, yaml.YAMLError, KeyError, TypeError, ValueError) as exc:
+            raise bad_value("calibration", "a calibration file written by spherestep calibrate",
+                            f"{path} ({type(exc).__name__}: {exc})") from None
+        if not (len(nodes) == len(det) == len(win)) or not np.all(np.diff(nodes) > 0):
+            raise bad_value("calibration", "tables with one value per increasing node", str(path))
+        if design.coil.core != "iron":
+            raise bad_value("calibration", "used with an iron-cored design", design.coil.core)
+        from ..motor import check_fingerprint
+
+        check_fingerprint(design, data.get("design_fingerprint"), "calibration.design_fingerprint",
+                          f"calibrate again with `spherestep calibrate` ({path})")
+        coupling = bool(data.get("coupling", False))
+        gain = float(data.get("coupling_gain", 1.0))
+        cross = scaled_coupling(iron_model(design, coupling=True).coupling, gain) if coupling else None
+        model = IronTorqueMap.from_tables(design, design.coil, nodes, det, win, coupling=cross)
+        return cls(model, nodes, det, win, *arrays, float(data["scale_detent"]), float(data["scale_winding"]),
+                   tuple(float(x) for x in data["scale_std"]), float(data["residual_before_Nm"]),
+                   float(data["residual_after_Nm"]), float(data["sigma_Nm"]), int(data["holds"]),
+                   int(data["equations"]), moved, tuple(str(u) for u in data["unseen"]), coupling,
+                   str(data["backend"]), str(data.get("label", "calibrated")), gain,
+                   float(data.get("coupling_std", 0.0)), design.fingerprint)
+
+
+def calibration_beside(design_path) -> Path | None:
+    """The calibration file beside a design file (``calibration.yaml`` in its folder), or None if there is none."""
+    path = Path(design_path).parent / CALIBRATION_FILE
+    return path if path.is_file() else None
+
+
+def scaled_coupling(coupling, gain: float):
+    """The cores' coupling (a :class:`~spherestep.magnetics.IronTorqueMap`'s ``coupling``) with its energy, hence
+    its torque, ×``gain``: its series' spline coefficients scaled (the same splines otherwise)."""
+    import copy
+
+    if gain == 1.0:
+        return coupling
+    series = []
+    for spline in coupling.series:
+        out = copy.copy(spline)
+        tx, ty, c = spline.tck
+        out.tck = (tx, ty, np.asarray(c) * gain)
+        series.append(out)
+    return replace(coupling, series=tuple(series))

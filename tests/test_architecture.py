@@ -1,0 +1,259 @@
+"""The house map, checked on the source (issue 36): the middle floor's packages import one another in one direction,
+backends are built in one place, and an ampere changes unit in one module.
+
+The import graph is read with ``ast`` from every module under ``src/spherestep``, imports inside functions counted
+(a lazy import is still an arrow). ``docs/conventions.md`` (the house map) states the same rules in words.
+"""
+
+from __future__ import annotations
+
+import ast
+import re
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+SRC = ROOT / "src" / "spherestep"
+MIDDLE = ("electrics", "magnetics", "sensing", "control", "dynamics", "hardware", "drive")
+BACKENDS = {"LockstepLink", "DriveLink", "PtyDevice", "MotorPty", "Simulated", "DryRun", "Serial", "SerialPort",
+            "EmulatedMotor"}
+SELECTOR = SRC / "drive" / "connect.py"
+ELECTRICS = SRC / "electrics.py"
+CURRENTISH = re.compile(r"(^|_)(ma|amps?|amperes?|currents?)($|_)|nominal|current", re.IGNORECASE)
+
+
+def _module(path: Path) -> tuple[str, bool]:
+    """``(dotted name, is a package's __init__)`` of a file under ``src``."""
+    parts = list(path.relative_to(SRC.parent).with_suffix("").parts)
+    package = parts[-1] == "__init__"
+    return ".".join(parts[:-1] if package else parts), package
+
+
+def _imports(path: Path) -> list[tuple[str, int]]:
+    """Every ``spherestep`` module (or name in one) ``path`` imports, anywhere in the file, with its line."""
+    name, package = _module(path)
+    base = name.split(".") if package else name.split(".")[:-1]
+    out = []
+    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+        if isinstance(node, ast.Import):
+            out += [(a.name, node.lineno) for a in node.names]
+        elif isinstance(node, ast.ImportFrom):
+            if node.level:
+                target = ".".join(base[:len(base) - node.level + 1] + ([node.module] if node.module else []))
+            else:
+                target = node.module or ""
+            out.append((target, node.lineno))
+            out += [(f"{target}.{a.name}", node.lineno) for a in node.names]
+    return [(t, line) for t, line in out if t.startswith("spherestep.")]
+
+
+def _room(dotted: str) -> str | None:
+    """The top-level room of ``spherestep.room...`` (None for the package itself)."""
+    parts = dotted.split(".")
+    return parts[1] if len(parts) > 1 else None
+
+
+def package_graph(rooms=MIDDLE) -> dict[tuple[str, str], list[str]]:
+    """``(room a, room b) -> ["module:line", ...]`` for every import from ``a`` into ``b`` among ``rooms``."""
+    edges: dict[tuple[str, str], list[str]] = {}
+    for path in SRC.rglob("*.py"):
+        name, _ = _module(path)
+        a = _room(name)
+        if a not in rooms:
+            continue
+        for target, line in _imports(path):
+            b = _room(target)
+            if b in rooms and b != a:
+                edges.setdefault((a, b), []).append(f"{name}:{line}")
+    return edges
+
+
+def _cycle(edges) -> list[str] | None:
+    """One cycle of the directed graph ``edges`` (a list of nodes, first repeated last), or None."""
+    succ: dict[str, set[str]] = {}
+    for a, b in edges:
+        succ.setdefault(a, set()).add(b)
+    state: dict[str, int] = {}
+    stack: list[str] = []
+
+    def visit(n):
+        state[n] = 1
+        stack.append(n)
+        for m in sorted(succ.get(n, ())):
+            if state.get(m) == 1:
+                return stack[stack.index(m):] + [m]
+            if m not in state and (found := visit(m)):
+                return found
+        stack.pop()
+        state[n] = 2
+        return None
+
+    for n in sorted(succ):
+        if n not in state and (found := visit(n)):
+            return found
+    return None
+
+
+def test_the_cycle_finder_finds_a_planted_cycle():
+    """The checker can fail: a graph with a cycle is reported, one without is not."""
+    assert _cycle({("a", "b"): [], ("b", "c"): [], ("c", "a"): []}) == ["a", "b", "c", "a"]
+    assert _cycle({("a", "b"): [], ("b", "c"): [], ("a", "c"): []}) is None
+
+
+def test_the_middle_floor_has_no_package_cycle():
+    """No cycle among electrics, magnetics, sensing, control, dynamics, hardware and drive, function-level imports
+    counted; the arrows that once tied the knot are gone (control → dynamics/drive/hardware, magnetics → control,
+    hardware → control/dynamics/sensing)."""
+    edges = package_graph()
+    cycle = _cycle(edges)
+    assert cycle is None, "package cycle " + " -> ".join(cycle) + ": " + "; ".join(
+        f"{a}->{b} at {', '.join(edges[(a, b)])}" for a, b in zip(cycle, cycle[1:]))
+    for a, b in (("control", "dynamics"), ("control", "drive"), ("control", "hardware"), ("magnetics", "control"),
+                 ("hardware", "control"), ("hardware", "dynamics"), ("hardware", "sensing"),
+                 ("electrics", "magnetics"), ("electrics", "control")):
+        assert (a, b) not in edges, f"{a} imports {b} at {edges[(a, b)]}"
+
+
+def _calls(path: Path):
+    """``(name, line)`` of every call by a bare or dotted name in ``path`` (docstrings and comments ignored)."""
+    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+        if isinstance(node, ast.Call):
+            f = node.func
+            if isinstance(f, ast.Name):
+                yield f.id, node.lineno
+            elif isinstance(f, ast.Attribute) and not (isinstance(f.value, ast.Name) and f.value.id == "pyserial"):
+                yield f.attr, node.lineno
+
+
+def _sources():
+    return [p for p in [*SRC.rglob("*.py"), *(ROOT / "scripts").rglob("*.py")] if p.is_file()]
+
+
+def test_backends_are_built_only_by_the_selector():
+    """No ``LockstepLink(``, ``DriveLink(``, ``PtyDevice(``, ``MotorPty(``, ``Simulated(``, ``DryRun(``,
+    ``Serial(``, ``EmulatedMotor(`` outside ``spherestep.drive.connect`` in src/ and scripts/ (tests may)."""
+    found = [f"{p.relative_to(ROOT)}:{line} {name}(" for p in _sources() if p != SELECTOR
+             for name, line in _calls(p) if name in BACKENDS]
+    assert not found, "backend built outside spherestep.drive.connect: " + "; ".join(found)
+    assert {name for name, _ in _calls(SELECTOR)} >= {"LockstepLink", "DriveLink", "MotorPty", "Simulated",
+                                                       "DryRun", "Serial", "EmulatedMotor"}
+
+
+def _names(node) -> list[str]:
+    return [n.id if isinstance(n, ast.Name) else n.attr for n in ast.walk(node)
+            if isinstance(n, (ast.Name, ast.Attribute))]
+
+
+def conversions(path: Path) -> list[str]:
+    """The unit conversions of a coil current in ``path``: ``x * / ** nominal_current`` either way round, and a
+    current-like operand (``ma``, ``amps``, ``current``...) times or over 1000 (a bare ``i`` is too common a
+    name to judge by)."""
+    out = []
+    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+        if not isinstance(node, ast.BinOp) or not isinstance(node.op, (ast.Mult, ast.Div, ast.Pow)):
+            continue
+        sides = (node.left, node.right)
+        if any(isinstance(s, (ast.Name, ast.Attribute)) and _names(s)[0] == "nominal_current" for s in sides):
+            out.append(f"{path.relative_to(ROOT)}:{node.lineno} nominal_current")
+        for k, s in enumerate(sides):
+            other = sides[1 - k]
+            if isinstance(s, ast.Constant) and s.value in (1000, 1000.0) and \
+                    any(CURRENTISH.search(n) for n in _names(other)):
+                out.append(f"{path.relative_to(ROOT)}:{node.lineno} ×/÷ 1000")
+    return out
+
+
+def test_the_conversion_finder_sees_each_form(tmp_path, monkeypatch):
+    """The checker can fail: each form it must see, and a millisecond conversion it must not."""
+    monkeypatch.setattr(f"{__name__}.ROOT", tmp_path)
+    f = tmp_path / "m.py"
+    f.write_text("a = c * lim.nominal_current\nb = i / nominal_current\nc = 1000.0 * currents\nd = ma / 1000\n"
+                 "e = lim.resistance * lim.nominal_current ** 2\nf = watchdog_ms * 1000\n", encoding="utf-8")
+    assert [s.split(":")[1].split()[0] for s in conversions(f)] == ["1", "2", "3", "4", "5"]
+
+
+def test_an_ampere_changes_unit_only_in_electrics():
+    """Per unit ↔ A ↔ mA (and the power and back-EMF factors built from ``nominal_current``) only in
+    ``spherestep.electrics``."""
+    found = [c for p in _sources() if p != ELECTRICS for c in conversions(p)]
+    assert not found, "conversion outside spherestep.electrics: " + "; ".join(found)
+
+
+@pytest.mark.parametrize("room", ["control", "magnetics", "hardware"])
+def test_the_low_rooms_import_the_electrics_not_each_other(room):
+    """DriveLimits comes from electrics in control, magnetics and hardware (not control.limits, which is gone)."""
+    assert not (SRC / "control" / "limits.py").exists()
+    uses = [(p, t) for p in (SRC / room).rglob("*.py") for t, _ in _imports(p) if t.endswith(".DriveLimits")]
+    assert all(t == "spherestep.electrics.DriveLimits" for _, t in uses), uses
+
+
+def test_every_current_link_is_a_link():
+    """The serial link and the lockstep link both offer the one ``Link`` protocol (drive, read, off, info, a
+    context manager), and the servo loop is typed by it, not by one of them."""
+    import inspect
+
+    from spherestep.hardware import DriveLink, Link, LockstepLink, run_servo
+
+    members = ("drive", "read", "off", "__enter__", "__exit__")
+    for cls in (DriveLink, LockstepLink):
+        assert all(callable(getattr(cls, m, None)) for m in members), cls
+    assert "Link" in str(inspect.signature(run_servo).parameters["link"].annotation)
+    assert "DriveLink" not in str(inspect.signature(run_servo).parameters["link"].annotation)
+    assert isinstance(Link, type)
+
+
+def test_one_quaternion_order_in_every_file():
+    """Files carry quaternions scalar first under the columns ``qw qx qy qz`` (``so3.quaternion_rows``), checked
+    on a known rotation (a turn θ about z is ``(cos θ/2, 0, 0, sin θ/2)``), and no module but so3 converts a
+    rotation to a quaternion by SciPy itself."""
+    import math
+
+    import numpy as np
+
+    from spherestep import so3
+
+    theta = 0.7
+    q = so3.quaternion_rows(so3.exp(np.array([0.0, 0.0, theta])))
+    assert np.allclose(q, [math.cos(theta / 2), 0.0, 0.0, math.sin(theta / 2)], atol=1e-15)
+    assert so3.QUATERNION_COLUMNS == ("qw", "qx", "qy", "qz")
+    found = [f"{p.relative_to(ROOT)}:{line}" for p in SRC.rglob("*.py") if p != SRC / "so3.py"
+             for name, line in _calls(p) if name == "as_quat"]
+    assert found == ["src/spherestep/magnetics/_ironforce.py:34"] or not found, found  # magpylib's, a count
+
+
+def test_numba_lives_in_the_fast_path():
+    """Only ``spherestep._fast`` imports numba (docs/conventions.md, the fast path)."""
+    found = [f"{p.relative_to(ROOT)}:{line}" for p in SRC.rglob("*.py") if "_fast" not in p.parts
+             for target, line in [(a.name, n.lineno) for n in ast.walk(ast.parse(p.read_text(encoding="utf-8")))
+                                  if isinstance(n, ast.Import) for a in n.names]
+             + [(n.module or "", n.lineno) for n in ast.walk(ast.parse(p.read_text(encoding="utf-8")))
+                if isinstance(n, ast.ImportFrom)]
+             if target.split(".")[0] == "numba"]
+    assert not found, "numba imported outside spherestep._fast: " + "; ".join(found)
+
+
+def test_the_selector_refuses_bad_input_and_builds_the_light_backends():
+    """``drive.connect``: an unknown kind, a port kind without a port and an emulated kind without a plant are each one
+    InputError naming the field; ``dry run`` is protocol 1's back end with the channels asked for, ``simulated`` the
+    relay back end on the design's rotor at its start."""
+    import numpy as np
+
+    from spherestep.drive import KINDS, connect
+    from spherestep.errors import InputError
+    from spherestep.hardware import Backend
+    from spherestep.magnetics import torque_map
+    from spherestep.motor import prototype
+
+    design = prototype()
+    for kind, options, field in (("serial", {}, "kind"), ("port", {}, "port"), ("relay port", {}, "port"),
+                                 ("lockstep", {}, "plant"), ("simulated", {"plant": object()}, "R0")):
+        with pytest.raises(InputError, match=f"^{field} must be"):
+            with connect(design, kind, **options):
+                pass
+    assert set(KINDS) == {"port", "lockstep", "pty", "relay port", "dry run", "simulated"}
+    with connect(None, "dry run", channels=12) as conn:
+        assert isinstance(conn.link, Backend) and conn.link.open().channels == 12 and conn.truth is None
+    with connect(design, "simulated", plant=torque_map(design), R0=np.eye(3)) as conn:
+        assert isinstance(conn.link, Backend) and conn.link.coil_count == len(design.stator)
+        assert np.array_equal(conn.link.R, np.eye(3))
