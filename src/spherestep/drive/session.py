@@ -36,6 +36,7 @@ FIRMWARES = ("python", "qemu")  # the emulated motor's device: the Python Curren
 # ms a step on a loaded 2-core machine: 4 kHz slipped), and 0.1 s for an answer on its UART0 (QEMU hands each
 # received byte over between its threads: a 29-coil DRIVE took 3-10 ms at load 9-12, measured)
 QEMU_PERIOD = 1e-3
+QEMU_RATE = 100.0  # Hz: the servo's default rate on the firmware in QEMU (the DRIVE round trip above)
 QEMU_TIMEOUT = 0.1
 SETTLE = 0.5  # s the loop runs on after the trajectory's end
 BANDWIDTH = 2 * math.pi * 3  # rad/s: the servo's closed-loop natural frequency on hardware (a 5 ms loop, ~1 cycle late)

@@ -49,6 +49,7 @@ CFLAGS = ("-mcpu=cortex-m7", "-mthumb", "-mfpu=fpv5-d16", "-mfloat-abi=hard", "-
           "-fno-exceptions", "-fno-rtti", "-fno-threadsafe-statics", "-ffunction-sections", "-Wall", "-Wextra",
           "-Werror", "-nostartfiles", "-specs=nano.specs", "-specs=nosys.specs", "-Wl,--gc-sections")
 ICOUNT_SHIFT = 4  # -icount shift: an instruction is 2^4 ns of virtual time
+ICOUNT = ("-icount", f"shift={ICOUNT_SHIFT},sleep=off")
 CALIBRATION_INSTRUCTIONS = 100002  # board.cpp's timed loop
 PSRAM = 16 << 20  # bytes of the board's PSRAM (at 0x60000000), the exchange at its start
 TRIP_CODES = ("", "WDOG", "CRCS", "OVER", "OPEN", "STUCK", "HEAT")
@@ -142,6 +143,7 @@ class QemuBoard:
         self.coils = self.sensors = 0
         self._qemu: subprocess.Popen | None = None
         self._doorbells: int | None = None
+        self._hold: int | None = None
         self._memory: mmap.mmap | None = None
         self._path: str | None = None
         self._rung = bytearray()
@@ -160,7 +162,7 @@ class QemuBoard:
         self._qemu = subprocess.Popen(
             [qemu, "-M", "mps2-an500,memory-backend=psram", "-object",
              f"memory-backend-file,id=psram,size={PSRAM},mem-path={self._path},share=on", "-nographic",
-             "-monitor", "none", "-serial", "pty", "-serial", "pty", "-icount", f"shift={ICOUNT_SHIFT},sleep=off",
+             "-monitor", "none", "-serial", "pty", "-serial", "pty", *ICOUNT,
              "-kernel", str(elf)], stdout=subprocess.PIPE, stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL,
             bufsize=0, start_new_session=True, preexec_fn=_realtime if self.realtime else None)
         try:
@@ -205,9 +207,10 @@ class QemuBoard:
             except subprocess.TimeoutExpired:
                 self._qemu.kill()
                 self._qemu.wait()
-        if self._doorbells is not None:
-            os.close(self._doorbells)
-            self._doorbells = None
+        for fd in (self._doorbells, self._hold):
+            if fd is not None:
+                os.close(fd)
+        self._doorbells = self._hold = None
         if self._memory is not None:
             self._memory.close()
             self._memory = None
@@ -252,7 +255,22 @@ class QemuBoard:
         self.coils, self.sensors = coils, sensors
         self._ring(b"C", b"R", None)
         self.build = x["build"].decode()
+        self._connect()
         return self.build
+
+    def _connect(self) -> None:
+        """Hold the host link's pseudo-terminal open from here on and wait until QEMU reads it: QEMU looks for a
+        reader of a pty it found closed only once a second, and until then what the host sends waits (the first
+        HELLO took up to a second, while an iron rotor drifted off its start). Carriage returns outside a frame
+        are ignored by the firmware's frame reader; it counts them as received."""
+        self._hold = os.open(self.port, os.O_RDWR | os.O_NOCTTY)
+        tty.setraw(self._hold)
+        deadline = time.monotonic() + 3.0
+        while self.received() == 0:
+            if time.monotonic() > deadline or not self.alive():
+                raise LinkError("the firmware in QEMU does not read its host link (UART0) after 3 s")
+            os.write(self._hold, b"\r")
+            time.sleep(0.01)
 
     def step(self, now_us: int, ma, sense=None) -> BoardState:
         """One control step at ``now_us`` with the coil currents ``ma`` (integer mA, (N,))."""
