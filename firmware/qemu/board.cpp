@@ -61,6 +61,7 @@ struct Exchange {
   uint32_t calibration;  // SysTick counts of a 100002-instruction loop
   char build[108];
   uint32_t received;  // bytes taken from UART0 (the host link), each after its reply (if any) went out
+  uint32_t answered;  // bytes put on UART0
 };
 Exchange& shared() { return *reinterpret_cast<Exchange*>(0x60000000u); }
 
@@ -148,7 +149,8 @@ bool same(const char* a, const char* b) {
   return *a == *b;
 }
 
-void publish() {
+// The board's state into the exchange: after every step and tick (then 'D') and after every frame.
+void record() {
   Exchange& x = shared();
   x.enabled = board.enabled;
   x.version = device->version();
@@ -159,7 +161,6 @@ void publish() {
   x.tripCoil = (uint32_t)device->tripCoil();
   x.trips = device->trips();
   for (uint8_t k = 0; k < board.coils; ++k) x.duty[k] = (float)board.duty[k];
-  putByte(UART1, 'D');
 }
 
 void configure() {
@@ -206,7 +207,8 @@ void ring(uint8_t doorbell) {
   } else {
     return;  // 'F' outside a request: stale, dropped
   }
-  publish();
+  record();
+  putByte(UART1, 'D');
 }
 
 }  // namespace
@@ -225,6 +227,8 @@ int main() {
     } else if (device != nullptr && readable(UART0)) {
       const size_t n = device->receive((char)getByte(UART0), nowUs, reply);
       for (size_t i = 0; i < n; ++i) putByte(UART0, (uint8_t)reply[i]);
+      if (n > 0) record();  // a frame may have switched the bridges off or tripped
+      shared().answered += n;
       ++shared().received;
     } else {
       idle();

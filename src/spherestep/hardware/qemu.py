@@ -61,7 +61,7 @@ EXCHANGE = np.dtype([
     ("now_us", "<u4"), ("stale", "<u4"), ("ma", "<i4", 32), ("counts", "<i4", 48),
     ("enabled", "<u4"), ("version", "<u4"), ("trip", "<u4"), ("trip_coil", "<i4"), ("trips", "<u4"),
     ("duty", "<f4", 32), ("steps", "<u4"), ("max_ticks", "<u4"), ("sum_ticks", "<u8"), ("calibration", "<u4"),
-    ("build", "S108"), ("received", "<u4")], align=True)
+    ("build", "S108"), ("received", "<u4"), ("answered", "<u4")], align=True)
 
 
 def require_tools(*tools: str) -> dict[str, str]:
@@ -265,11 +265,13 @@ class QemuBoard:
         are ignored by the firmware's frame reader; it counts them as received."""
         self._hold = os.open(self.port, os.O_RDWR | os.O_NOCTTY)
         tty.setraw(self._hold)
-        deadline = time.monotonic() + 3.0
-        while self.received() == 0:
+        deadline, written = time.monotonic() + 3.0, 0
+        while self.received() < max(written, 1):  # until it has read one, and then every one sent
             if time.monotonic() > deadline or not self.alive():
                 raise LinkError("the firmware in QEMU does not read its host link (UART0) after 3 s")
-            os.write(self._hold, b"\r")
+            if self.received() == 0:
+                os.write(self._hold, b"\r")
+                written += 1
             time.sleep(0.01)
 
     def step(self, now_us: int, ma, sense=None) -> BoardState:
@@ -306,6 +308,10 @@ class QemuBoard:
     def received(self) -> int:
         """Bytes the board has taken from the host link, each after its reply went out."""
         return int(self.exchange["received"])
+
+    def answered(self) -> int:
+        """Bytes the board has put on the host link."""
+        return int(self.exchange["answered"])
 
     def step_cost(self) -> tuple[int, float, float]:
         """``(steps, mean, max)``: the control steps that drove the coils and their instructions (the SysTick
