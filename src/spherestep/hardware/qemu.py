@@ -81,7 +81,7 @@ def require_tools(*tools: str) -> dict[str, str]:
 def build_firmware(cache: Path | None = None) -> Path:
     """The board's ELF image, built from :data:`SOURCES` with :data:`CFLAGS` into ``cache`` (default
     ``$XDG_CACHE_HOME/spherestep`` or ``~/.cache/spherestep``) under the hash of the sources and flags, so that a
-    build is reused until a source changes; written atomically."""
+    build is reused until a source changes (older builds are then removed); written atomically."""
     gxx = require_tools("arm-none-eabi-g++")["arm-none-eabi-g++"]
     digest = hashlib.sha256(" ".join(CFLAGS).encode())
     for name in SOURCES + HEADERS:
@@ -101,6 +101,9 @@ def build_firmware(cache: Path | None = None) -> Path:
         if build.returncode != 0:
             raise ComputationError(f"the firmware did not build for mps2-an500: {build.stderr.strip()[:400]}")
         os.replace(partial, elf)
+        for old in cache.glob("spherestep-mps2-an500-*.elf"):  # builds of sources that have changed since
+            if old != elf:
+                old.unlink(missing_ok=True)
     finally:
         if os.path.exists(partial):
             os.unlink(partial)
