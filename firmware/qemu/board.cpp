@@ -19,7 +19,8 @@
 //
 // Between bytes the core sleeps: WFI with the UARTs' receive interrupts enabled and PRIMASK set (a pending
 // interrupt ends WFI, no handler runs). Under -icount QEMU's I/O thread delivers a byte only while the core is
-// halted: a core that polled the UARTs (or spun between polls) was 5-10 times slower per byte, measured. Build: spherestep.hardware.qemu.build_firmware.
+// halted: a core that polled the UARTs (or spun between polls) was 5-10 times slower per byte, measured.
+// Build: spherestep.hardware.qemu.build_firmware.
 #include <stddef.h>
 #include <stdint.h>
 

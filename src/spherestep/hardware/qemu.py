@@ -20,7 +20,6 @@ what to install (:func:`require_tools`).
 
 from __future__ import annotations
 
-import collections
 import hashlib
 import mmap
 import os
@@ -150,7 +149,6 @@ class QemuBoard:
         self._memory: mmap.mmap | None = None
         self._path: str | None = None
         self._rung = bytearray()
-        self._output: collections.deque[str] = collections.deque(maxlen=20)
 
     # -- life --------------------------------------------------------------------------------------------------------
     def start(self) -> QemuBoard:
@@ -193,13 +191,12 @@ class QemuBoard:
                                 f"{text.decode(errors='replace').strip()[-300:] or 'no output within 10 s'}")
             text += chunk
         lines = text.decode(errors="replace").splitlines()
-        self._output.extend(lines)
         return [line.split("redirected to ")[1].split()[0] for line in lines if "redirected to /dev/" in line]
 
     def _drain(self) -> None:
-        """Keep reading QEMU's output (its warnings), so that it never blocks on a full pipe."""
-        for line in self._qemu.stdout:
-            self._output.append(line.decode(errors="replace").strip())
+        """Keep reading QEMU's output (its warnings, dropped), so that it never blocks on a full pipe."""
+        for _ in self._qemu.stdout:
+            pass
 
     def stop(self) -> None:
         """Stop QEMU and release the exchange (safe to call twice)."""
