@@ -122,9 +122,22 @@ class BoardState:
     duty: np.ndarray
 
 
+def _orphan_dies() -> None:
+    """In QEMU's process before exec: SIGTERM when the process that started it dies (Linux; elsewhere nothing),
+    so that a host killed outright leaves no board running."""
+    try:
+        import ctypes
+
+        ctypes.CDLL(None).prctl(1, signal.SIGTERM)  # PR_SET_PDEATHSIG
+    except (AttributeError, OSError):
+        pass
+
+
 def _realtime() -> None:
-    """QEMU's threads at the device's real-time priority where the OS permits it (set before exec: inherited by
-    every thread it starts), as the Python device's process is: the board answers before the host's loop asks."""
+    """As :func:`_orphan_dies`, and QEMU's threads at the device's real-time priority where the OS permits it (set
+    before exec: inherited by every thread it starts), as the Python device's process is: the board answers
+    before the host's loop asks."""
+    _orphan_dies()
     try:
         os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(DEVICE_RT_PRIORITY))
     except (AttributeError, OSError):
@@ -158,6 +171,7 @@ class QemuBoard:
         elf = self.elf if self.elf is not None else build_firmware()
         fd, self._path = tempfile.mkstemp(prefix="spherestep-qemu-", dir="/dev/shm" if os.path.isdir("/dev/shm")
                                           else None)
+        os.ftruncate(fd, PSRAM)  # its size now: QEMU opens it only after it has named its ptys
         os.close(fd)
         self._owner = os.getpid()
         self._qemu = subprocess.Popen(
@@ -165,7 +179,7 @@ class QemuBoard:
              f"memory-backend-file,id=psram,size={PSRAM},mem-path={self._path},share=on", "-nographic",
              "-monitor", "none", "-serial", "pty", "-serial", "pty", *ICOUNT,
              "-kernel", str(elf)], stdout=subprocess.PIPE, stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL,
-            bufsize=0, start_new_session=True, preexec_fn=_realtime if self.realtime else None)
+            bufsize=0, start_new_session=True, preexec_fn=_realtime if self.realtime else _orphan_dies)
         try:
             ptys = self._ptys()
             self.port = ptys[0]
@@ -254,6 +268,8 @@ class QemuBoard:
         x["loop"] = (supply, inductance, bandwidth)
         self.coils, self.sensors = coils, sensors
         self._ring(b"C", b"R", None)
+        os.unlink(self._path)  # both have it mapped now (the board answered from it): nothing left behind
+        self._path = None
         self.build = x["build"].decode()
         self._connect()
         return self.build
