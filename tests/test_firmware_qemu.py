@@ -225,3 +225,84 @@ def test_a_host_that_falls_silent_is_stopped_by_the_firmwares_watchdog(rig, monk
     s = session(rig, 1.5, max_late=1.0)
     assert s.report.outcome == "WDOG", s.report.to_dict()
     assert [t[0] for t in s.final.trips] == ["WDOG"] and not s.final.enabled and np.abs(s.final.i).max() < 1e-3
+
+
+def tty_raw(fd: int) -> None:
+    import tty
+
+    tty.setraw(fd)
+
+
+def raw_session(server, fault: str) -> tuple[list[bytes], object]:
+    """One device-level fault over the raw line, the emulated motor behind ``server`` (a MotorPty or a
+    QemuMotor, started): ``heat`` (150 mA held on coil 0 against a 0.1 A rating with a 50 ms thermal time),
+    ``over`` (100 mA on coil 0, whose bridge shorts at 0.3 s: 1 A against a 0.2 A limit), ``crcs`` (eight
+    damaged frames in a row). Returns the replies and the truth 0.2 s after the last."""
+    from spherestep.hardware.protocol import encode
+    from spherestep.hardware.protocol2 import MAX_FRAME2, encode_block
+
+    fd = os.open(server.port, os.O_RDWR | os.O_NOCTTY)
+    tty_raw(fd)
+    replies: list[bytes] = []
+    buffer = b""
+
+    def ask(frame: bytes) -> bytes:
+        nonlocal buffer
+        os.write(fd, frame)
+        deadline = time.monotonic() + 2.0
+        while b"\n" not in buffer:
+            assert time.monotonic() < deadline, f"no answer to {frame!r}"
+            if select.select([fd], [], [], 0.05)[0]:
+                buffer += os.read(fd, 4096)
+        line, _, buffer = buffer.partition(b"\n")
+        replies.append(line)
+        return line
+
+    try:
+        assert b",ACK,HELLO,2," in ask(encode(0, "HELLO", 2, max_frame=MAX_FRAME2))
+        block = np.zeros(29)
+        block[0] = 150.0 if fault == "heat" else 100.0
+        if fault == "crcs":
+            ask(encode(1, "DRIVE", encode_block(block), max_frame=MAX_FRAME2))
+            for _ in range(8):
+                ask(b"$02,PING*0000\n")  # a damaged frame: the CRC does not match
+            ask(encode(3, "READ", max_frame=MAX_FRAME2))
+        else:
+            for k in range(200):  # every 10 ms for up to 2 s, until the device refuses
+                if b",NAK," in ask(encode(k % 256, "DRIVE", encode_block(block), max_frame=MAX_FRAME2)):
+                    break
+                time.sleep(0.01)
+        time.sleep(0.2)
+        return replies, server.truth()
+    finally:
+        os.close(fd)
+
+
+@pytest.mark.parametrize("fault, code, coil", [("heat", "HEAT", 0), ("over", "OVER", 0), ("crcs", "CRCS", -1)])
+def test_heat_over_current_and_a_crc_storm_end_alike_on_the_python_device_and_the_firmware(rig, fault, code, coil):
+    """The same line, motor and fault against both devices: the same trip, the same coil, every coil off."""
+    from dataclasses import replace
+
+    from spherestep.hardware import EmulatedMotor, MotorPty
+    from spherestep.hardware.motor_emulator import MotorFaults
+    from spherestep.hardware.qemu import QemuMotor
+
+    limits = CurrentLimits.from_drive(rig["drive"])
+    options = {"watchdog_ms": 500}
+    faults = None
+    if fault == "heat":
+        options["limits"] = replace(limits, continuous_current=0.1, thermal_time=0.05)
+    elif fault == "over":
+        options["limits"], options["nominal_ma"] = replace(limits, max_current=0.2), 100
+        faults = MotorFaults(stuck_coil=(0, 0.3))
+    outcomes = []
+    for server in (MotorPty, QemuMotor):
+        motor = EmulatedMotor(rig["design"], rig["model"], rig["sensors"], drive=rig["drive"], period=1e-3,
+                              faults=faults)
+        with server(motor, **options) as dev:
+            replies, truth = raw_session(dev, fault)
+        assert replies[-1].split(b"*")[0].endswith(b",NAK," + code.encode()), (server.__name__, replies[-3:])
+        assert [t[:2] for t in truth.trips] == [(code, coil)], (server.__name__, truth.trips)
+        assert not truth.enabled and np.abs(truth.i).max() < 1e-3, server.__name__
+        outcomes.append((truth.trips[0][:2], replies[-1].split(b"*")[0].split(b",", 1)[1]))  # when: the clock's
+    assert outcomes[0] == outcomes[1]

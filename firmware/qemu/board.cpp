@@ -63,6 +63,8 @@ struct Exchange {
   char build[108];
   uint32_t received;  // bytes taken from UART0 (the host link), each after its reply (if any) went out
   uint32_t answered;  // bytes put on UART0
+  uint32_t tripUs;    // the board's time at the last trip
+  uint32_t offUs;     // the board's time when the bridges last went from driven to off
 };
 Exchange& shared() { return *reinterpret_cast<Exchange*>(0x60000000u); }
 
@@ -105,6 +107,8 @@ uint32_t stopTicks() {
   return ticks;
 }
 
+uint32_t nowUs = 0;  // the board's time: the model's, at its last 'T' or 'W'
+
 class Board : public spherestep::Bridges {
  public:
   uint8_t coils = 0;
@@ -118,6 +122,7 @@ class Board : public spherestep::Bridges {
   }
   void drive(const double* d, bool on) override {
     for (uint8_t k = 0; k < coils; ++k) duty[k] = on ? d[k] : 0.0;
+    if (enabled && !on) shared().offUs = nowUs;
     enabled = on;
   }
   uint32_t sense(int32_t* counts) override {
@@ -142,7 +147,6 @@ Board board;
 alignas(8) uint8_t deviceStorage[sizeof(spherestep::CurrentDevice)];
 spherestep::CurrentDevice* device = nullptr;
 char name[17];
-uint32_t nowUs = 0;
 char reply[spherestep::MAX_REPLY2];
 
 bool same(const char* a, const char* b) {
@@ -160,6 +164,7 @@ void record() {
     if (same(TRIPS[i], device->tripped())) x.trip = i + 1;
   }
   x.tripCoil = (uint32_t)device->tripCoil();
+  if (device->trips() != x.trips) x.tripUs = nowUs;
   x.trips = device->trips();
   for (uint8_t k = 0; k < board.coils; ++k) x.duty[k] = (float)board.duty[k];
 }

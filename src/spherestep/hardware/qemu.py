@@ -60,7 +60,8 @@ EXCHANGE = np.dtype([
     ("now_us", "<u4"), ("stale", "<u4"), ("ma", "<i4", 32), ("counts", "<i4", 48),
     ("enabled", "<u4"), ("version", "<u4"), ("trip", "<u4"), ("trip_coil", "<i4"), ("trips", "<u4"),
     ("duty", "<f4", 32), ("steps", "<u4"), ("max_ticks", "<u4"), ("sum_ticks", "<u8"), ("calibration", "<u4"),
-    ("build", "S108"), ("received", "<u4"), ("answered", "<u4")], align=True)
+    ("build", "S108"), ("received", "<u4"), ("answered", "<u4"), ("trip_us", "<u4"), ("off_us", "<u4")],
+    align=True)
 
 
 def require_tools(*tools: str) -> dict[str, str]:
@@ -415,7 +416,7 @@ class QemuMotor:
                                  field_lsb_nt=o["field_lsb_nt"], name=o["name"])
             m.warm_up()
             self._trips: list[tuple[str, int, float]] = []
-            self._off_at, self._slip, self._was_on = 0.0, 0.0, False
+            self._slip = 0.0
             self._publish()
             self.started = time.monotonic() - m.t
             self._runner.start()
@@ -465,7 +466,8 @@ class QemuMotor:
         m.sync()
         rows = [(TRIP_CODES.index(c), k, t) for c, k, t in self._trips[:_MAX_TRIPS]]
         rows += [(0.0, 0.0, 0.0)] * (_MAX_TRIPS - len(rows))
-        values = np.concatenate([m.R.ravel(), m.w, m.i, [m.t, float(m.enabled), len(self._trips), self._off_at,
+        off_at = int(self.board.exchange["off_us"]) * 1e-6
+        values = np.concatenate([m.R.ravel(), m.w, m.i, [m.t, float(m.enabled), len(self._trips), off_at,
                                                          self._slip], np.ravel(rows)])
         with self._shared.get_lock():
             self._shared[:] = values.tolist()
@@ -474,14 +476,10 @@ class QemuMotor:
         """One period of the coils, then one board step at the new time with the currents they carry."""
         m = self.motor
         m.advance_to(m.t + m.period)
-        before = self.board.exchange["trips"]
         s = self.board.step(round(m.t * 1e6), m.measure(), m.sense)
         m.drive(s.duty, s.enabled)
-        if s.trips > before:
-            self._trips.append((s.trip, s.coil, m.t))
-        if self._was_on and not s.enabled:
-            self._off_at = m.t
-        self._was_on = s.enabled
+        if s.trips > len(self._trips):  # at a step or on a frame since: the board's time of the trip
+            self._trips.append((s.trip, s.coil, int(self.board.exchange["trip_us"]) * 1e-6))
 
     def _serve(self) -> None:
         """The model's process: board steps up to the wall clock, the magnetometers between them."""
