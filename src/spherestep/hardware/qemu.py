@@ -406,6 +406,8 @@ class QemuMotor:
         self._runner = ctx.Process(target=self._serve, name="QemuMotor", daemon=True)
 
     def start(self) -> QemuMotor:
+        """Start QEMU, configure the board, fork the model's process; returns self once it has run ``STARTUP`` s
+        of emulated time idle (as ``MotorPty``)."""
         m, o = self.motor, self.options
         self.board.start()
         try:
