@@ -45,15 +45,17 @@ check: $(VENV)/.installed-test
 	$(RUFF)
 	$(BIN)/python -m pytest -q -n $(WORKERS) -m "not slow and not realtime"
 
-# Debian's chromium and its driver for tests/test_report_browser.py, and the cross-compilers for the firmware's
-# boards (tests/test_firmware.py: the Teensy 4.1's Cortex-M7, the relay sketch's Mega 2560); installed only as root
-# (as in CI)
+# Debian's chromium and its driver for tests/test_report_browser.py, the cross-compilers for the firmware's
+# boards (tests/test_firmware.py: the Teensy 4.1's Cortex-M7, the relay sketch's Mega 2560) and QEMU's Arm machines
+# for the firmware run as firmware (tests/test_firmware_qemu.py: mps2-an500); installed only as root (as in CI,
+# .ci/run: make test)
 browser:
-	@if command -v chromium >/dev/null && command -v chromedriver >/dev/null && command -v arm-none-eabi-g++ >/dev/null && command -v avr-g++ >/dev/null; then :; \
+	@if command -v chromium >/dev/null && command -v chromedriver >/dev/null && command -v arm-none-eabi-g++ >/dev/null && command -v avr-g++ >/dev/null && command -v qemu-system-arm >/dev/null; then :; \
 	elif [ "$$(id -u)" = 0 ]; then \
 		apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq chromium chromium-driver \
-			gcc-arm-none-eabi libnewlib-arm-none-eabi libstdc++-arm-none-eabi-newlib gcc-avr avr-libc >/dev/null; \
-	else echo "chromium/chromedriver or a cross-compiler missing and not root: the browser test and the board builds will be skipped (sudo make browser)"; fi
+			gcc-arm-none-eabi libnewlib-arm-none-eabi libstdc++-arm-none-eabi-newlib gcc-avr avr-libc \
+			qemu-system-arm >/dev/null; \
+	else echo "chromium/chromedriver, a cross-compiler or qemu-system-arm missing and not root: the browser test, the board builds and the firmware in QEMU will be skipped (sudo make browser)"; fi
 
 figures: $(VENV)/.installed
 	$(BIN)/python docs/make_figures.py

@@ -20,7 +20,8 @@ def build_and_run(tmp_path: Path, source: str, *args: str, extra: tuple[str, ...
     exe = tmp_path / Path(source).stem
     build = subprocess.run(
         [GXX, "-std=c++11", "-Wall", "-Wextra", "-Werror", "-pedantic", "-I", str(FIRMWARE / "spherestep"),
-         "-I", str(FIRMWARE / "test" / "arduino"), str(FIRMWARE / "test" / source),
+         "-I", str(FIRMWARE / "test" / "arduino"), "-I", str(FIRMWARE / "spherestep_drive"),
+         str(FIRMWARE / "test" / source),
          str(FIRMWARE / "spherestep" / "protocol.cpp"), *(str(FIRMWARE / "spherestep" / e) for e in extra),
          "-o", str(exe)],
         capture_output=True, text=True, timeout=120)
@@ -52,6 +53,17 @@ def test_sketch_runs_on_the_host(tmp_path):
     assert re.search(r"^10 passed, 0 failed$", out, re.M), out
 
 
+def test_teensy_sketch_runs_on_the_host_against_a_recording_board(tmp_path):
+    """spherestep_drive.ino itself with drive.cpp, against the Arduino stand-ins (SPI, Wire, pins, PWM, micros,
+    Serial) and a recording board: the pin map (29 distinct PWM pins of the Teensy 4.1 at 20 kHz, none on SPI or
+    I2C), the 74HC595 direction word, |duty| on the EN pins, the sign of the IPROPI reads (a magnitude, signed by
+    the direction driven), the magnetometers' stale flags, and a trip putting the bridges to sleep before the supply
+    relay opens (firmware/test/test_drive_sketch.cpp)."""
+    code, out = build_and_run(tmp_path, "test_drive_sketch.cpp", extra=("drive.cpp",))
+    assert code == 0, out
+    assert re.search(r"^44 passed, 0 failed$", out, re.M), out
+
+
 TEENSY41 = ["-mcpu=cortex-m7", "-mthumb", "-mfloat-abi=hard", "-mfpu=fpv5-d16", "-O2", "-std=gnu++17",
             "-fno-exceptions", "-fno-rtti", "-fno-threadsafe-statics", "-Wall", "-Wextra", "-Werror"]
 
@@ -60,17 +72,21 @@ TEENSY41 = ["-mcpu=cortex-m7", "-mthumb", "-mfloat-abi=hard", "-mfpu=fpv5-d16", 
                     reason="arm-none-eabi-g++ is not installed (Debian: gcc-arm-none-eabi libnewlib-arm-none-eabi "
                            "libstdc++-arm-none-eabi-newlib; `make test` installs them as root)")
 def test_firmware_cross_compiles_for_the_teensy_41(tmp_path):
-    """The current-mode board the README names: the protocol core and the device core (drive.cpp: PI loops,
-    limits, trips) build for the Teensy 4.1's i.MX RT1062 (Cortex-M7, hard float) with Teensyduino's
-    code-generation flags, no exceptions, no RTTI. The sketch's board layer (SPI, Wire of Teensyduino's core) is
-    not built here: that core is not packaged for Debian or PyPI. (The relay sketch targets the Mega: below.)"""
-    sources = (("protocol.cpp", []), ("drive.cpp", []))
+    """The current-mode board the README names: the protocol core, the device core (drive.cpp: PI loops,
+    limits, trips) and the sketch (spherestep_drive.ino, against the Arduino stand-ins' declarations of SPI, Wire,
+    pins and Serial: Teensyduino's core is not packaged for Debian or PyPI, so nothing is linked) build for the
+    Teensy 4.1's i.MX RT1062 (Cortex-M7, hard float) with Teensyduino's code-generation flags, no exceptions, no
+    RTTI. (The relay sketch targets the Mega: below.)"""
+    sources = (("spherestep/protocol.cpp", []), ("spherestep/drive.cpp", []),
+               ("spherestep_drive/spherestep_drive.ino", ["-x", "c++"]))
     for source, lang in sources:
         build = subprocess.run(["arm-none-eabi-g++", *TEENSY41, "-I", str(FIRMWARE / "spherestep"), "-I",
-                                str(FIRMWARE / "test" / "arduino"), *lang, "-c", str(FIRMWARE / "spherestep" / source),
-                                "-o", str(tmp_path / f"{source}.o")], capture_output=True, text=True, timeout=120)
+                                str(FIRMWARE / "test" / "arduino"), *lang, "-c", str(FIRMWARE / source),
+                                "-o", str(tmp_path / f"{Path(source).name}.o")], capture_output=True, text=True,
+                               timeout=120)
         assert build.returncode == 0, build.stderr
-        size = subprocess.run(["arm-none-eabi-size", str(tmp_path / f"{source}.o")], capture_output=True, text=True)
+        size = subprocess.run(["arm-none-eabi-size", str(tmp_path / f"{Path(source).name}.o")], capture_output=True,
+                              text=True)
         text = int(size.stdout.splitlines()[1].split()[0])
         assert 0 < text < 64_000, size.stdout  # code that fits the board's tightly coupled memory with room to spare
 

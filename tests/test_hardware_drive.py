@@ -4,7 +4,6 @@
 from __future__ import annotations
 
 import math
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -12,11 +11,9 @@ import pytest
 from spherestep.errors import InputError
 from spherestep.hardware.current_device import CurrentDevice
 from spherestep.hardware.limits import CurrentLimits, ThermalLimitError, heating_step
-from spherestep.hardware.protocol import crc16, encode
+from spherestep.hardware.protocol import encode
 from spherestep.hardware.protocol2 import MAX_FRAME2, decode_block, encode_block, frame_bytes, parse_state
-
-VECTORS2 = Path(__file__).resolve().parents[1] / "firmware" / "test" / "vectors2.txt"
-
+from vectors2 import run_vectors
 
 class TablePlant:
     """The sense reads what the vectors say; the bridges record what the device drives."""
@@ -38,90 +35,43 @@ class TablePlant:
         return self.counts.copy(), self.stale
 
 
-def frame(body: str) -> bytes:
-    return b"$" + body.encode() + f"*{crc16(body.encode()):04X}\n".encode()
+class PythonRig:
+    """The Python CurrentDevice on a TablePlant, as tests/vectors2.py drives a rig."""
 
+    def __init__(self, coils, sensors, watchdog, period, name, limits):
+        self.plant = TablePlant(coils, sensors)
+        self.dev = CurrentDevice(self.plant, coils, sensors, watchdog_ms=watchdog, period_us=period,
+                                 limits=CurrentLimits(**limits), supply=24.0, inductance=18.7e-3, bandwidth=125.0,
+                                 nominal_ma=1000, field_lsb_nt=8118, name=name)
 
-def unescape(text: str) -> bytes:
-    return text.encode().decode("unicode_escape").encode("latin-1")
+    def meas(self, ma):
+        self.plant.ma = np.array(ma)
 
+    def field(self, stale, counts):
+        self.plant.stale, self.plant.counts = stale, np.array(counts).reshape(-1, 3)
 
-def permille(x: float) -> int:
-    return int(math.copysign(math.floor(abs(x) * 1000 + 0.5), x))
+    def tick(self, now):
+        self.dev.tick(now)
 
+    def step(self, now):
+        self.dev.step(now)
 
-DEFAULT_LIMITS = dict(max_current=1.0, max_duty=0.95, max_power=100.0, continuous_current=1.0,
-                      thermal_time=60.0, resistance=24.0)
+    def send(self, data, now):
+        return [self.dev.receive(data, now)]
+
+    def duty(self):
+        return list(self.plant.duty)
+
+    def enabled(self):
+        return self.plant.enabled
+
+    def trip(self):
+        return self.dev.tripped, (self.dev.trips[-1][1] if self.dev.trips else -1)
 
 
 def test_python_device_passes_the_shared_vectors():
     """Every line of firmware/test/vectors2.txt, as firmware/test/test_drive.cpp runs it."""
-    limits = dict(DEFAULT_LIMITS)
-    dev = plant = None
-    now = 0
-    replies: list[bytes] = []
-    checked = 0
-    for number, raw in enumerate(VECTORS2.read_text().splitlines(), 1):
-        line = raw.strip()
-        if not line or line.startswith("#"):
-            continue
-        where = f"vectors2.txt:{number}: {line}"
-        op, _, rest = line.partition(" ")
-        words = rest.split()
-        if op == "crc":
-            assert f"{crc16(words[0].encode()):04X}" == words[1], where
-        elif op == "limits":
-            ma, duty, watts, cont, thermal, res = map(float, words)
-            limits = dict(max_current=ma / 1000, max_duty=duty / 1000, max_power=watts, continuous_current=cont / 1000,
-                          thermal_time=thermal / 1000, resistance=res / 1000)
-        elif op == "device2":
-            coils, sensors, watchdog, period = map(int, words[:4])
-            plant = TablePlant(coils, sensors)
-            dev = CurrentDevice(plant, coils, sensors, watchdog_ms=watchdog, period_us=period,
-                                limits=CurrentLimits(**limits), supply=24.0, inductance=18.7e-3, bandwidth=125.0,
-                                nominal_ma=1000, field_lsb_nt=8118, name=words[4])
-            limits, now, replies = dict(DEFAULT_LIMITS), 0, []
-        elif op == "meas":
-            plant.ma = np.array([int(x) for x in rest.split(",")])
-        elif op == "field":
-            plant.stale = int(words[0], 16)
-            plant.counts = np.array([int(x) for x in words[1].split(",")]).reshape(-1, 3)
-        elif op == "@":
-            now = int(rest)
-            dev.tick(now)
-        elif op == "step":
-            at, count = map(int, words)
-            for i in range(count):
-                now = at + i * dev.period_us
-                dev.step(now)
-        elif op in (">", ">raw"):
-            assert not replies, f"{where} (previous send left {replies[0]!r} unchecked)"
-            data = frame(rest) if op == ">" else unescape(rest)
-            out = dev.receive(data, now)
-            replies = [b"$" + r for r in out.split(b"$") if r]
-        elif op == "<":
-            assert replies and replies.pop(0) == frame(rest), f"{where} (got {replies})"
-        elif op == "-":
-            assert not replies, where
-        elif op == "=":
-            what = words[0]
-            if what == "duty":
-                assert [permille(d) for d in plant.duty] == [int(x) for x in words[1].split(",")], \
-                    f"{where} (got {[permille(d) for d in plant.duty]})"
-            elif what == "enabled":
-                assert plant.enabled == (words[1] == "1"), where
-            elif what == "trip":
-                if words[1] == "-":
-                    assert dev.tripped is None, f"{where} (got {dev.tripped})"
-                else:
-                    assert dev.tripped == words[1] and dev.trips[-1][1] == int(words[2]), \
-                        f"{where} (got {dev.trips[-1:]})"
-            else:
-                raise AssertionError(f"{where}: unknown check")
-        else:
-            raise AssertionError(f"{where}: unknown operation")
-        checked += 1
-    assert checked > 150
+    assert run_vectors(PythonRig) > 150
 
 
 def test_blocks_round_trip_signed_16_bit_values():

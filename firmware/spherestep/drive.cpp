@@ -71,12 +71,10 @@ CurrentDevice::CurrentDevice(Bridges& bridges, uint8_t coils, uint8_t sensors, u
   kp_ = loop.bandwidth * loop.inductance / loop.supply;
   ki_ = kp_ * limits.resistance / loop.inductance * h;
   decay_ = exp(-h / limits.thermalTime);
+  coilDecay_ = exp(-h * limits.resistance / loop.inductance);
   followSteps_ = (FOLLOW_MS * 1000 + loop.periodUs / 2) / loop.periodUs;
   if (followSteps_ < 1) followSteps_ = 1;
-  for (uint8_t k = 0; k < MAX_COILS; ++k) {
-    heat_[k] = 0.0;
-    measured_[k] = 0;
-  }
+  for (uint8_t k = 0; k < MAX_COILS; ++k) heat_[k] = 0.0;
   allOff();
 }
 
@@ -85,10 +83,10 @@ void CurrentDevice::allOff() {
     setpoint_[k] = 0.0;
     integral_[k] = 0.0;
     duty_[k] = 0.0;
+    expected_[k] = 0.0;
     follow_[k] = 0;
-    frozen_[k] = 0;
-    dead_[k] = 0;
   }
+  fresh_ = true;
   enable_ = 0;
   polarity_ = 0;
   enabled_ = false;
@@ -118,10 +116,7 @@ void CurrentDevice::step(uint32_t nowUs) {
     const double x = amps[k] / limits_.continuousCurrent;
     heat_[k] = decay_ * heat_[k] + (1.0 - decay_) * (x * x);
   }
-  if (!session() || !driving_) {
-    for (uint8_t k = 0; k < coils_; ++k) measured_[k] = ma[k];
-    return;
-  }
+  if (!session() || !driving_) return;
   const double overMa = limits_.tripRatio * limits_.maxCurrent * 1000;
   for (uint8_t k = 0; k < coils_; ++k) {
     if ((ma[k] < 0 ? -ma[k] : ma[k]) > overMa) return trip("OVER", k);
@@ -131,23 +126,18 @@ void CurrentDevice::step(uint32_t nowUs) {
   }
   const double dmax = limits_.maxDuty;
   for (uint8_t k = 0; k < coils_; ++k) {
+    // the coil's law: the duty driven over the last period through the coil's L/R (from the reading at the start)
+    const double a = coilDecay_;
+    expected_[k] = fresh_ ? amps[k] : a * expected_[k] + (1.0 - a) * duty_[k] * loop_.supply / limits_.resistance;
     const double e = setpoint_[k] - amps[k];
     integral_[k] = clampAbs(integral_[k] + ki_ * e, dmax);
     duty_[k] = clampAbs(kp_ * e + integral_[k], dmax);
-    const bool lagging = fabs(duty_[k]) >= dmax && fabs(e) > 0.05 + 0.1 * fabs(setpoint_[k]);
-    follow_[k] = lagging ? follow_[k] + 1 : 0;
-    const bool dead = fabs(duty_[k]) * loop_.supply / limits_.resistance > OPEN_EXPECTED &&
-                      (ma[k] < 0 ? -ma[k] : ma[k]) < 50;
-    dead_[k] = dead ? dead_[k] + 1 : 0;
-    const bool frozen = ma[k] == measured_[k] && (ma[k] < 0 ? -ma[k] : ma[k]) >= 50 && fabs(duty_[k]) > FROZEN_DUTY;
-    frozen_[k] = frozen ? frozen_[k] + 1 : 0;
-    measured_[k] = ma[k];
+    const bool offLaw = fabs(amps[k] - expected_[k]) > FOLLOW_A + FOLLOW_REL * fabs(expected_[k]);
+    follow_[k] = offLaw ? follow_[k] + 1 : 0;
   }
+  fresh_ = false;
   for (uint8_t k = 0; k < coils_; ++k) {
-    if (follow_[k] >= followSteps_ || dead_[k] >= followSteps_) return trip((ma[k] < 0 ? -ma[k] : ma[k]) < 50 ? "OPEN" : "STUCK", k);
-  }
-  for (uint8_t k = 0; k < coils_; ++k) {
-    if (frozen_[k] >= followSteps_) return trip("STUCK", k);
+    if (follow_[k] >= followSteps_) return trip((ma[k] < 0 ? -ma[k] : ma[k]) < 50 ? "OPEN" : "STUCK", k);
   }
   enabled_ = true;
   bridges_.drive(duty_, true);

@@ -23,9 +23,9 @@ const size_t MAX_REPLY2 = 420;  // longest reply, '$' to '\n', plus a terminatin
 const uint8_t MAX_COILS = 32;
 const uint8_t MAX_SENSORS = 16;
 const uint8_t CRC_STORM = 8;     // damaged frames in a row that trip a session
-const uint32_t FOLLOW_MS = 20;   // duty saturated without the current following, or a frozen reading, this long
-const double FROZEN_DUTY = 0.05;  // a reading is only judged frozen while |duty| exceeds this
-const double OPEN_EXPECTED = 0.2;  // A: a duty that would drive this much (d V / R) with under 50 mA flowing: open
+const uint32_t FOLLOW_MS = 20;   // a reading off the coil's law (FOLLOW_A + FOLLOW_REL |i_expected|) this long: trip
+const double FOLLOW_A = 0.05;    // A: the absolute part of that tolerance (sense noise and offset)
+const double FOLLOW_REL = 0.1;   // the relative part (the winding's R with temperature, the back-EMF)
 
 // Limits in SI (A, W, Ω, s), enforced on the device (hardware/limits.py CurrentLimits).
 struct Limits {
@@ -102,15 +102,15 @@ class CurrentDevice {
   double kp_;
   double ki_;
   double decay_;
+  double coilDecay_;  // e^(-R h / L): the coil's own response over one period
   uint32_t followSteps_;
   double setpoint_[MAX_COILS];
   double integral_[MAX_COILS];
   double duty_[MAX_COILS];
   double heat_[MAX_COILS];
-  int32_t measured_[MAX_COILS];
+  double expected_[MAX_COILS];  // A: the current the coil's law predicts from the duties driven
   uint32_t follow_[MAX_COILS];
-  uint32_t frozen_[MAX_COILS];
-  uint32_t dead_[MAX_COILS];
+  bool fresh_;  // the next driving step starts expected_ at the reading (the bridges were asleep)
   uint64_t enable_;
   uint64_t polarity_;
   bool enabled_;

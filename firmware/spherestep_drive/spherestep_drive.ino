@@ -22,8 +22,10 @@ const spherestep::Limits LIMITS = {1.0, 0.95, 100.0, 1.0, 60.0, 24.0, 1.25};
 // loop: 24 V, 18.7 mH, 2 pi 40 Hz closed-loop bandwidth, relay-mode current 1000 mA, 8118 nT per count (+-266 mT)
 const spherestep::Loop LOOP = {24.0, 18.7e-3, 2 * 3.14159265358979 * 40, PERIOD_US, 1000, 8118};
 
+// PWM-capable (Teensyduino's teensy4/pwm.c); 11-13 are SPI, 16-19 are I2C. Pin 41 (once coil 22's) has no PWM on
+// the 4.1, so analogWrite left that coil undriven: coil 22 is on pin 51, a bottom pad (no QSPI memory chip fitted).
 const uint8_t EN_PINS[COILS] = {0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 14, 15, 22, 23, 24, 25, 28, 29, 33, 36, 37,
-                                41, 42, 43, 44, 45, 46, 47};  // PWM-capable; 11-13 are SPI, 16-19 are I2C
+                                51, 42, 43, 44, 45, 46, 47};
 const uint8_t PIN_NSLEEP = 30;      // every DRV8874 nSLEEP: low = all asleep
 const uint8_t PIN_SUPPLY = 31;      // gate of the supply relay's MOSFET: high = bridge supply on
 const uint8_t PIN_LATCH = 32;       // 74HC595 RCLK (PH of the 29 bridges, 4 chained registers on SPI)

@@ -25,6 +25,12 @@ def _check_mode(ctx: typer.Context, param: typer.CallbackParam, value):
     return value
 
 
+def _check_firmware(ctx: typer.Context, param: typer.CallbackParam, value):
+    if value not in ("python", "qemu") and not ctx.resilient_parsing:
+        raise typer.BadParameter(f"must be python or qemu; instead received {value!r}")
+    return value
+
+
 def _check_sensor(ctx: typer.Context, param: typer.CallbackParam, value):
     if value not in ("ideal", "hall", "imu") and not ctx.resilient_parsing:
         raise typer.BadParameter(f"must be ideal, hall or imu; instead received {value!r}")
@@ -64,7 +70,12 @@ def move(
                                                   "(protocol 2, docs/protocol.md), e.g. /dev/ttyACM0."),
     emulate: bool = typer.Option(False, "--emulate", help="Servo on the emulated motor behind a pseudo-terminal."),
     rate: float = typer.Option(None, "--rate", callback=number("Hz", 1, 2000, what="the loop rate"),
-                               help="With --port/--emulate: the loop rate in Hz (default 500)."),
+                               help="With --port/--emulate: the loop rate in Hz (default 500; 100 with --firmware "
+                                    "qemu)."),
+    firmware: str = typer.Option("python", "--firmware", callback=_check_firmware,
+                                 help="With --emulate: the device behind the line: python (the emulator's) or qemu "
+                                      "(firmware/spherestep's drive.cpp built for and run in QEMU's mps2-an500; "
+                                      "needs qemu-system-arm and gcc-arm-none-eabi)."),
 ) -> None:
     """Drive a turn about an axis on the simulated motor (the design's own model: the iron-cored coils of the
     prototype, their winding's limits, 24 V / 100 W supply) and write the trajectory (trajectory.csv), coil currents
@@ -77,6 +88,7 @@ def move(
     motor behind a pseudo-terminal) with live status, its log streamed to OUT/servo-log.csv; exit status 1 when a
     fault ended the run (every coil is off either way) or it missed the tolerance.
     Example: [bold]spherestep move --axis 1,0.5,2 --angle 360 --time 2.4 --emulate[/bold]
+    With --emulate --firmware qemu the device is the firmware itself, run in QEMU.
     """
 
     from .. import checks
@@ -93,6 +105,13 @@ def move(
         raise bad_value("--time", "given only with --mode servo (relay modes run at their own pace)", time)
     if port is not None and emulate:
         raise bad_value("--port", "left out with --emulate (one or the other)", port)
+    if firmware != "python" and not emulate:
+        raise bad_value("--firmware", "python (left out) unless --emulate (the firmware in QEMU drives the emulated "
+                        "motor)", firmware)
+    if firmware == "qemu":  # the tools, before any work: one line saying what to install
+        from ..hardware.qemu import require_tools
+
+        require_tools()
     if backend != "simulated" and mode != "servo":
         raise bad_value("--mode", "servo with --port/--emulate (relay plans run with spherestep run)", mode)
     if rate is not None and backend == "simulated":
@@ -140,7 +159,8 @@ def move(
                 result = drive_turn(design, axis_vec, math.radians(angle), mode=mode, backend=backend,
                                     model=own, duration=time, sensor=sensor, sensor_noise=noise,
                                     port=port, rate=rate, tolerance=math.radians(tolerance),
-                                    log=out / "servo-log.csv" if backend != "simulated" else None, progress=say)
+                                    log=out / "servo-log.csv" if backend != "simulated" else None, progress=say,
+                                    firmware=firmware)
                 if backend != "simulated" and result.details.outcome == "INTERRUPT":  # the loop caught it, coils off
                     raise interrupt_for(received.name)
                 written = result.write(out)

@@ -8,6 +8,9 @@ Kinds (:data:`KINDS`):
   (:class:`~spherestep.hardware.LockstepLink`): the servo keeps its rate exactly, whatever the machine's load;
 * ``"pty"``: the emulated motor behind its device in a forked process on a real pseudo-terminal
   (:class:`~spherestep.hardware.MotorPty`), reached by a :class:`~spherestep.hardware.DriveLink` on its port;
+* ``"qemu"``: as ``"pty"`` with the firmware itself (``drive.cpp``/``protocol.cpp`` built for QEMU's
+  ``mps2-an500``, :class:`~spherestep.hardware.qemu.QemuMotor`) as the device, its current loop at
+  :data:`QEMU_PERIOD` and its link's timeout :data:`QEMU_TIMEOUT`;
 * ``"relay port"``: a relay board on a serial device (:class:`~spherestep.hardware.Serial`, protocol 1);
 * ``"dry run"``: nothing is sent, every frame recorded (:class:`~spherestep.hardware.DryRun`, protocol 1);
 * ``"simulated"``: a relay plan on the design's simulated rotor (:class:`~spherestep.hardware.Simulated`,
@@ -29,7 +32,12 @@ from dataclasses import dataclass
 from .. import so3
 from ..errors import bad_value
 
-KINDS = ("port", "lockstep", "pty", "relay port", "dry run", "simulated")
+KINDS = ("port", "lockstep", "pty", "qemu", "relay port", "dry run", "simulated")
+# The firmware in QEMU: its current loop at 1 kHz (the model steps the board once per period through QEMU, 0.1-0.3
+# ms a step on a loaded 2-core machine: 4 kHz slipped), and 0.1 s for an answer on its UART0 (QEMU hands each
+# received byte over between its threads: a 29-coil DRIVE took 3-10 ms at load 9-12, measured)
+QEMU_PERIOD = 1e-3
+QEMU_TIMEOUT = 0.1
 EMULATED_DAMPING = 0.01  # N·m·s/rad: the emulated rotor's viscous damping (the drive room's emulated motor)
 
 
@@ -49,6 +57,7 @@ class Connection:
     watchdog: float | None = None
     started: float | None = None
     _release: Callable | None = None
+    step_cost: Callable | None = None
 
     def release(self, seconds: float = 0.0):
         """Let go of the link (``OFF`` if it still answers, then close) and let ``seconds`` pass — emulated time
@@ -64,12 +73,13 @@ class Connection:
         return None if self.truth is None else self.truth()
 
 
-def emulated_motor(design, plant, sensors, *, drive, R0=None, faults=None, rotor=None):
+def emulated_motor(design, plant, sensors, *, drive, R0=None, faults=None, rotor=None, period: float | None = None):
     """The :class:`~spherestep.hardware.EmulatedMotor` of ``design`` obeying the torque model ``plant``, its
     magnetometers ``sensors`` (:class:`~spherestep.sensing.SensorArray`), with the drive's limits ``drive``:
     ``rotor`` (default the design's, damping :data:`EMULATED_DAMPING`), the sensing room's
     :func:`~spherestep.sensing.field_model` at the sensors and the servo law's :class:`~spherestep.control.ModelCache`
-    of ``plant``; ``R0`` the start, ``faults`` a :class:`~spherestep.hardware.MotorFaults`."""
+    of ``plant``; ``R0`` the start, ``faults`` a :class:`~spherestep.hardware.MotorFaults`, ``period`` its device's
+    current loop (s; default the emulator's)."""
     from ..control import ModelCache
     from ..dynamics import Rotor
     from ..hardware import EmulatedMotor
@@ -77,7 +87,8 @@ def emulated_motor(design, plant, sensors, *, drive, R0=None, faults=None, rotor
 
     rotor = Rotor.from_design(design, damping=EMULATED_DAMPING) if rotor is None else rotor
     return EmulatedMotor(design, plant, sensors, rotor=rotor, field=field_model(design, sensors.positions),
-                         torque_cache=ModelCache(plant), drive=drive, R0=R0, faults=faults)
+                         torque_cache=ModelCache(plant), drive=drive, R0=R0, faults=faults,
+                         **({} if period is None else {"period": period}))
 
 
 def simulated_relays(design, model, start, *, rotor=None, dt: float = 5e-3, channels: int | None = None):
@@ -132,11 +143,21 @@ def connect(design, kind: str, *, port: str | None = None, plant=None, limits=No
                 raise bad_value("R0", "the simulated rotor's start (3×3, at rest)", R0)
             yield Connection(kind, simulated_relays(design, plant, start, rotor=rotor, dt=dt, channels=channels))
             return
-        motor = emulated_motor(design, plant, sensors, drive=limits, R0=start, faults=faults, rotor=rotor)
+        motor = emulated_motor(design, plant, sensors, drive=limits, R0=start, faults=faults, rotor=rotor,
+                               period=QEMU_PERIOD if kind == "qemu" else None)
         if kind == "lockstep":
             link = stack.enter_context(hardware.LockstepLink(motor, **device))
             yield Connection(kind, link, motor, link.truth, {"clock": link.clock, "sleep": link.sleep},
                              link.device.watchdog_ms / 1000, 0.0)
+            return
+        if kind == "qemu":
+            from ..hardware.qemu import QemuMotor
+
+            dev = stack.enter_context(QemuMotor(motor, **device))
+            stack.callback(inner.close)  # after the device's exit is registered: the link closes first
+            link = inner.enter_context(hardware.DriveLink(dev.port, timeout=QEMU_TIMEOUT))
+            yield Connection(kind, link, motor, dev.truth, {}, dev.watchdog_ms / 1000, dev.started, inner.close,
+                             dev.step_cost)
             return
         dev = stack.enter_context(hardware.MotorPty(motor, **device))
         stack.callback(inner.close)  # after the device's exit is registered: the link closes first

@@ -24,7 +24,8 @@ STATUS_EVERY = 0.25  # s between progress lines from the loop
 
 
 def drive_on_hardware(design, axis, angle: float, chosen, *, duration: float | None, port: str | None,
-                      emulate: bool, rate: float, log=None, tolerance: float, progress=None):
+                      emulate: bool, rate: float, log=None, tolerance: float, progress=None,
+                      firmware: str = "python"):
     """Run the servo turn on ``port`` or the emulated motor (module docstring) on ``chosen``'s model and limits."""
     from ..dynamics import Rotor
     from .session import SETTLE, servo_session
@@ -43,9 +44,14 @@ def drive_on_hardware(design, axis, angle: float, chosen, *, duration: float | N
             progress(f"t {t:6.2f} s   turned {math.degrees(float(np.linalg.norm(so3.log(R)))):7.2f}°   "
                      f"|ω| {float(np.linalg.norm(w)):5.2f} rad/s   max |i| {float(np.abs(currents).max()):.3f} A")
 
-    job.say(f"servo on {'the emulated motor' if emulate else port} at {rate:g} Hz")
+    where = port if not emulate else "the emulated motor" + (" (the firmware in QEMU)" if firmware == "qemu" else "")
+    job.say(f"servo on {where} at {rate:g} Hz")
     session = servo_session(design, traj, traj.duration + SETTLE, port=port, emulate=emulate, rate=rate, log=log,
-                            status=status, model=chosen.model, drive=chosen.limits)
+                            status=status, model=chosen.model, drive=chosen.limits, firmware=firmware)
+    if session.step_cost is not None and session.step_cost[0]:
+        steps, mean, worst = session.step_cost
+        job.say(f"firmware in QEMU: {steps} control steps, {mean:.0f} instructions each (most {worst:.0f}): "
+                f"{mean / 600:.1f} µs at 600 MHz and one instruction a cycle")
     report = session.report
     end = np.asarray(session.reference(1e9)[0])
     if report.cycles:

@@ -30,6 +30,8 @@ DELAY = 1  # control periods: the currents computed in a cycle are driven at the
 # 200 Hz: max tracking error 0.31° and final 0.019° (120 rad/s: 0.44° and 0.016°; the former difference filter:
 # 0.34° and 0.043°). The iron prototype at 500 Hz (the emulator's 4 kHz current loop, 2026-11-25): the 360° turn
 # about (1, 0.5, 2) from a detent well in lockstep tracks within 0.47° and parks 0.006° off; a hold within 0.004°.
+FIRMWARES = ("python", "qemu")  # the emulated motor's device: the Python CurrentDevice, or drive.cpp in QEMU
+QEMU_RATE = 100.0  # Hz: the servo's default rate on the firmware in QEMU (the DRIVE round trip in drive.connect)
 SETTLE = 0.5  # s the loop runs on after the trajectory's end
 BANDWIDTH = 2 * math.pi * 3  # rad/s: the servo's closed-loop natural frequency on hardware (a 5 ms loop, ~1 cycle late)
 
@@ -41,7 +43,8 @@ class Session:
     ``[(loop time, Truth)]`` taken every ``truth_every`` s, ``held`` the
     :class:`~spherestep.hardware.motor_emulator.Truth` at the loop's last cycle (the servo still holding) and
     ``final`` 0.15 s after the end (the coils off: an iron motor's detent moves the rotor into its nearest well),
-    the device's ``watchdog`` (s) and when it ``started`` (``time.monotonic()``)."""
+    the device's ``watchdog`` (s) and when it ``started`` (``time.monotonic()``); with the firmware in QEMU its
+    ``step_cost`` ``(steps, mean, max)`` in instructions per control step that drove the coils."""
 
     report: ServoReport
     trajectory: Trajectory
@@ -50,6 +53,7 @@ class Session:
     watchdog: float | None = None
     started: float | None = None
     held: object | None = None
+    step_cost: tuple | None = None
 
     @property
     def reference(self):
@@ -86,7 +90,7 @@ def turn_reference(start, axis, angle: float, duration: float, delay: float = 0.
 def servo_session(design, trajectory: Trajectory, duration: float, *, port: str | None = None, emulate: bool = False,
                   lockstep: bool = False, rate: float = LOOP_RATE, log=None, status=None, faults=None, sensors=None, model=None, drive=None,
                   R0=None, watchdog_ms: int | None = None, max_late: float | None = None,
-                  truth_every: float = 0.05, plant=None, cores: bool | None = None) -> Session:
+                  truth_every: float = 0.05, plant=None, cores: bool | None = None, firmware: str = "python") -> Session:
     """Run the servo for ``duration`` s following ``trajectory`` (a :class:`~spherestep.control.Trajectory`;
     :meth:`~spherestep.control.Trajectory.hold` for a pose) on the controller at
     ``port``, or with ``emulate`` on the emulated motor (``faults`` a
@@ -102,7 +106,10 @@ def servo_session(design, trajectory: Trajectory, duration: float, *, port: str 
     The estimator fits the sensing room's :func:`~spherestep.sensing.field_model` of the design, the one the
     emulated motor's magnetometers read and the simulated Hall sensor uses: on an iron design the rotor's field
     plus the cores it magnetises, and the iron coils' (``cores=False``: the rotor and the bare windings, the
-    iron ignored, for comparison)."""
+    iron ignored, for comparison). ``firmware`` (with ``emulate``, not ``lockstep``): ``"python"`` the Python
+    device on a pseudo-terminal (:class:`~spherestep.hardware.motor_emulator.MotorPty`), ``"qemu"`` the firmware
+    itself in QEMU (:class:`~spherestep.hardware.qemu.QemuMotor`; its control step's instructions in
+    :attr:`Session.step_cost`)."""
     from ..dynamics import Rotor
     from ..magnetics import design_model
     from ..sensing import default_array, field_model
@@ -114,6 +121,8 @@ def servo_session(design, trajectory: Trajectory, duration: float, *, port: str 
         raise bad_value("port", "a serial device, or emulate=True (one of the two)", port)
     if lockstep and not emulate:
         raise bad_value("lockstep", "used only with emulate=True", lockstep)
+    if firmware not in FIRMWARES or (firmware != "python" and (not emulate or lockstep)):
+        raise bad_value("firmware", "python, or qemu with emulate=True and no lockstep", firmware)
     sensors = default_array(design, 8) if sensors is None else sensors
     if model is None or drive is None:
         own = design_model(design)
@@ -127,7 +136,7 @@ def servo_session(design, trajectory: Trajectory, duration: float, *, port: str 
     law = ServoLaw(model, trajectory, controller, limits=wire_limits(drive), sensor_rate=rate, delay=DELAY,
                    observer_bandwidth=rate)
     options = {} if max_late is None else {"max_late": max_late}
-    kind = "port" if not emulate else "lockstep" if lockstep else "pty"
+    kind = "port" if not emulate else "lockstep" if lockstep else "qemu" if firmware == "qemu" else "pty"
     truth: list = []
     held: list = [None]  # the truth at the latest cycle
     with connect(design, kind, port=port, plant=model if plant is None else plant, limits=drive, sensors=sensors,
@@ -146,7 +155,8 @@ def servo_session(design, trajectory: Trajectory, duration: float, *, port: str 
         if conn.truth is None:
             return Session(report, trajectory, [], None)
         final = conn.release(0.15)  # the device runs on: a watchdog trip after a lost link lands in the truth
-    return Session(report, trajectory, truth, final, conn.watchdog, conn.started, held[0])
+        cost = conn.step_cost() if conn.step_cost is not None else None
+    return Session(report, trajectory, truth, final, conn.watchdog, conn.started, held[0], cost)
 
 
 def move_on_hardware(design, axis, angle: float, *, duration: float | None = None, port: str | None = None,

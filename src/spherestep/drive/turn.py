@@ -306,7 +306,8 @@ def check_duration(design, axis, angle: float, chosen: Chosen, duration: float, 
 def drive_turn(design, axis, angle_rad: float, *, mode: str = "servo", backend: str = "simulated", model=None,
                limits=None, duration: float | None = None, sensor: str = "ideal", sensor_noise: float = 0.0,
                port: str | None = None, rate: float | None = None, tolerance: float = TOLERANCE, seed: int = 0,
-               rates=None, log=None, progress: Callable[[str], None] | None = None) -> DriveResult:
+               rates=None, log=None, progress: Callable[[str], None] | None = None,
+               firmware: str = "python") -> DriveResult:
     """Drive a turn of ``angle_rad`` about ``axis`` (fixed frame) in ``mode`` on ``backend`` (module docstring).
 
     ``model``/``limits``: default the design's own (:func:`spherestep.magnetics.design_model`). ``duration`` (s):
@@ -315,18 +316,25 @@ def drive_turn(design, axis, angle_rad: float, *, mode: str = "servo", backend: 
     the coils' field subtracted at a 1 % current error) or ``"imu"`` (gyro, accelerometer and magnetometer in the
     rotor). ``port`` (backend ``"port"``) the serial device; ``rate`` the loop rate (Hz) on an emulated motor or
     a port (default :data:`spherestep.hardware.LOOP_RATE`, 500); ``log`` the loop's per-cycle CSV there.
-    ``rates``: the ramped cruise rates tried.
+    ``rates``: the ramped cruise rates tried. ``firmware`` (backend ``"emulated"``): the device behind the line,
+    ``"python"`` or ``"qemu"`` (:func:`~spherestep.drive.session.servo_session`; its rate then defaults to
+    :data:`~spherestep.drive.session.QEMU_RATE`).
     ``tolerance`` (rad): a result is :attr:`~DriveResult.ok` only within it. ``progress(text)`` hears each stage.
     """
     check_options(mode, backend, duration=duration, sensor=sensor, sensor_noise=sensor_noise, port=port, rate=rate)
+    if firmware != "python" and backend != "emulated":
+        raise bad_value("firmware", "python unless backend='emulated' (the firmware in QEMU drives the emulated "
+                        "motor)", firmware)
     chosen = choose_model(design, model, limits)
     if backend != "simulated":
         from ..hardware import LOOP_RATE
         from .hardware import drive_on_hardware
+        from .session import QEMU_RATE
 
+        default = QEMU_RATE if firmware == "qemu" else LOOP_RATE
         return drive_on_hardware(design, axis, angle_rad, chosen, duration=duration, port=port,
-                                 emulate=backend == "emulated", rate=LOOP_RATE if rate is None else rate, log=log,
-                                 tolerance=tolerance, progress=progress)
+                                 emulate=backend == "emulated", rate=default if rate is None else rate, log=log,
+                                 tolerance=tolerance, progress=progress, firmware=firmware)
     job = Turn(design, axis, angle_rad, chosen, tolerance, progress)
     if duration is not None:
         check_duration(design, job.axis, job.angle, chosen, duration, start=job.start)

@@ -10,10 +10,13 @@ loop per coil and writes the PWM duties to a :class:`Bridges` plant, and checks 
 
 * over-current: a measured ``|i| > trip_ratio · max_current`` → trip ``OVER``;
 * heating: the I²t model (:func:`~spherestep.hardware.limits.heating_step`) of any coil above 1 → ``HEAT``;
-* following: duty at ``±max_duty`` while ``|i_set − i| > 50 mA + 0.1 |i_set|`` for 20 ms → ``OPEN`` when
-  ``|i| < 50 mA`` (no current sensed: an open coil, or a sense stuck at zero), else ``STUCK``;
-* no current: a duty that would drive over 0.2 A (``|d| V / R``) while under 50 mA flows, for 20 ms → ``OPEN``;
-* frozen reading: the same non-zero reading (``|i| ≥ 50 mA``) for 20 ms while ``|duty| > 0.05`` → ``STUCK``;
+* the coil's own law: each step the device predicts the current from the duties it drove, ``î ← a î + (1 − a)
+  d V / R`` with ``a = e^{−R h / L}`` (the coil's L/R; ``î`` starts at the reading when driving starts); a
+  reading off that prediction by ``|i − î| > 50 mA + 0.1 |î|`` for 20 ms → ``OPEN`` when ``|i| < 50 mA`` (no
+  current: an open coil, or a sense stuck at zero), else ``STUCK`` (a bridge shorted to the supply, a frozen
+  sense the PI loop winds its duty away from). A coil at its DC limit (full duty, ``i = d V / R``, the reading
+  steady for as long as the host asks more) agrees with its law and runs on; a frozen reading equal to the
+  coil's true steady current cannot be told from a quiet sense and is harmless until the demand moves;
 * 8 damaged frames in a row during a session → ``CRCS``; no accepted command for the watchdog period → ``WDOG``.
 
 A trip switches every bridge off (duty 0, drivers asleep, supply cut), ends the session and is answered to
@@ -49,9 +52,9 @@ from .protocol2 import MAX_COILS, MAX_FRAME2, MAX_SENSORS, VERSION2, decode_bloc
 
 _NAME_CHARS = frozenset("ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789._-")
 CRC_STORM = 8  # damaged frames in a row that trip a session
-FOLLOW_MS = 20  # duty saturated without the current following, or a frozen reading, this long → trip
-FROZEN_DUTY = 0.05  # a reading is only judged frozen while |duty| exceeds this
-OPEN_EXPECTED = 0.2  # A: a duty that would drive this much (d V / R) while under 50 mA flows is an open coil
+FOLLOW_MS = 20  # a reading off the coil's law (FOLLOW_A + FOLLOW_REL |î|) this long → trip
+FOLLOW_A = 0.05  # A: the absolute part of the tolerance (sense noise and offset)
+FOLLOW_REL = 0.1  # the relative part (the winding's R with temperature, the back-EMF)
 
 
 class Bridges(Protocol):
@@ -112,15 +115,15 @@ class CurrentDevice:
         self.kp = bandwidth * inductance / supply
         self.ki = self.kp * lim.resistance / inductance * h
         self.decay = math.exp(-h / lim.thermal_time)
+        self.coil_decay = math.exp(-h * lim.resistance / inductance)  # a = e^{−R h / L}
         self.follow_steps = max(1, round(FOLLOW_MS * 1000 / period_us))
         self.setpoint = np.zeros(coils)  # A
         self.integral = np.zeros(coils)
         self.duty = np.zeros(coils)
-        self.measured = np.zeros(coils, dtype=np.int64)  # mA, at the last control step
         self.heat = np.zeros(coils)
+        self.expected = np.zeros(coils)  # A: î, the current the coil's law predicts from the duties driven
+        self._fresh = True  # the next driving step starts î at the reading (the bridges were asleep)
         self._follow = np.zeros(coils, dtype=np.int64)
-        self._frozen = np.zeros(coils, dtype=np.int64)
-        self._dead = np.zeros(coils, dtype=np.int64)
         self.supply = float(supply)
         self.version = 0  # 0: no session, 1: relay session, 2: current session
         self.enable = self.polarity = 0  # relay-mode masks
@@ -152,8 +155,7 @@ class CurrentDevice:
         self.integral[:] = 0.0
         self.duty[:] = 0.0
         self._follow[:] = 0
-        self._frozen[:] = 0
-        self._dead[:] = 0
+        self._fresh = True
         self._set_enable(0)
         self._set_polarity(0)
         if self.bridges is not None:
@@ -198,7 +200,6 @@ class CurrentDevice:
         i = from_milliamperes(ma)
         self.heat = self.decay * self.heat + (1.0 - self.decay) * (i / lim.continuous_current) ** 2
         if not self.session or not self.driving:
-            self.measured = ma
             return
         over = np.flatnonzero(np.abs(ma) > lim.trip_ratio * milliamperes(lim.max_current))
         if len(over):
@@ -206,24 +207,22 @@ class CurrentDevice:
         hot = np.flatnonzero(self.heat > 1.0)
         if len(hot):
             return self._trip("HEAT", int(hot[0]), now_us)
+        if self._fresh:
+            self.expected = i.copy()
+        else:  # the duties driven over the last period, through the coil's L/R
+            a = self.coil_decay
+            self.expected = a * self.expected + (1.0 - a) * self.duty * self.supply / lim.resistance
+        self._fresh = False
         e = self.setpoint - i
         dmax = lim.max_duty
         self.integral = np.clip(self.integral + self.ki * e, -dmax, dmax)
         self.duty = np.clip(self.kp * e + self.integral, -dmax, dmax)
-        lagging = (np.abs(self.duty) >= dmax) & (np.abs(e) > 0.05 + 0.1 * np.abs(self.setpoint))
-        self._follow = np.where(lagging, self._follow + 1, 0)
-        dead = (np.abs(self.duty) * self.supply / lim.resistance > OPEN_EXPECTED) & (np.abs(ma) < 50)
-        self._dead = np.where(dead, self._dead + 1, 0)
-        frozen = (ma == self.measured) & (np.abs(ma) >= 50) & (np.abs(self.duty) > FROZEN_DUTY)
-        self._frozen = np.where(frozen, self._frozen + 1, 0)
-        self.measured = ma
-        lost = np.flatnonzero((self._follow >= self.follow_steps) | (self._dead >= self.follow_steps))
+        off_law = np.abs(i - self.expected) > FOLLOW_A + FOLLOW_REL * np.abs(self.expected)
+        self._follow = np.where(off_law, self._follow + 1, 0)
+        lost = np.flatnonzero(self._follow >= self.follow_steps)
         if len(lost):
             k = int(lost[0])
             return self._trip("OPEN" if abs(ma[k]) < 50 else "STUCK", k, now_us)
-        stuck = np.flatnonzero(self._frozen >= self.follow_steps)
-        if len(stuck):
-            return self._trip("STUCK", int(stuck[0]), now_us)
         self.bridges.drive(self.duty.copy(), True)
 
     # -- frames -------------------------------------------------------------------------------------------------
