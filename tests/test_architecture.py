@@ -251,7 +251,7 @@ def test_the_selector_refuses_bad_input_and_builds_the_light_backends():
         with pytest.raises(InputError, match=f"^{field} must be"):
             with connect(design, kind, **options):
                 pass
-    assert set(KINDS) == {"port", "lockstep", "pty", "relay port", "dry run", "simulated"}
+    assert set(KINDS) == {"port", "lockstep", "pty", "qemu", "relay port", "dry run", "simulated"}
     with connect(None, "dry run", channels=12) as conn:
         assert isinstance(conn.link, Backend) and conn.link.open().channels == 12 and conn.truth is None
     with connect(design, "simulated", plant=torque_map(design), R0=np.eye(3)) as conn:
