@@ -3,6 +3,7 @@ one result type.
 
 * :func:`drive_turn` (:mod:`.turn`): one turn one way → :class:`DriveResult` (:mod:`.result`: arrays, numbers,
   per-mode details, ``to_dict(degrees=True)``, ``write(out)`` — what ``spherestep move`` writes);
+* :func:`many_turns` (:mod:`.many_turns`): the many-turn verdict on a relay planner (issue 39 §2);
 * :func:`compare_drives` (:mod:`.compare`): the same turn every mode → :class:`DriveComparison` (the demo's table);
 * :mod:`.hardware`: the servo on a coil controller or the emulated motor, judged like a simulation;
   :mod:`.session` assembles that session for a design (:func:`servo_session`, :func:`move_on_hardware`,
@@ -13,6 +14,7 @@ names it. The simulation itself (rotor, integrator, coil electrics, the servo an
 :mod:`spherestep.dynamics`.
 """
 
+from .many_turns import TurnOutcome, Verdict, many_turns, relay_planner, relay_tuning, verdict_turns
 from .compare import DEMO_AXIS, SENSOR_NOISE, DriveComparison, compare_drives
 from .session import Session, move_on_hardware, servo_session, turn_reference
 from .result import DriveResult, HardwareDetails, RampedDetails, ServoDetails, SettledDetails, figure_drive
@@ -21,5 +23,6 @@ from .turn import BACKENDS, FIXED_SERVO_TIME, MODES, SENSORS, TOLERANCE, check_o
 
 __all__ = ["BACKENDS", "DEMO_AXIS", "FIXED_SERVO_TIME", "MODES", "SENSORS", "SENSOR_NOISE", "TOLERANCE",
            "DriveComparison", "DriveResult", "HardwareDetails", "RampedDetails", "ServoDetails", "Session",
-           "SettledDetails", "check_options", "choose_model", "compare_drives", "drive_turn", "figure_drive", "fixed_servo_time",
-           "move_on_hardware", "servo_session", "turn_reference"]
+           "SettledDetails", "TurnOutcome", "Verdict", "check_options", "choose_model", "compare_drives", "drive_turn", "figure_drive", "fixed_servo_time",
+           "many_turns", "move_on_hardware", "relay_planner", "relay_tuning", "servo_session", "turn_reference",
+           "verdict_turns"]
