@@ -36,7 +36,7 @@ import numpy as np
 
 from .. import checks, so3
 from ..errors import bad_value
-from .geometric import BLOCKED, DEFAULT_CANDIDATES, MAX_SETTLE_STEPS, SETTLE, start_state
+from .geometric import DEFAULT_CANDIDATES, MAX_SETTLE_STEPS, SETTLE, start_state
 from .plan import Plan
 from .potential_planner import _activations, _assemble, _trim
 from .trajectory import check_targets
@@ -193,8 +193,10 @@ def plan_iron(design, targets, model, *, limits=None, max_coils: int = DEFAULT_M
     if len(states) == 0:
         raise bad_value("design", "a design with stepper states", "none")
     most = 2 * max_coils if limits is None else supply_coils(limits)
-    if most < max_coils:
-        raise bad_value("max_coils", f"at most the {most} coils the supply powers at once", max_coils)
+    if most < 2:
+        raise bad_value("limits", "a supply that powers at least two coils at once (two poles fix the rotor)",
+                        f"{most} coil")
+    max_coils = min(max_coils, most)
     reach = design.max_step if max_step is None else checks.positive(max_step, "max_step")
     first = start_state(states, targets[0]) if start is None else int(start)
     coils = _trim(states.held(first), design, states.rotations[first], max_coils)
@@ -232,7 +234,8 @@ def _step(design, states, land: _Landscape, rows: list, target, here, current, n
     gap = so3.distance(R, target)
     stay = float(so3.distance(here, target))
     ahead = np.flatnonzero(ok & (gap < stay - 1e-9))
-    b = land.first(here, masks, R, ahead[np.argsort(gap[ahead], kind="stable")][:ROBUST_TRIES])
+    ahead = ahead[np.argsort(gap[ahead], kind="stable")][:ROBUST_TRIES]
+    b = land.first(here, masks, R, ahead)
     if b >= 0:
         rows.append((target, R[b], _coil_map(masks[b]), status))
         return R[b], masks[b]
@@ -252,5 +255,27 @@ def _step(design, states, land: _Landscape, rows: list, target, here, current, n
             return R2[b2], masks2[b2]
     nearest = float(states.nearest(target, k=1)[0].ravel()[0])
     blocked = stay > nearest + reach
-    rows.append((target, here, _coil_map(current), BLOCKED if blocked else "hold"))
+    rows.append((target, here, _coil_map(current), f"blocked: {_why(land, here, masks, R, ok, ahead)}" if blocked
+                 else "hold"))
     return here, current
+
+
+def _why(land: _Landscape, here, masks, R, ok, ahead) -> str:
+    """Why no mask advances from ``here``, for the ``blocked`` status: none of the masks' minima is ahead, or the
+    nearest advancing minimum's basin holds only a smaller margin (the largest of 1, 0.5, 0.25° tried), or its
+    margins hold but the tuned rotor does not settle on it within the dwell."""
+    if not len(ahead):
+        return (f"none of {len(masks)} masks has a minimum ahead ({int(ok.sum())} have a strict minimum within a "
+                f"step, all behind or beside the rotor)")
+    b = ahead[:1]
+    if land.robust(here, masks[b], R[b])[0]:
+        return (f"the nearest advancing minimum ({math.degrees(float(so3.distance(R[b[0]], here))):.1f}° away) keeps "
+                f"its margins but the rotor does not settle on it within the dwell")
+    kept = 0.0
+    for margin in np.radians([1.0, 0.5, 0.25]):
+        narrow = _Landscape(land.model, land.reach, float(margin), land.overshoot, land.land_tol, land.stiffness)
+        if narrow.robust(here, masks[b], R[b])[0]:
+            kept = float(margin)
+            break
+    return (f"the nearest advancing minimum's basin holds a {math.degrees(kept):.2f}° margin, not "
+            f"{math.degrees(land.margin):.2f}°")
