@@ -117,3 +117,25 @@ def test_the_verdict_on_a_design_that_steps_and_one_that_does_not(iron):
     assert good.fraction == 1.0 and good.worst <= math.radians(0.5) and good.failure() == ""
     bad = many_turns(design, own, planner="geometric", count=0, spec_turn=((0, 0, 1), math.radians(30)))
     assert bad.fraction == 0.0 and not bad.steps and "step" in bad.failure()
+
+
+def test_plan_refuses_an_unknown_planner_without_writing(tmp_path, capsys):
+    from spherestep.cli import main
+
+    assert main(["plan", "--axis", "0,0,1", "--angle", "10", "--planner", "magic", "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "--planner" in err and not (tmp_path / "o").exists()
+
+
+@pytest.mark.slow
+def test_simulate_on_a_perturbed_plant_fails_loudly(tmp_path, capsys):
+    """The iron plan of 20° about (1, 0.5, 2) executes on the model (exit 0) and not on the plant with the winding
+    ×0.85 and the detent ×1.2 (exit 1, the first missed step named): that plant's minima lie over 0.5° from the
+    model's."""
+    from spherestep.cli import main
+
+    base = ["simulate", "--axis", "1,0.5,2", "--angle", "20", "--steps", "3"]
+    assert main(base + ["--out", str(tmp_path / "a"), "--json"]) == 0
+    assert main(base + ["--out", str(tmp_path / "b"), "--plant-winding", "0.85", "--plant-detent", "1.2"]) == 1
+    err = capsys.readouterr().err
+    assert "did not execute on this plant: step 1" in err and "Traceback" not in err
