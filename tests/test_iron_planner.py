@@ -139,3 +139,26 @@ def test_simulate_on_a_perturbed_plant_fails_loudly(tmp_path, capsys):
     assert main(base + ["--out", str(tmp_path / "b"), "--plant-winding", "0.85", "--plant-detent", "1.2"]) == 1
     err = capsys.readouterr().err
     assert "did not execute on this plant: step 1" in err and "Traceback" not in err
+
+
+@pytest.mark.slow
+def test_the_equilibrium_states_are_minima_and_their_metrics_are_measured_on_them(iron):
+    """Each state's equilibrium is the minimum Nelder–Mead finds from the geometric state under its mask; the
+    metrics' resolution is the brute-force nearest minimum's distance (checked on 200 of the samples)."""
+    from spherestep.commutation import equilibrium_metrics, equilibrium_states
+
+    design, own, _ = iron
+    R, strict = equilibrium_states(design, own.model)
+    states = design.states()
+    assert strict.mean() > 0.95
+    for s in np.random.default_rng(5).choice(np.flatnonzero(strict), 3, replace=False):
+        c = design.coil_currents(states.coils(int(s)))
+        start = states.rotations[s]
+        res = minimize(lambda w: float(own.model.energy(so3.exp(w) @ start, c)), np.zeros(3), method="Nelder-Mead",
+                       options={"xatol": 1e-7, "fatol": 1e-12, "maxiter": 4000})
+        assert math.degrees(so3.distance(so3.exp(res.x) @ start, R[s])) < 0.05
+    m = equilibrium_metrics(design, own.model, samples=200, seed=2)
+    samples = so3.random(200, np.random.default_rng(2))
+    brute = np.array([so3.distance(R[strict], q).min() for q in samples])
+    assert m.resolution_median_rad == pytest.approx(float(np.median(brute)), abs=1e-9)
+    assert m.distinct <= m.minima <= m.states and m.offset_median_rad > 0

@@ -118,12 +118,11 @@ class _Landscape:
     def first(self, here: np.ndarray, masks: np.ndarray, R: np.ndarray, order: np.ndarray) -> int:
         """The first of the candidates ``order`` (indices into ``masks``/``R``) whose landing keeps its margins and
         settles; −1 if none."""
-        if not len(order):
-            return -1
-        good = self.robust(here, masks[order], R[order])
-        for b in order[good]:
-            if self.settles(here, masks[b], R[b]):
-                return int(b)
+        for lo in range(0, len(order), 2):  # two at a time: the nearest usually passes
+            chunk = order[lo:lo + 2]
+            for b in chunk[self.robust(here, masks[chunk], R[chunk])]:
+                if self.settles(here, masks[b], R[b]):
+                    return int(b)
         return -1
 
 
@@ -148,6 +147,28 @@ def _pulls(design, here, target, most) -> np.ndarray:
             c[keep] = pol[pole[lead, keep]]
             out.append(c)
     return np.array(out)
+
+
+FACING = math.radians(20.0)  # a coil faces a pole when their centres are this close (the pairs' last resort)
+
+
+def _pairs(design, here) -> np.ndarray:
+    """Masks ``(M, N)`` of every single coil and every pair of coils facing a pole at ``here`` (within
+    :data:`FACING`), each coil with either polarity."""
+    cos = (here @ design.rotor.centers.T).T @ design.stator.centers.T  # (M poles, N coils)
+    facing = np.flatnonzero(cos.max(axis=0) >= math.cos(FACING))
+    N, out = len(design.stator), []
+    for a in range(len(facing)):
+        for sa in (1.0, -1.0):
+            c = np.zeros(N)
+            c[facing[a]] = sa
+            out.append(c)
+            for b in range(a + 1, len(facing)):
+                for sb in (1.0, -1.0):
+                    d = c.copy()
+                    d[facing[b]] = sb
+                    out.append(d)
+    return np.array(out).reshape(-1, N)
 
 
 def _masks(design, states, target, here, current, near, reach, candidates, max_coils, most) -> np.ndarray:
@@ -253,6 +274,19 @@ def _step(design, states, land: _Landscape, rows: list, target, here, current, n
             rows.append((target, R[b], _coil_map(masks[b]), INTERMEDIATE))
             rows.append((target, R2[b2], _coil_map(masks2[b2]), status))
             return R2[b2], masks2[b2]
+    # the last resort: every single coil and pair of coils facing a pole, either polarity
+    wide = _pairs(design, here)
+    R3, ok3 = land.land(here, wide)
+    gap3 = so3.distance(R3, target)
+    ahead3 = np.flatnonzero(ok3 & (gap3 < stay - 1e-9))
+    b = land.first(here, wide, R3, ahead3[np.argsort(gap3[ahead3], kind="stable")][:ROBUST_TRIES])
+    if b >= 0:
+        rows.append((target, R3[b], _coil_map(wide[b]), status))
+        return R3[b], wide[b]
+    masks, R, ok = np.concatenate([masks, wide]), np.concatenate([R, R3]), np.concatenate([ok, ok3])
+    gap = np.concatenate([gap, gap3])
+    ahead = np.flatnonzero(ok & (gap < stay - 1e-9))
+    ahead = ahead[np.argsort(gap[ahead], kind="stable")][:ROBUST_TRIES]
     nearest = float(states.nearest(target, k=1)[0].ravel()[0])
     blocked = stay > nearest + reach
     rows.append((target, here, _coil_map(current), f"blocked: {_why(land, here, masks, R, ok, ahead)}" if blocked
