@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import math
-from dataclasses import replace
 from pathlib import Path
 
 import typer
@@ -111,7 +110,7 @@ def simulate(
         own = design_model(design, core)
         physics = own.model
         if planner == "auto":
-            planner = relay_planner(replace(design, coil=replace(design.coil, core=own.core)))
+            planner = relay_planner(design, planner, physics)
         tuning = relay_tuning(design, physics, planner)
         plant = physics
         if plant_winding != 1.0 or plant_detent != 1.0:

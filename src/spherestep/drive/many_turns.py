@@ -33,12 +33,14 @@ REQUIRED = 0.95  # the fraction of turns a design that "steps on relays" execute
 PLANNERS = ("auto", "iron", "geometric", "potential")
 
 
-def relay_planner(design, planner: str = "auto") -> str:
-    """``planner`` resolved: ``"auto"`` is ``"iron"`` on an iron-cored design, ``"geometric"`` on air."""
+def relay_planner(design, planner: str = "auto", model=None) -> str:
+    """``planner`` resolved: ``"auto"`` is ``"iron"`` where the rotor feels a detent — a ``model`` that declares
+    ``has_bias`` (the iron model), or without a model an iron-cored design — and ``"geometric"`` otherwise (air)."""
     if planner not in PLANNERS:
         raise bad_value("planner", f"one of {', '.join(PLANNERS)}", planner)
     if planner == "auto":
-        return "iron" if design.coil.core == "iron" else "geometric"
+        iron = design.coil.core == "iron" if model is None else bool(model.has_bias)
+        return "iron" if iron else "geometric"
     return planner
 
 
@@ -177,8 +179,8 @@ def many_turns(design, model=None, *, planner: str = "auto", plant=None, count: 
     from ..commutation import turn
     from .turn import choose_model
 
-    planner = relay_planner(design, planner)
     chosen = choose_model(design, model)
+    planner = relay_planner(design, planner, chosen.model)
     plant = chosen.model if plant is None else plant
     tolerance = checks.positive(tolerance, "tolerance", "a positive angle in radians")
     path_tol = design.max_step if path_tol is None else checks.positive(path_tol, "path_tol", "a positive angle")

@@ -4,7 +4,7 @@ The turn is ``angle`` rad about the fixed-frame ``axis`` from the stepper state 
 simulated motor; on a port or the emulated motor the rotor is taken to be at the identity).
 
 * ``"settled"``: the paper's relay steps — the relay plan (:func:`spherestep.commutation.turn`: the iron-aware
-  planner on an iron-cored design, the geometric one on air, ``planner`` overrides) run by
+  planner on a model with a detent — the iron —, the geometric one on air; ``planner`` overrides) run by
   :func:`spherestep.dynamics.simulate` with :func:`spherestep.dynamics.tune`'s rotor (damping critical on the
   softest well), dwell and time step; time = steps × dwell when the rotor ends within the plan's tolerance
   (0.5°) of the plan's last state.
@@ -88,7 +88,7 @@ class Turn:
         from .many_turns import relay_planner
 
         self.design, self.chosen = design, chosen
-        self.planner = relay_planner(design, planner)
+        self.planner = relay_planner(design, planner, chosen.model)
         self.axis = checks.axis(axis, "axis")
         self.angle = checks.number(angle, "angle", expected="a finite non-zero angle in radians")
         if self.angle == 0:
