@@ -22,6 +22,8 @@ from pathlib import Path
 import numpy as np
 
 from spherestep.drive import many_turns
+from spherestep.magnetics import design_model
+from spherestep.magnetics.mismatch import scaled_model
 from spherestep.motor import prototype
 from spherestep.synthesis import load_spec
 
@@ -45,9 +47,9 @@ def designs(which: set[str]):
     levers = _levers_module()
     spec = load_spec(levers.SPEC)
     d0 = levers.base_design(spec)
-    if "remanence" in which:
-        for br in (0.7, 0.4, 0.25):
-            yield "remanence (T)", f"{br:g}", replace(d0, remanence=br)
+    if "remanence" in which:  # the prototype as built with another magnet grade (detent ∝ Br², pull ∝ Br)
+        for br in (0.7, 0.4, 0.3, 0.25):
+            yield "remanence (T)", f"{br:g}", replace(prototype(), remanence=br)
     if "winding" in which:
         for n_on in (3, 2):
             cap = spec.supply.power / (spec.supply.voltage * n_on)
@@ -63,16 +65,29 @@ def designs(which: set[str]):
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--levers", default="asbuilt,remanence,winding")
+    ap.add_argument("--remanence", default=None, help="only these grades (T), e.g. 0.3,0.25")
     ap.add_argument("--count", type=int, default=20)
+    ap.add_argument("--plants", default=None, help="run each design's plans also on these plants, "
+                    "winding:detent scales, e.g. 0.85:1.2,0.85:1,1:1.2 (magnetics.mismatch.scaled_model)")
     ap.add_argument("--json", default=None)
     args = ap.parse_args()
     rows = []
     for lever, value, design in designs(set(args.levers.split(","))):
+        if args.remanence and lever.startswith("remanence") and value not in args.remanence.split(","):
+            continue
         t0 = time.perf_counter()
-        v = many_turns(design, count=args.count, spec_turn=SPEC_TURN)
-        row = {"lever": lever, "value": value, "seconds": time.perf_counter() - t0} | v.to_dict()
-        rows.append(row)
-        print(f"{lever:28s} {value:20s} {v.line()} ({row['seconds']:.0f} s)", flush=True)
+        plants = [(1.0, 1.0)] + [tuple(float(x) for x in p.split(":")) for p in (args.plants or "").split(",") if p]
+        for winding, detent in plants:
+            t0 = time.perf_counter()
+            plant = None
+            if (winding, detent) != (1.0, 1.0):
+                plant = scaled_model(design_model(design).model, winding=winding, detent=detent)
+            v = many_turns(design, plant=plant, count=args.count, spec_turn=SPEC_TURN)
+            row = {"lever": lever, "value": value, "plant": {"winding": winding, "detent": detent},
+                   "seconds": time.perf_counter() - t0} | v.to_dict()
+            rows.append(row)
+            print(f"{lever:28s} {value:20s} plant w{winding:g} d{detent:g}: {v.line()} ({row['seconds']:.0f} s)",
+                  flush=True)
         if args.json:
             Path(args.json).write_text(json.dumps(rows, indent=1))
 

@@ -149,14 +149,14 @@ def _pulls(design, here, target, most) -> np.ndarray:
     return np.array(out)
 
 
-FACING = math.radians(20.0)  # a coil faces a pole when their centres are this close (the pairs' last resort)
+FACING = 12  # the coils nearest a pole that the last resort's singles and pairs use
 
 
 def _pairs(design, here) -> np.ndarray:
-    """Masks ``(M, N)`` of every single coil and every pair of coils facing a pole at ``here`` (within
-    :data:`FACING`), each coil with either polarity."""
+    """Masks ``(M, N)`` of every single coil and every pair of coils among the :data:`FACING` coils nearest a pole
+    at ``here``, each coil with either polarity (12 coils: 288 masks)."""
     cos = (here @ design.rotor.centers.T).T @ design.stator.centers.T  # (M poles, N coils)
-    facing = np.flatnonzero(cos.max(axis=0) >= math.cos(FACING))
+    facing = np.argsort(-cos.max(axis=0), kind="stable")[:FACING]
     N, out = len(design.stator), []
     for a in range(len(facing)):
         for sa in (1.0, -1.0):
