@@ -162,3 +162,16 @@ def test_the_equilibrium_states_are_minima_and_their_metrics_are_measured_on_the
     brute = np.array([so3.distance(R[strict], q).min() for q in samples])
     assert m.resolution_median_rad == pytest.approx(float(np.median(brute)), abs=1e-9)
     assert m.distinct <= m.minima <= m.states and m.offset_median_rad > 0
+
+
+@pytest.mark.slow
+def test_the_stored_relay_design_steps_on_random_turns():
+    """examples/designs/relays-iron.yaml (the prototype with 0.25 T magnets) executes the spec's turn and two random
+    ones with the iron-aware planner (the full 21-turn verdict: scripts/relay_iron_answer.py, docs/commutation.md)."""
+    from pathlib import Path
+
+    from spherestep.motor import MotorDesign
+
+    design = MotorDesign.load(Path(__file__).parents[1] / "examples" / "designs" / "relays-iron.yaml")
+    verdict = many_turns(design, count=2, seed=0, spec_turn=((0, 0, 1), math.radians(30)))
+    assert verdict.planner == "iron" and verdict.fraction == 1.0 and verdict.worst < math.radians(0.5)
