@@ -23,7 +23,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .. import checks
+from .. import checks, so3
 from ..errors import bad_value
 
 COUNT = 20
@@ -72,8 +72,9 @@ def verdict_turns(count: int = COUNT, seed: int = SEED, spec_turn=None) -> list[
 @dataclass(frozen=True)
 class TurnOutcome:
     """One turn of the verdict: ``axis``, ``angle`` (rad), ``steps``, ``landed`` (steps within the tolerance),
-    ``worst`` (the worst landing, rad), ``first_miss`` (the first step that missed, or −1), ``blocked`` steps,
-    ``path`` (the plan's largest distance from its target, rad), ``executed``."""
+    ``worst`` (the worst landing, rad), ``first_miss`` (the first step that missed, or −1) and ``first_error`` (its
+    landing error, rad), ``blocked`` steps, ``path`` (the plan's largest distance from its target, rad), ``end``
+    (where the simulated rotor ended, from the turn's end, rad), ``executed``."""
 
     axis: tuple[float, float, float]
     angle: float
@@ -81,14 +82,17 @@ class TurnOutcome:
     landed: int
     worst: float
     first_miss: int
+    first_error: float
     blocked: int
     path: float
+    end: float
     executed: bool
 
     def to_dict(self) -> dict:
         return {"axis": [round(x, 6) for x in self.axis], "angle_deg": math.degrees(self.angle), "steps": self.steps,
                 "landed": self.landed, "worst_landing_deg": math.degrees(self.worst), "first_miss": self.first_miss,
-                "blocked": self.blocked, "path_deg": math.degrees(self.path), "executed": self.executed}
+                "first_miss_deg": math.degrees(self.first_error), "blocked": self.blocked,
+                "path_deg": math.degrees(self.path), "end_deg": math.degrees(self.end), "executed": self.executed}
 
 
 @dataclass(frozen=True)
@@ -126,7 +130,7 @@ class Verdict:
         """One line naming the first failed turn and its step ("" when every turn executed)."""
         for n, o in enumerate(self.outcomes):
             if not o.executed:
-                what = (f"step {o.first_miss} landed {math.degrees(o.worst):.2f}° off its planned equilibrium"
+                what = (f"step {o.first_miss} landed {math.degrees(o.first_error):.2f}° off its planned equilibrium"
                         if o.first_miss >= 0 else f"{o.blocked} steps blocked" if o.blocked else
                         f"the plan strays {math.degrees(o.path):.1f}° from the requested rotation")
                 return (f"turn {n} ({math.degrees(o.angle):.0f}° about ({', '.join(f'{x:.2f}' for x in o.axis)})): "
@@ -164,9 +168,10 @@ def run_turn(design, plan, plant, tuning, axis, angle: float, tolerance: float, 
     blocked = len(plan.failures)
     path = float(plan.errors.max())
     executed = not len(missed) and not blocked and path <= path_tol
+    end = float(so3.distance(sim.settled[-1], plan.targets[-1]))
     return TurnOutcome(tuple(float(x) for x in axis), float(angle), len(errors), int(len(errors) - len(missed)),
-                       float(errors.max()) if len(errors) else 0.0, int(missed[0]) + 1 if len(missed) else -1, blocked,
-                       path, bool(executed))
+                       float(errors.max()) if len(errors) else 0.0, int(missed[0]) + 1 if len(missed) else -1,
+                       float(errors[missed[0]]) if len(missed) else 0.0, blocked, path, end, bool(executed))
 
 
 def many_turns(design, model=None, *, planner: str = "auto", plant=None, count: int = COUNT, seed: int = SEED,
