@@ -70,6 +70,8 @@ def main() -> None:
     ap.add_argument("--plants", default=None, help="run each design's plans also on these plants, "
                     "winding:detent scales, e.g. 0.85:1.2,0.85:1,1:1.2 (magnetics.mismatch.scaled_model)")
     ap.add_argument("--json", default=None)
+    ap.add_argument("--robust", action="store_true", help="plan with the --plants as the iron planner's plants "
+                    "(plans that hold on them too)")
     args = ap.parse_args()
     rows = []
     for lever, value, design in designs(set(args.levers.split(","))):
@@ -77,13 +79,16 @@ def main() -> None:
             continue
         t0 = time.perf_counter()
         plants = [(1.0, 1.0)] + [tuple(float(x) for x in p.split(":")) for p in (args.plants or "").split(",") if p]
+        own = design_model(design).model
+        hold_on = tuple(scaled_model(own, winding=w, detent=d) for w, d in plants[1:]) if args.robust else ()
         for winding, detent in plants:
             t0 = time.perf_counter()
             plant = None
             if (winding, detent) != (1.0, 1.0):
-                plant = scaled_model(design_model(design).model, winding=winding, detent=detent)
-            v = many_turns(design, plant=plant, count=args.count, spec_turn=SPEC_TURN)
+                plant = scaled_model(own, winding=winding, detent=detent)
+            v = many_turns(design, plant=plant, count=args.count, spec_turn=SPEC_TURN, plan_plants=hold_on)
             row = {"lever": lever, "value": value, "plant": {"winding": winding, "detent": detent},
+                   "planned_for_plants": bool(hold_on),
                    "seconds": time.perf_counter() - t0} | v.to_dict()
             rows.append(row)
             print(f"{lever:28s} {value:20s} plant w{winding:g} d{detent:g}: {v.line()} ({row['seconds']:.0f} s)",

@@ -73,9 +73,10 @@ class _Landscape:
     """The model's minima as seen from one pose: batched descents and the margin test (module docstring)."""
 
     def __init__(self, model, reach: float, margin: float, overshoot: float, land_tol: float, stiffness: float,
-                 tuning=None):
+                 tuning=None, plants=()):
         from ..statics import descend
 
+        self.plants = tuple(plants)
         self.model, self.reach, self.descend, self.stiffness = model, reach, descend, stiffness
         self.tuning = tuning
         if tuning is not None:
@@ -104,7 +105,15 @@ class _Landscape:
         ends, _, _, _, _, converged = self.descend(self.model, starts.reshape(-1, 3, 3).copy(),
                                                    np.repeat(c, 7, axis=0))
         close = converged & (so3.distance(ends, np.repeat(R, 7, axis=0)) <= self.land_tol)
-        return close.reshape(B, 7).all(axis=1)
+        ok = close.reshape(B, 7).all(axis=1)
+        for plant in self.plants:  # the pose within the margin of here, on every plant: within the margin of R
+            if not ok.any():
+                break
+            near = np.concatenate([here[None], self.jiggle @ here])  # (7, 3, 3)
+            ends, _, _, _, _, converged = self.descend(plant, np.tile(near, (B, 1, 1)), np.repeat(c, 7, axis=0))
+            close = converged & (so3.distance(ends, np.repeat(R, 7, axis=0)) <= max(self.margin, self.land_tol))
+            ok &= close.reshape(B, 7).all(axis=1)
+        return ok
 
     def settles(self, here: np.ndarray, c: np.ndarray, R: np.ndarray) -> bool:
         """Whether the tuned rotor, released at rest at ``here`` under mask ``c``, ends its dwell within
@@ -193,15 +202,18 @@ def _masks(design, states, target, here, current, near, reach, candidates, max_c
 def plan_iron(design, targets, model, *, limits=None, max_coils: int = DEFAULT_MAX_COILS,
               candidates: int = DEFAULT_CANDIDATES, max_step: float | None = None, margin: float = MARGIN,
               overshoot: float = OVERSHOOT, land_tol: float = LAND_TOL, min_stiffness: float = 0.0,
-              tuning=None, start: int | None = None) -> Plan:
+              tuning=None, plants=(), start: int | None = None) -> Plan:
     """Commutate ``targets (n+1, 3, 3)`` on the minima of ``model``'s energy (module docstring).
 
     ``model``: a :class:`~spherestep.statics.TorqueModel` of ``design`` (the iron model of
     :func:`spherestep.magnetics.design_model`); ``limits``: its :class:`~spherestep.control.DriveLimits` (the
     supply caps the coils energised at once; default no cap beyond ``2 max_coils``); ``margin`` (rad),
-    ``overshoot`` (fraction of a step) and ``land_tol`` (rad): the landing's margins; ``start``: the stepper
-    state whose coils hold the rotor first (default nearest ``targets[0]``)."""
-    from ..statics import equilibrium
+    ``overshoot`` (fraction of a step) and ``land_tol`` (rad): the landing's margins; ``plants``: torque models the
+    plan must also hold on (e.g. :func:`spherestep.magnetics.mismatch.scaled_model`'s winding ×0.85, detent ×1.2):
+    from within ``margin`` of the current pose each plant's minimum under the mask lies within ``margin`` of the
+    planned one, so the next step starts inside its margin again; ``start``: the stepper state whose coils hold
+    the rotor first (default nearest ``targets[0]``)."""
+    from ..statics import equilibrium, is_torque_model
 
     targets = check_targets(targets)
     max_coils = checks.count(max_coils, "max_coils", minimum=2,
@@ -224,7 +236,12 @@ def plan_iron(design, targets, model, *, limits=None, max_coils: int = DEFAULT_M
     current = design.coil_currents(coils)
     here = equilibrium(model, states.rotations[first], current).rotation  # checks the model and N, once
     min_stiffness = checks.non_negative(min_stiffness, "min_stiffness", "a non-negative stiffness in N·m/rad")
-    land = _Landscape(model, reach, margin, overshoot, land_tol, min_stiffness, tuning)
+    plants = tuple(plants)
+    for n, plant in enumerate(plants):
+        if not is_torque_model(plant) or plant.coil_count != model.coil_count:
+            raise bad_value(f"plants[{n}]", f"a torque model of the design's {model.coil_count} coils",
+                            type(plant).__name__)
+    land = _Landscape(model, reach, margin, overshoot, land_tol, min_stiffness, tuning, plants)
     _, near = states.nearest(targets, k=candidates)
     rows = [(targets[0], here, coils, "ok")]
     for i in range(1, len(targets)):
