@@ -8,21 +8,26 @@ whatever :func:`spherestep.magnetics.design_model` gives — not the geometric s
 
 One step, from the current equilibrium ``R̃`` under the current mask, towards the desired ``R_i``:
 
-* **candidates** — the coil sets of the 8 stepper states nearest ``R_i`` and of the 8 reachable states
-  (within ``max_step`` of ``R̃``) nearest it, each trimmed to the ``max_coils`` pairs closest at ``R_i``
-  (as :func:`~.potential_planner.plan_potential`); each also *with the coils holding the rotor now reversed*
-  (a push from behind: more coils, at most the supply's count ``⌊P / (V I_n)⌋``); and the current mask (stay);
+* **candidates** — the current mask (stay); the coil sets of the 8 stepper states nearest ``R_i`` and of the 8
+  reachable states (within ``max_step`` of ``R̃``) nearest it, each trimmed to the ``max_coils`` pairs closest at
+  ``R_i`` (as :func:`~.potential_planner.plan_potential`), alone and *with the coils energised now reversed* (a
+  push from behind); and *pull masks* (:func:`_pulls`): at poses along the step, every coil's nearest pole, the 3,
+  6 and all the supply powers best aligned. Never more coils than the supply powers, ``⌊P / (V I_n)⌋``;
 * **landing** — the minimum the energy descends to from ``R̃`` under each (:func:`spherestep.statics.descend`):
-  the minimum whose basin holds the current pose. It must be a strict minimum (Hessian positive definite),
-  within one ``max_step`` of ``R̃``, and strictly nearer ``R_i`` than ``R̃`` is (it *advances*);
+  the minimum whose basin holds the current pose. It must be a strict minimum (Hessian positive definite, softer
+  than ``min_stiffness`` refused), within one ``max_step`` of ``R̃``, and strictly nearer ``R_i`` than ``R̃`` is;
 * **margins** — of those, nearest ``R_i`` first, the first whose landing is robust: descents from ``R̃`` turned
   by ``±margin`` about the three fixed axes (the pose is known only to the model's error and the open loop's
   drift) and from the landing overshot by ``overshoot`` of the step along its own axis (the rotor arrives with
-  momentum) all end within ``land_tol`` of the same minimum;
-* **intermediate masks** — when no candidate both advances and is robust, a two-mask step is tried: a robust
-  candidate that does not advance, then from its minimum one that does; the first such pair wins;
-* otherwise the rotor holds (status ``hold``) or, when even the current mask's minimum is no longer the nearest
-  reachable one, the step is ``blocked: …``. At the end up to ten ``settle`` steps walk on towards the last target.
+  momentum) all end within ``land_tol`` of the same minimum; on each of ``plants`` (optional) the descents from
+  within the margin end within the margin of it; and the tuned rotor (``tuning``, :func:`iron_tuning`) released
+  at rest at ``R̃`` ends its dwell within :data:`SETTLE_TOL` of it (one compiled integration);
+* **intermediate masks** — when no candidate both advances and is robust, a two-mask step: a robust candidate
+  that does not advance, then from its minimum one that does (status ``intermediate: …``);
+* **the last resort** — every single coil and pair among the :data:`FACING` coils nearest a pole, either polarity;
+* otherwise the rotor holds (status ``hold``) or, when the target has run more than a step beyond the states
+  nearest it, the step is ``blocked: <why>`` (:func:`_why`). At the end up to ten ``settle`` steps walk on while a
+  mask still advances.
 
 The plan's ``achieved`` orientations are these minima, so a rotor simulated on the same model settles on them;
 :func:`spherestep.drive.many_turns` judges a plan by exactly that. The plan's ``planner`` is ``"iron"``.
