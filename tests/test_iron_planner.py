@@ -175,3 +175,22 @@ def test_the_stored_relay_design_steps_on_random_turns():
     design = MotorDesign.load(Path(__file__).parents[1] / "examples" / "designs" / "relays-iron.yaml")
     verdict = many_turns(design, count=2, seed=0, spec_turn=((0, 0, 1), math.radians(30)))
     assert verdict.planner == "iron" and verdict.fraction == 1.0 and verdict.worst < math.radians(0.5)
+
+
+def test_a_plan_for_plants_holds_on_them(iron):
+    """Planned with the plant (winding ×0.85, detent ×1.2) among its plants, each step's mask takes the plant's
+    rotor, resting where the plant put it on the previous step, to within the margin (1.5°) of the planned
+    minimum: the plan stays on course on that plant."""
+    from spherestep.magnetics.mismatch import scaled_model
+    from spherestep.statics import equilibrium
+
+    design, own, tuning = iron
+    plant = scaled_model(own.model, winding=0.85, detent=1.2)
+    plan = plan_iron(design, turn_targets(design, (0, 0, 1), math.radians(20)), own.model, limits=own.limits,
+                     tuning=tuning, plants=(plant,))
+    here = plan.steps[0].achieved
+    for step in plan.steps[1:]:
+        here = equilibrium(plant, here, design.coil_currents(step.coils)).rotation
+        assert math.degrees(so3.distance(here, step.achieved)) <= 1.5 + 1e-6
+    with pytest.raises(InputError, match="plants"):
+        turn(design, (0, 0, 1), 0.1, planner="geometric", plants=(plant,))
