@@ -194,3 +194,23 @@ def test_a_plan_for_plants_holds_on_them(iron):
         assert math.degrees(so3.distance(here, step.achieved)) <= 1.5 + 1e-6
     with pytest.raises(InputError, match="plants"):
         turn(design, (0, 0, 1), 0.1, planner="geometric", plants=(plant,))
+
+
+def test_simulate_refuses_the_verdict_in_the_closed_loop(tmp_path, capsys):
+    from spherestep.cli import main
+
+    assert main(["simulate", "--axis", "0,0,1", "--angle", "10", "--turns", "2", "--noise", "0.1", "--out",
+                 str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "--turns" in err and not (tmp_path / "o").exists()
+
+
+@pytest.mark.slow
+def test_simulate_with_the_verdict_exits_1_when_the_design_does_not_step(tmp_path, capsys):
+    """The prototype as built: the spec's 30° and the first random turn (21°) execute, the second (203°) blocks:
+    2 of 3, exit 1 naming the turn."""
+    from spherestep.cli import main
+
+    assert main(["simulate", "--axis", "0,0,1", "--angle", "30", "--turns", "2", "--out", str(tmp_path / "o")]) == 1
+    err = capsys.readouterr().err
+    assert "does not step on relays: 2 of 3 turns" in err and "turn 2 (203°" in err

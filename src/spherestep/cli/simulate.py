@@ -68,6 +68,10 @@ def simulate(
                                         help="Run on a plant whose winding's torque is this many times the model's."),
     plant_detent: float = typer.Option(1.0, "--plant-detent", callback=number("a scale 0 to 10", 0, 10),
                                        help="Run on a plant whose detent is this many times the model's (iron)."),
+    turns: int = typer.Option(0, "--turns", callback=number("a whole number of random turns, 0 to 200", 0, 200),
+                              help="Open loop: also the many-turn verdict — this turn and TURNS seeded random ones of "
+                                   "15-360° (20 is the project's rule), each planned and run as this one; exit 1 "
+                                   "unless 95 % execute."),
     core: str = typer.Option(None, "--core", callback=check_core,
                              help="air or iron: override the core the design file states (default: the design's)."),
     out: Path = typer.Option(Path("spherestep-out"), "--out", help="Output folder."),
@@ -82,6 +86,8 @@ def simulate(
     Example: [bold]spherestep simulate --axis 1,0.5,2 --angle 90 --missed 0.1 --noise 0.2 --out sim[/bold]
     """
     closed = bool(noise or missed)
+    if closed and turns:
+        raise bad_value("--turns", "0 with --noise or --missed (the verdict runs the open-loop plans)", turns)
     if closed and planner == "auto":
         planner = "geometric"
     if closed and planner != "geometric":
@@ -142,10 +148,22 @@ def simulate(
 
                 _, result = simulate_and_write(design, plan, axis_vec, out, plant, tuning)
             summary |= {"closed_loop": False} | result
+            if turns:
+                from ..drive import many_turns
+
+                with progress(f"the many-turn verdict: {turns + 1} turns", enabled=not as_json):
+                    verdict = many_turns(design, own, planner=planner, plant=plant, count=turns, seed=seed,
+                                         spec_turn=(axis_vec, math.radians(angle)))
+                summary["many_turns"] = verdict.to_dict()
         summary["files"] = [str(p) for p in files.paths]
         write_json(out / "simulation.json", summary)
     if as_json:
         print_json(summary)
+    verdict = summary.get("many_turns")
+    if verdict is not None and not verdict["steps_on_relays"]:
+        raise ComputationError(f"the design does not step on relays: {verdict['executed']} of {verdict['turns']} turns "
+                               f"executed (at least {100 * verdict['required']:.0f} % needed); first failure: "
+                               f"{verdict['first_failure']}; files in {out}/")
     if not summary["closed_loop"] and not summary["executed"]:
         step = summary["missed_steps"][0]
         raise ComputationError(f"the plan did not execute on this plant: step {step} is the first to settle more than "
@@ -161,4 +179,7 @@ def simulate(
                       f"(median {summary['settled_error_median_deg']:.2f}°): "
                       f"{'executed' if summary['executed'] else 'NOT executed'}; wrote {len(files.paths)} files "
                       f"to {out}/")
+        if verdict is not None:
+            console.print(f"many turns: {verdict['executed']} of {verdict['turns']} executed, worst landing "
+                          f"{verdict['worst_landing_deg']:.2f}°")
 
