@@ -214,3 +214,26 @@ def test_simulate_with_the_verdict_exits_1_when_the_design_does_not_step(tmp_pat
     assert main(["simulate", "--axis", "0,0,1", "--angle", "30", "--turns", "2", "--out", str(tmp_path / "o")]) == 1
     err = capsys.readouterr().err
     assert "does not step on relays: 2 of 3 turns" in err and "turn 2 (203°" in err
+
+
+@pytest.mark.slow
+def test_the_plan_starts_from_a_minimum_not_a_saddle():
+    """The 16-coil layout of the relay spec's search (truncated icosahedron × truncated cuboctahedron, both
+    unrefined, cap 60°): the first mask's descent from the start state ends on a saddle, where the simulated rotor
+    did not stay (it fell 14.9° during the first step); the planner now starts from the minimum beside it, and every
+    step of the spec's turn lands within 0.5°."""
+    from pathlib import Path
+
+    from spherestep.drive.turn import Turn, choose_model
+    from spherestep.dynamics import simulate
+    from spherestep.synthesis import load_spec
+    from spherestep.synthesis.ladder import Candidate, build
+
+    spec = load_spec(Path(__file__).parents[1] / "examples" / "specs" / "prototype-relays-iron.yaml")
+    design = build(Candidate("truncated-icosahedron", 0, "truncated-cuboctahedron", 0, 60.0, 12 * 0.0254), "iron",
+                   spec)
+    job = Turn(design, (0, 0, 1), math.radians(30), choose_model(design))
+    assert job.planner == "iron"
+    plan, tuning = job.plan, job.tuning
+    sim = simulate(design, plan, job.chosen.model, dwell=tuning.dwell, rotor=tuning.rotor, dt=tuning.dt)
+    assert sim.executed, np.degrees(sim.step_errors)
