@@ -219,6 +219,59 @@ def commutation_steps(outdir: Path) -> Path:
     return plots.save_figure(plots.figure_steps(design, plan, axis), outdir / "commutation_steps.png")
 
 
+@figure("iron_basins")
+def iron_basins(outdir: Path) -> Path:
+    """Basins of attraction on the prototype's iron model, in the slice of orientations ``exp(a ẑ + b x̂) R̃₀``
+    about the first rest pose of the iron plan of 30° about z: with every coil off (the detent alone) and under
+    the plan's first mask. Each point is coloured by the minimum the energy's descent from it reaches; crosses
+    mark the minima (where they lie in the slice), the circle the rest pose the step starts from."""
+    import math
+
+    from spherestep import so3
+    from spherestep.commutation import iron_tuning, plan_iron, turn_targets
+    from spherestep.magnetics import design_model
+    from spherestep.motor import prototype
+    from spherestep.statics import descend
+
+    design = prototype()
+    own = design_model(design)
+    plan = plan_iron(design, turn_targets(design, (0, 0, 1), math.radians(30)), own.model, limits=own.limits,
+                     tuning=iron_tuning(design, own.model))
+    R0 = plan.steps[0].achieved
+    span = np.radians(np.linspace(-12, 12, 61))
+    a, b = np.meshgrid(span, span, indexing="xy")
+    w = np.stack([b.ravel(), np.zeros(a.size), a.ravel()], axis=1)  # x̂ b + ẑ a
+    starts = so3.exp(w) @ R0
+    fig, axes = plt.subplots(1, 2, figsize=(10, 4.6))
+    masks = (("every coil off: the detent alone", np.zeros(len(design.stator))),
+             (f"step 1's mask, coils {sorted(plan.steps[1].coils)}", design.coil_currents(plan.steps[1].coils)))
+    for ax, (title, c) in zip(axes, masks):
+        ends = descend(own.model, starts.copy(), np.repeat(c[None], len(starts), axis=0))[0]
+        labels = np.full(len(ends), -1)
+        minima = []
+        for i, R in enumerate(ends):
+            for k, M in enumerate(minima):
+                if so3.distance(R, M) < math.radians(0.1):
+                    labels[i] = k
+                    break
+            else:
+                labels[i] = len(minima)
+                minima.append(R)
+        ax.imshow(labels.reshape(a.shape) % 20, origin="lower", cmap="tab20", interpolation="nearest",
+                  extent=[-12, 12, -12, 12], vmin=0, vmax=19)
+        for M in minima:
+            v = np.degrees(so3.log(M @ R0.T))
+            if abs(v[0]) <= 12 and abs(v[2]) <= 12 and abs(v[1]) < 1.0:
+                ax.plot(v[0], v[2], "kx", ms=8, mew=2)
+        ax.plot(0, 0, "o", mfc="none", mec="k", ms=10, mew=2)
+        ax.set_title(title, fontsize=9)
+        ax.set_xlabel("turn about x (°)")
+        ax.set_ylabel("turn about z (°)")
+    fig.suptitle("Basins of the iron model's minima about the prototype's first rest pose (one colour per minimum)",
+                 fontsize=10)
+    return save(fig, outdir / "iron_basins.png")
+
+
 @figure("sensing_layout")
 def sensing_layout(outdir: Path) -> Path:
     """The prototype's 24 magnetometers (greedy placement) between its coils, and the worst-case bound against

@@ -219,11 +219,12 @@ def test_the_relay_rung_reuses_the_states_and_gives_the_same_row():
     assert together[0]["stage"] == "relays" and together[0]["relay_steps"] > 0
 
 
+@pytest.mark.slow
 def test_ferrite_and_a_rewound_coil_make_the_prototype_step_on_iron():
-    """Issue 29 §3: the prototype on iron lands its settled relay plan (every step within 0.5°) with two parts
-    changed — 0.2 T ferrite magnets and the coils rewound for the supply's share with 4 on (docs/synthesis.md: the
-    landing error depends on ``B_r / N I`` alone); the relay rung keeps the worst landing error and the plan's
-    peak power."""
+    """Issue 29 §3, with issue 39's iron-aware planner and many-turn verdict: the prototype on iron lands its
+    settled relay plan (every step within 0.5°) with two parts changed — 0.2 T ferrite magnets and the coils rewound
+    for the supply's share with 4 on — and executes at least 95 % of 20 random turns too; the relay rung keeps the
+    worst landing error, the plan's peak power and the fraction of turns executed (2-3 min: 21 plans simulated)."""
     from dataclasses import replace
 
     from spherestep.synthesis.ladder import baseline_layout
@@ -234,8 +235,8 @@ def test_ferrite_and_a_rewound_coil_make_the_prototype_step_on_iron():
                       capability_samples=32)
     row = Ladder(spec, False, baseline_layout(spec))(replace(proto, remanence=0.2, wound_for=4))[0]
     assert row["status"] == "ok" and row["stage"] == "relays" and row["relay_executed"], row["reason"]
-    assert row["relay_steps_on_plan"] == row["relay_steps"] == 7
-    assert 0.4 < row["relay_worst_deg"] < 0.5 and row["relay_peak_W"] <= 100.0
+    assert row["relay_steps_on_plan"] == row["relay_steps"] >= 7
+    assert row["relay_worst_deg"] < 0.5 and row["relay_peak_W"] <= 100.0 and row["relay_turns_fraction"] >= 0.95
     assert 2.1 < row["change"] < 2.2 and 1500 < row["ampere_turns"] < 1600
     assert row["motor"].endswith("i-0.2T-w4")  # the same layout with other parts is another motor on the front
 

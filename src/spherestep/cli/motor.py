@@ -126,6 +126,8 @@ def plan(
     out: Path = typer.Option(Path("spherestep-out"), "--out", help="Output folder."),
     as_json: bool = typer.Option(False, "--json", help="Print the plan summary as JSON."),
     design_path: Path = typer.Option(None, "--design", help="Design file (YAML/TOML); default the built-in prototype."),
+    planner: str = typer.Option("auto", "--planner", help="auto (iron on an iron-cored design, geometric on air), "
+                                "geometric, potential or iron (the minima of the design's own energy)."),
 ) -> None:
     """Commutate a rotation about an axis on the prototype (or --design FILE): plan CSV/JSON (relay masks) and figures.
 
@@ -134,12 +136,18 @@ def plan(
     Example: [bold]spherestep plan --axis 0,1,1 --angle 90 --steps 20 --out plan90 --design mymotor.yaml[/bold]
     """
     from ..commutation import turn
+    from ..drive import relay_planner
+    from ..drive.many_turns import PLANNERS
+    from ..errors import bad_value
     from ..outputs import Outputs, output_folder
 
+    if planner not in PLANNERS:
+        raise bad_value("--planner", f"one of {', '.join(PLANNERS)}", planner)
     out = output_folder(out, "--out")
     axis_vec = parse_vector(axis, "--axis")
     design = usable(design_from(design_path), "--design", design_path)
-    result = turn(design, axis_vec, math.radians(angle), steps)
+    planner = relay_planner(design, planner)
+    result = turn(design, axis_vec, math.radians(angle), steps, planner)
     from ..demo import PLAN_FILES, write_plan_files
 
     files = Outputs(out, PLAN_FILES)

@@ -7,13 +7,13 @@ from pathlib import Path
 
 import typer
 
-from ..errors import bad_value
+from ..errors import ComputationError, bad_value
 from .app import app
 from .common import check_axis, check_core, console, design_from, number, parse_vector, print_json, usable, write_json
 from .progress import progress
 from .motor import ANGLE
 
-PLANNERS = ("geometric", "potential")
+PLANNERS = ("geometric", "potential", "iron")
 
 
 def parse_coils(text: str | None) -> list[int]:
@@ -39,8 +39,8 @@ def _check_coils(ctx: typer.Context, param: typer.CallbackParam, value):
 
 
 def _check_planner(ctx: typer.Context, param: typer.CallbackParam, value):
-    if value not in PLANNERS and not ctx.resilient_parsing:
-        raise typer.BadParameter(f"must be one of {', '.join(PLANNERS)}; instead received {value!r}")
+    if value not in ("auto",) + PLANNERS and not ctx.resilient_parsing:
+        raise typer.BadParameter(f"must be one of auto, {', '.join(PLANNERS)}; instead received {value!r}")
     return value
 
 
@@ -50,9 +50,10 @@ def simulate(
                                                                       "frame."),
     angle: float = typer.Option(..., "--angle", callback=ANGLE, help="Rotation angle in degrees."),
     design_path: Path = typer.Option(None, "--design", help="Design file; default the built-in prototype."),
-    planner: str = typer.Option("geometric", "--planner", callback=_check_planner,
-                                help="geometric (Sec. III-A) or potential (Sec. III-B; open loop only: the closed "
-                                     "loop re-plans with the geometric rule)."),
+    planner: str = typer.Option("auto", "--planner", callback=_check_planner,
+                                help="auto (iron on an iron-cored design, geometric on air), geometric (Sec. "
+                                     "III-A), potential (Sec. III-B) or iron (the minima of the design's own energy); "
+                                     "the closed loop re-plans with the geometric rule."),
     steps: int = typer.Option(None, "--steps", callback=number("a whole number of steps, 1 to 10000", 1, 10_000),
                               help="Number of steps (default: 0.35 of a max step each)."),
     noise: float = typer.Option(0.0, "--noise", callback=number("a noise σ in degrees, 0 to 180", 0, 180),
@@ -63,6 +64,14 @@ def simulate(
                                      help="Coils that do not work, e.g. 3,7."),
     seed: int = typer.Option(0, "--seed", callback=number("a whole number ≥ 0 (a random seed)", 0, 2 ** 63 - 1),
                              help="Random seed for noise and missed steps (a whole number ≥ 0)."),
+    plant_winding: float = typer.Option(1.0, "--plant-winding", callback=number("a scale 0.1 to 10", 0.1, 10),
+                                        help="Run on a plant whose winding's torque is this many times the model's."),
+    plant_detent: float = typer.Option(1.0, "--plant-detent", callback=number("a scale 0 to 10", 0, 10),
+                                       help="Run on a plant whose detent is this many times the model's (iron)."),
+    turns: int = typer.Option(0, "--turns", callback=number("a whole number of random turns, 0 to 200", 0, 200),
+                              help="Open loop: also the many-turn verdict — this turn and TURNS seeded random ones of "
+                                   "15-360° (20 is the project's rule), each planned and run as this one; exit 1 "
+                                   "unless 95 % execute."),
     core: str = typer.Option(None, "--core", callback=check_core,
                              help="air or iron: override the core the design file states (default: the design's)."),
     out: Path = typer.Option(Path("spherestep-out"), "--out", help="Output folder."),
@@ -77,6 +86,10 @@ def simulate(
     Example: [bold]spherestep simulate --axis 1,0.5,2 --angle 90 --missed 0.1 --noise 0.2 --out sim[/bold]
     """
     closed = bool(noise or missed)
+    if closed and turns:
+        raise bad_value("--turns", "0 with --noise or --missed (the verdict runs the open-loop plans)", turns)
+    if closed and planner == "auto":
+        planner = "geometric"
     if closed and planner != "geometric":
         raise bad_value("--planner", "geometric with --noise or --missed (the closed loop re-plans with the "
                         "geometric rule); drop --planner, or --noise and --missed for an open-loop run", planner)
@@ -95,20 +108,31 @@ def simulate(
     design = usable(design, "--design" if not failed else "--design/--failed-coils", design_path)
     targets = turn_targets(design, axis_vec, math.radians(angle), steps)  # checked before the torque map is built
     from .. import plots  # matplotlib and magpylib load once the command line is known to be good
-    from ..dynamics import run_closed_loop, tune
+    from ..drive import relay_planner, relay_tuning
+    from ..dynamics import run_closed_loop
     from ..magnetics import design_model
+    from ..magnetics.mismatch import scaled_model
     with progress("building the torque model and tuning the rotor", enabled=not as_json):
         own = design_model(design, core)
         physics = own.model
-        tuning = tune(design, physics)
+        if planner == "auto":
+            planner = relay_planner(design, planner, physics)
+        tuning = relay_tuning(design, physics, planner)
+        plant = physics
+        if plant_winding != 1.0 or plant_detent != 1.0:
+            try:
+                plant = scaled_model(physics, winding=plant_winding, detent=plant_detent)
+            except ValueError as exc:
+                raise bad_value("--plant-detent", "1 on an air core (it has no detent)", plant_detent) from exc
     summary = {"design": design.name, "model": own.label, "planner": planner, "failed_coils": failed,
-               "damping_N_m_s": tuning.rotor.damping, "dwell_s": tuning.dwell}
+               "damping_N_m_s": tuning.rotor.damping, "dwell_s": tuning.dwell,
+               "plant": {"winding": plant_winding, "detent": plant_detent}}
     names = ("closed_loop.csv", "closed_loop.png") if closed else ("trajectory.csv", "simulation.png")
     files = Outputs(out, names + ("simulation.json",))
     with files:
         if closed:
             with progress(f"running the closed loop on the {own.label} model", enabled=not as_json):
-                run = run_closed_loop(design, targets, physics, dwell=tuning.dwell, noise=math.radians(noise),
+                run = run_closed_loop(design, targets, plant, dwell=tuning.dwell, noise=math.radians(noise),
                                       missed=missed, rotor=tuning.rotor, dt=tuning.dt, rng=seed)
             run.to_csv(out / "closed_loop.csv", axis_vec)
             plots.save_figure(plots.figure_closed_loop(run, axis_vec), out / "closed_loop.png")
@@ -116,17 +140,38 @@ def simulate(
                         "steps_taken": len(run.missed), "missed_steps": int(run.missed.sum()),
                         "final_error_deg": math.degrees(run.final_error)}
         else:
-            plan = turn(design, axis_vec, math.radians(angle), steps, planner)
+            with progress(f"planning ({planner})", enabled=not as_json):
+                plan = turn(design, axis_vec, math.radians(angle), steps, planner, physics if planner != "geometric"
+                            else None, limits=own.limits, tuning=tuning if planner == "iron" else None)
             with progress(f"simulating the plan on the {own.label} model", enabled=not as_json):
                 from ..demo import simulate_and_write
 
-                _, result = simulate_and_write(design, plan, axis_vec, out, physics, tuning)
+                _, result = simulate_and_write(design, plan, axis_vec, out, plant, tuning)
             summary |= {"closed_loop": False} | result
+            if turns:
+                from ..drive import many_turns
+
+                with progress(f"the many-turn verdict: {turns + 1} turns", enabled=not as_json):
+                    verdict = many_turns(design, own, planner=planner, plant=plant, count=turns, seed=seed,
+                                         spec_turn=(axis_vec, math.radians(angle)))
+                summary["many_turns"] = verdict.to_dict()
         summary["files"] = [str(p) for p in files.paths]
         write_json(out / "simulation.json", summary)
     if as_json:
         print_json(summary)
-    elif summary["closed_loop"]:
+    verdict = summary.get("many_turns")
+    if verdict is not None and not verdict["steps_on_relays"]:
+        raise ComputationError(f"the design does not step on relays: {verdict['executed']} of {verdict['turns']} turns "
+                               f"executed (at least {100 * verdict['required']:.0f} % needed); first failure: "
+                               f"{verdict['first_failure']}; files in {out}/")
+    if not summary["closed_loop"] and not summary["executed"]:
+        step = summary["missed_steps"][0]
+        raise ComputationError(f"the plan did not execute on this plant: step {step} is the first to settle more than "
+                               f"{summary['tolerance_deg']:g}° off its planned orientation (worst "
+                               f"{summary['settled_error_max_deg']:.2f}°); files in {out}/")
+    if as_json:
+        return
+    if summary["closed_loop"]:
         console.print(f"closed loop on the {own.label} model: {summary['steps_taken']} steps, {summary['missed_steps']} missed; final error "
                       f"{summary['final_error_deg']:.2f}°; wrote {len(files.paths)} files to {out}/")
     else:
@@ -134,4 +179,7 @@ def simulate(
                       f"(median {summary['settled_error_median_deg']:.2f}°): "
                       f"{'executed' if summary['executed'] else 'NOT executed'}; wrote {len(files.paths)} files "
                       f"to {out}/")
+        if verdict is not None:
+            console.print(f"many turns: {verdict['executed']} of {verdict['turns']} executed, worst landing "
+                          f"{verdict['worst_landing_deg']:.2f}°")
 

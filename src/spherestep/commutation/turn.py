@@ -22,7 +22,7 @@ from .trajectory import about_axis, steps_for
 STEP_FRACTION = 0.35  # default desired step, as a fraction of the max step
 MAX_ANGLE = 200.0 * math.pi  # rad: a hundred turns
 MAX_STEPS = 100_000
-PLANNERS = ("geometric", "potential")
+PLANNERS = ("geometric", "potential", "iron")
 
 
 def check_turn(axis, angle, steps) -> np.ndarray:
@@ -59,10 +59,12 @@ def turn_targets(design, axis, angle: float, steps: int | None = None) -> np.nda
 
 
 def turn(design, axis, angle: float, steps: int | None = None, planner: str = "geometric",
-         model=None) -> Plan:
+         model=None, *, limits=None, tuning=None, plants=()) -> Plan:
     """Plan a turn of ``angle`` rad about ``axis`` (see :func:`turn_targets`) with ``planner``:
-    ``"geometric"`` (:func:`plan_geometric`) or ``"potential"`` (:func:`plan_potential` on ``model``, default
-    the design's :class:`~spherestep.potential.MotorPotential`).
+    ``"geometric"`` (:func:`plan_geometric`), ``"potential"`` (:func:`plan_potential` on ``model``, default
+    the design's :class:`~spherestep.potential.MotorPotential`) or ``"iron"`` (:func:`plan_iron` on ``model``,
+    default the design's own, :func:`spherestep.magnetics.design_model`, with its ``limits`` and the relay rotor
+    ``tuning``, default :func:`iron_tuning`, and the ``plants`` it must also hold on).
 
     >>> import math
     >>> import spherestep as ss
@@ -72,7 +74,19 @@ def turn(design, axis, angle: float, steps: int | None = None, planner: str = "g
     """
     if planner not in PLANNERS:
         raise bad_value("planner", f"one of {', '.join(PLANNERS)}", planner)
+    if plants and planner != "iron":
+        raise bad_value("plants", "given only with planner='iron'", f"{len(plants)} plants")
     targets = turn_targets(design, axis, angle, steps)
+    if planner == "iron":
+        from .iron_planner import iron_tuning, plan_iron
+
+        if model is None:
+            from ..magnetics import design_model
+
+            own = design_model(design)
+            model, limits = own.model, own.limits if limits is None else limits
+        return plan_iron(design, targets, model, limits=limits,
+                         tuning=iron_tuning(design, model) if tuning is None else tuning, plants=plants)
     if planner == "potential":
         from ..potential import MotorPotential
         from .potential_planner import plan_potential

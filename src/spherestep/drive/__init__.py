@@ -3,12 +3,13 @@ one result type.
 
 * :func:`drive_turn` (:mod:`.turn`): one turn one way → :class:`DriveResult` (:mod:`.result`: arrays, numbers,
   per-mode details, ``to_dict(degrees=True)``, ``write(out)`` — what ``spherestep move`` writes);
+* :func:`many_turns` (:mod:`.many_turns`): the many-turn verdict on a relay planner (issue 39 §2);
 * :func:`compare_drives` (:mod:`.compare`): the same turn every mode → :class:`DriveComparison` (the demo's table);
 * :mod:`.hardware`: the servo on a coil controller or the emulated motor, judged like a simulation;
   :mod:`.session` assembles that session for a design (:func:`servo_session`, :func:`move_on_hardware`,
   :func:`turn_reference`) from the hardware room's links, devices and emulators;
 * :func:`connect` (:mod:`.connect`): the one place a backend is chosen and built (``port``, ``lockstep``, ``pty``,
-  ``relay port``, ``dry run``, ``simulated``) → a :class:`Connection`;
+  ``qemu``, ``relay port``, ``dry run``, ``simulated``) → a :class:`Connection`;
 * :func:`collect_holds` (:mod:`.calibration`): the servo sessions a calibration fits (:class:`Emulated`,
   :class:`Port`, or a torque model: the simulated plant).
 
@@ -19,6 +20,7 @@ names it. The simulation itself (rotor, integrator, coil electrics, the servo an
 
 from .calibration import Emulated, Port, collect_holds
 from .connect import KINDS, Connection, connect  # the function shadows its module's name (as design_model)
+from .many_turns import TurnOutcome, Verdict, many_turns, relay_planner, relay_tuning, verdict_turns
 from .compare import DEMO_AXIS, SENSOR_NOISE, DriveComparison, compare_drives
 from .session import Session, move_on_hardware, servo_session, turn_reference
 from .result import DriveResult, HardwareDetails, RampedDetails, ServoDetails, SettledDetails, figure_drive
@@ -26,6 +28,8 @@ from .turn import BACKENDS, FIXED_SERVO_TIME, MODES, SENSORS, TOLERANCE, check_o
     fixed_servo_time
 
 __all__ = ["BACKENDS", "DEMO_AXIS", "FIXED_SERVO_TIME", "MODES", "SENSORS", "SENSOR_NOISE", "TOLERANCE",
-           "DriveComparison", "Emulated", "Port", "collect_holds", "KINDS", "Connection", "connect", "DriveResult", "HardwareDetails", "RampedDetails", "ServoDetails", "Session",
-           "SettledDetails", "check_options", "choose_model", "compare_drives", "drive_turn", "figure_drive", "fixed_servo_time",
-           "move_on_hardware", "servo_session", "turn_reference"]
+           "KINDS", "Connection", "DriveComparison", "DriveResult", "Emulated", "HardwareDetails", "Port",
+           "RampedDetails", "ServoDetails", "Session", "SettledDetails", "TurnOutcome", "Verdict", "check_options",
+           "choose_model", "collect_holds", "compare_drives", "connect", "drive_turn", "figure_drive",
+           "fixed_servo_time", "many_turns", "move_on_hardware", "relay_planner", "relay_tuning", "servo_session",
+           "turn_reference", "verdict_turns"]

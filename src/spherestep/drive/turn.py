@@ -3,7 +3,8 @@
 The turn is ``angle`` rad about the fixed-frame ``axis`` from the stepper state nearest the identity (the
 simulated motor; on a port or the emulated motor the rotor is taken to be at the identity).
 
-* ``"settled"``: the paper's relay steps — the geometric plan (:func:`spherestep.commutation.turn`) run by
+* ``"settled"``: the paper's relay steps — the relay plan (:func:`spherestep.commutation.turn`: the iron-aware
+  planner on a model with a detent — the iron —, the geometric one on air; ``planner`` overrides) run by
   :func:`spherestep.dynamics.simulate` with :func:`spherestep.dynamics.tune`'s rotor (damping critical on the
   softest well), dwell and time step; time = steps × dwell when the rotor ends within the plan's tolerance
   (0.5°) of the plan's last state.
@@ -82,10 +83,12 @@ class Turn:
     ``tuning`` are made on first use."""
 
     def __init__(self, design, axis, angle: float, chosen: Chosen, tolerance: float = TOLERANCE,
-                 progress: Callable[[str], None] | None = None):
+                 progress: Callable[[str], None] | None = None, planner: str = "auto"):
         from ..commutation import turn_targets
+        from .many_turns import relay_planner
 
         self.design, self.chosen = design, chosen
+        self.planner = relay_planner(design, planner, chosen.model)
         self.axis = checks.axis(axis, "axis")
         self.angle = checks.number(angle, "angle", expected="a finite non-zero angle in radians")
         if self.angle == 0:
@@ -98,22 +101,24 @@ class Turn:
 
     @property
     def plan(self):
-        """The geometric relay plan of the turn (:func:`spherestep.commutation.turn`)."""
+        """The relay plan of the turn (:func:`spherestep.commutation.turn`) by ``planner``: the iron-aware one on
+        an iron-cored design, the geometric one on air (:func:`~.many_turns.relay_planner`)."""
         if self._plan is None:
             from ..commutation import turn
 
-            self.say("commutating: the geometric relay plan")
-            self._plan = turn(self.design, self.axis, self.angle)
+            self.say(f"commutating: the {self.planner} relay plan")
+            self._plan = turn(self.design, self.axis, self.angle, planner=self.planner, model=self.chosen.model,
+                              limits=self.chosen.limits, tuning=self.tuning if self.planner == "iron" else None)
         return self._plan
 
     @property
     def tuning(self):
-        """The relay rotor's damping, dwell and time step on this model (:func:`spherestep.dynamics.tune`)."""
+        """The relay rotor's damping, dwell and time step on this model (:func:`~.many_turns.relay_tuning`)."""
         if self._tuning is None:
-            from ..dynamics import tune
+            from .many_turns import relay_tuning
 
             self.say("tuning the relay rotor's damping and dwell on the model's wells")
-            self._tuning = tune(self.design, self.chosen.model)
+            self._tuning = relay_tuning(self.design, self.chosen.model, self.planner)
         return self._tuning
 
     def result(self, mode: str, backend: str, times, orientations, targets, sensor_error, currents, power,

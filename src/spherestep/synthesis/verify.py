@@ -9,7 +9,8 @@ its own code path:
   (:func:`spherestep.control.available_torque`), a relay state's holding torque;
 * the stated turn driven by :func:`spherestep.drive.drive_turn`: the fastest servo turn (``mode="servo"``) and the
   paper's settled relay plan (``mode="settled"``, every step within 0.5° of the plan, its peak power within the
-  supply's) as the spec's drive asks;
+  supply's) as the spec's drive asks, and for relays the many-turn verdict (:func:`spherestep.drive.many_turns`:
+  the spec's turn and 20 random ones, at least 95 % executed);
 * holds at random orientations in the range: the servo (:func:`spherestep.dynamics.simulate_servo`) holding
   ``Trajectory.hold(R)`` for 0.5 s with the spec's sensor (the Hall array of ``sensing.hall_parts`` parts, else the
   drive room's noisy sensor, σ = :data:`spherestep.drive.SENSOR_NOISE` = 0.02°), the largest distance from ``R``;
@@ -131,7 +132,7 @@ def verify(design_text: str, spec, *, seed: int = 1, capability_samples: int = 2
     """Check the design written in ``design_text`` (a design file's YAML) against every requirement of ``spec``
     (module docstring), with orientations drawn from ``seed``."""
     from ..control import available_torque
-    from ..drive import drive_turn
+    from ..drive import drive_turn, many_turns
     from ..magnetics import design_model
     from ..motor import MotorDesign
 
@@ -254,6 +255,11 @@ def verify(design_text: str, spec, *, seed: int = 1, capability_samples: int = 2
         checks.append(_yes("settled relay plan executes (every step within 0.5° of the plan)",
                            f"{det.steps} of {det.steps} steps", f"{det.steps_settled_on_plan} of {det.steps} steps",
                            det.executed))
+        many = many_turns(design, spec_turn=(axis, angle), seed=seed)
+        numbers.update(relay_turns_fraction=many.fraction, relay_turns_worst_deg=math.degrees(many.worst))
+        checks.append(_at_least(f"relay turns executed ({many.planner} planner: the spec's turn + {many.turns - 1} "
+                                f"random of 15-360°, every step within 0.5°)", 100 * many.fraction,
+                                100 * many.required, ".3g", "%"))
         numbers["relay_peak_W"] = float(run.peak_power)
         checks.append(_at_most("relay plan's peak power (its most coils at once)", float(run.peak_power),
                                spec.supply.power, ".3g", "W"))

@@ -1,0 +1,103 @@
+"""The stepper states on the true landscape: the minima of the design's own energy under each state's coils.
+
+For every geometric stepper state ``s`` (a set of poles on coils, :meth:`spherestep.motor.MotorDesign.states`) its
+relay mask — the held coils, each with its pole's polarity, trimmed to the ``max_coils`` closest as the planners
+energise them — has a minimum near ``R_s``: the energy's descent from ``R_s`` under that mask
+(:func:`spherestep.statics.descend`). Those minima that are strict (Hessian positive definite) are the *equilibrium
+states*; :func:`equilibrium_metrics` measures on them what :func:`spherestep.motor.design_metrics` measures on the
+geometric states — resolution (Park distance from uniformly random orientations to the nearest state: median,
+95 %, max), the fraction of orientations with a state within one ``max_step``, the state graph's components (states
+linked when within ``max_step``) — and how far each minimum lies from its geometric state.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import connected_components
+
+from .. import so3
+from .potential_planner import DEFAULT_MAX_COILS, _activations
+from .._fast.threads import single_blas_thread
+
+BATCH = 4096  # descents per call
+DISTINCT = math.radians(0.01)  # rad: minima closer than this are one
+
+
+@dataclass(frozen=True)
+class EquilibriumMetrics:
+    """:func:`equilibrium_metrics`' result (angles in radians; :meth:`to_dict` in degrees): ``states`` (geometric),
+    ``minima`` (strict minima among their masks' descents), ``distinct`` (those more than :data:`DISTINCT` apart:
+    the detent draws many masks to one minimum), resolution, range and graph as in
+    :class:`spherestep.motor.DesignMetrics`, and the minima's ``offset_*`` from their geometric states."""
+
+    states: int
+    minima: int
+    distinct: int
+    samples: int
+    max_step_rad: float
+    resolution_median_rad: float
+    resolution_p95_rad: float
+    resolution_max_rad: float
+    range_fraction: float
+    state_graph_components: int
+    reaches_all: bool
+    offset_median_rad: float
+    offset_max_rad: float
+
+    def to_dict(self, degrees: bool = True) -> dict:
+        out = {}
+        for key, value in self.__dict__.items():
+            if key.endswith("_rad") and degrees:
+                out[key[:-4] + "_deg"] = math.degrees(value)
+            else:
+                out[key] = value
+        return out
+
+
+@single_blas_thread
+def equilibrium_states(design, model, max_coils: int = DEFAULT_MAX_COILS) -> tuple[np.ndarray, np.ndarray]:
+    """``(rotations (K, 3, 3), minimum (K,))``: for every stepper state the end of the energy's descent from it under
+    its trimmed mask, and whether that is a strict minimum (module docstring)."""
+    from ..statics import descend
+
+    states = design.states()
+    out, strict = np.empty((len(states), 3, 3)), np.zeros(len(states), dtype=bool)
+    for lo in range(0, len(states), BATCH):
+        ids = np.arange(lo, min(lo + BATCH, len(states)))
+        c = _activations(states, design, np.eye(3), ids, len(design.stator), False)  # every held pair
+        for n in np.flatnonzero(states.counts[ids] > max_coils):  # trimmed at the state's own pose
+            s = int(ids[n])
+            c[n] = _activations(states, design, states.rotations[s], np.array([s]), max_coils)[0]
+        R, _, _, H, _, converged = descend(model, states.rotations[ids].copy(), c)
+        out[ids] = R
+        strict[ids] = converged & (np.linalg.eigvalsh(H)[:, 0] > 0)
+    return out, strict
+
+
+def equilibrium_metrics(design, model, *, max_coils: int = DEFAULT_MAX_COILS, samples: int = 20_000,
+                        seed: int = 0) -> EquilibriumMetrics:
+    """Resolution, range and state graph on the equilibrium states (module docstring), from ``samples`` uniformly
+    random orientations drawn from ``seed``."""
+    from ..motor import StepperStates
+
+    states = design.states()
+    R, strict = equilibrium_states(design, model, max_coils)
+    keep = np.flatnonzero(strict)
+    minima = StepperStates(R[keep], states.pairs[:0], np.zeros(len(keep) + 1, dtype=np.int64), design.polarity,
+                           design.state_tol)
+    dist = minima.nearest(so3.random(samples, np.random.default_rng(seed)))[0][:, 0]
+    pairs = minima.neighbour_pairs(design.max_step)
+    graph = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(len(keep),) * 2)
+    components = int(connected_components(graph, directed=False)[0])
+    offset = so3.distance(R[keep], states.rotations[keep])
+    same = minima.neighbour_pairs(DISTINCT)
+    same = coo_matrix((np.ones(len(same)), (same[:, 0], same[:, 1])), shape=(len(keep),) * 2)
+    distinct = int(connected_components(same, directed=False)[0])
+    return EquilibriumMetrics(len(states), len(keep), distinct, samples, design.max_step, float(np.median(dist)),
+                              float(np.quantile(dist, 0.95)), float(dist.max()), float(np.mean(dist <= design.max_step)),
+                              components, bool(np.all(dist <= design.max_step) and components == 1),
+                              float(np.median(offset)), float(offset.max()))
