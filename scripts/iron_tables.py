@@ -32,6 +32,15 @@ from spherestep.motor import prototype
 from spherestep.motor.coil import iron_coil
 
 DATA = Path(__file__).resolve().parents[1] / "data"
+# The two-core study's cores, by direction: the lowest core and, of the eight at 34.3° round it (equally near, so no
+# index order may choose), the one toward this direction (cores 28 and 17; 26 and 17 before issue 35 renumbered them)
+STUDY_NEIGHBOUR = (-0.216, -0.521, -0.826)
+
+
+def study_cores(design) -> list[int]:
+    """The stator indices of the two-core study's cores (:data:`STUDY_NEIGHBOUR`)."""
+    v = np.array(design.stator.centers)
+    return [int(np.argmin(v[:, 2])), int(np.argmax(v @ np.array(STUDY_NEIGHBOUR)))]
 
 
 def _write(path: Path, header: str, names: list[str], rows: np.ndarray) -> None:
@@ -117,10 +126,7 @@ def multibody(level: int = 0) -> None:
     """Two neighbouring cores under the whole rotor: full solve against the sum of pair tables (same level)."""
     from spherestep.magnetics._ironmap import IronTorqueMap
     design, coil = prototype(), iron_coil()
-    v = np.array(design.stator.centers)
-    k0 = int(np.argmin(v[:, 2]))
-    k1 = int(np.argsort(v @ v[k0])[-2])
-    coils = [k0, k1]
+    coils = study_cores(design)
     rng = np.random.default_rng(1)
     from scipy.spatial.transform import Rotation
     # orientations that put a pole 3-10 degrees from each core's axis (where the torques are large)
@@ -163,9 +169,7 @@ def coupling(level: int = 0) -> None:
     design, coil = prototype(), iron_coil()
     mb = read_table(DATA / "iron_multibody.csv")  # c0, c1, orientation, full xyz, pair xyz, solve_s
     R = np.load(DATA / "iron_multibody_R.npy")
-    v = np.array(design.stator.centers)
-    k0 = int(np.argmin(v[:, 2]))
-    coils = [k0, int(np.argsort(v @ v[k0])[-2])]
+    coils = study_cores(design)
     rows = []
     for r in mb[(mb[:, 0] == 0) & (mb[:, 1] == 0)]:
         t0 = time.perf_counter()

@@ -50,7 +50,7 @@ def test_demo_writes_plan_figures_simulation_and_report(tmp_path, capsys):
     # on iron the relay plan is simulated and counted, and the relays planned on the iron model are counted
     iron = {m["mode"]: m for m in info["drives"]["modes"]}
     settled = iron["settled"]["details"]
-    assert 0 <= settled["steps_settled_on_plan"] <= settled["steps"] == info["plan"]["steps"]
+    assert 0 <= settled["steps_settled_on_plan"] <= settled["steps"]  # the iron-aware plan's own steps (issue 39)
     assert settled["executed"] == (settled["steps_settled_on_plan"] == settled["steps"])
     assert [t["rate_steps_per_s"] for t in iron["ramped"]["details"]["tried"]][:1] == [2.0]
     assert iron["servo"]["within_tolerance"] and iron["servo"]["max_tracking_error_deg"] <= 0.5

@@ -509,8 +509,8 @@ def test_plan_uses_the_design_file(tmp_path, capsys):
     doc = mutate(name="rewired", channel_map=[[k, 63 - k] for k in range(29)])
     path = write(tmp_path, doc)
     out = tmp_path / "plan"
-    assert main(["plan", "--axis", "0,1,1", "--angle", "20", "--steps", "3", "--out", str(out), "--json",
-                 "--design", str(path)]) == 0
+    assert main(["plan", "--axis", "0,1,1", "--angle", "20", "--steps", "3", "--planner", "geometric", "--out",
+                 str(out), "--json", "--design", str(path)]) == 0
     assert json.loads(capsys.readouterr().out)["steps"] == 3
     plan = json.loads((out / "plan.json").read_text())
     assert plan["design"] == "rewired"

@@ -283,7 +283,8 @@ def test_heat_over_current_and_a_crc_storm_end_alike_on_the_python_device_and_th
     """The same line, motor and fault against both devices: the same trip, the same coil, every coil off."""
     from dataclasses import replace
 
-    from spherestep.hardware import EmulatedMotor, MotorPty
+    from spherestep.drive.connect import emulated_motor
+    from spherestep.hardware import MotorPty
     from spherestep.hardware.motor_emulator import MotorFaults
     from spherestep.hardware.qemu import QemuMotor
 
@@ -297,8 +298,8 @@ def test_heat_over_current_and_a_crc_storm_end_alike_on_the_python_device_and_th
         faults = MotorFaults(stuck_coil=(0, 0.3))
     outcomes = []
     for server in (MotorPty, QemuMotor):
-        motor = EmulatedMotor(rig["design"], rig["model"], rig["sensors"], drive=rig["drive"], period=1e-3,
-                              faults=faults)
+        motor = emulated_motor(rig["design"], rig["model"], rig["sensors"], drive=rig["drive"], period=1e-3,
+                               faults=faults)
         with server(motor, **options) as dev:
             replies, truth = raw_session(dev, fault)
         assert replies[-1].split(b"*")[0].endswith(b",NAK," + code.encode()), (server.__name__, replies[-3:])

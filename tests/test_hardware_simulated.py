@@ -34,7 +34,8 @@ def test_play_on_the_simulated_rotor_follows_the_plan(proto):
 
 @pytest.mark.slow
 def test_run_simulate_cli(tmp_path, capsys):
-    assert main(["plan", "--axis", "0,0,1", "--angle", "15", "--steps", "2", "--out", str(tmp_path)]) == 0
+    assert main(["plan", "--axis", "0,0,1", "--angle", "15", "--steps", "2", "--planner", "geometric", "--out",
+                 str(tmp_path)]) == 0  # the plumbing of run, not the iron planner (its own tests)
     capsys.readouterr()
     assert main(["run", str(tmp_path / "plan.json"), "--rate", "0.8", "--simulate"]) == 0
     out = capsys.readouterr().out

@@ -25,6 +25,20 @@ from spherestep.motor.coil import INCH, RHO_COPPER, CoilSpec, IronMaterial, air_
 DATA = Path(__file__).resolve().parents[1] / "data"
 
 
+def study_cores(design) -> list[int]:
+    """The two-core study's cores (``scripts/iron_tables.py``: the lowest core and, of the eight equally near it,
+    the one toward ``STUDY_NEIGHBOUR`` — chosen by direction, not by index order), checked to be neighbours."""
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("iron_tables", DATA.parent / "scripts" / "iron_tables.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    cores = module.study_cores(design)
+    v = design.stator.centers
+    assert cores == [28, 17] and v[cores[1]] @ v[cores[0]] == pytest.approx(np.sort(v @ v[cores[0]])[-2])
+    return cores
+
+
 @pytest.fixture(scope="module")
 def design():
     return prototype()
@@ -251,8 +265,7 @@ def _multibody(design):
     mb = _csv("iron_multibody.csv")
     R = np.load(DATA / "iron_multibody_R.npy")[mb["orientation"].astype(int)]
     v = design.stator.centers
-    k0 = int(np.argmin(v[:, 2]))
-    cores = [k0, int(np.argsort(v @ v[k0])[-2])]
+    cores = study_cores(design)
     c = np.zeros((len(R), len(v)))
     c[:, cores] = np.c_[mb["c0"], mb["c1"]]
     return mb, R, c, cores, np.c_[mb["full_x"], mb["full_y"], mb["full_z"]]
@@ -437,8 +450,7 @@ def test_coupled_model_against_the_full_solve(design):
     full = np.c_[mb["full_x"], mb["full_y"], mb["full_z"]]
     pair = np.c_[mb["pair_x"], mb["pair_y"], mb["pair_z"]]
     v = design.stator.centers
-    k0 = int(np.argmin(v[:, 2]))
-    cores = [k0, int(np.argsort(v @ v[k0])[-2])]
+    cores = study_cores(design)
     c = np.zeros((len(R), len(v)))
     c[:, cores] = np.c_[mb["c0"], mb["c1"]]
     got = model.torque_on(R, c, cores)

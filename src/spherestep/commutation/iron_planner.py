@@ -71,7 +71,7 @@ def iron_tuning(design, model):
 
 def supply_coils(limits) -> int:
     """The most coils the supply powers at once: ``⌊P / (V I_n)⌋`` (a relay coil draws ``V I_n``)."""
-    return max(1, int(math.floor(limits.supply_power / (limits.supply_voltage * limits.nominal_current) + 1e-9)))
+    return max(1, int(math.floor(limits.supply_power / limits.relay_power + 1e-9)))
 
 
 class _Landscape:

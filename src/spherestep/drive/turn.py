@@ -141,8 +141,13 @@ class Turn:
         targets = _step_targets(sim.times, tuning.dwell * np.arange(len(plan.steps) - 1), plan.targets)
         on_plan = int(np.count_nonzero(sim.step_errors[1:] <= sim.tolerance))  # the steps, not the start
         ends_on_plan = float(so3.distance(sim.settled[-1], plan.achieved[-1])) <= sim.tolerance
+        blocked = plan.failures
         note = "" if ends_on_plan else (f"the rotor did not end within {math.degrees(sim.tolerance):g}° of the plan's "
                                         f"last state ({on_plan} of {len(plan.steps) - 1} steps settled on the plan)")
+        if blocked:  # the rotor may follow the plan, but the plan does not make the turn
+            note = (f"the plan is blocked at {len(blocked)} of {len(plan.steps) - 1} steps (first, step {blocked[0][0]}: "
+                    f"{blocked[0][1].removeprefix('blocked: ')})" + (f"; {note}" if note else ""))
+            ends_on_plan = False
         details = SettledDetails(len(plan.steps) - 1, tuning.dwell, tuning.rotor.damping, sim.executed, on_plan,
                                  sim.tolerance)
         return self.result("settled", "simulated", sim.times, sim.orientations, targets, np.zeros(len(sim.times)),
