@@ -126,6 +126,7 @@ def multibody(level: int = 0) -> None:
     """Two neighbouring cores under the whole rotor: full solve against the sum of pair tables (same level)."""
     from spherestep.magnetics._ironmap import IronTorqueMap
     design, coil = prototype(), iron_coil()
+    v = np.array(design.stator.centers)
     coils = study_cores(design)
     rng = np.random.default_rng(1)
     from scipy.spatial.transform import Rotation
