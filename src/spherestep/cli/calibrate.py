@@ -7,10 +7,11 @@ from pathlib import Path
 import typer
 
 from .app import app
-from .common import design_from, number, print_json, usable
+from .common import check_port, design_from, number, print_json, usable
 from .progress import progress
 
 ERROR_KEYS = ("detent", "winding")
+OUT_SUFFIXES = (".yaml", ".yml", ".json")  # the suffix of --out decides the format (JSON for .json); others refused
 
 
 def plant_error(text: str) -> dict:
@@ -36,8 +37,9 @@ def plant_error(text: str) -> dict:
 
 @app.command()
 def calibrate(
-    out: Path = typer.Option(..., "--out", help="Where to write the calibration (YAML). Name it calibration.yaml "
-                                                "beside the design file for design_model(calibration=...)."),
+    out: Path = typer.Option(..., "--out", help="Where to write the calibration: .yaml/.yml (YAML) or .json (JSON). "
+                                                "Name it calibration.yaml beside the design file for "
+                                                "design_model(calibration=...)."),
     design_path: Path = typer.Option(None, "--design", help="Design file (iron-cored); default the built-in "
                                                             "prototype."),
     emulate: bool = typer.Option(False, "--emulate", help="Calibrate the emulated motor (a plant built with "
@@ -61,14 +63,16 @@ def calibrate(
     from ..errors import bad_value
     from ..magnetics import design_model
     from ..magnetics.mismatch import scaled_model
+    from ..outputs import output_file
 
     if emulate == (port is not None):
         raise bad_value("--emulate/--port", "one of --emulate or --port DEV", "both" if emulate else "neither")
     factors = plant_error(error)
     if not emulate and error != "detent=1.2,winding=0.85":
         raise bad_value("--plant-error", "used only with --emulate", error)
-    if out.exists() and not out.is_file():
-        raise bad_value("--out", "a file to write (not a folder or device)", str(out))
+    out = output_file(out, "--out", suffixes=OUT_SUFFIXES)  # before any hold: writable, and its suffix the format
+    if port is not None:  # a port that cannot be opened is refused before any work, with nothing written
+        check_port(port)
     design = usable(design_from(design_path), path=design_path)
     own = design_model(design)
     if own.core != "iron":

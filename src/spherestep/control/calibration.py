@@ -461,14 +461,20 @@ class Calibration:
                 "unseen": list(self.unseen)}
 
     def save(self, path) -> Path:
-        """Write the calibration as YAML (atomically; ``calibration.yaml`` beside the design file is what
-        :func:`spherestep.magnetics.design_model` reads with ``calibration=``); returns the path."""
+        """Write the calibration atomically, as JSON when ``path`` ends in ``.json`` and as YAML otherwise
+        (``calibration.yaml`` beside the design file is what :func:`spherestep.magnetics.design_model` reads with
+        ``calibration=``; :meth:`load` reads both, JSON being YAML); returns the path."""
+        import json
+
         import yaml
 
         from ..atomic import write_text
 
+        data = self.to_dict(degrees=True)
+        if Path(path).suffix.lower() == ".json":
+            return write_text(path, json.dumps(data, indent=1) + "\n")
         text = "# spherestep torque calibration (spherestep.control.calibrate); tables in N·m at nodes in degrees\n"
-        return write_text(path, text + yaml.safe_dump(self.to_dict(degrees=True), sort_keys=False))
+        return write_text(path, text + yaml.safe_dump(data, sort_keys=False))
 
     @classmethod
     def load(cls, path, design) -> Calibration:
