@@ -122,7 +122,7 @@ def move(
     if port is not None:  # a port that cannot be opened is refused before any work, with nothing written
         check_port(port)
     out = output_folder(out, "--out")  # before the work: a bad location costs nothing
-    design = usable(design_from(design_path))
+    design = usable(design_from(design_path), path=design_path)
     from ..magnetics import design_model
 
     own = design_model(design, core)

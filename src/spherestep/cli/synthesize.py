@@ -56,7 +56,7 @@ def synthesize(
     view = Table(title=f"finalists for {spec_value.name} ({budget} budget, {len(result.table)} candidates, "
                        f"{result.seconds:.0f} s)")
     for col in ("#", "layout", "magnets/coils", "meets", "binds", "file"):
-        view.add_column(col)
+        view.add_column(col, no_wrap=col in ("layout", "file"))  # whole: a cut layout lost the stator's level
     for n, f in enumerate(result.finalists, start=1):
         v = f.verification
         b = v.binding

@@ -66,6 +66,11 @@ PRIOR = {"scale": 0.3, "node": 0.3, "curvature": 0.1, "coupling": 1.0}  # prior 
 ENVELOPE_DEG = 5.0  # the envelope of a table: the largest |τ| within this many degrees of a node
 UNSEEN = 0.5  # a parameter is not seen when its posterior variance exceeds this fraction of its prior's
 SIGMA_FLOOR = 1e-6  # of the peak detent: the least noise assumed
+def torque_text(value: float, digits: int = 3) -> str:
+    """A torque for people: N·m from 1 N·m up, mN·m below (``1.09 N·m``, ``44.1 mN·m``; never ``1.09e+03 mN·m``)."""
+    return f"{value:.{digits}g} N·m" if abs(value) >= 1.0 else f"{value * 1e3:.{digits}g} mN·m"
+
+
 CONSISTENT = 0.05  # a fit whose residual RMS is above this fraction of the uncorrected model's does not explain the data
 
 
@@ -426,8 +431,8 @@ class Calibration:
             "of the uncorrected model's): the rotor was not at rest in the holds or the measurements are off; do "
             "not use this calibration"]
         lines += [f"{self.holds} holds, {self.equations} equations ({self.backend}): residual RMS "
-                 f"{self.residual_before * 1e3:.3g} -> {self.residual_after * 1e3:.3g} mN·m (noise taken "
-                 f"{self.sigma * 1e3:.2g} mN·m)",
+                 f"{torque_text(self.residual_before)} -> {torque_text(self.residual_after)} (noise taken "
+                 f"{torque_text(self.sigma, 2)})",
                  f"detent table ×{self.scale_detent:.4f} ± {self.scale_std[0]:.4f}, winding table "
                  f"×{self.scale_winding:.4f} ± {self.scale_std[1]:.4f} (fitted against nominal, θ⁰·θ / θ⁰·θ⁰)",
                  ("no coupling through the cores" if not self.coupling else
