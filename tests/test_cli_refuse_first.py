@@ -90,3 +90,44 @@ def test_design_file_with_another_suffix_is_refused(tmp_path, capsys, argv, suff
     design.write_text(DESIGN.read_text())  # a valid design: only its name is wrong
     argv = [a.replace("{d}", str(design)).replace("{base}", str(tmp_path)) for a in argv]
     _refused(argv, capsys, tmp_path, str(design), ".yaml, *.yml or *.toml", "rename it")
+
+
+@pytest.mark.slow
+@pytest.mark.timeout(1800)
+@pytest.mark.parametrize("signum, code, name", [(2, 130, "SIGINT"), (15, 143, "SIGTERM")])
+def test_calibrate_interrupted_says_whether_the_coils_are_off(tmp_path, signum, code, name):
+    """Issue 40 §3: interrupted during its first hold on the emulated motor, calibrate says in one line that the
+    coils are off (the loop switched them off and the emulated device acknowledged it), exit 130/143, nothing
+    written."""
+    import signal
+    import subprocess
+    import sys
+    import threading
+
+    env = dict(os.environ, PYTHONPATH=str(Path(__file__).resolve().parents[1] / "src"))
+    p = subprocess.Popen([sys.executable, "-c", "from spherestep.cli import main; main()", "calibrate", "--emulate",
+                          "--orientations", "2", "--out", str(tmp_path / "c.yaml")], env=env, cwd=tmp_path,
+                         stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True, start_new_session=True)
+    lines, holding = [], threading.Event()
+
+    def read():
+        for line in p.stderr:
+            lines.append(line)
+            if "holding at orientation 1" in line:
+                holding.set()
+
+    reader = threading.Thread(target=read, daemon=True)
+    reader.start()
+    try:
+        assert holding.wait(timeout=1500), "".join(lines)
+        os.killpg(p.pid, signal.Signals(signum))
+        assert p.wait(timeout=120) == code, "".join(lines)
+    finally:
+        if p.poll() is None:
+            os.killpg(p.pid, signal.SIGKILL)
+            p.wait()
+    reader.join(timeout=10)
+    last = "".join(lines).strip().splitlines()[-1]
+    assert last.startswith(f"spherestep: interrupted ({name}): all coils off"), "".join(lines)
+    assert "nothing written" in last and "Traceback" not in "".join(lines)
+    assert os.listdir(tmp_path) == []

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import sys
 from pathlib import Path
 
 import typer
@@ -9,6 +10,7 @@ import typer
 from .app import app
 from .common import check_port, design_from, number, print_json, usable
 from .progress import progress
+from .signals import Terminated, interrupt_of, sigterm_as_interrupt, told
 
 ERROR_KEYS = ("detent", "winding")
 OUT_SUFFIXES = (".yaml", ".yml", ".json")  # the suffix of --out decides the format (JSON for .json); others refused
@@ -33,6 +35,20 @@ def plant_error(text: str) -> dict:
             raise bad_value("--plant-error", expected, text)
         out[key.strip()] = factor
     return out
+
+
+def coils_off(interrupt: BaseException, emulate: bool) -> str:
+    """Whether the coils are off after ``interrupt`` stopped the holds: the servo loop switches every coil off when
+    it stops (``off_acknowledged`` says whether the device confirmed it); between holds and in the fit none is
+    driven."""
+    acknowledged = getattr(interrupt, "off_acknowledged", None)
+    where = "the emulated motor" if emulate else "the device"
+    if acknowledged is None:
+        return f"all coils off (none was being driven: stopped between holds or in the fit; {where})"
+    if acknowledged:
+        return f"all coils off, acknowledged by {where}"
+    return (f"all coils off NOT acknowledged by {where}: switch the controller's supply off before touching the "
+            "motor")
 
 
 @app.command()
@@ -80,14 +96,23 @@ def calibrate(
     plant = scaled_model(own.model, **factors) if emulate else None
     backend = Emulated(plant) if emulate else Port(port)
     walk = hold_orientations(int(orientations), seed=seed)
-    with progress("calibrating", enabled=not as_json) as say:
-        holds = collect_holds(design, backend, walk, model=own.model, limits=own.limits, progress=say)
-        say("fitting the tables")
-        cal = fit(design, own.model, holds)
-        before = after = None
-        if plant is not None:
-            say("measuring the torque error against the emulated plant")
-            before, after = torque_error(own.model, plant), torque_error(cal.model, plant)
+    try:
+        with sigterm_as_interrupt() as received, progress("calibrating", enabled=not as_json) as say:
+            holds = collect_holds(design, backend, walk, model=own.model, limits=own.limits, progress=say)
+            say("fitting the tables")
+            cal = fit(design, own.model, holds)
+            before = after = None
+            if plant is not None:
+                say("measuring the torque error against the emulated plant")
+                before, after = torque_error(own.model, plant), torque_error(cal.model, plant)
+    except BaseException as exc:
+        interrupt = interrupt_of(exc)
+        if interrupt is None:
+            raise
+        print(f"spherestep: interrupted ({received.name or 'SIGINT'}): {coils_off(interrupt, emulate)}; nothing "
+              "written", file=sys.stderr)
+        told()
+        raise typer.Exit(143 if isinstance(interrupt, Terminated) or received.name == "SIGTERM" else 130) from None
     path = cal.save(out)
     if as_json:
         print_json({"calibration": cal.to_dict(), "holds": holds.to_dict(), "file": str(path),
