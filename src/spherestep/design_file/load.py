@@ -175,7 +175,7 @@ def read(path: str | Path) -> Document:
     DesignFileError for any other suffix (a ``.txt`` is refused before it is read)."""
     path = Path(path)
     suffix = path.suffix.lower()
-    if suffix not in SUFFIXES:
+    if suffix not in SUFFIXES and not path.is_dir():  # a folder is told it is one (read_text)
         raise DesignFileError(str(path), None, f"has suffix {suffix or '(none)'!r}; a design file is named "
                               "*.yaml, *.yml or *.toml (the suffix says how it is read): rename it")
     fmt = "toml" if suffix == ".toml" else "yaml"
