@@ -93,7 +93,6 @@ def test_design_file_with_another_suffix_is_refused(tmp_path, capsys, argv, suff
 
 
 @pytest.mark.slow
-@pytest.mark.timeout(1800)
 @pytest.mark.parametrize("signum, code, name", [(2, 130, "SIGINT"), (15, 143, "SIGTERM")])
 def test_calibrate_interrupted_says_whether_the_coils_are_off(tmp_path, signum, code, name):
     """Issue 40 §3: interrupted during its first hold on the emulated motor, calibrate says in one line that the

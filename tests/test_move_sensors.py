@@ -24,7 +24,6 @@ def drives(proto):
 
 
 @pytest.mark.slow
-@pytest.mark.timeout(1800)  # the module's two drives and the iron cores' field model: over 600 s at load 14
 def test_servo_with_the_magnetometer_array_in_the_loop(drives):
     move = drives["hall"]
     s = move.to_dict()
@@ -35,7 +34,6 @@ def test_servo_with_the_magnetometer_array_in_the_loop(drives):
 
 
 @pytest.mark.slow
-@pytest.mark.timeout(1800)
 def test_servo_with_an_imu_is_worse_than_with_the_array(drives):
     """An AHRS drifts and is noisy: degrees, not thousandths (docs/sensing.md: 1.48° RMS, the turn ends 2.00° off);
     the servo follows its estimate, so the turn ends within the IMU's error of the target (plus the servo's own
