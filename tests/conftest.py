@@ -1,12 +1,14 @@
 """Shared fixtures: the prototype is built and its states enumerated once per test session.
 
 In CI (``CI`` set) Hypothesis runs derandomized, so a submission's verdict does not depend on the draw;
-locally it explores new examples on every run.
+locally it explores new examples on every run. In CI a skip not listed in tests/skips-allowed.txt fails the run
+(:mod:`ci_skips`).
 """
 
 import os
 
 import pytest
+from ci_skips import pytest_runtest_logreport, pytest_sessionfinish, pytest_terminal_summary  # noqa: F401 (hooks)
 from hypothesis import settings
 
 settings.register_profile("ci", derandomize=True)

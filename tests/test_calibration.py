@@ -226,14 +226,18 @@ def test_bad_input():
 
 def test_cli_on_the_emulator(tmp_path, capsys):
     """spherestep calibrate --emulate end to end (3 holds on the lockstep emulated motor): exit 0, the file is a
-    calibration of the prototype, the JSON has the fit and the torque errors; bad input exits 2 with one line."""
-    out = tmp_path / "cal.yaml"
+    calibration of the prototype written as JSON (its suffix decides), the fit makes the torque error against the
+    plant smaller (the ≥ 5× of the default 60 holds is tests/test_pinned_numbers.py's); bad input exits 2 with one
+    line."""
+    out = tmp_path / "cal.json"
     assert main(["calibrate", "--emulate", "--orientations", "3", "--plant-error", "detent=1.1,winding=0.9",
                  "--out", str(out), "--json"]) == 0
     data = json.loads(capsys.readouterr().out)
     assert data["holds"]["holds"] == 3 and data["holds"]["backend"] == "emulated"
     assert data["plant_error"] == {"detent": 1.1, "winding": 0.9}
-    assert data["torque_error_before"] > 0 and len(data["calibration"]["detent_Nm"]) == 68
+    assert 0 < data["torque_error_after"] < data["torque_error_before"], data
+    assert len(data["calibration"]["detent_Nm"]) == 68
+    assert json.loads(out.read_text())["holds"] == 3  # JSON under a .json name
     assert isinstance(data["calibration"]["consistent"], bool)
     assert Calibration.load(out, prototype()).holds == 3
     assert main(["calibrate", "--emulate", "--plant-error", "detent=x", "--out", str(out)]) == 2

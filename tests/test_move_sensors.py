@@ -13,9 +13,19 @@ from spherestep.errors import InputError
 from spherestep.magnetics import design_model
 
 
+TURN = ([1, 0.5, 2], math.radians(20))  # docs/sensing.md's "In the loop" turn, on the magnets' torque map
+
+
+@pytest.fixture(scope="module")
+def drives(proto):
+    """The same 20° turn with the magnetometer array and with the IMU in the loop."""
+    model = design_model(proto, "air")
+    return {sensor: drive_turn(proto, *TURN, sensor=sensor, model=model) for sensor in ("hall", "imu")}
+
+
 @pytest.mark.slow
-def test_servo_with_the_magnetometer_array_in_the_loop(proto):
-    move = drive_turn(proto, [1, 0.5, 2], math.radians(20), sensor="hall", model=design_model(proto, "air"))
+def test_servo_with_the_magnetometer_array_in_the_loop(drives):
+    move = drives["hall"]
     s = move.to_dict()
     # the array's estimate stays within a few thousandths of a degree; the turn ends within the servo target
     assert s["details"]["sensor"] == "hall" and s["details"]["sensor_error_max_deg"] < 0.02
@@ -24,10 +34,17 @@ def test_servo_with_the_magnetometer_array_in_the_loop(proto):
 
 
 @pytest.mark.slow
-def test_servo_with_an_imu_is_worse_than_with_the_array(proto):
-    imu = drive_turn(proto, [0, 0, 1], math.radians(10), sensor="imu", model=design_model(proto, "air")).to_dict()
-    # an AHRS drifts and is noisy: degrees, not thousandths (docs/sensing.md)
-    assert imu["details"]["sensor_error_max_deg"] > 0.05
+def test_servo_with_an_imu_is_worse_than_with_the_array(drives):
+    """An AHRS drifts and is noisy: degrees, not thousandths (docs/sensing.md: 1.48° RMS, the turn ends 2.00° off);
+    the servo follows its estimate, so the turn ends within the IMU's error of the target (plus the servo's own
+    0.05°), and an order of magnitude worse than with the array, on the same turn."""
+    hall, imu = drives["hall"].to_dict(), drives["imu"].to_dict()
+    assert imu["details"]["sensor"] == "imu"
+    assert 0.3 < imu["details"]["sensor_error_max_deg"] < 5.0
+    assert imu["details"]["sensor_error_max_deg"] > 20 * hall["details"]["sensor_error_max_deg"]
+    assert imu["final_error_deg"] <= imu["details"]["sensor_error_max_deg"] + 0.05
+    assert imu["final_error_deg"] > 10 * hall["final_error_deg"]
+    assert imu["max_tracking_error_deg"] <= imu["details"]["sensor_error_max_deg"] + 0.5
 
 
 def test_sensor_choice_is_checked(proto, tmp_path, capsys):

@@ -40,8 +40,10 @@ def length(value: float | str, name: str = "length", *, allow_zero: bool = False
     return length_and_unit(value, name, allow_zero=allow_zero)[0]
 
 
-def length_and_unit(value: float | str, name: str = "length", *, allow_zero: bool = False) -> tuple[float, str]:
-    """``(metres, unit)`` of ``value``; the unit is the one written (``"m"`` for a bare number)."""
+def length_and_unit(value: float | str, name: str = "length", *, allow_zero: bool = False,
+                    unit_required: bool = False) -> tuple[float, str]:
+    """``(metres, unit)`` of ``value``; the unit is the one written (``"m"`` for a bare number, which
+    ``unit_required`` refuses, as design files do)."""
     if not isinstance(value, str):
         kind = "non-negative" if allow_zero else "positive"
         return checks.number(value, name, low=0.0, low_open=not allow_zero,
@@ -50,6 +52,9 @@ def length_and_unit(value: float | str, name: str = "length", *, allow_zero: boo
     unit = quantity[1].lower() if quantity else ""
     if quantity is None or (unit and unit not in METRES_PER_UNIT):
         raise bad_value(name, f"a length like '12 in' with unit one of {_UNIT_NAMES}", value)
+    if unit_required and not unit:
+        raise bad_value(name, f"a length with its unit, such as '6 in' or '0.15 m' (a bare number is refused, as in "
+                        f"design files; units {_UNIT_NAMES})", value)
     unit = {'"': "in", "inch": "in"}.get(unit, unit or "m")
     metres = quantity[0] * METRES_PER_UNIT[unit]
     if not math.isfinite(metres) or metres < 0 or (metres == 0 and not allow_zero):

@@ -2,15 +2,18 @@
 
 from __future__ import annotations
 
+import sys
 from pathlib import Path
 
 import typer
 
 from .app import app
-from .common import design_from, number, print_json, usable
+from .common import check_port, design_from, number, print_json, usable
 from .progress import progress
+from .signals import Terminated, interrupt_of, sigterm_as_interrupt, told
 
 ERROR_KEYS = ("detent", "winding")
+OUT_SUFFIXES = (".yaml", ".yml", ".json")  # the suffix of --out decides the format (JSON for .json); others refused
 
 
 def plant_error(text: str) -> dict:
@@ -34,10 +37,25 @@ def plant_error(text: str) -> dict:
     return out
 
 
+def coils_off(interrupt: BaseException, emulate: bool) -> str:
+    """Whether the coils are off after ``interrupt`` stopped the holds: the servo loop switches every coil off when
+    it stops (``off_acknowledged`` says whether the device confirmed it); between holds and in the fit none is
+    driven."""
+    acknowledged = getattr(interrupt, "off_acknowledged", None)
+    where = "the emulated motor" if emulate else "the device"
+    if acknowledged is None:
+        return f"all coils off (none was being driven: stopped between holds or in the fit; {where})"
+    if acknowledged:
+        return f"all coils off, acknowledged by {where}"
+    return (f"all coils off NOT acknowledged by {where}: switch the controller's supply off before touching the "
+            "motor")
+
+
 @app.command()
 def calibrate(
-    out: Path = typer.Option(..., "--out", help="Where to write the calibration (YAML). Name it calibration.yaml "
-                                                "beside the design file for design_model(calibration=...)."),
+    out: Path = typer.Option(..., "--out", help="Where to write the calibration: .yaml/.yml (YAML) or .json (JSON). "
+                                                "Name it calibration.yaml beside the design file for "
+                                                "design_model(calibration=...)."),
     design_path: Path = typer.Option(None, "--design", help="Design file (iron-cored); default the built-in "
                                                             "prototype."),
     emulate: bool = typer.Option(False, "--emulate", help="Calibrate the emulated motor (a plant built with "
@@ -62,14 +80,16 @@ def calibrate(
     from ..errors import bad_value
     from ..magnetics import design_model
     from ..magnetics.mismatch import scaled_model
+    from ..outputs import output_file
 
     if emulate == (port is not None):
         raise bad_value("--emulate/--port", "one of --emulate or --port DEV", "both" if emulate else "neither")
     factors = plant_error(error)
     if not emulate and error != "detent=1.2,winding=0.85":
         raise bad_value("--plant-error", "used only with --emulate", error)
-    if out.exists() and not out.is_file():
-        raise bad_value("--out", "a file to write (not a folder or device)", str(out))
+    out = output_file(out, "--out", suffixes=OUT_SUFFIXES)  # before any hold: writable, and its suffix the format
+    if port is not None:  # a port that cannot be opened is refused before any work, with nothing written
+        check_port(port)
     design = usable(design_from(design_path), path=design_path)
     own = design_model(design)
     if own.core != "iron":
@@ -77,14 +97,23 @@ def calibrate(
     plant = scaled_model(own.model, **factors) if emulate else None
     backend = Emulated(plant) if emulate else Port(port)
     walk = hold_orientations(int(orientations), seed=seed)
-    with progress("calibrating", enabled=not as_json) as say:
-        holds = collect_holds(design, backend, walk, model=own.model, limits=own.limits, progress=say)
-        say("fitting the tables")
-        cal = fit(design, own.model, holds)
-        before = after = None
-        if plant is not None:
-            say("measuring the torque error against the emulated plant")
-            before, after = torque_error(own.model, plant), torque_error(cal.model, plant)
+    try:
+        with sigterm_as_interrupt() as received, progress("calibrating", enabled=not as_json) as say:
+            holds = collect_holds(design, backend, walk, model=own.model, limits=own.limits, progress=say)
+            say("fitting the tables")
+            cal = fit(design, own.model, holds)
+            before = after = None
+            if plant is not None:
+                say("measuring the torque error against the emulated plant")
+                before, after = torque_error(own.model, plant), torque_error(cal.model, plant)
+    except BaseException as exc:
+        interrupt = interrupt_of(exc)
+        if interrupt is None:
+            raise
+        print(f"spherestep: interrupted ({received.name or 'SIGINT'}): {coils_off(interrupt, emulate)}; nothing "
+              "written", file=sys.stderr)
+        told()
+        raise typer.Exit(143 if isinstance(interrupt, Terminated) or received.name == "SIGTERM" else 130) from None
     path = cal.save(out)
     if as_json:
         print_json({"calibration": cal.to_dict(), "holds": holds.to_dict(), "file": str(path),

@@ -16,8 +16,8 @@ from .progress import progress
 @app.command()
 def capability(
     design_path: Path = typer.Option(None, "--design", help="Design file; default the built-in prototype."),
-    samples: int = typer.Option(1000, "--samples", callback=number("orientations", 1, 200_000,
-                                                                   what="a number of orientations"),
+    samples: int = typer.Option(1000, "--samples", callback=number("a whole number of orientations from 1 to "
+                                                                   "200000", 1, 200_000),
                                 help="Orientations drawn uniformly on SO(3)."),
     seed: int = typer.Option(0, "--seed", callback=number("a whole number ≥ 0 (a random seed)", 0, 2 ** 63 - 1),
                              help="Random seed of the orientations."),
@@ -40,7 +40,7 @@ def capability(
     from ..outputs import Outputs
 
     out = output_folder(out, "--out")  # before the work: a bad location costs nothing
-    design = usable(design_from(design_path))
+    design = usable(design_from(design_path), path=design_path)
     with progress("building the torque model", enabled=not as_json) as say:
         own = design_model(design, core)
         say(f"mapping the torque capability at {samples} orientations ({own.label})")

@@ -82,6 +82,19 @@ def input_file(path: Path, name: str) -> Path:
     return path
 
 
+def check_port(port: str, name: str = "--port") -> None:
+    """Open and close the serial device ``port`` before any work (nothing driven, nothing written); InputError
+    naming the option ``name`` and how to find the right device when it cannot be opened."""
+    from ..hardware.serialport import open_port
+
+    try:
+        open_port(port, 115200, 0.1).close()
+    except InputError as exc:
+        error = InputError(f"{name}: {exc}")
+        error.field = name
+        raise error from None
+
+
 def design_from(path: Path | None, name: str = "--design"):
     """The design in the file at ``path`` (a regular file), or the built-in prototype."""
     from ..motor import MotorDesign, prototype

@@ -104,7 +104,9 @@ def show(
     if as_json:
         print_json(info)
         return
-    table = Table(title=f"{info['name']} ({file})")
+    # the title on its own line, never wrapped (a table's title breaks a long file name mid-word)
+    console.print(f"{info['name']} ({file})", soft_wrap=True, markup=False, highlight=False)
+    table = Table()
     table.add_column("field", no_wrap=True)
     table.add_column("value", justify="right", no_wrap=True)
     for key, value in info.items():

@@ -12,7 +12,8 @@ import typer
 from ..errors import bad_value
 from ..outputs import output_folder
 from .app import app
-from .common import check_axis, check_core, console, design_from, number, parse_vector, print_json, usable
+from .common import (check_axis, check_core, check_port, console, design_from, number, parse_vector, print_json,
+                     usable)
 from .motor import ANGLE
 from .signals import exit_code, interrupt_for, sigterm_as_interrupt, told
 
@@ -138,11 +139,9 @@ def move(
     noise = math.radians(sensor_noise or 0.0)
     check_options(mode, backend, duration=time, sensor=sensor, sensor_noise=noise, port=port, rate=rate)
     if port is not None:  # a port that cannot be opened is refused before any work, with nothing written
-        from ..hardware.serialport import open_port
-
-        open_port(port, 115200, 0.1).close()
+        check_port(port)
     out = output_folder(out, "--out")  # before the work: a bad location costs nothing
-    design = usable(design_from(design_path))
+    design = usable(design_from(design_path), path=design_path)
     from ..magnetics import design_model
 
     own = design_model(design, core)

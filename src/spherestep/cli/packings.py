@@ -70,7 +70,7 @@ def packing(
     if refine is not None and refine > MAX_REFINE:
         raise bad_value("--refine", f"0..{MAX_REFINE} refinement levels, as in design files (each level roughly "
                         "triples the caps)", refine)
-    metres, unit = length_and_unit(radius, "--radius")
+    metres, unit = length_and_unit(radius, "--radius", unit_required=True)
     if not (np.isfinite(metres) and metres > 0):
         raise bad_value("--radius", 'a finite positive length such as "6 in"', radius)
     out = output_file(out, "--out", suffixes=(".csv", ".json"))

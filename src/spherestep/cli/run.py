@@ -123,8 +123,12 @@ def run(
     """
     if dry_run and simulate:
         raise bad_value("--dry-run/--simulate", "at most one of the two", "both")
+    if port is not None and (dry_run or simulate):  # a port given with them would be silently ignored
+        option = "--dry-run" if dry_run else "--simulate"
+        raise bad_value("--port", f"left out with {option} (it sends nothing to a device); drop --port or "
+                        f"{option}", port)
     if simulate:
-        port = port or "simulated"
+        port = "simulated"
     if not dry_run and port is None:
         raise bad_value("--port", "the controller's serial device, such as /dev/ttyUSB0 (or give --dry-run)", None)
     if channels is not None and not dry_run:

@@ -39,7 +39,7 @@ def sense(
     from .. import sensing
 
     out = output_folder(out, "--out")  # before the work: a bad location costs nothing
-    design = usable(design_from(design_path))
+    design = usable(design_from(design_path), path=design_path)
     if marked:
         design = sensing.marked_design(design)
     with progress(f"placing {sensors} magnetometers", enabled=not as_json) as say:

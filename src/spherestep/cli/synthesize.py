@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import sys
 from pathlib import Path
 
 import typer
@@ -9,6 +10,7 @@ import typer
 from .app import app
 from .common import console, input_file, number, print_json
 from .progress import progress
+from .signals import Terminated, interrupt_of, sigterm_as_interrupt, told
 
 
 @app.command()
@@ -45,9 +47,20 @@ def synthesize(
         raise bad_value("--budget", f"one of {', '.join(BUDGETS)}", budget)
     spec_value = load_spec(input_file(spec, "SPEC"))
     out = output_folder(out, "--out")
-    with progress(f"synthesizing for {spec_value.name!r}", enabled=not as_json) as say:
-        result = run(spec_value, out, budget=budget, scheduler=scheduler, workers=workers, threads=threads,
-                     resume=resume, seed=int(seed), progress=say)
+    try:
+        with sigterm_as_interrupt(), progress(f"synthesizing for {spec_value.name!r}", enabled=not as_json) as say:
+            result = run(spec_value, out, budget=budget, scheduler=scheduler, workers=workers, threads=threads,
+                         resume=resume, seed=int(seed), progress=say)
+    except BaseException as exc:
+        interrupt = interrupt_of(exc)
+        if interrupt is None:
+            raise
+        signame = "SIGTERM" if isinstance(interrupt, Terminated) else "SIGINT"
+        print(f"spherestep: interrupted ({signame}): the cluster is stopped; the candidates evaluated so far are "
+              f"stored in {str(out)!r}: continue with spherestep synthesize {spec} --out {out} --budget {budget} "
+              "--resume", file=sys.stderr)
+        told()
+        raise typer.Exit(143 if isinstance(interrupt, Terminated) else 130) from None
     if as_json:
         print_json(result.to_dict())
         return
@@ -56,7 +69,7 @@ def synthesize(
     view = Table(title=f"finalists for {spec_value.name} ({budget} budget, {len(result.table)} candidates, "
                        f"{result.seconds:.0f} s)")
     for col in ("#", "layout", "magnets/coils", "meets", "binds", "file"):
-        view.add_column(col)
+        view.add_column(col, no_wrap=col in ("layout", "file"))  # whole: a cut layout lost the stator's level
     for n, f in enumerate(result.finalists, start=1):
         v = f.verification
         b = v.binding

@@ -167,10 +167,18 @@ def parse(text: str, fmt: str = "yaml", source: str = "<design>") -> Document:
     return validate(parse_data(text, fmt, source), source)
 
 
+SUFFIXES = (".yaml", ".yml", ".toml")  # a design file's name says how it is read; any other suffix is refused
+
+
 def read(path: str | Path) -> Document:
-    """The :class:`Document` of a design file: TOML when its name ends in ``.toml``, YAML otherwise."""
+    """The :class:`Document` of a design file: TOML when its name ends in ``.toml``, YAML for ``.yaml``/``.yml``;
+    DesignFileError for any other suffix (a ``.txt`` is refused before it is read)."""
     path = Path(path)
-    fmt = "toml" if path.suffix.lower() == ".toml" else "yaml"
+    suffix = path.suffix.lower()
+    if suffix not in SUFFIXES and not path.is_dir():  # a folder is told it is one (read_text)
+        raise DesignFileError(str(path), None, f"has suffix {suffix or '(none)'!r}; a design file is named "
+                              "*.yaml, *.yml or *.toml (the suffix says how it is read): rename it")
+    fmt = "toml" if suffix == ".toml" else "yaml"
     return parse(read_text(path), fmt, str(path))
 
 

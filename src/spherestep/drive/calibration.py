@@ -138,8 +138,10 @@ def _session(design, backend, traj, settle: float, start, model, limits, rate: f
     session = servo_session(design, traj, traj.duration + settle, port=port, emulate=emulate, model=model,
                             drive=limits, R0=start, **options)
     rep = session.report
-    if rep.outcome == "INTERRUPT":  # the loop caught Ctrl-C or SIGTERM and switched every coil off: unwind on
-        raise interrupt_for(last_signal())
+    if rep.outcome == "INTERRUPT":  # the loop caught Ctrl-C or SIGTERM and switched every coil off: unwind on,
+        stop = interrupt_for(last_signal())  # saying whether the device acknowledged it (the CLI tells the user)
+        stop.off_acknowledged = bool(rep.off_acknowledged)
+        raise stop
     if rep.outcome != "done" or len(rep.times) < 4:
         raise bad_value("backend", "a motor that runs the servo to the end of each hold",
                         f"outcome {rep.outcome} ({rep.message})")

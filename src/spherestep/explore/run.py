@@ -12,6 +12,7 @@ and not written, so the next run picks them up.
 
 from __future__ import annotations
 
+import logging
 import os
 import re
 import time
@@ -29,6 +30,7 @@ from .grid import DesignPoint
 from .store import ResultStore
 
 CONNECT_TIMEOUT = 10.0  # seconds to wait for an existing scheduler
+QUIT_TIMEOUT = 2.0  # s: on an interrupt the client and a local cluster are closed within this (issue 40 §3: ≤ 3 s)
 _SCHEDULER = re.compile(r"^(tcp|tls|inproc|ucx|ws|wss)://\S+$")
 
 
@@ -60,20 +62,74 @@ def dask_client(scheduler: str | None = None, *, threads: bool = False, workers:
             raise error from None
         try:
             yield client
-        finally:
-            client.close()
+        except BaseException:
+            _quietly(client.close, timeout=QUIT_TIMEOUT)
+            raise
+        client.close()
         return
     n = workers or os.cpu_count() or 1
-    if threads:
-        cluster = LocalCluster(n_workers=1, threads_per_worker=n, processes=False, dashboard_address="127.0.0.1:0")
-    else:
-        cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, host="127.0.0.1",
-                               dashboard_address="127.0.0.1:0")
+    with _sigint_ignored():  # worker processes inherit it: Ctrl-C reaches this process alone, which closes them
+        if threads:
+            cluster = LocalCluster(n_workers=1, threads_per_worker=n, processes=False,
+                                   dashboard_address="127.0.0.1:0")
+        else:
+            cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, host="127.0.0.1",
+                                   dashboard_address="127.0.0.1:0", silence_logs=logging.ERROR)
+    client = Client(cluster)
     try:
-        with Client(cluster) as client:
-            yield client
+        yield client
+    except BaseException:  # an interrupt (or a failure): stop the cluster quickly and without Dask's warnings
+        _quietly(client.close, timeout=QUIT_TIMEOUT / 2)
+        _quietly(cluster.close, timeout=QUIT_TIMEOUT / 2)
+        _kill_workers()  # a worker busy in a long task does not answer the close: its process is ended
+        cluster.shutdown_on_close = False  # else Dask's atexit hook tries the close again, for 10 s, at exit
+        raise
+    client.close()
+    cluster.close()
+
+
+@contextmanager
+def _sigint_ignored():
+    """SIGINT ignored while inside (in the main thread): processes started meanwhile inherit the disposition across
+    exec and Python keeps it, so a terminal's Ctrl-C, sent to the whole process group, does not print a
+    KeyboardInterrupt traceback from every worker; the command that started them stops them."""
+    import signal
+    import threading
+
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        yield
     finally:
-        cluster.close()
+        signal.signal(signal.SIGINT, previous)
+
+
+def _kill_workers() -> None:
+    """End the local cluster's worker processes that are still alive (children of this process)."""
+    import multiprocessing
+
+    for child in multiprocessing.active_children():
+        child.kill()
+    for child in multiprocessing.active_children():
+        child.join(timeout=0.5)
+
+
+def _quietly(close: Callable, timeout: float) -> None:
+    """``close(timeout=timeout)`` with Dask's loggers silenced and its errors ignored: after an interrupt the run
+    is over, and what a closing cluster says about the tasks it drops is noise on the user's terminal."""
+    loggers = [logging.getLogger(name) for name in ("distributed", "tornado", "asyncio")]
+    levels = [logger.level for logger in loggers]
+    for logger in loggers:
+        logger.setLevel(logging.CRITICAL + 1)
+    try:
+        close(timeout=timeout)
+    except BaseException:  # noqa: BLE001 (a second Ctrl-C or a timeout while closing: the run is over either way)
+        pass
+    finally:
+        for logger, level in zip(loggers, levels):
+            logger.setLevel(level)
 
 
 def finished_keys(table: pd.DataFrame, limits: Limits) -> set[str]:

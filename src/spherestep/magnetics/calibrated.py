@@ -21,6 +21,11 @@ CALIBRATION_FILE = "calibration.yaml"  # beside the design file
 CONSISTENT = 0.05  # a fit whose residual RMS is above this fraction of the uncorrected model's does not explain the data
 
 
+def torque_text(value: float, digits: int = 3) -> str:
+    """A torque for people: N·m from 1 N·m up, mN·m below (``1.09 N·m``, ``44.1 mN·m``; never ``1.09e+03 mN·m``)."""
+    return f"{value:.{digits}g} N·m" if abs(value) >= 1.0 else f"{value * 1e3:.{digits}g} mN·m"
+
+
 @dataclass(frozen=True)
 class Moved:
     """A node the fit moved beyond two standard deviations: ``table`` (``"detent"``/``"winding"``), ``angle``
@@ -90,8 +95,8 @@ class Calibration:
             "of the uncorrected model's): the rotor was not at rest in the holds or the measurements are off; do "
             "not use this calibration"]
         lines += [f"{self.holds} holds, {self.equations} equations ({self.backend}): residual RMS "
-                 f"{self.residual_before * 1e3:.3g} -> {self.residual_after * 1e3:.3g} mN·m (noise taken "
-                 f"{self.sigma * 1e3:.2g} mN·m)",
+                 f"{torque_text(self.residual_before)} -> {torque_text(self.residual_after)} (noise taken "
+                 f"{torque_text(self.sigma, 2)})",
                  f"detent table ×{self.scale_detent:.4f} ± {self.scale_std[0]:.4f}, winding table "
                  f"×{self.scale_winding:.4f} ± {self.scale_std[1]:.4f} (fitted against nominal, θ⁰·θ / θ⁰·θ⁰)",
                  ("no coupling through the cores" if not self.coupling else
@@ -125,14 +130,21 @@ class Calibration:
                 "unseen": list(self.unseen)}
 
     def save(self, path) -> Path:
-        """Write the calibration as YAML (atomically; ``calibration.yaml`` beside the design file is what
-        :func:`spherestep.magnetics.design_model` reads with ``calibration=``); returns the path."""
+        """Write the calibration atomically, as JSON when ``path`` ends in ``.json`` and as YAML otherwise
+        (``calibration.yaml`` beside the design file is what :func:`spherestep.magnetics.design_model` reads with
+        ``calibration=``; :meth:`load` reads both, JSON being YAML); returns the path."""
+        import json
+
         import yaml
 
         from ..atomic import write_text
 
+        data = self.to_dict(degrees=True)
+        if Path(path).suffix.lower() == ".json":
+            return write_text(path, json.dumps(data, indent=1) + "\n")
+
         text = "# spherestep torque calibration (spherestep.control.calibrate); tables in N·m at nodes in degrees\n"
-        return write_text(path, text + yaml.safe_dump(self.to_dict(degrees=True), sort_keys=False))
+        return write_text(path, text + yaml.safe_dump(data, sort_keys=False))
 
     @classmethod
     def load(cls, path, design) -> Calibration:
