@@ -7,7 +7,7 @@ for another BLAS kernel's rounding, issue 35, not for a changed model).
 - the robustness row (``spherestep.demo.robustness``): the servo holds 4 of 5 random orientations within 0.05°
   on the plant with the winding ×0.85 and the detent ×1.2, the worst 0.792°;
 - the CLI calibration (``spherestep calibrate --emulate``, 60 holds, the default plant error): the torque error
-  against the plant falls ≥ 5× (docs/control.md: 0.1748 → 0.0343, 5.1×).
+  against the plant falls ≥ 5× (docs/control.md: 0.1699 → 0.0312, 5.4×).
 """
 
 from __future__ import annotations
@@ -62,11 +62,9 @@ def test_robustness_row_pinned(proto):
 @pytest.mark.slow
 def test_cli_calibration_factor_pinned(tmp_path, capsys):
     """``spherestep calibrate --emulate`` with its defaults (60 holds, detent ×1.2, winding ×0.85, seed 0): the
-    torque error against the plant falls ≥ 5× (docs/control.md, measured 5.1×: 0.1748 → 0.0343), the scales come
-    back near the plant's (×1.178, ×0.831 within 0.03). The error before the fit is deterministic: 0.1699 here
-    (2026-11-28), not docs/control.md's 0.1748 (measured 2026-11-26, on an earlier commit; the cause of the 2.8 %
-    is not established — issue 35's renumbering of the coils, which reorders the 200 random currents it is
-    measured at, is one candidate)."""
+    torque error against the plant falls ≥ 5× (docs/control.md's control-notes block, measured 5.4×: 0.1699 →
+    0.0312 on 2026-11-28), the scales come back near the plant's. The error before the fit is deterministic: 0.1699
+    (0.1748 before issue 35 renumbered the coils, which reorders the 200 random currents it is measured at)."""
     out = tmp_path / "calibration.yaml"
     assert main(["calibrate", "--emulate", "--out", str(out), "--json"]) == 0
     data = json.loads(capsys.readouterr().out)
