@@ -62,5 +62,5 @@ def test_hung_test_times_out(tmp_path):
 
 def test_timeout_and_strict_markers_are_configured():
     config = (ROOT / "pyproject.toml").read_text()
-    assert "--strict-markers" in config and 'timeout_method = "thread"' in config and "\ntimeout = 1800\n" in config
+    assert "--strict-markers" in config and 'timeout_method = "thread"' in config and "\ntimeout = 600\n" in config
     import pytest_timeout  # noqa: F401
