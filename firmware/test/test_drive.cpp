@@ -1,6 +1,7 @@
 // Host test harness for the current-mode core: g++ -std=c++11 -I../spherestep test_drive.cpp
 // ../spherestep/drive.cpp ../spherestep/protocol.cpp, run with the path of vectors2.txt. Prints one line per
 // failure and a closing "N passed, N failed"; the exit status is 0 only if nothing failed.
+#include "check.h"
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -16,17 +17,6 @@ using spherestep::CurrentDevice;
 
 namespace {
 
-int passed = 0;
-int failed = 0;
-
-void check(bool ok, const std::string& what) {
-  if (ok) {
-    ++passed;
-  } else {
-    ++failed;
-    std::printf("FAIL %s\n", what.c_str());
-  }
-}
 
 std::string frame(const std::string& body) {
   char crc[8];
@@ -245,6 +235,5 @@ int main(int argc, char** argv) {
   runVectors(argv[1]);
   testPrototypeFrameFits();
   testWatchdogAcrossMicrosWrap();
-  std::printf("%d passed, %d failed\n", passed, failed);
-  return failed == 0 ? 0 : 1;
+  return report();
 }

@@ -4,6 +4,7 @@
 // the clock and the USB serial port. Checks the pin map, the sign of the current reads, the magnetometers' stale
 // flags and the supply relay opening on a trip. g++ -std=c++11 -Iarduino -I../spherestep -I../spherestep_drive
 // test_drive_sketch.cpp ../spherestep/drive.cpp ../spherestep/protocol.cpp; prints "N passed, N failed".
+#include "check.h"
 #include <cstdio>
 #include <map>
 #include <string>
@@ -16,17 +17,6 @@
 
 namespace {
 
-int passed = 0;
-int failed = 0;
-
-void check(bool ok, const std::string& what) {
-  if (ok) {
-    ++passed;
-  } else {
-    ++failed;
-    std::printf("FAIL %s\n", what.c_str());
-  }
-}
 
 // The Teensy 4.1's PWM pins (Teensyduino's teensy4/pwm.c, pwm_pin_info for ARDUINO_TEENSY41: FlexPWM or QuadTimer)
 bool pwmPin(int pin) {
@@ -263,6 +253,5 @@ int main() {
   r = exchange("03,READ");
   check(r == frame("03,NAK,OVER"), "the trip is answered: " + r);
 
-  std::printf("%d passed, %d failed\n", passed, failed);
-  return failed == 0 ? 0 : 1;
+  return report();
 }

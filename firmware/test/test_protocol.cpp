@@ -1,6 +1,7 @@
 // Host test harness for the firmware's protocol core: g++ -std=c++11 -I../spherestep test_protocol.cpp
 // ../spherestep/protocol.cpp, run with the path of vectors.txt. Prints one line per failure and a closing
 // "N passed, N failed"; the exit status is 0 only if nothing failed.
+#include "check.h"
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
@@ -14,17 +15,6 @@ using spherestep::Device;
 
 namespace {
 
-int passed = 0;
-int failed = 0;
-
-void check(bool ok, const std::string& what) {
-  if (ok) {
-    ++passed;
-  } else {
-    ++failed;
-    std::printf("FAIL %s\n", what.c_str());
-  }
-}
 
 std::string hex(uint64_t v) {
   char text[20];
@@ -209,6 +199,5 @@ int main(int argc, char** argv) {
   testBreakBeforeMake();
   testWatchdogAcrossMillisWrap();
   testBootAndHandshake();
-  std::printf("%d passed, %d failed\n", passed, failed);
-  return failed == 0 ? 0 : 1;
+  return report();
 }

@@ -2,6 +2,7 @@
 // pins start at the relay-off level, a SET closes the right relays on the Mega's pins 22..53 (active low),
 // polarity relays move only while the enable relays are open and after the settle delay, the watchdog
 // opens everything. g++ -std=c++11 -Iarduino -I../spherestep test_sketch.cpp ../spherestep/protocol.cpp
+#include "check.h"
 #include <cstdio>
 #include <string>
 #include <vector>
@@ -18,17 +19,6 @@ std::string rx;  // bytes the host has sent, not yet read
 std::string tx;  // bytes the sketch wrote
 std::vector<std::string> events;
 
-int passed = 0;
-int failed = 0;
-
-void check(bool ok, const std::string& what) {
-  if (ok) {
-    ++passed;
-  } else {
-    ++failed;
-    std::printf("FAIL %s\n", what.c_str());
-  }
-}
 
 std::string frame(const std::string& body) {
   char crc[8];
@@ -109,6 +99,5 @@ int main() {
   check(allOpen, "every relay open when the watchdog expires");
   check(exchange("03,SET,1,0") == frame("03,NAK,WDOG"), "SET refused after the watchdog tripped");
 
-  std::printf("%d passed, %d failed\n", passed, failed);
-  return failed == 0 ? 0 : 1;
+  return report();
 }
