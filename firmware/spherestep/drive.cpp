@@ -231,6 +231,9 @@ size_t CurrentDevice::process(uint32_t nowUs, char* reply) {
       r.decimalField((uint32_t)lround(limits_.maxCurrent * 1000));
       r.decimalField((uint32_t)lround(limits_.maxPower));
       r.decimalField(loop_.fieldLsbNt);
+      r.decimalField((uint32_t)lround(loop_.supply * 1000));         // mV
+      r.decimalField((uint32_t)lround(limits_.resistance * 1000));   // mΩ
+      r.decimalField((uint32_t)lround(loop_.inductance * 1e6));      // µH
     }
     r.field(name_);
     return r.finish();

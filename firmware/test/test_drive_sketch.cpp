@@ -199,7 +199,7 @@ int main() {
   check(csHigh, "every ADC deselected after setup");
 
   std::string r = exchange("00,HELLO,2");
-  check(r == frame("00,ACK,HELLO,2,29,8,100,1000,1000,100,8118,spherestep-t41"), "HELLO: " + r);
+  check(r == frame("00,ACK,HELLO,2,29,8,100,1000,1000,100,8118,24000,24000,18700,spherestep-t41"), "HELLO: " + r);
 
   // coil 0 +500 mA, coil 1 -500 mA: the first step drives coil 1 reversed (PH bit 1), both EN up, supply on
   std::string block = "01F4FE0C";

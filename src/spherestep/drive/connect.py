@@ -124,8 +124,12 @@ def connect(design, kind: str, *, port: str | None = None, plant=None, limits=No
     with ExitStack() as stack:
         inner = ExitStack()  # the host's link, let go before the device (Connection.release)
         if kind == "port":
+            if limits is None:
+                raise bad_value("limits", "the design's DriveLimits, which the device's handshake must agree with "
+                                "(spherestep.magnetics.design_model(design).limits)", limits)
             stack.callback(inner.close)
             link = inner.enter_context(hardware.DriveLink(port))
+            link.info.check_drive(limits, f"the device on {port}")
             yield Connection(kind, link, timing={}, watchdog=link.info.watchdog, _release=inner.close)
             return
         if kind == "relay port":
@@ -147,6 +151,7 @@ def connect(design, kind: str, *, port: str | None = None, plant=None, limits=No
                                period=QEMU_PERIOD if kind == "qemu" else None)
         if kind == "lockstep":
             link = stack.enter_context(hardware.LockstepLink(motor, **device))
+            link.info.check_drive(motor.drive_limits, "the emulated device")
             yield Connection(kind, link, motor, link.truth, {"clock": link.clock, "sleep": link.sleep},
                              link.device.watchdog_ms / 1000, 0.0)
             return
@@ -156,10 +161,12 @@ def connect(design, kind: str, *, port: str | None = None, plant=None, limits=No
             dev = stack.enter_context(QemuMotor(motor, **device))
             stack.callback(inner.close)  # after the device's exit is registered: the link closes first
             link = inner.enter_context(hardware.DriveLink(dev.port, timeout=QEMU_TIMEOUT))
+            link.info.check_drive(motor.drive_limits, "the firmware in QEMU")
             yield Connection(kind, link, motor, dev.truth, {}, dev.watchdog_ms / 1000, dev.started, inner.close,
                              dev.step_cost)
             return
         dev = stack.enter_context(hardware.MotorPty(motor, **device))
         stack.callback(inner.close)  # after the device's exit is registered: the link closes first
         link = inner.enter_context(hardware.DriveLink(dev.port))
+        link.info.check_drive(motor.drive_limits, "the emulated device")
         yield Connection(kind, link, motor, dev.truth, {}, dev.device.watchdog_ms / 1000, dev.started, inner.close)

@@ -124,7 +124,7 @@ class CurrentDevice:
         self.expected = np.zeros(coils)  # A: î, the current the coil's law predicts from the duties driven
         self._fresh = True  # the next driving step starts î at the reading (the bridges were asleep)
         self._follow = np.zeros(coils, dtype=np.int64)
-        self.supply = float(supply)
+        self.supply, self.inductance = float(supply), float(inductance)
         self.version = 0  # 0: no session, 1: relay session, 2: current session
         self.enable = self.polarity = 0  # relay-mode masks
         self.trace: deque[tuple[str, int]] = deque(maxlen=4096)
@@ -276,7 +276,9 @@ class CurrentDevice:
                 return accepted(1, self.channels, self.watchdog_ms, self.name)
             lim = self.limits
             return accepted(VERSION2, self.coils, self.sensors, self.watchdog_ms, self.period_us,
-                            round(milliamperes(lim.max_current)), round(lim.max_power), self.field_lsb_nt, self.name)
+                            round(milliamperes(lim.max_current)), round(lim.max_power), self.field_lsb_nt,
+                            round(self.supply * 1000), round(lim.resistance * 1000), round(self.inductance * 1e6),
+                            self.name)
         if verb == "OFF":
             if args:
                 return nak("ARGS")

@@ -20,7 +20,7 @@ import numpy as np
 import serial as pyserial
 
 from ..electrics import from_milliamperes, milliamperes
-from ..errors import bad_value
+from ..errors import InputError, bad_value
 from .backend import LinkError
 from .protocol import BAUDRATE, NAK_CODES, RETRYABLE, Frame, FrameError, LineReader, decode, encode, \
     parse_decimal
@@ -36,9 +36,24 @@ class DeviceTrip(NakError):
     heat) and says so; ``code`` is the trip code."""
 
 
+FIRMWARE = ("firmware/spherestep_drive (drive.cpp) of spherestep 0.1.0 from 2026-11-28 on, whose HELLO,2 "
+            "answer reports the supply and the coils")
+"""What to flash on a device whose handshake predates the supply and coil fields (named in the refusal)."""
+AGREE = 0.02
+"""How far (relative) a device's supply, coil resistance, inductance and current limit may lie from the design's
+:class:`~spherestep.electrics.DriveLimits` (firmware constants are typed to three or four digits: the sketch's
+18.7 mH against Wheeler's 18.714 mH is 0.08 %), besides the wire's rounding (half a mV, mΩ, µH or mA)."""
+
+
+class DeviceMismatch(InputError):
+    """The device's handshake disagrees with the design (an older firmware, another supply or other coils)."""
+
+
 @dataclass(frozen=True)
 class DriveInfo:
-    """What a current-mode device reports in the handshake (SI units)."""
+    """What a current-mode device reports in the handshake (SI units): ``supply_voltage`` (V), the coils'
+    ``resistance`` (Ω) and ``inductance`` (H) that its current loop is tuned for, its ``max_current`` (A) and
+    ``max_power`` (W) limits."""
 
     name: str
     coils: int
@@ -48,17 +63,45 @@ class DriveInfo:
     max_current: float
     max_power: float
     field_lsb: float
+    supply_voltage: float
+    resistance: float
+    inductance: float
+
+    def check_drive(self, drive, where: str = "the device") -> None:
+        """Raise :class:`DeviceMismatch` (one line, naming the quantity) unless the supply, the coils' ``R`` and
+        ``L`` and the current limit agree with ``drive`` (a :class:`~spherestep.electrics.DriveLimits`) within
+        :data:`AGREE` plus the wire's rounding: the law's volts, time constants and amperes would be wrong."""
+        for name, label, unit, device, design, step in (
+                ("supply_voltage", "supply", "V", self.supply_voltage, drive.supply_voltage, 5e-4),
+                ("resistance", "coil resistance", "Ω", self.resistance, drive.resistance, 5e-4),
+                ("inductance", "coil inductance", "H", self.inductance, drive.inductance, 5e-7),
+                ("max_current", "current limit", "A", self.max_current, drive.max_current, 5e-4)):
+            if abs(device - design) > AGREE * abs(design) + step:
+                error = DeviceMismatch(
+                    f"{where} ({self.name}) reports a {label} of {device:.4g} {unit}, but the design's drive has "
+                    f"{name} = {design:.4g} {unit}; flash the firmware with the design's coils and supply, or give "
+                    "the drive limits of the motor this device drives (every coil is off)")
+                error.field = name
+                raise error
 
 
 def device_info(ack: Frame, port: str) -> DriveInfo:
-    """The :class:`DriveInfo` in an ``ACK,HELLO,2,...`` frame; :class:`LinkError` if it is not one."""
+    """The :class:`DriveInfo` in an ``ACK,HELLO,2,...`` frame; :class:`DeviceMismatch` for the older 9-field
+    answer (no supply or coils: :data:`FIRMWARE` to flash), :class:`LinkError` if it is not one."""
     d = ack.args[1:]
-    nums = [parse_decimal(x, 9) for x in d[:8]] if len(d) == 9 else [None]
-    if None in nums or nums[0] != VERSION2 or not nums[1] or not nums[3] or not nums[4]:
+    if len(d) == 9 and parse_decimal(d[0], 9) == VERSION2:
+        error = DeviceMismatch(f"device on {port} ({d[8]}) answered HELLO,2 without its supply voltage and coils "
+                               f"(a firmware older than this host); flash {FIRMWARE}")
+        error.field = "firmware"
+        raise error
+    nums = [parse_decimal(x, 9) for x in d[:11]] if len(d) == 12 else [None]
+    if None in nums or nums[0] != VERSION2 or not all(nums[i] for i in (1, 3, 4, 8, 9, 10)):
         raise LinkError(f"device on {port} answered HELLO,2 with {','.join(d)!r}; expected version 2, coils, "
-                        "sensors, watchdog_ms, period_us, max_mA, max_W, field_nT, name")
-    _, coils, sensors, wd, period, ma, watts, lsb = nums
-    return DriveInfo(d[8], coils, sensors, wd / 1000, period * 1e-6, float(from_milliamperes(ma)), float(watts), lsb * 1e-9)
+                        "sensors, watchdog_ms, period_us, max_mA, max_W, field_nT, supply_mV, coil_mOhm, coil_uH, "
+                        "name")
+    _, coils, sensors, wd, period, ma, watts, lsb, mv, mohm, uh = nums
+    return DriveInfo(d[11], coils, sensors, wd / 1000, period * 1e-6, float(from_milliamperes(ma)), float(watts),
+                     lsb * 1e-9, mv / 1000, mohm / 1000, uh * 1e-6)
 
 
 class DriveLink:
