@@ -26,7 +26,7 @@ import numpy as np
 
 from _record import Record
 from spherestep.commutation import Plan, Step, default_channel_map
-from spherestep.hardware import DryRun, PtyDevice, Serial, play
+from spherestep.hardware import DryRun, PtyDevice, RelayLink, Serial, play
 from spherestep.hardware.protocol import crc16, crc16_table, decode, encode
 
 FRAMES = 500
@@ -60,7 +60,7 @@ def main() -> None:
 
         def play_pty():
             link.close()
-            play(plan, Serial(dev.port), rate=1e6)
+            play(plan, RelayLink(Serial(dev.port), plan.channel_map), rate=1e6)
             link.open()
 
         cases = {
@@ -68,7 +68,7 @@ def main() -> None:
                                                 for i in range(FRAMES)],
             "PING round trip over pty": lambda: [link._transact("PING") for _ in range(FRAMES)],
             "play() over pty, rate unbounded": play_pty,
-            "play() on DryRun": lambda: play(plan, DryRun(), rate=1e6),
+            "play() on DryRun": lambda: play(plan, RelayLink(DryRun(), plan.channel_map), rate=1e6),
             "encode + decode only": lambda: [decode(encode(0x12, "SET", "3", "20")[1:-1]) for _ in range(FRAMES)],
             "crc16 of a SET frame": lambda: [crc16(frame) for _ in range(FRAMES)],
         }
@@ -78,7 +78,7 @@ def main() -> None:
         link.off()
         link.close()
         short = Plan(steps=plan.steps[:RATE_STEPS], coil_count=16, channel_map=plan.channel_map)
-        lags = [play(short, Serial(dev.port), rate=RATE).max_lag for _ in range(REPEATS)]
+        lags = [play(short, RelayLink(Serial(dev.port), short.channel_map), rate=RATE).max_lag for _ in range(REPEATS)]
     base = rates["SET round trip over pty"]
     print(f"# bench_hardware  {time.strftime('%Y-%m-%d')}  {platform.machine()}  {os.cpu_count()} cores  "
           f"Python {platform.python_version()}  (medians of {REPEATS} interleaved rounds of {FRAMES} frames)")

@@ -17,7 +17,7 @@ ROOT = Path(__file__).resolve().parents[1]
 SRC = ROOT / "src" / "spherestep"
 MIDDLE = ("electrics", "magnetics", "sensing", "control", "dynamics", "hardware", "drive")
 BACKENDS = {"LockstepLink", "DriveLink", "PtyDevice", "MotorPty", "Simulated", "DryRun", "Serial", "SerialPort",
-            "EmulatedMotor"}
+            "EmulatedMotor", "RelayLink"}
 SELECTOR = SRC / "drive" / "connect.py"
 ELECTRICS = SRC / "electrics.py"
 CURRENTISH = re.compile(r"(^|_)(ma|amps?|amperes?|currents?)($|_)|nominal|current", re.IGNORECASE)
@@ -137,7 +137,7 @@ def test_backends_are_built_only_by_the_selector():
              for name, line in _calls(p) if name in BACKENDS]
     assert not found, "backend built outside spherestep.drive.connect: " + "; ".join(found)
     assert {name for name, _ in _calls(SELECTOR)} >= {"LockstepLink", "DriveLink", "MotorPty", "Simulated",
-                                                       "DryRun", "Serial", "EmulatedMotor"}
+                                                       "DryRun", "Serial", "EmulatedMotor", "RelayLink"}
 
 
 def _names(node) -> list[str]:
@@ -234,26 +234,57 @@ def test_numba_lives_in_the_fast_path():
 
 
 def test_the_selector_refuses_bad_input_and_builds_the_light_backends():
-    """``drive.connect``: an unknown kind, a port kind without a port and an emulated kind without a plant are each one
-    InputError naming the field; ``dry run`` is protocol 1's back end with the channels asked for, ``simulated`` the
-    relay back end on the design's rotor at its start."""
+    """``drive.connect``: an unknown kind, a port kind without a port, an emulated kind without a plant and a relay
+    kind without the plan's channel map are each one InputError naming the field; ``dry run`` is protocol 1's back
+    end with the channels asked for, ``simulated`` the relay back end on the design's rotor at its start, each
+    behind a ``RelayLink``."""
     import numpy as np
 
+    from spherestep.commutation import default_channel_map
     from spherestep.drive import KINDS, connect
     from spherestep.errors import InputError
-    from spherestep.hardware import Backend
+    from spherestep.hardware import Backend, Link, RelayLink
     from spherestep.magnetics import torque_map
     from spherestep.motor import prototype
 
     design = prototype()
+    cmap = default_channel_map(len(design.stator))
     for kind, options, field in (("serial", {}, "kind"), ("port", {}, "port"), ("relay port", {}, "port"),
-                                 ("lockstep", {}, "plant"), ("simulated", {"plant": object()}, "R0")):
+                                 ("port", {"port": "/dev/ttyACM0"}, "limits"), ("dry run", {}, "channel_map"),
+                                 ("lockstep", {}, "plant"), ("simulated", {"plant": object(), "channel_map": cmap}, "R0")):
         with pytest.raises(InputError, match=f"^{field} must be"):
             with connect(design, kind, **options):
                 pass
     assert set(KINDS) == {"port", "lockstep", "pty", "qemu", "relay port", "dry run", "simulated"}
-    with connect(None, "dry run", channels=12) as conn:
-        assert isinstance(conn.link, Backend) and conn.link.open().channels == 12 and conn.truth is None
-    with connect(design, "simulated", plant=torque_map(design), R0=np.eye(3)) as conn:
-        assert isinstance(conn.link, Backend) and conn.link.coil_count == len(design.stator)
-        assert np.array_equal(conn.link.R, np.eye(3))
+    with connect(None, "dry run", channels=58, channel_map=cmap) as conn:
+        assert isinstance(conn.link, RelayLink) and isinstance(conn.link.backend, Backend)
+        assert conn.link.open().channels == 58 and conn.truth is None
+    with connect(design, "simulated", plant=torque_map(design), R0=np.eye(3), channel_map=cmap) as conn:
+        assert isinstance(conn.link, RelayLink) and conn.link.backend.coil_count == len(design.stator)
+        assert np.array_equal(conn.link.backend.R, np.eye(3))
+        assert conn.timing == {"clock": conn.link.clock, "sleep": conn.link.sleep}
+    assert isinstance(conn.link, Link)
+
+
+def test_every_kind_the_selector_builds_is_a_link():
+    """Relay boards behind the one ``Link`` (issue 36): the relay adapter has every member of the protocol, and a
+    relay link driven by amperes writes the relay masks of those coils (0 or ± the nominal current), refuses any
+    other current naming the coil, and reads back what it drives."""
+    import numpy as np
+
+    from spherestep.commutation import default_channel_map
+    from spherestep.electrics import DriveLimits
+    from spherestep.errors import InputError
+    from spherestep.hardware import DryRun, Link, RelayLink
+
+    members = ("drive", "read", "off", "__enter__", "__exit__")
+    assert all(callable(getattr(RelayLink, m, None)) for m in members)
+    drive = DriveLimits(nominal_current=0.25, max_current=0.25)
+    with RelayLink(DryRun(), default_channel_map(4), drive) as link:
+        assert isinstance(link, Link)
+        state = link.drive([0.25, 0.0, -0.25, 0.0])
+        assert (link.backend.sent[-1].enable, link.backend.sent[-1].polarity) == (0b101, 1 << 6)
+        assert np.array_equal(state.currents, [0.25, 0.0, -0.25, 0.0]) and state.field.shape == (0, 3)
+        with pytest.raises(InputError, match="coil 1"):
+            link.drive([0.25, 0.1, 0.0, 0.0])
+    assert link.backend.sent[-1].enable == 0  # every relay open on leaving

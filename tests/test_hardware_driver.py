@@ -9,7 +9,9 @@ from hypothesis import strategies as st
 
 from spherestep.commutation import Plan, Step, default_channel_map
 from spherestep.errors import InputError
-from spherestep.hardware import CoilDriver, DryRun, ThermalLimitError, ThermalLimits, coil_masks, play
+from spherestep.hardware import CoilDriver, DryRun, RelayLink, ThermalLimitError, ThermalLimits, coil_masks
+
+from relays import play_relays
 from spherestep.hardware.protocol import decode
 
 I3 = np.eye(3)
@@ -38,7 +40,7 @@ def test_coil_masks_set_exactly_the_mapped_bits(case):
 
 def test_apply_drives_masks_and_context_ends_all_off():
     backend = DryRun()
-    with CoilDriver(backend, default_channel_map(4)) as driver:
+    with CoilDriver(RelayLink(backend, default_channel_map(4))) as driver:
         driver.apply({0: 1, 2: -1}, duration=0.1)
         driver.hold(0.1)
         driver.apply(make_plan([{3: -1}]).steps[0], duration=0.1)
@@ -53,7 +55,7 @@ def test_apply_drives_masks_and_context_ends_all_off():
 def test_exception_inside_the_driver_still_ends_all_off():
     backend = DryRun()
     with pytest.raises(RuntimeError, match="boom"):
-        with CoilDriver(backend, default_channel_map(4)) as driver:
+        with CoilDriver(RelayLink(backend, default_channel_map(4))) as driver:
             driver.apply({1: 1})
             raise RuntimeError("boom")
     assert (backend.sent[-1].enable, backend.sent[-1].polarity) == (0, 0)
@@ -62,7 +64,7 @@ def test_exception_inside_the_driver_still_ends_all_off():
 
 @pytest.mark.parametrize("coils", [{4: 1}, {-1: 1}, {0: 2}, {0: 0}, {"0": 1}])
 def test_apply_rejects_bad_coils(coils):
-    with CoilDriver(DryRun(), default_channel_map(4)) as driver:
+    with CoilDriver(RelayLink(DryRun(), default_channel_map(4))) as driver:
         with pytest.raises(InputError, match="^coils must be a map from coil index 0..3"):
             driver.apply(coils)
 
@@ -70,13 +72,13 @@ def test_apply_rejects_bad_coils(coils):
 @pytest.mark.parametrize("cmap", [[[0, 1], [1, 2]], [[0, -1]], [[0, 1, 2]], np.zeros((0, 2), int), [[0.5, 1]]])
 def test_channel_map_is_validated(cmap):
     with pytest.raises(InputError, match="^channel_map must be"):
-        CoilDriver(DryRun(), cmap)
+        CoilDriver(RelayLink(DryRun(), cmap))
 
 
 def test_device_with_too_few_channels_refuses_the_map_before_switching():
     backend = DryRun(channels=8)
     with pytest.raises(InputError, match="relay channel 9, but device 'dry-run' has 8 channels"):
-        with CoilDriver(backend, default_channel_map(5)):
+        with CoilDriver(RelayLink(backend, default_channel_map(5))):
             pass
     assert backend.sent == []
 
@@ -84,7 +86,7 @@ def test_device_with_too_few_channels_refuses_the_map_before_switching():
 def test_play_keeps_the_schedule_on_the_backend_clock():
     plan = make_plan([{0: 1}, {1: 1}, {1: -1, 2: 1}, {}])
     backend = DryRun()
-    report = play(plan, backend, rate=4.0)
+    report = play_relays(plan, backend, rate=4.0)
     assert [s.t for s in backend.sent] == pytest.approx([0.0, 0.25, 0.5, 0.75, 1.0])
     assert [s.coils for s in backend.sent] == [{0: 1}, {1: 1}, {1: -1, 2: 1}, {}, {}]
     assert report.steps == 4 and report.elapsed == pytest.approx(1.0) and report.max_lag == 0.0
@@ -92,10 +94,10 @@ def test_play_keeps_the_schedule_on_the_backend_clock():
 
 def test_play_rejects_empty_plan_and_bad_rate():
     with pytest.raises(InputError, match="^plan.steps must be at least one step"):
-        play(make_plan([]), DryRun(), rate=1.0)
+        play_relays(make_plan([]), DryRun(), rate=1.0)
     for rate in (0.0, -1.0, float("nan"), float("inf")):
         with pytest.raises(InputError, match="^rate must be a positive step rate"):
-            play(make_plan([{0: 1}]), DryRun(), rate=rate)
+            play_relays(make_plan([{0: 1}]), DryRun(), rate=rate)
 
 
 def test_continuous_on_time_limit_names_step_and_coil():
@@ -121,7 +123,7 @@ def test_duty_cycle_limit_over_sliding_window():
 
 def test_driver_aborts_all_off_when_a_hold_would_overheat():
     backend = DryRun()
-    with CoilDriver(backend, default_channel_map(4), ThermalLimits(max_on=1.0)) as driver:
+    with CoilDriver(RelayLink(backend, default_channel_map(4)), ThermalLimits(max_on=1.0)) as driver:
         driver.apply({2: 1}, duration=0.6)
         driver.hold(0.6)
         driver.hold(0.3)

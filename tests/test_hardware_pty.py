@@ -21,8 +21,10 @@ import pytest
 
 from spherestep.commutation import Plan, Step, default_channel_map
 from spherestep.errors import InputError
-from spherestep.hardware import CoilDriver, CurrentDevice, Faults, LinkError, NakError, PtyDevice, Serial, coil_masks, \
-    play
+from spherestep.hardware import CoilDriver, CurrentDevice, Faults, LinkError, NakError, PtyDevice, RelayLink, Serial, \
+    coil_masks
+
+from relays import play_relays
 
 I3 = np.eye(3)
 WATCHDOG_MS = 200
@@ -84,7 +86,7 @@ def test_whole_plan_is_streamed_and_acknowledged(device_factory):
     plan = make_plan(12)
     serial = host(dev)
     t = time.monotonic()
-    report = play(plan, serial, rate=50.0)
+    report = play_relays(plan, serial, rate=50.0)
     # the schedule, which a stall can only delay: SET i leaves no earlier than i / rate after the start, and
     # the last step is held a whole period
     assert time.monotonic() - t >= 12 / 50
@@ -106,7 +108,7 @@ def test_whole_plan_is_streamed_and_acknowledged(device_factory):
 def test_keepalives_hold_coils_through_a_long_step(device_factory):
     dev = device_factory()
     serial = host(dev)
-    play(make_plan(2), serial, rate=2.0)  # 0.5 s per step, watchdog 0.2 s
+    play_relays(make_plan(2), serial, rate=2.0)  # 0.5 s per step, watchdog 0.2 s
     assert dev.device.trips == [] and dev.state() == (0, 0)
     assert serial.transcript.count("TX", "$") - 4 == serial.transcript.count("RX", "$") - 4 >= 2 * 3
     assert [line for line in serial.transcript.lines() if " TX " in line][2].split(",")[1].startswith("PING")
@@ -123,7 +125,7 @@ def test_line_faults_are_retried_and_the_plan_completes(device_factory, faults, 
     dev = device_factory(faults)
     plan = make_plan(8)
     serial = host(dev)
-    play(plan, serial, rate=25.0)
+    play_relays(plan, serial, rate=25.0)
     # the fault forced a retransmission; a stall longer than the timeout may force more, each accounted for
     stats = serial.stats
     assert stats["retransmissions"] >= 1 and stats[counter] >= 1
@@ -138,7 +140,7 @@ def test_persistent_corruption_gives_up_after_bounded_retries(device_factory):
     dev = device_factory(Faults(corrupt=frozenset(range(3, 1000))))
     serial = host(dev)
     with pytest.raises(LinkError) as err:
-        play(make_plan(8), serial, rate=25.0)
+        play_relays(make_plan(8), serial, rate=25.0)
     text = one_line(err.value)
     assert text.startswith(f"no valid answer from the device on {dev.port} to SET after 3 attempts")
     assert "switching the coils off failed too" in text and "watchdog opens every relay within 0.2 s" in text
@@ -150,7 +152,7 @@ def test_no_answer_aborts_and_the_watchdog_switches_off(device_factory):
     dev = device_factory(Faults(silent_after=4))
     serial = host(dev)
     with pytest.raises(LinkError) as err:
-        play(make_plan(8), serial, rate=25.0)
+        play_relays(make_plan(8), serial, rate=25.0)
     assert "to SET after 3 attempts (3 timeouts" in one_line(err.value)
     # the hung device drove the last step it obeyed until its watchdog opened every relay
     assert len(enables_driven(dev)) == 3
@@ -162,7 +164,7 @@ def test_device_vanishing_mid_plan_is_a_clean_abort(device_factory):
     dev = device_factory(Faults(vanish_after=5))
     serial = host(dev)
     with pytest.raises(LinkError) as err:
-        play(make_plan(8), serial, rate=25.0)
+        play_relays(make_plan(8), serial, rate=25.0)
     text = one_line(err.value)
     assert text.startswith(f"serial link to {dev.port} lost during SET") and "watchdog" in text
     assert wait_all_off(dev) == (0, 0) and trip_codes(dev) == ["WDOG"]
@@ -172,7 +174,7 @@ def test_host_falling_silent_trips_the_watchdog_and_is_told(device_factory):
     dev = device_factory()
     plan = make_plan(4)
     with pytest.raises(NakError) as err:
-        with CoilDriver(host(dev), plan.channel_map) as driver:
+        with CoilDriver(RelayLink(host(dev), plan.channel_map)) as driver:
             sent = time.monotonic()
             driver.apply(plan.steps[0], duration=0.1)
             # a host stuck without keep-alives: the device switches off by itself, never before its period
@@ -187,7 +189,7 @@ def test_host_falling_silent_trips_the_watchdog_and_is_told(device_factory):
 def test_plan_wider_than_the_device_is_refused_before_anything_is_switched(device_factory):
     dev = device_factory(channels=8)
     with pytest.raises(InputError, match="channel map uses relay channel 11, but device 'spherestep-emu' has 8"):
-        play(make_plan(4, coil_count=6), host(dev), rate=25.0)
+        play_relays(make_plan(4, coil_count=6), host(dev), rate=25.0)
     assert dev.frames == 1 and enables_driven(dev) == []
 
 
@@ -200,7 +202,7 @@ def test_ctrl_c_mid_plan_switches_everything_off(device_factory):
     timer.start()
     try:
         with pytest.raises(KeyboardInterrupt):
-            play(make_plan(100), serial, rate=25.0)
+            play_relays(make_plan(100), serial, rate=25.0)
     finally:
         timer.cancel()
         signal.signal(signal.SIGINT, previous)
@@ -230,7 +232,7 @@ def test_masks_sent_are_those_of_the_plan_convention(device_factory):
     dev = device_factory(channels=32)
     plan = make_plan(6, coil_count=16)
     serial = host(dev)
-    play(plan, serial, rate=50.0)
+    play_relays(plan, serial, rate=50.0)
     sets = [line.split(",")[2:4] for _, kind, line in serial.transcript.entries if kind == "TX" and ",SET," in line]
     assert [(int(e, 16), int(p.split("*")[0], 16)) for e, p in sets] == \
         [coil_masks(s.coils, plan.channel_map) for s in plan.steps]
@@ -243,13 +245,13 @@ def test_wall_clock_promises(device_factory):
     device at the handshake — is reported within a second (attempts × the 0.1 s timeout, and the OFF)."""
     dev = device_factory()
     t = time.monotonic()
-    play(make_plan(12), host(dev), rate=50.0)
+    play_relays(make_plan(12), host(dev), rate=50.0)
     assert time.monotonic() - t == pytest.approx(12 / 50, abs=0.1)
     for faults in (Faults(corrupt=frozenset(range(3, 1000))), Faults(silent_after=4), Faults(vanish_after=5)):
         dev = device_factory(faults)
         t = time.monotonic()
         with pytest.raises(LinkError):
-            play(make_plan(8), host(dev), rate=25.0)
+            play_relays(make_plan(8), host(dev), rate=25.0)
         assert time.monotonic() - t < 1.0, faults
     nobody = PtyDevice(channels=8)
     try:
@@ -274,7 +276,7 @@ def test_one_server_refuses_what_it_cannot_run():
         assert dev.device.channels == 8 and dev.device.name == "board" and dev.motor is None
         with pytest.raises(InputError, match="^motor must be an emulated motor"):
             dev.truth()
-        with CoilDriver(host(dev), default_channel_map(4)) as driver:
+        with CoilDriver(RelayLink(host(dev), default_channel_map(4))) as driver:
             assert (driver.info.name, driver.info.channels) == ("board", 8)
             driver.apply({0: 1, 1: -1}, duration=0.05)
             assert dev.state() == (0b11, 0b10 << 4)

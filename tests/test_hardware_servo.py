@@ -315,7 +315,8 @@ def test_relay_plans_still_play_on_the_current_device(rig):
     the others nothing, and the run ends all off."""
     from spherestep.commutation import Plan, Step, default_channel_map
     from spherestep.drive.connect import emulated_motor
-    from spherestep.hardware import MotorPty, Serial, play
+    from relays import play_relays
+    from spherestep.hardware import MotorPty, Serial
 
     n = len(rig["design"].stator)
     I3 = np.eye(3)
@@ -332,7 +333,7 @@ def test_relay_plans_still_play_on_the_current_device(rig):
             seen.append(dev.truth().i.copy())
 
         link.hold = hold_and_look
-        report = play(plan, link, rate=5.0)
+        report = play_relays(plan, link, rate=5.0)
         time.sleep(0.05)
         final = dev.truth()
     assert report.steps == 3 and report.device.protocol == 1 and report.device.channels == 2 * n

@@ -10,7 +10,9 @@ from spherestep.cli import main
 from spherestep.commutation import about_axis, plan_geometric
 from spherestep.dynamics import tune
 from spherestep.drive.connect import simulated_relays
-from spherestep.hardware import ThermalLimits, play
+from spherestep.hardware import ThermalLimits
+
+from relays import play_relays
 from spherestep.magnetics import torque_map
 
 
@@ -20,7 +22,7 @@ def test_play_on_the_simulated_rotor_follows_the_plan(proto):
     tuning = tune(proto, model)
     backend = simulated_relays(proto, model, plan.steps[0].achieved, rotor=tuning.rotor)
     rate = 1.0 / tuning.dwell
-    report = play(plan, backend, rate, ThermalLimits(max_on=60, max_duty=1.0, window=60))
+    report = play_relays(plan, backend, rate, ThermalLimits(max_on=60, max_duty=1.0, window=60))
     assert report.steps == len(plan.steps)
     assert math.isclose(backend.clock(), len(plan.steps) / rate, rel_tol=1e-9)
     assert not backend.currents.any()  # everything off at the end

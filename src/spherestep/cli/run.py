@@ -166,12 +166,12 @@ def run(
             else:
                 design, options = None, {"port": port, "transcript": transcript}
             kind = "dry run" if dry_run else "simulated" if simulate else "relay port"
-            with connect(design, kind, **options) as conn:
-                backend = conn.link
+            with connect(design, kind, channel_map=steps.channel_map, **options) as conn:
+                backend = conn.link.backend
                 if live is not None:
                     live.start()
                 try:
-                    report = play(steps, backend, rate, limits, on_step=on_step)
+                    report = play(steps, conn.link, rate, limits, on_step=on_step)
                 finally:
                     if live is not None:
                         live.stop()

@@ -16,8 +16,10 @@ Kinds (:data:`KINDS`):
 * ``"simulated"``: a relay plan on the design's simulated rotor (:class:`~spherestep.hardware.Simulated`,
   protocol 1, the dynamics room's integrator).
 
-The protocol-2 kinds yield a link with ``drive(currents A)``, ``read()``, ``off()`` and ``info``; the protocol-1
-kinds a :class:`~spherestep.hardware.Backend` for :func:`~spherestep.hardware.play`. The emulated motor is
+Every kind yields a :class:`~spherestep.hardware.Link` (``drive(currents A)``, ``read()``, ``off()``, ``info``, a
+context manager): protocol 2's serial or lockstep link, or for the protocol-1 kinds a
+:class:`~spherestep.hardware.RelayLink` over the relay back end (coils at 0 or ± the nominal current, the relay
+wire format unchanged) for :func:`~spherestep.hardware.play`. The emulated motor is
 assembled here from the rooms that know its parts (:func:`emulated_motor`: the dynamics room's rotor, the sensing
 room's field model, the control room's torque cache), so the hardware room imports none of them.
 """
@@ -105,7 +107,7 @@ def simulated_relays(design, model, start, *, rotor=None, dt: float = 5e-3, chan
 @contextmanager
 def connect(design, kind: str, *, port: str | None = None, plant=None, limits=None, sensors=None, R0=None,
             faults=None, watchdog_ms: int | None = None, rotor=None, channels: int | None = None, transcript=None,
-            dt: float = 5e-3) -> Iterator[Connection]:
+            dt: float = 5e-3, channel_map=None) -> Iterator[Connection]:
     """A :class:`Connection` of ``kind`` (module docstring) for ``design``, closed on leaving (every coil off).
 
     ``port``: the serial device (``"port"``, ``"relay port"``). The emulated motor (``"lockstep"``, ``"pty"``):
@@ -113,7 +115,10 @@ def connect(design, kind: str, *, port: str | None = None, plant=None, limits=No
     its magnetometers, ``R0`` its start, ``faults`` (:class:`~spherestep.hardware.MotorFaults`), ``watchdog_ms``
     its device's watchdog, ``rotor`` (default the design's, damping :data:`EMULATED_DAMPING`). ``"simulated"``:
     ``plant`` the rotor's torque model, ``R0`` its start, ``rotor``, ``dt``, ``channels``. ``"dry run"``:
-    ``channels``, ``transcript``; ``"relay port"``: ``transcript``."""
+    ``channels``, ``transcript``; ``"relay port"``: ``transcript``. The relay kinds need the plan's
+    ``channel_map`` (and take ``limits``' nominal current as the relays' current, default the default coils'):
+    their link is a :class:`~spherestep.hardware.RelayLink`, opened and closed by
+    :class:`~spherestep.hardware.CoilDriver`."""
     from .. import hardware
 
     if kind not in KINDS:
@@ -121,6 +126,10 @@ def connect(design, kind: str, *, port: str | None = None, plant=None, limits=No
     if kind in ("port", "relay port") and not port:
         raise bad_value("port", f"a serial device for kind {kind!r}, such as /dev/ttyUSB0", port)
     device = {} if watchdog_ms is None else {"watchdog_ms": watchdog_ms}
+
+    def relays(backend) -> Connection:  # protocol 1 behind the one Link; CoilDriver opens and closes it
+        link = hardware.RelayLink(backend, channel_map, limits)
+        return Connection(kind, link, timing={"clock": link.clock, "sleep": link.sleep})
     with ExitStack() as stack:
         inner = ExitStack()  # the host's link, let go before the device (Connection.release)
         if kind == "port":
@@ -132,12 +141,15 @@ def connect(design, kind: str, *, port: str | None = None, plant=None, limits=No
             link.info.check_drive(limits, f"the device on {port}")
             yield Connection(kind, link, timing={}, watchdog=link.info.watchdog, _release=inner.close)
             return
+        if kind in ("relay port", "dry run", "simulated") and channel_map is None:
+            raise bad_value("channel_map", f"the plan's relay channel map for kind {kind!r} (Plan.channel_map)",
+                            channel_map)
         if kind == "relay port":
-            yield Connection(kind, hardware.Serial(port, transcript=transcript))
+            yield relays(hardware.Serial(port, transcript=transcript))
             return
         if kind == "dry run":
-            yield Connection(kind, hardware.DryRun(**({} if channels is None else {"channels": channels}),
-                                                   transcript=transcript))
+            yield relays(hardware.DryRun(**({} if channels is None else {"channels": channels}),
+                                         transcript=transcript))
             return
         if plant is None:
             raise bad_value("plant", f"the torque model the rotor obeys (kind {kind!r})", plant)
@@ -145,7 +157,7 @@ def connect(design, kind: str, *, port: str | None = None, plant=None, limits=No
         if kind == "simulated":
             if start is None:
                 raise bad_value("R0", "the simulated rotor's start (3×3, at rest)", R0)
-            yield Connection(kind, simulated_relays(design, plant, start, rotor=rotor, dt=dt, channels=channels))
+            yield relays(simulated_relays(design, plant, start, rotor=rotor, dt=dt, channels=channels))
             return
         motor = emulated_motor(design, plant, sensors, drive=limits, R0=start, faults=faults, rotor=rotor,
                                period=QEMU_PERIOD if kind == "qemu" else None)

@@ -1,8 +1,8 @@
 """Hardware: coil drivers and the serial line protocol to the relay boards (Sec. IV-B).
 
-:class:`CoilDriver` switches stator coils through a :class:`Backend` (:class:`DryRun`, :class:`Serial`,
-:class:`Simulated`) within
-:class:`ThermalLimits`, and always leaves them off; :func:`play` streams a commutation plan at a step rate.
+:class:`CoilDriver` switches stator coils through a :class:`RelayLink` (the one :class:`Link` over a relay
+:class:`Backend`: :class:`DryRun`, :class:`Serial`, :class:`Simulated`) within :class:`ThermalLimits`, and always
+leaves them off; :func:`play` streams a commutation plan at a step rate.
 :mod:`~spherestep.hardware.protocol` is the wire format. See ``docs/protocol.md``.
 
 One device, one pseudo-terminal server: :class:`CurrentDevice` is the coil controller — the firmware's
@@ -18,13 +18,15 @@ from __future__ import annotations
 
 from . import protocol, protocol2
 from .backend import Backend, DeviceInfo, Link, LinkError
-from .driver import CoilDriver, coil_masks
+from ..commutation.plan import coil_masks
+from .driver import CoilDriver
 from .dryrun import DryRun, Sent
 from .current_device import CurrentDevice
 from .drive_link import DeviceTrip, DriveInfo, DriveLink
 from .limits import CurrentLimits, ThermalGuard, ThermalLimitError, ThermalLimits, heating_step
 from .motor_emulator import EmulatedMotor, LockstepLink, MotorFaults, MotorPty
 from .pty_device import Faults, PtyDevice, Truth
+from .relay_link import RelayLink
 from .serialport import NakError, Serial
 from .servo import LOOP_RATE, ServoFault, ServoReport, run_servo
 from .servo_parts import FieldTracker, wire_limits
@@ -35,7 +37,7 @@ from .transcript import Transcript
 __all__ = [
     "LOOP_RATE", "Backend", "CoilDriver", "CurrentDevice", "CurrentLimits", "DeviceInfo", "DeviceTrip", "DriveInfo", "DriveLink",
     "DryRun", "EmulatedMotor", "LockstepLink", "Faults", "FieldTracker", "Link", "LinkError", "MotorFaults", "MotorPty",
-    "NakError", "PlayReport", "PtyDevice", "Sent", "Serial", "ServoFault", "ServoReport",
+    "NakError", "PlayReport", "PtyDevice", "RelayLink", "Sent", "Serial", "ServoFault", "ServoReport",
     "Simulated", "ThermalGuard", "ThermalLimitError", "ThermalLimits", "Transcript", "Truth", "coil_masks",
     "heating_step", "play", "protocol", "protocol2", "run_servo", "wire_limits",
 ]

@@ -1,10 +1,10 @@
-"""The coil driver: stator coil states through a back end, within thermal limits, always ending all off.
+"""The coil driver: stator coil states through a relay link, within thermal limits, always ending all off.
 
 Coil ``k`` is switched by relay channels ``channel_map[k] = (enable, polarity)`` exactly as in
-:meth:`spherestep.commutation.Step.masks`: energised coils set their enable bit, coils driven with polarity
-−1 also set their polarity bit. Used as a context manager the driver opens the back end, refuses a channel
-map the device cannot carry, and on leaving (normally, on an error or on Ctrl-C) switches every coil off
-before closing.
+:meth:`spherestep.commutation.Step.masks` (the :class:`~spherestep.hardware.RelayLink` writes the masks of the
+amperes it is given: energised coils set their enable bit, coils driven with polarity −1 also set their polarity
+bit). Used as a context manager the driver opens the link, which refuses a channel map the device cannot carry,
+and on leaving (normally, on an error or on Ctrl-C) switches every coil off before closing.
 """
 
 from __future__ import annotations
@@ -14,12 +14,14 @@ import threading
 from collections.abc import Mapping
 from contextlib import contextmanager
 
+import numpy as np
+
 from .. import checks
-from ..channels import as_channel_map
-from ..commutation.plan import Step, coil_masks
-from ..errors import InputError, bad_value
-from .backend import Backend, DeviceInfo, LinkError
+from ..commutation.plan import Step
+from ..errors import bad_value
+from .backend import DeviceInfo, LinkError
 from .limits import ThermalGuard, ThermalLimitError, ThermalLimits
+from .relay_link import RelayLink
 
 
 @contextmanager
@@ -37,26 +39,27 @@ def _ctrl_c_ignored():
 
 
 class CoilDriver:
-    """Drive stator coils through ``backend`` with the ``(N, 2)`` ``channel_map`` under ``limits``.
+    """Drive stator coils through the relay ``link`` (a :class:`~spherestep.hardware.RelayLink`: its back end and
+    channel map) under ``limits``.
 
     ``jitter`` seconds of scheduling slack are allowed on the thermal limits at run time (the plan itself is
     checked exactly by :meth:`ThermalLimits.check_plan`). ``coils`` is the state now driven.
 
     >>> from spherestep.commutation import default_channel_map
-    >>> from spherestep.hardware import CoilDriver, DryRun
-    >>> with CoilDriver(DryRun(), default_channel_map(4)) as driver:
+    >>> from spherestep.hardware import CoilDriver, DryRun, RelayLink
+    >>> with CoilDriver(RelayLink(DryRun(), default_channel_map(4))) as driver:
     ...     driver.apply({0: +1, 2: -1}, duration=0.1)
     ...     driver.hold(0.1)
-    >>> [(s.enable, s.polarity) for s in driver.backend.sent]
+    >>> [(s.enable, s.polarity) for s in driver.link.backend.sent]
     [(5, 64), (0, 0)]
     """
 
-    def __init__(self, backend: Backend, channel_map, limits: ThermalLimits | None = None, jitter: float = 0.010):
-        cmap = as_channel_map(channel_map)
-        if len(cmap) == 0:
-            raise bad_value("channel_map", "channels for at least one coil", "an empty map")
-        self.backend = backend
-        self.channel_map = cmap
+    def __init__(self, link: RelayLink, limits: ThermalLimits | None = None, jitter: float = 0.010):
+        if not isinstance(link, RelayLink):
+            raise bad_value("link", "a spherestep.hardware.RelayLink (spherestep.drive.connect builds one)",
+                            type(link).__name__)
+        self.link = link
+        self.channel_map = link.channel_map
         self.limits = limits if limits is not None else ThermalLimits()
         self.guard = ThermalGuard(self.limits, tolerance=jitter)
         self.coils: dict[int, int] = {}
@@ -77,22 +80,16 @@ class CoilDriver:
             exc.add_note(str(off_failed))
 
     def open(self) -> DeviceInfo:
-        """Open the back end (all off) and check that the device has every channel of the map."""
-        self.info = self.backend.open()
-        top = int(self.channel_map.max())
-        if top >= self.info.channels:
-            self.backend.close()
-            raise InputError(f"the plan's channel map uses relay channel {top}, but device {self.info.name!r} has "
-                             f"{self.info.channels} channels (0..{self.info.channels - 1}); use a controller with "
-                             "more channels or a plan for fewer coils")
+        """Open the link (all off; it refuses a channel map the device cannot carry)."""
+        self.info = self.link.open()
         return self.info
 
     def close(self) -> None:
-        """Switch every coil off, then close the back end (even if switching off failed)."""
+        """Switch every coil off, then close the link (even if switching off failed)."""
         try:
             self.all_off()
         finally:
-            self.backend.close()
+            self.link.close()
 
     def apply(self, coils: Step | Mapping[int, int], duration: float = 0.0) -> None:
         """Energise exactly ``coils`` (a :class:`Step` or coil → ±1), to be held for ``duration`` seconds.
@@ -104,25 +101,27 @@ class CoilDriver:
         state = {checks.count(coil, "coils", 0, len(self.channel_map) - 1, expected=expected):
                  checks.sign(sign, "coils", expected) for coil, sign in state.items()}
         self._check(state, duration)
-        enable, polarity = coil_masks(state, self.channel_map)
-        now = self.backend.clock()
-        self.backend.write(enable, polarity, state)
+        c = np.zeros(len(self.channel_map))
+        for coil, sign in state.items():
+            c[coil] = sign
+        now = self.link.clock()
+        self.link.drive(self.link.limits.amperes(c))
         self.guard.record(state, now)
         self.coils = state
 
     def hold(self, seconds: float) -> None:
         """Keep the present coils on for ``seconds`` (checked against the limits first)."""
         self._check(self.coils, seconds)
-        self.backend.hold(seconds)
+        self.link.sleep(seconds)
 
     def all_off(self) -> None:
         """Switch every coil off; Ctrl-C cannot interrupt it. A failure raises :class:`LinkError` saying
         that the device's watchdog (if it has one) takes over."""
         with _ctrl_c_ignored():
             self.coils = {}
-            self.guard.record({}, self.backend.clock())
+            self.guard.record({}, self.link.clock())
             try:
-                self.backend.off()
+                self.link.off()
             except LinkError as exc:
                 watchdog = self.info.watchdog if self.info is not None else None
                 fallback = (f"the device's watchdog opens every relay within {watchdog:g} s" if watchdog
@@ -130,7 +129,7 @@ class CoilDriver:
                 raise LinkError(f"switching the coils off failed too ({exc}); {fallback}") from exc
 
     def _check(self, coils: Mapping[int, int], duration: float) -> None:
-        now = self.backend.clock()
+        now = self.link.clock()
         try:
             self.guard.check(coils, now, duration, f"the state applied at t = {now:.3f} s")
         except ThermalLimitError:

@@ -16,9 +16,11 @@ One server, two clocks:
 
 Frames are answered as they complete, at the device's time. Line faults by frame number (:class:`Faults`) apply
 to either; a motor's faults by time (``vanish_at``, ``deaf_at``, ``slow_answers`` of
-:class:`~spherestep.hardware.motor_emulator.MotorFaults`) to a motor's. Try a plan without hardware::
+:class:`~spherestep.hardware.motor_emulator.MotorFaults`) to a motor's. Try a plan without hardware
+(``connect`` is :func:`spherestep.drive.connect`)::
 
-    with PtyDevice(channels=32) as dev, CoilDriver(Serial(dev.port), plan.channel_map) as driver:
+    with PtyDevice(channels=32) as dev, connect(None, "relay port", port=dev.port,
+                                                channel_map=plan.channel_map) as conn, CoilDriver(conn.link) as driver:
         driver.apply(plan.steps[0], duration=0.2)
         driver.hold(0.2)
 
