@@ -33,6 +33,7 @@ import numpy as np
 
 from _record import Record
 from spherestep import so3
+from spherestep._fast import allocation as fast_alloc
 from spherestep.control import GeometricPD, ModelCache, ServoLaw, Trajectory
 from spherestep.control import allocation as alloc_module
 from spherestep.dynamics import simulate_servo
@@ -61,13 +62,13 @@ class Unpacked:
 @contextlib.contextmanager
 def reference_allocation():
     """The allocation's NumPy Newton and Clarabel fallback in place of the compiled ones."""
-    saved = alloc_module.least_power_box_compiled, alloc_module.closest_reachable_compiled
-    alloc_module.least_power_box_compiled = alloc_module.least_power_box
-    alloc_module.closest_reachable_compiled = lambda K, t, u, rho, lower=None: None
+    saved = fast_alloc.solve_box, fast_alloc.solve_reachable
+    fast_alloc.solve_box = alloc_module.least_power_box
+    fast_alloc.solve_reachable = lambda K, t, u, rho, lower=None: None
     try:
         yield
     finally:
-        alloc_module.least_power_box_compiled, alloc_module.closest_reachable_compiled = saved
+        fast_alloc.solve_box, fast_alloc.solve_reachable = saved
 
 
 def cpu_us(func, n: int) -> float:

@@ -288,3 +288,16 @@ def test_every_kind_the_selector_builds_is_a_link():
         with pytest.raises(InputError, match="coil 1"):
             link.drive([0.25, 0.1, 0.0, 0.0])
     assert link.backend.sent[-1].enable == 0  # every relay open on leaving
+
+
+def test_no_compiled_twins_on_controls_surface():
+    """numba stays in the fast path (issue 36 §5): no function of the control room is a ``*_compiled`` twin or a
+    ``_warm`` hook; the allocation's compiled entry points are ``_fast.allocation``'s (``solve_box``,
+    ``solve_reachable``, ``warm``)."""
+    found = [f"{p.relative_to(ROOT)}:{n.lineno} {n.name}" for p in (SRC / "control").rglob("*.py")
+             for n in ast.walk(ast.parse(p.read_text(encoding="utf-8")))
+             if isinstance(n, ast.FunctionDef) and (n.name.endswith("_compiled") or n.name.lstrip("_") == "warm")]
+    assert not found, "compiled twins in control: " + "; ".join(found)
+    from spherestep._fast import allocation
+
+    assert all(callable(getattr(allocation, name)) for name in ("solve_box", "solve_reachable", "warm"))

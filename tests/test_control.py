@@ -139,7 +139,8 @@ def test_bias_torque_is_included():
 def test_compiled_newton_is_the_numpy_reference_to_rounding(matrices):
     """The loop's compiled semismooth Newton (numba) against the NumPy reference, cold and warm-started, with the
     box active or not, a failed coil, and requests out of reach (where both must say so)."""
-    from spherestep.control.allocation import least_power_box, least_power_box_compiled
+    from spherestep._fast.allocation import solve_box as least_power_box_compiled
+    from spherestep.control.allocation import least_power_box
 
     rng = np.random.default_rng(3)
     u = np.ones(29)
@@ -164,7 +165,8 @@ def test_compiled_closest_reachable_is_at_least_as_close_as_clarabel(matrices):
     """Out of reach, the compiled bisection on the power ball's multiplier finds the closest reachable torque:
     within the box and the ball, as close to the request as Clarabel's conic solution (to 1e-7, and 1e-9 of ‖K‖‖u‖) and the same
     torque (to 1e-5 of the request: Clarabel stops at its own tolerance and is pulled back into the limits)."""
-    from spherestep.control.allocation import closest_reachable, closest_reachable_compiled
+    from spherestep._fast.allocation import solve_reachable as closest_reachable_compiled
+    from spherestep.control.allocation import closest_reachable
 
     rng = np.random.default_rng(4)
     u = np.ones(29)

@@ -9,8 +9,9 @@ import pytest
 
 from spherestep._fast.allocation import voltage_box
 from spherestep.control import DriveLimits, GeometricPD, ServoLaw, Trajectory, allocate_matrix
-from spherestep.control.allocation import (closest_reachable, closest_reachable_compiled, least_power_box,
-                                           least_power_box_compiled)
+from spherestep._fast.allocation import solve_box as least_power_box_compiled
+from spherestep._fast.allocation import solve_reachable as closest_reachable_compiled
+from spherestep.control.allocation import closest_reachable, least_power_box
 
 LIMITS = DriveLimits()
 

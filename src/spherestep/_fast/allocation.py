@@ -281,3 +281,61 @@ def voltage_box(K, w, previous, bound, volts, slew, lower, upper):
             hi = lo = bound if lo > 0.0 else -bound
         upper[k] = hi
         lower[k] = lo
+
+
+# -- the entry points control.allocation.allocate_matrix calls (plain Python around the kernels) -----------------
+def solve_box(K: np.ndarray, t: np.ndarray, u: np.ndarray, lam0: np.ndarray | None = None, max_iter: int = 40,
+              lower: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, bool]:
+    """:func:`spherestep.control.allocation.least_power_box` compiled (:func:`least_power_box`, the same
+    iteration, equal to it to rounding): ``(c, λ, converged)``. ``K (3, N)``, ``t (3,)``, ``u (N,)`` and
+    ``lower (N,)`` (default ``−u``) float arrays (trusted)."""
+    c, lam = np.empty(K.shape[1]), np.empty(3)
+    warm = lam0 is not None
+    ok = least_power_box(K if K.flags.c_contiguous else np.ascontiguousarray(K), t, _lower(u, lower), u,
+                         lam0 if warm else _NO_LAM, warm, max_iter, c, lam)
+    return c, lam, bool(ok)
+
+
+def solve_reachable(K: np.ndarray, t: np.ndarray, u: np.ndarray, rho: float,
+                    lower: np.ndarray | None = None) -> np.ndarray | None:
+    """:func:`spherestep.control.allocation.closest_reachable` by a compiled bisection on the power ball's
+    multiplier (:func:`closest_reachable`: the same KKT point to ~1e-9 of the torque, in ~0.1 ms where Clarabel
+    takes 1.5–4 ms); ``None`` when it does not converge (then Clarabel decides)."""
+    c = np.empty(K.shape[1])
+    ok = closest_reachable(K if K.flags.c_contiguous else np.ascontiguousarray(K), t, _lower(u, lower), u,
+                           float(rho), c)
+    return c if ok else None
+
+
+def _lower(u: np.ndarray, lower: np.ndarray | None) -> np.ndarray:
+    """``lower``, or ``−u`` with ``u``'s writeability (the compiled kernels' signature: both alike)."""
+    if lower is not None:
+        return lower
+    lo = -u
+    lo.flags.writeable = u.flags.writeable
+    return lo
+
+
+_NO_LAM = np.zeros(3)
+_WARM: list[bool] = []
+
+
+def warm(fallback) -> None:
+    """Load both compiled solvers (numba's on-disk cache, every signature the servo uses) and the conic
+    ``fallback`` (``closest_reachable(K, t, u, rho)``: Clarabel's imports) once, on the first allocation — tens of
+    ms each — so that a control loop never meets that cost in a period: its law allocates once when built."""
+    if _WARM:
+        return
+    _WARM.append(True)
+    K, u = np.eye(3, 4), np.ones(4)
+    fixed = u.copy()
+    fixed.flags.writeable = False  # the cached bounds are read-only: numba compiles that signature apart
+    for t in (np.array([0.1, 0.0, 0.0]), np.array([9.0, 0.0, 0.0])):
+        for bounds in (u, fixed):
+            solve_box(K, t, bounds)
+            solve_box(K, t, bounds, np.zeros(3))
+            solve_reachable(K, t, bounds, 1.0)
+        lower = -0.5 * u  # the servo's per-period asymmetric box
+        solve_box(K, t, u, np.zeros(3), lower=lower)
+        solve_reachable(K, t, u, 1.0, lower=lower)
+    fallback(K, np.array([9.0, 0.0, 0.0]), u, 1.0)

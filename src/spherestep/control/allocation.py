@@ -18,11 +18,13 @@ piecewise linear, so a (semismooth) Newton iteration ``λ ← λ + (K_F K_Fᵀ)�
 ``F = {k : |K_kᵀλ| < u_k}``, with backtracking on ``g``, ends at an exact KKT point in a few steps (the first step
 from ``λ = (KKᵀ)⁻¹ t`` is the minimum-norm right inverse, which is already optimal when no coil saturates).
 Accepted when ``‖K c − t‖`` is at rounding level and ``‖c‖ ≤ ρ``. :func:`least_power_box` is the NumPy form
-(the reference); the loop runs it compiled, :func:`least_power_box_compiled` (numba, equal to rounding, a few µs).
+(the reference); the loop runs it compiled, :func:`spherestep._fast.allocation.solve_box` (numba, equal to rounding, a
+few µs).
 
 General path (the request is out of reach, or Newton fails). The closest reachable torque: minimise
 ``‖K c − t‖²`` over the box and the power ball — by a compiled bisection on the ball's multiplier
-(:func:`closest_reachable_compiled`, a box-constrained Tikhonov problem per step solved by the dual Newton), or,
+(:func:`spherestep._fast.allocation.solve_reachable`, a box-constrained Tikhonov problem per step solved by the dual
+Newton), or,
 when that does not converge, as a second-order cone program solved by Clarabel (an interior point conic solver,
 :func:`closest_reachable`) — then, among the currents that give that torque, the least-power ones by the fast path. The result
 is flagged ``reachable=False``.
@@ -164,68 +166,6 @@ def least_power_box(K: np.ndarray, t: np.ndarray, u: np.ndarray, lam0: np.ndarra
     return c, lam, bool(float(r @ r) <= tol2)
 
 
-def least_power_box_compiled(K: np.ndarray, t: np.ndarray, u: np.ndarray, lam0: np.ndarray | None = None,
-                             max_iter: int = 40, lower: np.ndarray | None = None
-                             ) -> tuple[np.ndarray, np.ndarray, bool]:
-    """:func:`least_power_box` compiled (:func:`spherestep._fast.allocation.least_power_box`, the same iteration;
-    equal to it to rounding): what :func:`allocate_matrix` runs. ``K (3, N)``, ``t (3,)``, ``u (N,)`` and
-    ``lower (N,)`` (default ``−u``) float arrays (trusted)."""
-    from .._fast.allocation import least_power_box as compiled
-
-    _warm()
-    c, lam = np.empty(K.shape[1]), np.empty(3)
-    warm = lam0 is not None
-    ok = compiled(K if K.flags.c_contiguous else np.ascontiguousarray(K), t, _lower(u, lower), u,
-                  lam0 if warm else _NO_LAM, warm, max_iter, c, lam)
-    return c, lam, bool(ok)
-
-
-def _lower(u: np.ndarray, lower: np.ndarray | None) -> np.ndarray:
-    """``lower``, or ``−u`` with ``u``'s writeability (the compiled kernels' signature: both alike)."""
-    if lower is not None:
-        return lower
-    lo = -u
-    lo.flags.writeable = u.flags.writeable
-    return lo
-
-
-_NO_LAM = np.zeros(3)
-_WARM = []
-
-
-def _warm() -> None:
-    """Load both compiled solvers and the conic fallback on the first allocation (numba's on-disk cache and
-    Clarabel's imports: tens of ms each), so that a control loop never meets that cost in a period: its law
-    allocates once when it is built."""
-    if _WARM:
-        return
-    _WARM.append(True)
-    K, u = np.eye(3, 4), np.ones(4)
-    fixed = u.copy()
-    fixed.flags.writeable = False  # the cached bounds are read-only: numba compiles that signature apart
-    for t in (np.array([0.1, 0.0, 0.0]), np.array([9.0, 0.0, 0.0])):
-        for bounds in (u, fixed):
-            least_power_box_compiled(K, t, bounds)
-            least_power_box_compiled(K, t, bounds, np.zeros(3))
-            closest_reachable_compiled(K, t, bounds, 1.0)
-        lower = -0.5 * u  # the servo's per-period asymmetric box
-        least_power_box_compiled(K, t, u, np.zeros(3), lower=lower)
-        closest_reachable_compiled(K, t, u, 1.0, lower=lower)
-    closest_reachable(K, np.array([9.0, 0.0, 0.0]), u, 1.0)  # the fallback's imports (Clarabel, SciPy)
-
-
-def closest_reachable_compiled(K: np.ndarray, t: np.ndarray, u: np.ndarray, rho: float,
-                               lower: np.ndarray | None = None) -> np.ndarray | None:
-    """:func:`closest_reachable` by a compiled bisection on the power ball's multiplier
-    (:func:`spherestep._fast.allocation.closest_reachable`: the same KKT point to ~1e-9 of the torque, in
-    ~0.1 ms where Clarabel takes 1.5–4 ms); ``None`` when it does not converge (then Clarabel decides)."""
-    from .._fast.allocation import closest_reachable as compiled
-
-    c = np.empty(K.shape[1])
-    ok = compiled(K if K.flags.c_contiguous else np.ascontiguousarray(K), t, _lower(u, lower), u, float(rho), c)
-    return c if ok else None
-
-
 def closest_reachable(K: np.ndarray, t: np.ndarray, u: np.ndarray, rho: float, lower: np.ndarray | None = None
                       ) -> np.ndarray:
     """``argmin ‖K c − t‖²`` over ``|c| ≤ u`` (``lower ≤ c ≤ u`` with ``lower``), ``‖c‖ ≤ ρ`` (a second-order
@@ -299,16 +239,18 @@ def allocate_matrix(K, torque, limits: DriveLimits | None = None, *, bias=None, 
         lower = (-u if lower is None else lower) + shift
         u = u + shift
         rho = math.sqrt(r2 + float(shift @ shift))
-    c, lam, ok = least_power_box_compiled(K, t, u, None if lam0 is None else np.asarray(lam0, dtype=float),
-                                          lower=lower)
+    from .._fast import allocation as fast  # compiled: loaded on the first allocation, not with the room
+
+    fast.warm(closest_reachable)
+    c, lam, ok = fast.solve_box(K, t, u, None if lam0 is None else np.asarray(lam0, dtype=float), lower=lower)
     method, reachable = "newton", True
     if not ok or float(c @ c) > rho * rho * (1 + 1e-12):
-        c_far = closest_reachable_compiled(K, t, u, rho, lower)
+        c_far = fast.solve_reachable(K, t, u, rho, lower)
         if c_far is None:  # the compiled bisection did not converge: the conic solver
             c_far = closest_reachable(K, t, u, rho, lower)
         t_r = K @ c_far
         reachable = bool(np.linalg.norm(t_r - t) <= 1e-7 * (np.linalg.norm(K) * rho + np.linalg.norm(t)))
-        c2, lam2, ok2 = least_power_box_compiled(K, t_r, u, lower=lower)
+        c2, lam2, ok2 = fast.solve_box(K, t_r, u, lower=lower)
         if ok2 and c2 @ c2 <= c_far @ c_far * (1 + 1e-12):
             c, lam = c2, lam2
         else:
