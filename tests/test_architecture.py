@@ -16,6 +16,7 @@ import pytest
 ROOT = Path(__file__).resolve().parents[1]
 SRC = ROOT / "src" / "spherestep"
 MIDDLE = ("electrics", "magnetics", "sensing", "control", "dynamics", "hardware", "drive")
+MOTOR_FLOOR = ("sphere", "so3", "packing", "harmonics", "motor", "design_file", "statics", "rotor_field", "potential")
 BACKENDS = {"LockstepLink", "DriveLink", "PtyDevice", "MotorPty", "Simulated", "DryRun", "Serial", "SerialPort",
             "EmulatedMotor", "RelayLink"}
 SELECTOR = SRC / "drive" / "connect.py"
@@ -30,12 +31,26 @@ def _module(path: Path) -> tuple[str, bool]:
     return ".".join(parts[:-1] if package else parts), package
 
 
+def _type_only(tree) -> set[int]:
+    """``id`` of every node under an ``if TYPE_CHECKING:`` block (imports for annotations only: never run)."""
+    out: set[int] = set()
+    for node in ast.walk(tree):
+        if isinstance(node, ast.If) and _names(node.test)[-1:] == ["TYPE_CHECKING"]:
+            out |= {id(n) for stmt in node.body for n in ast.walk(stmt)}
+    return out
+
+
 def _imports(path: Path) -> list[tuple[str, int]]:
-    """Every ``spherestep`` module (or name in one) ``path`` imports, anywhere in the file, with its line."""
+    """Every ``spherestep`` module (or name in one) ``path`` imports when it runs, anywhere in the file (inside
+    functions too), with its line; an import under ``if TYPE_CHECKING:`` is for annotations only and not counted."""
     name, package = _module(path)
     base = name.split(".") if package else name.split(".")[:-1]
     out = []
-    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+    tree = ast.parse(path.read_text(encoding="utf-8"))
+    skip = _type_only(tree)
+    for node in ast.walk(tree):
+        if id(node) in skip:
+            continue
         if isinstance(node, ast.Import):
             out += [(a.name, node.lineno) for a in node.names]
         elif isinstance(node, ast.ImportFrom):
@@ -113,6 +128,20 @@ def test_the_middle_floor_has_no_package_cycle():
                  ("hardware", "control"), ("hardware", "dynamics"), ("hardware", "sensing"),
                  ("electrics", "magnetics"), ("electrics", "control")):
         assert (a, b) not in edges, f"{a} imports {b} at {edges[(a, b)]}"
+
+
+def test_the_motor_floor_has_no_package_cycle():
+    """The design and its file (issue 36): ``motor`` calls ``design_file`` to read and write itself and
+    ``design_file`` names ``MotorDesign`` in annotations only (under ``if TYPE_CHECKING:``), so no arrow points
+    back; no cycle among the rooms of the geometry and motor floors either. A planted run-time import is seen."""
+    edges = package_graph(MOTOR_FLOOR)
+    assert _cycle(edges) is None, _cycle(edges)
+    assert ("motor", "design_file") in edges and ("design_file", "motor") not in edges
+    tree = ast.parse("from typing import TYPE_CHECKING\nif TYPE_CHECKING:\n    from ..motor import A\n"
+                     "def f():\n    from ..motor import B\n")
+    skipped = _type_only(tree)
+    kept = [n.names[0].name for n in ast.walk(tree) if isinstance(n, ast.ImportFrom) and id(n) not in skipped]
+    assert kept == ["TYPE_CHECKING", "B"]
 
 
 def _calls(path: Path):
