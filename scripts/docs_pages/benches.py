@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from .common import DATA, STORES, _thin, _times, _when
+from .common import DATA, STORES, _thin, _times, _when, table
 
 
 # each benchmark's command (in benchmarks/) and its store, data/bench_NAME.json: ``docs_numbers.py bench [NAME...]``
@@ -46,18 +46,17 @@ def loop_cost_table(b: dict) -> str:
     """docs/hardware.md: the law's cost per period by part, now | before (``bench_servo_loop.py``)."""
     v = b["values"]
     air, iron = v["law air"], v["law iron"]
-    lines = [f"Measured {_when(b)} (`benchmarks/bench_servo_loop.py`; {b['machine']}); CPU µs, now \\| before issue "
-             "27 (the reference paths in the same run):", "",
-             "| part of one period | air-core map, µs | iron model (pairwise), µs |", "|---|---|---|"]
+    rows = []
     for label, key in LAW_ROWS:
         if key == "law.step (turn)":
             label += (f" (`K(R)` re-evaluated in {air['K evaluations'][0]} / {iron['K evaluations'][0]} of "
                       f"{air['K evaluations'][1]} periods)")
-        lines.append(f"| {label} | {_us(air[key][0])} \\| {_us(air[key][1])} | {_us(iron[key][0])} \\| "
-                     f"{_us(iron[key][1])} |")
+        rows.append((label, f"{_us(air[key][0])} \\| {_us(air[key][1])}", f"{_us(iron[key][0])} \\| {_us(iron[key][1])}"))
     mag = _us(v["magnetometer update"])
-    lines.append(f"| + magnetometer update (the Hall tracker, 8 magnetometers) | {mag} | {mag} |")
-    return "\n".join(lines)
+    rows.append(("+ magnetometer update (the Hall tracker, 8 magnetometers)", mag, mag))
+    return table(("part of one period", "air-core map, µs", "iron model (pairwise), µs"), rows,
+                 f"Measured {_when(b)} (`benchmarks/bench_servo_loop.py`; {b['machine']}); CPU µs, now \\| before issue "
+                 "27 (the reference paths in the same run):")
 
 
 def _simulate(b: dict) -> list[dict]:
@@ -103,24 +102,22 @@ def control_speed_table(b: dict) -> str:
          "largest error over the last 0.15 s of 0.3 s: " + ", ".join(f"{w:.4f}°" for w in loop["hold worst deg"])),
         ("capability map, 1000 orientations", f"{v['capability 1000 s']:.1f} s"),
     ]
-    body = "\n".join(f"| {k} | {x} |" for k, x in rows)
-    return f"Measured {_when(b)} (`{b['command']}`; {b['machine']}):\n\n| what | measured |\n|---|---|\n{body}"
+    return table(("what", "measured"), rows, f"Measured {_when(b)} (`{b['command']}`; {b['machine']}):")
 
 
 def control_loop_table(b: dict) -> str:
     """docs/control.md: ``simulate_servo`` per period and the law alone (``bench_servo_loop.py``)."""
     v = b["values"]
-    lines = [f"Measured {_when(b)} ({b['machine']}); \"before\" is the same run through the reference paths "
-             "(the models' own methods, the NumPy Newton and Clarabel):", "",
-             "| model | hold | 20° turn | `ServoLaw.step` | the law with K and bias every period |",
-             "|---|---|---|---|---|"]
+    rows = []
     for name, label in (("air", "air core (`magnetics.torque_map`)"), ("iron", "iron (`magnetics.iron_model`, pairwise)")):
         hold, turn, law = v[f"simulate {name} hold"], v[f"simulate {name} turn"], v[f"law {name}"]
-        lines.append(f"| {label} | {hold['now'] / 1e3:.2f} ms (before {hold['before'] / 1e3:.2f}) | "
-                     f"{turn['now'] / 1e3:.2f} ms (before {turn['before'] / 1e3:.2f}) | "
-                     f"**{law['law.step (turn)'][0] / 1e3:.3f} ms** (before {law['law.step (turn)'][1] / 1e3:.2f}) | "
-                     f"{law['law.step, K each'][0] / 1e3:.3f} ms (before {law['law.step, K each'][1] / 1e3:.2f}) |")
-    return "\n".join(lines)
+        rows.append((label, f"{hold['now'] / 1e3:.2f} ms (before {hold['before'] / 1e3:.2f})",
+                     f"{turn['now'] / 1e3:.2f} ms (before {turn['before'] / 1e3:.2f})",
+                     f"**{law['law.step (turn)'][0] / 1e3:.3f} ms** (before {law['law.step (turn)'][1] / 1e3:.2f})",
+                     f"{law['law.step, K each'][0] / 1e3:.3f} ms (before {law['law.step, K each'][1] / 1e3:.2f})"))
+    return table(("model", "hold", "20° turn", "`ServoLaw.step`", "the law with K and bias every period"), rows,
+                 f"Measured {_when(b)} ({b['machine']}); \"before\" is the same run through the reference paths "
+                 "(the models' own methods, the NumPy Newton and Clarabel):")
 
 
 def loop_law(b: dict) -> str:
@@ -146,43 +143,41 @@ def iron_bench_table(b: dict) -> str:
     pair = m["E+tau pairwise us"]
     rows = {r["model"].split()[0]: r for r in m["rows"]}
     p, c = rows["pairwise"], rows["coupled"]
-    lines = [f"Measured {_when(b)} (`benchmarks/bench_iron.py`; {b['machine']}; the design's own model: "
-             f"{m['label']}):", "", "| what | measured | ratio to pairwise |", "|---|---|---|",
-             f"| E + τ, one orientation, pairwise (compiled zonal sums, 29 cores × 92 poles) | {pair:.0f} µs | 1 |",
-             f"| E + τ, one orientation, coupled, NumPy sums | {m['E+tau coupled numpy us'] / 1e3:.1f} ms | "
-             f"{m['E+tau coupled numpy us'] / pair:.0f} × |",
-             f"| E + τ, one orientation, coupled, tables (the model's call) | {m['E+tau coupled tables us']:.0f} µs | "
-             f"1/{pair / m['E+tau coupled tables us']:.0f} |",
-             f"| E + τ, one orientation, coupled, tables (the compiled call the integrator makes) | "
-             f"{m['E+tau coupled packed us']:.1f} µs | 1/{pair / m['E+tau coupled packed us']:.0f} |",
-             f"| coupled tables, cold build (of which `G` on its grid) | {m['tables cold build s']:.1f} s "
-             f"({m['coupling grid s']:.1f} s) | |",
-             f"| dynamics at the tuned step ({p['dt ms']:.2f} / {c['dt ms']:.2f} ms), pairwise | "
-             f"{p['x real time']:.1f} × real time | |",
-             f"| dynamics at the tuned step, coupled (tables) | {c['x real time']:.0f} × real time | "
-             f"{c['x real time'] / p['x real time']:.0f} × pairwise |",
-             f"| capability map, 400 orientations, pairwise / coupled | {p['capability s']:.1f} s / "
-             f"{c['capability s']:.1f} s | |"]
-    return "\n".join(lines)
+    rows = [("E + τ, one orientation, pairwise (compiled zonal sums, 29 cores × 92 poles)", f"{pair:.0f} µs", "1"),
+            ("E + τ, one orientation, coupled, NumPy sums", f"{m['E+tau coupled numpy us'] / 1e3:.1f} ms",
+             f"{m['E+tau coupled numpy us'] / pair:.0f} ×"),
+            ("E + τ, one orientation, coupled, tables (the model's call)", f"{m['E+tau coupled tables us']:.0f} µs",
+             f"1/{pair / m['E+tau coupled tables us']:.0f}"),
+            ("E + τ, one orientation, coupled, tables (the compiled call the integrator makes)",
+             f"{m['E+tau coupled packed us']:.1f} µs", f"1/{pair / m['E+tau coupled packed us']:.0f}"),
+            ("coupled tables, cold build (of which `G` on its grid)",
+             f"{m['tables cold build s']:.1f} s ({m['coupling grid s']:.1f} s)", ""),
+            (f"dynamics at the tuned step ({p['dt ms']:.2f} / {c['dt ms']:.2f} ms), pairwise",
+             f"{p['x real time']:.1f} × real time", ""),
+            ("dynamics at the tuned step, coupled (tables)", f"{c['x real time']:.0f} × real time",
+             f"{c['x real time'] / p['x real time']:.0f} × pairwise"),
+            ("capability map, 400 orientations, pairwise / coupled",
+             f"{p['capability s']:.1f} s / {c['capability s']:.1f} s", "")]
+    return table(("what", "measured", "ratio to pairwise"), rows, f"Measured {_when(b)} (`benchmarks/bench_iron.py`; "
+                 f"{b['machine']}; the design's own model: {m['label']}):")
 
 
 def iron_mom_table(b: dict) -> str:
     """docs/magnetics.md: the moment method's and the FEM's costs (``bench_iron.py`` without ``--no-mom``)."""
     m = b["values"]["mom"]
-    lines = [f"Measured {_when(b)} (`benchmarks/bench_iron.py`; the FEM rows: medians of `data/iron_fem.csv`):", "",
-             "| what | time | ratio |", "|---|---|---|",
-             f"| MoM: factorise one core (level {m['level']}, {m['cells']} cells; `demag_tensor` + LU) | "
-             f"{m['factorise s']:.1f} s | |",
-             f"| MoM: pair table, per angle (detent + linear) | {m['per angle s']:.2f} s | |",
-             f"| iron map (pairwise): 1000 orientations (compiled spline sums, detent over all 29 cores) | "
-             f"{m['iron map 1000 ms']:.0f} ms | {m['iron map 1000 ms'] / m['air map 1000 ms']:.2f} × air map |",
-             f"| iron map (pairwise): one orientation | {m['iron map one us']:.0f} µs | "
-             f"{m['iron map one us'] / m['air map one us']:.2f} × air map |"]
+    rows = [(f"MoM: factorise one core (level {m['level']}, {m['cells']} cells; `demag_tensor` + LU)",
+             f"{m['factorise s']:.1f} s", ""),
+            ("MoM: pair table, per angle (detent + linear)", f"{m['per angle s']:.2f} s", ""),
+            ("iron map (pairwise): 1000 orientations (compiled spline sums, detent over all 29 cores)",
+             f"{m['iron map 1000 ms']:.0f} ms", f"{m['iron map 1000 ms'] / m['air map 1000 ms']:.2f} × air map"),
+            ("iron map (pairwise): one orientation", f"{m['iron map one us']:.0f} µs",
+             f"{m['iron map one us'] / m['air map one us']:.2f} × air map")]
     if "fem solve s" in m:
-        lines += [f"| FEM (NGSolve): mesh one angle, median of the stored runs | {m['fem mesh s']:.0f} s | |",
-                  f"| FEM (NGSolve): one solve (order 2, sparse Cholesky), median of the stored runs | "
-                  f"{m['fem solve s']:.0f} s | {m['fem solve s'] / m['per angle s']:.0f} × a MoM angle |"]
-    return "\n".join(lines)
+        rows += [("FEM (NGSolve): mesh one angle, median of the stored runs", f"{m['fem mesh s']:.0f} s", ""),
+                 ("FEM (NGSolve): one solve (order 2, sparse Cholesky), median of the stored runs",
+                  f"{m['fem solve s']:.0f} s", f"{m['fem solve s'] / m['per angle s']:.0f} × a MoM angle")]
+    return table(("what", "time", "ratio"), rows,
+                 f"Measured {_when(b)} (`benchmarks/bench_iron.py`; the FEM rows: medians of `data/iron_fem.csv`):")
 
 
 def _script(b: dict) -> str:
@@ -290,9 +285,9 @@ def performance_table(bs: dict) -> str:
          f"missed, {lock['turn']['error deg']:.4f}°; {off} of {drills} injected faults end all-off within the 100 ms "
          "watchdog", g["hardware"]),
     ]
-    body = "\n".join(f"| {what} | {value} | {_script(b)} |" for what, value, b in rows)
     machines = sorted({b["machine"] for b in bs.values()})
-    return f"Machine: {'; '.join(machines)}.\n\n| what | measured | script, when |\n|---|---|---|\n{body}"
+    return table(("what", "measured", "script, when"), [(what, value, _script(b)) for what, value, b in rows],
+                 f"Machine: {'; '.join(machines)}.")
 
 
 SENSING_ROWS = (("magpylib: rotor field at the 24 sensors", "magpylib rotor field (1 call)"),
@@ -309,13 +304,14 @@ def sensing_timing(b: dict) -> str:
     """docs/sensing.md: time per call of the estimator's pieces (``bench_sensing.py --docs``)."""
     t = b["values"]["timing us"]
     mag = t["magpylib rotor field (1 call)"]
-    lines = [f"Measured {_when(b)} (`benchmarks/bench_sensing.py --docs`; {b['machine']}):", "",
-             "| call | median | rate | vs one magpylib call |", "|---|---|---|---|"]
+    rows = []
     for label, key in SENSING_ROWS:
         bold = "**" if label.startswith("**") else ""
-        lines.append(f"| {label} | {bold}{_us_or_ms(t[key])}{bold} | {bold}{_thin(round(1e6 / t[key]))} /s{bold} | "
-                     f"{mag / t[key]:.0f}× |".replace("| 1× |", "| 1 |"))
-    return "\n".join(lines)
+        ratio = f"{mag / t[key]:.0f}×"
+        rows.append((label, f"{bold}{_us_or_ms(t[key])}{bold}", f"{bold}{_thin(round(1e6 / t[key]))} /s{bold}",
+                     "1" if ratio == "1×" else ratio))
+    return table(("call", "median", "rate", "vs one magpylib call"), rows,
+                 f"Measured {_when(b)} (`benchmarks/bench_sensing.py --docs`; {b['machine']}):")
 
 
 def sensing_rate(b: dict) -> str:

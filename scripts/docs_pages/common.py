@@ -124,3 +124,15 @@ def _notes_when(n: dict) -> str:
 def _deg(x: float) -> str:
     """Degrees to four decimals below 0.1°, two above (an error of degrees needs no more)."""
     return f"{x:.4f}" if x < 0.1 else f"{x:.2f}"
+
+
+def table(head, rows, intro: str | None = None, align: str | None = None) -> str:
+    """A Markdown table, the one shape every page's tables take: ``intro`` and a blank line first when given, the
+    header row of the column titles ``head``, the rule (``---`` a column; ``align`` one letter a column, ``r`` for
+    ``---:``), then a line per row of ``rows`` (each a sequence of cell texts; an empty cell ``""`` is ``| |``, a
+    ``None`` cell keeps the two spaces of an empty field, ``|  |``, as the potential timings have always had it)."""
+    def line(cells) -> str:
+        return "|" + "|".join(" " if c == "" else f" {'' if c is None else c} " for c in cells) + "|"
+
+    rule = "|" + "|".join("---:" if a == "r" else "---" for a in (align or "l" * len(head))) + "|"
+    return "\n".join(([intro, ""] if intro is not None else []) + [line(head), rule] + [line(r) for r in rows])

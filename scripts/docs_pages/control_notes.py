@@ -11,7 +11,7 @@ import sys
 import tempfile
 import time
 from pathlib import Path
-from .common import _mode, _notes_when, _run_footer, _run_header, _signed
+from .common import _mode, _notes_when, _run_footer, _run_header, _signed, table
 
 
 NOTES_AXIS = (1.0, 0.5, 2.0)  # the demo's 360° turn, from the stepper state nearest the identity
@@ -159,26 +159,24 @@ def notes_iron_coil(n: dict) -> str:
 
 def notes_fastest_table(n: dict) -> str:
     """docs/control.md: the demo's turn planned each way on both cores, and the servo along each plan."""
-    lines = [f"Measured {n['measured']}, load {n['load'][0]:.1f} → {n['load'][1]:.1f} (`scripts/docs_numbers.py "
-             f"control-notes`; {n['machine']}):", "",
-             "| core | planner | time | bound (margin 1) | ratio | servo: max tracking | final | peak / mean power |",
-             "|---|---|---|---|---|---|---|---|"]
+    rows = []
     for core, row in n["turns"].items():
         b = row["bound_s"]
         for name, label in (("trapezoid", "trapezoid (`plan_trapezoid`)"), ("fastest", "**time-optimal**")):
             r = row[name]
             if "refused" in r:
-                lines.append(f"| {core} | {label} | refused: {r['refused']} | {b:.3f} s | — | — | — | — |")
+                rows.append((core, label, f"refused: {r['refused']}", f"{b:.3f} s", "—", "—", "—", "—"))
                 continue
             if name == "fastest":
                 label += f" ({r['path']}, margin {r['margin']:g})"
             dur = f"{r['duration_s']:.3f} s"
             lost = r["max_tracking_deg"] > 5
-            lines.append(f"| {core} | {label} | {f'**{dur}**' if name == 'fastest' else dur} | {b:.3f} s | "
-                         f"{r['duration_s'] / b:.2f} | {r['max_tracking_deg']:.{1 if lost else 3}f}°{' (lost)' if lost else ''} | "
-                         f"{r['final_deg']:.3f}° | "
-                         f"{r['peak_power_W']:.0f} / {r['mean_power_W']:.1f} W |")
-    return "\n".join(lines)
+            rows.append((core, label, f"**{dur}**" if name == "fastest" else dur, f"{b:.3f} s", f"{r['duration_s'] / b:.2f}",
+                         f"{r['max_tracking_deg']:.{1 if lost else 3}f}°{' (lost)' if lost else ''}", f"{r['final_deg']:.3f}°",
+                         f"{r['peak_power_W']:.0f} / {r['mean_power_W']:.1f} W"))
+    return table(("core", "planner", "time", "bound (margin 1)", "ratio", "servo: max tracking", "final",
+                  "peak / mean power"), rows, f"Measured {n['measured']}, load {n['load'][0]:.1f} → {n['load'][1]:.1f} "
+                 f"(`scripts/docs_numbers.py control-notes`; {n['machine']}):")
 
 
 def notes_fastest_summary(n: dict) -> str:

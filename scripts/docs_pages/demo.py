@@ -3,7 +3,7 @@
 
 from __future__ import annotations
 
-from .common import _mode, _signed
+from .common import _mode, _signed, table
 
 
 def _time(m: dict) -> str:
@@ -78,8 +78,7 @@ def readme_table(s: dict) -> str:
                      f"holds {rob['holds_within']} of {rob['holds']} random orientations within 0.05° (worst "
                      f"{rob['worst_hold_deg']:.3f}°); the turn final error {rob['final_error_deg']:.3f}°, max "
                      f"tracking error {rob['max_tracking_error_deg']:.2f}°, mean {rob['mean_power_W']:.0f} W"))
-    body = "\n".join(f"| {k} | {v} |" for k, v in rows)
-    return f"| quantity | value |\n|---|---|\n{body}"
+    return table(("quantity", "value"), rows)
 
 
 def _relay_label(m: dict) -> str:
@@ -96,8 +95,7 @@ def _relay_label(m: dict) -> str:
 
 def drives_table(s: dict) -> str:
     """docs/control.md: the demo's turn driven three ways on both models (``drives.json`` of the demo)."""
-    lines = ["| model | mode | time | final error | max tracking error | peak power | mean power |",
-             "|---|---|---|---|---|---|---|"]
+    rows = []
     for drives in (s["drives_other"], s["drives"]):
         for m in drives["modes"]:
             servo = m["mode"] == "servo"
@@ -105,14 +103,14 @@ def drives_table(s: dict) -> str:
             final = f"{m['final_error_deg']:.3f}°" if m["final_error_deg"] < 1 else f"{m['final_error_deg']:.1f}°"
             if servo:
                 time, final = f"**{time}**", f"**{final}**"
-            lines.append(f"| {drives['model'].split()[0]} | {_relay_label(m)} | {time} | {final} | "
-                         f"{m['max_tracking_error_deg']:.{2 if servo else 1}f}° | {m['peak_power_W']:.0f} W | "
-                         f"{m['mean_power_W']:.1f} W |")
+            rows.append((drives["model"].split()[0], _relay_label(m), time, final,
+                         f"{m['max_tracking_error_deg']:.{2 if servo else 1}f}°", f"{m['peak_power_W']:.0f} W",
+                         f"{m['mean_power_W']:.1f} W"))
     a, d = s["drives_other"], s["drives"]
     bounds = "; ".join(
         f"{x['model'].split()[0]} {x['bang_bang_bound_s']:.3f} s (the servo takes {x['servo_over_bound']:.2f}× it)" for x in (a, d))
-    lines += ["", f"Models: {a['model']} and {d['model']}. Bang-bang lower bound: {bounds}."]
-    return "\n".join(lines)
+    return (table(("model", "mode", "time", "final error", "max tracking error", "peak power", "mean power"), rows)
+            + f"\n\nModels: {a['model']} and {d['model']}. Bang-bang lower bound: {bounds}.")
 
 
 def move_servo(s: dict) -> str:
@@ -189,8 +187,7 @@ def iron_table(s: dict) -> str:
          f"median {t['50']:.1f} N·m, 5th percentile {t['5']:.1f} N·m; ≥ 0.5 N·m on "
          f"{100 * cap['fraction_at_least']['0.5_N_m']:.0f} % of SO(3); worst sampled {_signed(t['0'], 1)} N·m"),
     ]
-    body = "\n".join(f"| {a} | {b} | {c} |" for a, b, c in rows)
-    return f"| | air core | iron core (pot, μr 1000, linear) |\n|---|---|---|\n{body}"
+    return table(("", "air core", "iron core (pot, μr 1000, linear)"), rows)
 
 
 def iron_drives(s: dict) -> str:

@@ -9,7 +9,7 @@ import subprocess
 import sys
 import tempfile
 from pathlib import Path
-from .common import ROOT, _machine, _signed, _thin
+from .common import ROOT, _machine, _signed, _thin, table
 
 
 # docs/explore.md's published sweep: the default grid restricted to six rotor-stator pairs (the paper's, the old air-core
@@ -152,9 +152,7 @@ def explore_run(e: dict) -> str:
 
 def explore_pareto_table(e: dict) -> str:
     """docs/explore.md: the default sweep's Pareto set, and the paper's pair beside it."""
-    lines = ["| # | rotor | stator | cap | coils | median | 95 % | escape | holding (N·m) | capability p5 (N·m) | "
-             "families |", "|---|---|---|---|---|---|---|---|---|---|---|"]
-    seen = set()
+    rows, seen = [], set()
     for i, r in enumerate(e["pareto"], start=1):
         rotor = f"{_pack(r['rotor'])} L{r['rotor_level']}"
         if rotor not in seen:
@@ -163,11 +161,12 @@ def explore_pareto_table(e: dict) -> str:
         hold = "—" if r["holding_torque_median_Nm"] is None else f"{r['holding_torque_median_Nm']:.2f}"
         cap = "—" if r["capability_p5_Nm"] is None else _signed(r["capability_p5_Nm"], 2)
         same = " same" if r["family_rule"] == "same" else ""
-        lines.append(f"| {i} | {rotor} | {_pack(r['stator'])} L{r['stator_level']} | {r['cap_half_angle_deg']:.0f}° | "
-                     f"{r['coils']} | {r['resolution_median_deg']:.2f}° | {r['resolution_p95_deg']:.2f}° | "
-                     f"{100 * r['escape_violations'] / r['states']:.0f} % | {hold} | {cap} | "
-                     f"{r['rotor_family']}/{r['stator_family']}{same} |")
-    return "\n".join(lines)
+        rows.append((i, rotor, f"{_pack(r['stator'])} L{r['stator_level']}", f"{r['cap_half_angle_deg']:.0f}°", r["coils"],
+                     f"{r['resolution_median_deg']:.2f}°", f"{r['resolution_p95_deg']:.2f}°",
+                     f"{100 * r['escape_violations'] / r['states']:.0f} %", hold, cap,
+                     f"{r['rotor_family']}/{r['stator_family']}{same}"))
+    return table(("#", "rotor", "stator", "cap", "coils", "median", "95 %", "escape", "holding (N·m)",
+                  "capability p5 (N·m)", "families"), rows)
 
 
 def explore_prototype(e: dict) -> str:

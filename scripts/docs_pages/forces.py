@@ -8,7 +8,7 @@ import statistics
 import subprocess
 import sys
 import tempfile
-from .common import FORCES_SEED, FORCES_STATES, ROOT, _signed
+from .common import FORCES_SEED, FORCES_STATES, ROOT, _signed, table
 
 
 def _coils(r: dict) -> str:
@@ -17,15 +17,14 @@ def _coils(r: dict) -> str:
 
 def forces_table(f: dict) -> str:
     """docs/magnetics.md: the state torques ``spherestep forces --states 20 --core air`` prints."""
-    lines = ["| state | coils | offset ° | stiffness N·m/rad | holding N·m | strongest axis N·m | downhill/steps "
-             "| peak step N·m |", "|---|---|---|---|---|---|---|---|"]
+    rows = []
     for r in f["states"]:
         peak = f"{r['step_peak_torque_Nm']:.3f}" if r["step_peak_torque_Nm"] is not None else "—"
-        lines.append(f"| {r['state']} | {_coils(r)} | {r['equilibrium_offset_deg']:.2f} | "
-                     + " / ".join(f"{k:.2f}" for k in r["stiffness_Nm_per_rad"])
-                     + f" | {r['holding_torque_Nm']:.3f} | {r['strongest_axis_Nm']:.3f} | "
-                     f"{r['downhill_steps'] or 0}/{r['steps']} | {peak} |")
-    return "\n".join(lines)
+        rows.append((r["state"], _coils(r), f"{r['equilibrium_offset_deg']:.2f}",
+                     " / ".join(f"{k:.2f}" for k in r["stiffness_Nm_per_rad"]), f"{r['holding_torque_Nm']:.3f}",
+                     f"{r['strongest_axis_Nm']:.3f}", f"{r['downhill_steps'] or 0}/{r['steps']}", peak))
+    return table(("state", "coils", "offset °", "stiffness N·m/rad", "holding N·m", "strongest axis N·m",
+                  "downhill/steps", "peak step N·m"), rows)
 
 
 def forces_summary(f: dict) -> str:

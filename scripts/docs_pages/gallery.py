@@ -3,13 +3,12 @@
 from __future__ import annotations
 
 import re
-from .common import _thin
+from .common import _thin, table
 
 
 GALLERY_LABELS = {"prototype": "our reading of the paper", "jhu-as-built": "Johns Hopkins",
                   "ncsu-goldberg": "NCSU stator layout"}
-GALLERY_TARGET = ("| Kumagai & Hollis SIM (target) | n/a | n/a | n/a | n/a | n/a | n/a | n/a | target: 4 N·m about any axis "
-                  "| n/a | n/a | n/a |")
+GALLERY_TARGET = ("Kumagai & Hollis SIM (target)", *["n/a"] * 7, "target: 4 N·m about any axis", *["n/a"] * 3)
 
 
 def _nm(x: float) -> str:
@@ -18,37 +17,35 @@ def _nm(x: float) -> str:
 
 def gallery_table(g: dict) -> str:
     """docs/gallery.md: the stored metrics of every entry (``src/spherestep/data/gallery/metrics.csv``)."""
-    lines = ["| design | magnets / coils | core | states | res. median | res. p95 | all SO(3) | escape | torque median "
-             "(p5) | detent | magnets | W/coil |", "|---|---|---|---|---|---|---|---|---|---|---|---|"]
+    rows = []
     for key, r in g.items():
         label = GALLERY_LABELS.get(key)
         name = f"**{key}**" + (f" ({label}, {r['rotor_poles']}/{r['coils']})" if label else "")
         detent = f"{r['bias_torque_max_N_m']:.1f} N·m" if r["bias_torque_max_N_m"] else "0"
         mass = r["magnet_mass_kg"]
-        lines.append(
-            f"| {name} | {r['rotor_poles']} / {r['coils']} | {r['core']} | {_thin(r['states'])} | "
-            f"{r['resolution_median_deg']:.2f}° | {r['resolution_p95_deg']:.2f}° | {'yes' if r['reaches_all'] else 'no'} | "
-            f"{100 * r['escape_violations'] / r['states']:.0f} % | {_nm(r['torque_median_N_m'])} "
-            f"({_nm(r['torque_p5_N_m'])}) N·m | {detent} | {mass:.2f} kg | "
-            f"{r['coil_power_W']:.{1 if r['coil_power_W'] >= 1 else 2}f} |".replace(
-                f"{mass:.2f} kg", f"{mass:.3g} kg" if mass < 1 else f"{mass:.2f} kg"))
-    lines.append(GALLERY_TARGET)
-    return "\n".join(lines)
+        rows.append((name, f"{r['rotor_poles']} / {r['coils']}", r["core"], _thin(r["states"]),
+                     f"{r['resolution_median_deg']:.2f}°", f"{r['resolution_p95_deg']:.2f}°",
+                     "yes" if r["reaches_all"] else "no", f"{100 * r['escape_violations'] / r['states']:.0f} %",
+                     f"{_nm(r['torque_median_N_m'])} ({_nm(r['torque_p5_N_m'])}) N·m", detent,
+                     f"{mass:.3g} kg" if mass < 1 else f"{mass:.2f} kg",
+                     f"{r['coil_power_W']:.{1 if r['coil_power_W'] >= 1 else 2}f}"))
+    rows.append(GALLERY_TARGET)
+    return table(("design", "magnets / coils", "core", "states", "res. median", "res. p95", "all SO(3)", "escape",
+                  "torque median (p5)", "detent", "magnets", "W/coil"), rows)
 
 
 def gallery_drive_table(g: dict) -> str:
     """docs/gallery.md: each design driven (the servo's fastest turn, the settled relay plan), as stored."""
-    lines = ["| design | servo time | final | max track | power | relay plan: executed | steps on plan |",
-             "|---|---|---|---|---|---|---|"]
+    rows = []
     for key, r in g.items():
         if r["servo_turn_s"] is None:
-            servo = "— (planner refused) | — | — | —"
+            servo = ("— (planner refused)", "—", "—", "—")
         else:
-            servo = (f"{r['servo_turn_s']:.3f} s | {r['servo_final_error_deg']:.1e}° | "
-                     f"{r['servo_max_tracking_error_deg']:.2f}° | {r['servo_mean_power_W']:.1f} W")
-        lines.append(f"| **{key}** | {servo} | {'yes' if r['relay_executed'] else 'no'} | "
-                     f"{r['relay_steps_on_plan']} / {r['relay_steps']} |")
-    return "\n".join(lines)
+            servo = (f"{r['servo_turn_s']:.3f} s", f"{r['servo_final_error_deg']:.1e}°",
+                     f"{r['servo_max_tracking_error_deg']:.2f}°", f"{r['servo_mean_power_W']:.1f} W")
+        rows.append((f"**{key}**", *servo, "yes" if r["relay_executed"] else "no",
+                     f"{r['relay_steps_on_plan']} / {r['relay_steps']}"))
+    return table(("design", "servo time", "final", "max track", "power", "relay plan: executed", "steps on plan"), rows)
 
 
 def gallery_asbuilt(g: dict) -> str:

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from .common import table
+
 
 
 IRON_ROWS = (("unpowered: minima of 12 starts", "{unpowered_minima:d}"),
@@ -20,6 +22,5 @@ IRON_ROWS = (("unpowered: minima of 12 starts", "{unpowered_minima:d}"),
 def iron_compare_table(rows: dict) -> str:
     """docs/magnetics.md: ``scripts/iron_compare.py``'s pairwise and coupled models side by side."""
     a, b = rows["pairwise"], rows["coupled"]
-    lines = [f"| the prototype, iron-cored | {a['model']} | {b['model']} |", "|---|---|---|"]
-    lines += [f"| {label} | {fmt.format(**a)} | {fmt.format(**b)} |" for label, fmt in IRON_ROWS]
-    return "\n".join(lines)
+    return table(("the prototype, iron-cored", a["model"], b["model"]),
+                 [(label, fmt.format(**a), fmt.format(**b)) for label, fmt in IRON_ROWS])

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import math
-from .common import _thin, _times, _when
+from .common import _thin, _times, _when, table
 
 
 POTENTIAL_OFFSET_STATES, POTENTIAL_SEED = 5000, 0
@@ -80,15 +80,13 @@ def potential_cutoff(m: dict) -> str:
 def potential_offsets(m: dict) -> str:
     """docs/potential.md: equilibria of random states against their geometric states."""
     e = m["equilibria"]
-    lines = [f"({e['states']:,} random states of the prototype (seed {e['seed']}), each with its held coils energised "
-             f"with the polarity of their poles, started at the state): {e['minima']:,} of {e['states']:,} converge to "
-             f"strict minima (Hessian positive definite) in at most {e['iterations_max']} Newton iterations (mean "
-             f"{e['iterations_mean']:.1f}). Park distance equilibrium ↔ geometric state:", "",
-             "| held pairs | states | median | mean | 90th pct | max |", "|---:|---:|---:|---:|---:|---:|"]
-    for r in e["rows"]:
-        lines.append(f"| {r['held'] if r['held'] is not None else 'all'} | {r['states']} | {r['median']:.3f}° | "
-                     f"{r['mean']:.3f}° | {r['p90']:.3f}° | {r['max']:.3f}° |")
-    return "\n".join(lines)
+    rows = [(r["held"] if r["held"] is not None else "all", r["states"], f"{r['median']:.3f}°", f"{r['mean']:.3f}°",
+             f"{r['p90']:.3f}°", f"{r['max']:.3f}°") for r in e["rows"]]
+    return table(("held pairs", "states", "median", "mean", "90th pct", "max"), rows,
+                 f"({e['states']:,} random states of the prototype (seed {e['seed']}), each with its held coils "
+                 f"energised with the polarity of their poles, started at the state): {e['minima']:,} of {e['states']:,} "
+                 f"converge to strict minima (Hessian positive definite) in at most {e['iterations_max']} Newton "
+                 f"iterations (mean {e['iterations_mean']:.1f}). Park distance equilibrium ↔ geometric state:", "rrrrrr")
 
 
 def potential_stiffness(m: dict) -> str:
@@ -107,13 +105,7 @@ def potential_timings(b: dict) -> str:
     """docs/potential.md, Timings: ``bench_potential.py``'s batches of 1000 orientations and its other figures."""
     v = b["values"]
     batch, vs, single = v["batch us per orientation"], v["batch vs exact"], v["single us"]
-    lines = [f"Measured {_when(b)} (`benchmarks/bench_potential.py`; {b['machine']}, `OPENBLAS_NUM_THREADS="
-             f"{b.get('OPENBLAS_NUM_THREADS', '?')}`). Batches of 1000 random orientations; \"vs ducc0\" is the row's "
-             "time over the anchor's (ducc0's `synthesis_general` of `F` alone at the same points, library time "
-             "only); \"vs exact\" the matching exact row's time over the row's. The accuracy of each row is the "
-             "tests' (Accuracy, above).", "",
-             "| task (1000 orientations) | µs per orientation | per second | vs ducc0 | vs exact |",
-             "|---|---:|---:|---:|---:|"]
+    rows = []
     for task, us in batch.items():
         coils = task.rsplit(", ", 1)[1]
         anchor = batch[f"ducc0 synthesis of F (anchor), {coils}"]
@@ -121,22 +113,30 @@ def potential_timings(b: dict) -> str:
         if ", fast, " in task:
             name = "**" + name.replace(f", {coils}", "") + f"**, {coils}"
         ratio = vs.get(task)
-        lines.append(f"| {name} | {_thin(round(us)) if us >= 100 else f'{us:.2f}'} | {_thin(round(1e6 / us))} | "
-                     f"{_times(us / anchor)}× | {'' if ratio is None else f'{ratio:.1f}×'} |")
+        rows.append((name, _thin(round(us)) if us >= 100 else f"{us:.2f}", _thin(round(1e6 / us)),
+                     f"{_times(us / anchor)}×", None if ratio is None else f"{ratio:.1f}×"))
     eq, pl, dy = v["equilibria 1e4 s"], v["planner steps per s"], v["dynamics"]
-    lines += ["", "Same script, same run:", "", "| task | fast path | exact forms |", "|---|---:|---:|"]
+    same = []
     for n in (4, 29):
-        lines.append(f"| single call, energy + torque, {n} coils | {single[f'single call energy + torque, fast, {n} coils']:.1f} µs "
-                     f"(the compiled call alone {single[f'single call energy + torque, the compiled call alone, {n} coils']:.1f} µs) | "
-                     f"{single[f'single call energy + torque, pairwise, {n} coils']:.1f} µs (pairwise) |")
-        lines.append(f"| single call, torque only, {n} coils | {single[f'single call torque, fast, {n} coils']:.1f} µs | |")
-        lines.append(f"| single call, E, τ, Hessian, {n} coils | {single[f'single call E, τ, Hessian, fast, {n} coils']:.1f} µs | |")
-    lines += [f"| equilibria of 10⁴ starts (2° off a state, its coils; {100 * eq['converged']:.0f} % converged) | "
-              f"**{eq['fast']:.2f} s** | {eq['exact']:.1f} s |",
-              f"| potential planner, one 360° turn | {_thin(round(pl['fast']))} steps/s | {_thin(round(pl['exact']))} steps/s |",
-              f"| dynamics at the tuned step ({dy['fast']['dt ms']:.1f} ms) | {_thin(round(dy['fast']['x real time']))}× real "
-              f"time | {_times(dy['exact']['x real time'])}× real time |"]
-    return "\n".join(lines)
+        same += [(f"single call, energy + torque, {n} coils",
+                  f"{single[f'single call energy + torque, fast, {n} coils']:.1f} µs (the compiled call alone "
+                  f"{single[f'single call energy + torque, the compiled call alone, {n} coils']:.1f} µs)",
+                  f"{single[f'single call energy + torque, pairwise, {n} coils']:.1f} µs (pairwise)"),
+                 (f"single call, torque only, {n} coils", f"{single[f'single call torque, fast, {n} coils']:.1f} µs", ""),
+                 (f"single call, E, τ, Hessian, {n} coils",
+                  f"{single[f'single call E, τ, Hessian, fast, {n} coils']:.1f} µs", "")]
+    same += [(f"equilibria of 10⁴ starts (2° off a state, its coils; {100 * eq['converged']:.0f} % converged)",
+              f"**{eq['fast']:.2f} s**", f"{eq['exact']:.1f} s"),
+             ("potential planner, one 360° turn", f"{_thin(round(pl['fast']))} steps/s", f"{_thin(round(pl['exact']))} steps/s"),
+             (f"dynamics at the tuned step ({dy['fast']['dt ms']:.1f} ms)", f"{_thin(round(dy['fast']['x real time']))}× real "
+              "time", f"{_times(dy['exact']['x real time'])}× real time")]
+    batches = table(("task (1000 orientations)", "µs per orientation", "per second", "vs ducc0", "vs exact"), rows,
+                    f"Measured {_when(b)} (`benchmarks/bench_potential.py`; {b['machine']}, `OPENBLAS_NUM_THREADS="
+                    f"{b.get('OPENBLAS_NUM_THREADS', '?')}`). Batches of 1000 random orientations; \"vs ducc0\" is the "
+                    "row's time over the anchor's (ducc0's `synthesis_general` of `F` alone at the same points, library "
+                    "time only); \"vs exact\" the matching exact row's time over the row's. The accuracy of each row is "
+                    "the tests' (Accuracy, above).", "lrrrr")
+    return batches + "\n\n" + table(("task", "fast path", "exact forms"), same, "Same script, same run:", "lrr")
 
 
 def _met(ok: bool) -> str:
@@ -151,23 +151,30 @@ def potential_targets(bs: dict) -> str:
     et, k, h = (batch[f"{t}, fast, 29 coils"] for t in ("energy + torque", "K(R)", "E, τ, Hessian"))
     one = single["single call energy + torque, fast, 4 coils"]
     eq, steps, dyn = v["equilibria 1e4 s"], v["planner steps per s"], dy["values"]["potential"]
-    lines = [f"`bench_potential.py` {_when(po)}; `bench_planners.py` {_when(pl)}; `bench_dynamics.py` {_when(dy)}:", "",
-             "| task | stored runs | target |", "|---|---:|---:|",
-             f"| energy + torque, 29 coils, batches of 1000 | {et:.1f} µs per orientation ({_times(et / batch['ducc0 synthesis of F (anchor), 29 coils'])}× "
-             f"the anchor; {batch['energy + torque, pairwise (exact), 29 coils'] / et:.0f}× faster than pairwise) | ≤ 5 µs — {_met(et <= 5)} |",
-             f"| `K(R)`, 29 coils, batches | {k:.1f} µs → {_thin(int(round(1e6 / k, -3)))} per second | ≥ 10⁵ /s — {_met(1e6 / k >= 1e5)} |",
-             f"| E, τ, Hessian, 29 coils, batches | {h:.1f} µs | — |",
-             f"| one orientation per call, energy + torque, 4 coils | {one:.1f} µs (the compiled call alone "
+    planner = pl["values"]["potential"]
+    rows = [("energy + torque, 29 coils, batches of 1000",
+             f"{et:.1f} µs per orientation ({_times(et / batch['ducc0 synthesis of F (anchor), 29 coils'])}× the anchor; "
+             f"{batch['energy + torque, pairwise (exact), 29 coils'] / et:.0f}× faster than pairwise)",
+             f"≤ 5 µs — {_met(et <= 5)}"),
+            ("`K(R)`, 29 coils, batches", f"{k:.1f} µs → {_thin(int(round(1e6 / k, -3)))} per second",
+             f"≥ 10⁵ /s — {_met(1e6 / k >= 1e5)}"),
+            ("E, τ, Hessian, 29 coils, batches", f"{h:.1f} µs", "—"),
+            ("one orientation per call, energy + torque, 4 coils",
+             f"{one:.1f} µs (the compiled call alone "
              f"{single['single call energy + torque, the compiled call alone, 4 coils']:.1f} µs; pairwise "
-             f"{single['single call energy + torque, pairwise, 4 coils']:.0f} µs) | ≤ 30 µs — {_met(one <= 30)} |",
-             f"| equilibria of 10⁴ starts | {eq['fast']:.2f} s (exact forms {eq['exact']:.1f} s) | < 1 s — {_met(eq['fast'] < 1)} |",
-             f"| potential planner, one 360° turn | {_thin(round(steps['fast']))} steps/s in `bench_potential.py`, "
-             f"{_thin(round(pl['values']['potential']['steps per s']))} in `bench_planners.py` (median of "
-             f"{pl['values']['potential']['trials']} turns; exact forms {_thin(round(steps['exact']))}) | ≥ 1000 — "
-             f"{_met(min(steps['fast'], pl['values']['potential']['steps per s']) >= 1000)} |",
-             f"| dynamics at the tuned step ({dyn['dt ms']:.1f} ms) | {_thin(round(dyn['x real time']))}× real time "
-             f"(NumPy `Rotor.step` {_thin(round(dyn['numpy x real time']))}×) | ≥ 500× — {_met(dyn['x real time'] >= 500)} |"]
-    return "\n".join(lines)
+             f"{single['single call energy + torque, pairwise, 4 coils']:.0f} µs)", f"≤ 30 µs — {_met(one <= 30)}"),
+            ("equilibria of 10⁴ starts", f"{eq['fast']:.2f} s (exact forms {eq['exact']:.1f} s)",
+             f"< 1 s — {_met(eq['fast'] < 1)}"),
+            ("potential planner, one 360° turn",
+             f"{_thin(round(steps['fast']))} steps/s in `bench_potential.py`, {_thin(round(planner['steps per s']))} in "
+             f"`bench_planners.py` (median of {planner['trials']} turns; exact forms {_thin(round(steps['exact']))})",
+             f"≥ 1000 — {_met(min(steps['fast'], planner['steps per s']) >= 1000)}"),
+            (f"dynamics at the tuned step ({dyn['dt ms']:.1f} ms)",
+             f"{_thin(round(dyn['x real time']))}× real time (NumPy `Rotor.step` {_thin(round(dyn['numpy x real time']))}×)",
+             f"≥ 500× — {_met(dyn['x real time'] >= 500)}")]
+    return table(("task", "stored runs", "target"), rows,
+                 f"`bench_potential.py` {_when(po)}; `bench_planners.py` {_when(pl)}; `bench_dynamics.py` {_when(dy)}:",
+                 "lrr")
 
 
 def planners_potential(b: dict) -> str:

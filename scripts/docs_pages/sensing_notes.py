@@ -7,7 +7,7 @@ import statistics
 import sys
 import time
 from collections.abc import Callable
-from .common import ROOT, _cpu, _deg, _notes_when, _run_footer, _run_header, _signed, _step, _thin
+from .common import ROOT, _cpu, _deg, _notes_when, _run_footer, _run_header, _signed, _step, _thin, table
 
 
 SENSING_GLOBAL_TRIALS = 10  # per row of the global start (the 2026-11-23 one-off ran 50)
@@ -233,13 +233,13 @@ def sensing_notes_run(n: dict) -> str:
 
 
 def sensing_notes_table(n: dict) -> str:
-    lines = ["| nodes | max abs error | RMS error | build |", "|---|---|---|---|"]
+    rows = []
     for r in n["table"]:
         b = "**" if r["nodes"] == 16385 else ""
         name = f"{_thin(r['nodes'])} (default)" if r["nodes"] == 16385 else _thin(r["nodes"])
-        lines.append(f"| {b}{name}{b} | {b}{r['max_T'] * 1e6:.2g} µT{b} | {b}{r['rms_T'] * 1e6:.2g} µT{b} | "
-                     f"{r['build_s']:.2f} s |")
-    return "\n".join(lines)
+        rows.append((f"{b}{name}{b}", f"{b}{r['max_T'] * 1e6:.2g} µT{b}", f"{b}{r['rms_T'] * 1e6:.2g} µT{b}",
+                     f"{r['build_s']:.2f} s"))
+    return table(("nodes", "max abs error", "RMS error", "build"), rows)
 
 
 def sensing_notes_onestep(n: dict) -> str:
@@ -253,13 +253,11 @@ def sensing_notes_loop_cost(n: dict) -> str:
 
 def sensing_notes_global(n: dict) -> str:
     g = n["global"]
-    lines = [f"{g['trials']} Haar-random orientations per row (shortened from the 50 of the first run), 24 sensors, "
-             f"grid 2000; {_sn_when(n)}:", "",
-             "| rotor | readings averaged | success (error < 0.05°) | median time | failures |", "|---|---|---|---|---|"]
-    for r in g["rows"]:
-        fails = ", ".join(f"{x:g}°" for x in r["failures_deg"]) or "—"
-        lines.append(f"| {r['rotor']} | {r['averaged']} | {r['success']}/{g['trials']} | {r['median_s']:.2f} s | {fails} |")
-    return "\n".join(lines)
+    rows = [(r["rotor"], r["averaged"], f"{r['success']}/{g['trials']}", f"{r['median_s']:.2f} s",
+             ", ".join(f"{x:g}°" for x in r["failures_deg"]) or "—") for r in g["rows"]]
+    return table(("rotor", "readings averaged", "success (error < 0.05°)", "median time", "failures"), rows,
+                 f"{g['trials']} Haar-random orientations per row (shortened from the 50 of the first run), 24 sensors, "
+                 f"grid 2000; {_sn_when(n)}:")
 
 
 def sensing_notes_global_short(n: dict) -> str:
@@ -276,16 +274,15 @@ def sensing_notes_placement(n: dict) -> str:
 
 
 def sensing_notes_accuracy(n: dict) -> str:
-    lines = [f"Measured {n['measured']}, load {n['load'][0]:.1f} → {n['load'][1]:.1f} (`scripts/docs_numbers.py "
-             "sensing-notes`):", "",
-             "| sensors | layout | RMS (°) | worst (°) | Cramér–Rao RMS (°) | worst-case bound (°) | coil residual RMS (µT) |",
-             "|---|---|---|---|---|---|---|"]
+    rows = []
     for r in n["accuracy"]:
         b = "**" if r["sensors"] == 24 and r["layout"] == "greedy" else ""
-        bound = "" if r["bound_deg"] is None else f"{b}{r['bound_deg']:.4f}{b}"
-        lines.append(f"| {b}{r['sensors']}{b} | {b}{r['layout']}{b} | {b}{r['rms_deg']:.4f}{b} | {b}{r['worst_deg']:.4f}{b} "
-                     f"| {b}{r['predicted_deg']:.4f}{b} | {bound} | {r['coil_residual_uT']:.1f} |")
-    return "\n".join(lines)
+        rows.append((f"{b}{r['sensors']}{b}", f"{b}{r['layout']}{b}", f"{b}{r['rms_deg']:.4f}{b}",
+                     f"{b}{r['worst_deg']:.4f}{b}", f"{b}{r['predicted_deg']:.4f}{b}",
+                     None if r["bound_deg"] is None else f"{b}{r['bound_deg']:.4f}{b}", f"{r['coil_residual_uT']:.1f}"))
+    return table(("sensors", "layout", "RMS (°)", "worst (°)", "Cramér–Rao RMS (°)", "worst-case bound (°)",
+                  "coil residual RMS (µT)"), rows, f"Measured {n['measured']}, load {n['load'][0]:.1f} → "
+                 f"{n['load'][1]:.1f} (`scripts/docs_numbers.py sensing-notes`):")
 
 
 def _acc(n: dict, k: int, layout: str = "greedy") -> dict:
@@ -300,20 +297,17 @@ def sensing_notes_few(n: dict) -> str:
 
 
 def sensing_notes_model_error(n: dict) -> str:
-    lines = ["| error source | RMS (°) | worst (°) |", "|---|---|---|"]
-    lines += [f"| {r['source']} | {r['rms_deg']:.3f} | {r['worst_deg']:.3f} |" for r in n["model_error"]]
-    return "\n".join(lines)
+    return table(("error source", "RMS (°)", "worst (°)"),
+                 [(r["source"], f"{r['rms_deg']:.3f}", f"{r['worst_deg']:.3f}") for r in n["model_error"]])
 
 
 def sensing_notes_calibration(n: dict) -> str:
     c = n["calibration"]
-    return "\n".join([
-        f"5 rounds in {c['seconds']:.0f} s; {_sn_when(n)}:", "",
-        "| | nominal model | calibrated |", "|---|---|---|",
-        f"| residual per channel (µT) | {c['residual_before_uT']:.0f} | {c['residual_after_uT']:.0f} (the noise: 100 µT) |",
-        f"| sensor position error RMS per axis (mm) | {c['position_before_mm']:.3f} | {c['position_after_mm']:.3f} |",
-        f"| orientation error RMS (°) | {c['orientation_before_deg']:.4f} | {c['orientation_after_deg']:.4f} = a common "
-        f"turn of {c['common_deg']:.4f} + scatter {c['scatter_deg']:.4f} |"])
+    return table(("", "nominal model", "calibrated"), [
+        ("residual per channel (µT)", f"{c['residual_before_uT']:.0f}", f"{c['residual_after_uT']:.0f} (the noise: 100 µT)"),
+        ("sensor position error RMS per axis (mm)", f"{c['position_before_mm']:.3f}", f"{c['position_after_mm']:.3f}"),
+        ("orientation error RMS (°)", f"{c['orientation_before_deg']:.4f}", f"{c['orientation_after_deg']:.4f} = a common "
+         f"turn of {c['common_deg']:.4f} + scatter {c['scatter_deg']:.4f}")], f"5 rounds in {c['seconds']:.0f} s; {_sn_when(n)}:")
 
 
 def sensing_notes_common(n: dict) -> str:
@@ -329,23 +323,18 @@ def sensing_notes_imu(n: dict) -> str:
     lo = n["loop"]
     names = (("hall", "magnetometer array, 1 Gauss–Newton step per sample"), ("imu", "IMU alone (MEKF: gyro, gravity, field)"),
              ("fused", "**fused: gyro + array (MEKF)**"))
-    lines = [f"{_sn_when(n)}:", "", "| sensor | RMS (°) | worst (°) | time per sample (µs, incl. simulation) |",
-             "|---|---|---|---|"]
-    for k, label in names:
-        r = lo[k]
-        lines.append(f"| {label} | {_deg(r['rms_deg'])} | {_deg(r['worst_deg'])} | {r['us_per_sample']:.0f} |")
-    return "\n".join(lines)
+    return table(("sensor", "RMS (°)", "worst (°)", "time per sample (µs, incl. simulation)"),
+                 [(label, _deg(lo[k]["rms_deg"]), _deg(lo[k]["worst_deg"]), f"{lo[k]['us_per_sample']:.0f}")
+                  for k, label in names], f"{_sn_when(n)}:")
 
 
 def sensing_notes_servo(n: dict) -> str:
     names = (("ideal", "ideal"), ("hall", "**array (24 × TMAG5273A2, 1 % current error)**"),
              ("fused", "fused (gyro + array)"), ("imu", "IMU alone"))
-    lines = [f"{_sn_when(n)}:", "", "| sensor | max tracking error (°) | final error (°) | estimate error RMS (°) |",
-             "|---|---|---|---|"]
-    for k, label in names:
-        r = n["servo"][k]
-        lines.append(f"| {label} | {_deg(r['max_tracking_deg'])} | {_deg(r['final_deg'])} | {_deg(r['estimate_rms_deg'])} |")
-    return "\n".join(lines)
+    s = n["servo"]
+    return table(("sensor", "max tracking error (°)", "final error (°)", "estimate error RMS (°)"),
+                 [(label, _deg(s[k]["max_tracking_deg"]), _deg(s[k]["final_deg"]), _deg(s[k]["estimate_rms_deg"]))
+                  for k, label in names], f"{_sn_when(n)}:")
 
 
 def sensing_notes_iron_cost(n: dict) -> str:
@@ -353,27 +342,28 @@ def sensing_notes_iron_cost(n: dict) -> str:
     rate = lambda us: _thin(int(round(1e6 / us, -2)))  # noqa: E731
     w, wo = lo["turn with"], lo["turn without"]
     hw, hwo = lo["hold with"], lo["hold without"]
-    return "\n".join([
-        f"CPU medians of 200 calls; {_sn_when(n)}:", "",
-        "| call | median | rate |", "|---|---|---|",
-        f"| rotor table: field + Jacobian | {c['rotor']:.0f} µs | {rate(c['rotor'])} /s |",
-        f"| cores: field / field + Jacobian (compiled B-spline, 92 poles × 24 sensors) | {c['cores field']:.0f} / "
-        f"{c['cores jacobian']:.0f} µs | {rate(c['cores field'])} / {rate(c['cores jacobian'])} /s |",
-        f"| update without the cores (`track`, one Gauss–Newton step) | {c['update without']:.0f} µs | "
-        f"{rate(c['update without'])} /s |",
-        f"| **update with the cores** | **{c['update with']:.0f} µs** | **{rate(c['update with'])} /s** |", "",
-        "| estimation error, iron prototype (24 × TMAG5273A2, 0.1 mT noise, 4 coils at ±1, 1 % current error) | cores "
-        "modelled (default) | cores ignored (`cores=False`) |", "|---|---|---|",
-        f"| 200 Haar orientations, LM from 0.06° off: RMS / worst | **{s['with']['rms_deg']:.4f}° / "
-        f"{s['with']['worst_deg']:.4f}°** | {s['without']['rms_deg']:.2f}° / {s['without']['worst_deg']:.2f}° |",
-        f"| in the loop, 90° turn about x (the drive's fastest turn on the iron model, 1 kHz, 0.5 s settle): sensor RMS "
-        f"/ worst | **{w['rms_deg']:.4f}° / {w['worst_deg']:.4f}°** | {wo['rms_deg']:.2f}° / {wo['worst_deg']:.2f}° |",
-        f"| same turn: tracking max / final | {w['tracking_deg']:.3f}° / {w['final_deg']:.4f}° | "
-        f"{wo['tracking_deg']:.2f}° / {wo['final_deg']:.2f}° |",
-        f"| in the loop, hold at the turn's start (0.5 s): sensor RMS / final | **{hw['rms_deg']:.4f}°** / "
-        f"{hw['final_sensor_deg']:.4f}° | {hwo['rms_deg']:.2f}° / {hwo['final_sensor_deg']:.2f}° |",
-        f"| wall time per simulated second (turn, hold) | {w['wall_per_simulated']:.1f}, {hw['wall_per_simulated']:.1f} | "
-        f"{wo['wall_per_simulated']:.1f}, {hwo['wall_per_simulated']:.1f} |"])
+    costs = table(("call", "median", "rate"), [
+        ("rotor table: field + Jacobian", f"{c['rotor']:.0f} µs", f"{rate(c['rotor'])} /s"),
+        ("cores: field / field + Jacobian (compiled B-spline, 92 poles × 24 sensors)",
+         f"{c['cores field']:.0f} / {c['cores jacobian']:.0f} µs", f"{rate(c['cores field'])} / {rate(c['cores jacobian'])} /s"),
+        ("update without the cores (`track`, one Gauss–Newton step)", f"{c['update without']:.0f} µs",
+         f"{rate(c['update without'])} /s"),
+        ("**update with the cores**", f"**{c['update with']:.0f} µs**", f"**{rate(c['update with'])} /s**")],
+        f"CPU medians of 200 calls; {_sn_when(n)}:")
+    errors = table(("estimation error, iron prototype (24 × TMAG5273A2, 0.1 mT noise, 4 coils at ±1, 1 % current error)",
+                    "cores modelled (default)", "cores ignored (`cores=False`)"), [
+        ("200 Haar orientations, LM from 0.06° off: RMS / worst",
+         f"**{s['with']['rms_deg']:.4f}° / {s['with']['worst_deg']:.4f}°**",
+         f"{s['without']['rms_deg']:.2f}° / {s['without']['worst_deg']:.2f}°"),
+        ("in the loop, 90° turn about x (the drive's fastest turn on the iron model, 1 kHz, 0.5 s settle): sensor RMS "
+         "/ worst", f"**{w['rms_deg']:.4f}° / {w['worst_deg']:.4f}°**", f"{wo['rms_deg']:.2f}° / {wo['worst_deg']:.2f}°"),
+        ("same turn: tracking max / final", f"{w['tracking_deg']:.3f}° / {w['final_deg']:.4f}°",
+         f"{wo['tracking_deg']:.2f}° / {wo['final_deg']:.2f}°"),
+        ("in the loop, hold at the turn's start (0.5 s): sensor RMS / final",
+         f"**{hw['rms_deg']:.4f}°** / {hw['final_sensor_deg']:.4f}°", f"{hwo['rms_deg']:.2f}° / {hwo['final_sensor_deg']:.2f}°"),
+        ("wall time per simulated second (turn, hold)", f"{w['wall_per_simulated']:.1f}, {hw['wall_per_simulated']:.1f}",
+         f"{wo['wall_per_simulated']:.1f}, {hwo['wall_per_simulated']:.1f}")])
+    return costs + "\n\n" + errors
 
 
 def sensing_notes_iron_accuracy(n: dict) -> str:
@@ -426,17 +416,16 @@ def sensing_notes_marker_cost(n: dict) -> str:
     pair = lambda xs: ", ".join(f"{x:.3f}" for x in xs)  # noqa: E731
     change = [100 * (a / b - 1) for a, b in zip(m["holding_marker_after_Nm"], m["holding_marker_before_Nm"])]
     other = max(abs(a - b) for a, b in zip(m["holding_other_after_Nm"], m["holding_other_before_Nm"]))
-    return "\n".join([
-        f"{_sn_when(n)}:", "", "| | before | after |", "|---|---|---|",
-        f"| share of stepper states that hold the marked pole | — | {100 * m['states_holding_marker']:.1f} % |",
-        f"| holding torque, states holding the marked pole (N·m) | {pair(m['holding_marker_before_Nm'])} | "
-        f"{pair(m['holding_marker_after_Nm'])} ({_signed(min(change), 0)} to {_signed(max(change), 0)} %) |",
-        f"| holding torque, other states (N·m) | {pair(m['holding_other_before_Nm'])} | {pair(m['holding_other_after_Nm'])} "
-        f"(changed by at most {other:.1g} N·m) |",
-        f"| net dipole of the rotor (A·m²) | {m['dipole_before_Am2']:.0e} | {m['dipole_after_Am2']:.1f} (an Earth-field "
-        f"torque of at most {m['dipole_after_Am2'] * 65e-6:.0e} N·m in 65 µT) |",
-        f"| RMS torque change, 300 random orientations × random drives (±1 on 40 % of coils) | | "
-        f"{100 * m['torque_change_rms']:.0f} % of the RMS torque |"])
+    return table(("", "before", "after"), [
+        ("share of stepper states that hold the marked pole", "—", f"{100 * m['states_holding_marker']:.1f} %"),
+        ("holding torque, states holding the marked pole (N·m)", pair(m["holding_marker_before_Nm"]),
+         f"{pair(m['holding_marker_after_Nm'])} ({_signed(min(change), 0)} to {_signed(max(change), 0)} %)"),
+        ("holding torque, other states (N·m)", pair(m["holding_other_before_Nm"]),
+         f"{pair(m['holding_other_after_Nm'])} (changed by at most {other:.1g} N·m)"),
+        ("net dipole of the rotor (A·m²)", f"{m['dipole_before_Am2']:.0e}", f"{m['dipole_after_Am2']:.1f} (an Earth-field "
+         f"torque of at most {m['dipole_after_Am2'] * 65e-6:.0e} N·m in 65 µT)"),
+        ("RMS torque change, 300 random orientations × random drives (±1 on 40 % of coils)", "",
+         f"{100 * m['torque_change_rms']:.0f} % of the RMS torque")], f"{_sn_when(n)}:")
 
 
 def sensing_notes_pub(key: str) -> Callable[[dict], str]:

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from .common import table
+
 
 
 def robust_table(stored_run: dict) -> str:
@@ -9,43 +11,41 @@ def robust_table(stored_run: dict) -> str:
     rows = stored_run["rows"]
     turn = {r["turn_time_s"] for r in rows}
     note = f"{stored_run['note']}; " if stored_run.get("note") else ""
-    lines = [f"Measured {stored_run['measured']} ({note}the planned turn is "
-             + " / ".join(f"{x:.3f}" for x in sorted(turn)) + " s):", "","| plant (controller: the design's iron model) | holds within 0.05° (worst) off → **on** | turn final "
-             "error off → **on** | max tracking off → **on** | mean power off → on | reachable on | targets met |",
-             "|---|---|---|---|---|---|---|"]
-    cases = list(dict.fromkeys(r["case"] for r in rows))
-    for case in cases:
+    cells = []
+    for case in dict.fromkeys(r["case"] for r in rows):
         by = {r["observer"]: r for r in rows if r["case"] == case}
         off, on = by["off"], by["on"]
-        lines.append(
-            f"| {case} | {off['holds_within']}/{off['holds']} ({off['worst_hold_deg']:.3f}°) → "
-            f"**{on['holds_within']}/{on['holds']} ({on['worst_hold_deg']:.3f}°)** | {off['final_error_deg']:.3f}° → "
-            f"**{on['final_error_deg']:.4f}°** | {off['max_tracking_error_deg']:.2f}° → "
-            f"**{on['max_tracking_error_deg']:.3f}°** | {off['mean_power_W']:.1f} → {on['mean_power_W']:.1f} W | "
-            f"{on['reachable_fraction']:.3f} | {'yes' if on['passed'] else '**no**'} |")
-    return "\n".join(lines)
+        cells.append((case, f"{off['holds_within']}/{off['holds']} ({off['worst_hold_deg']:.3f}°) → "
+                      f"**{on['holds_within']}/{on['holds']} ({on['worst_hold_deg']:.3f}°)**",
+                      f"{off['final_error_deg']:.3f}° → **{on['final_error_deg']:.4f}°**",
+                      f"{off['max_tracking_error_deg']:.2f}° → **{on['max_tracking_error_deg']:.3f}°**",
+                      f"{off['mean_power_W']:.1f} → {on['mean_power_W']:.1f} W", f"{on['reachable_fraction']:.3f}",
+                      "yes" if on["passed"] else "**no**"))
+    return table(("plant (controller: the design's iron model)", "holds within 0.05° (worst) off → **on**",
+                  "turn final error off → **on**", "max tracking off → **on**", "mean power off → on", "reachable on",
+                  "targets met"), cells, f"Measured {stored_run['measured']} ({note}the planned turn is "
+                 + " / ".join(f"{x:.3f}" for x in sorted(turn)) + " s):")
 
 
 def calibration_table(run: dict) -> str:
     """docs/control.md: benchmarks/bench_calibration.py's table, per plant the torque error and the turn on each
     plan before calibration, after and on the exact model."""
     plans = run["plans"]
-    head = ("| plant (controller: the design's coupled model unless said) | holds (collected in) | torque error before "
-            "→ after (ratio) | scales fitted (detent, winding; coupling) ± σ |"
-            + "".join(f" {'fastest' if k == 'fastest' else '`MARGIN`'} plan ({plans[k]['duration_s']:.2f} s): before "
-                      "→ **after** (exact) |" for k in plans))
-    lines = [f"Measured {run['measured']}, load {run['load'][0]:.1f} → {run['load_after'][0]:.1f} "
-             f"(`benchmarks/bench_calibration.py --json data/calibration_table.json`):", "", head,
-             "|" + "---|" * (4 + len(plans))]
+    head = ("plant (controller: the design's coupled model unless said)", "holds (collected in)",
+            "torque error before → after (ratio)", "scales fitted (detent, winding; coupling) ± σ",
+            *(f"{'fastest' if k == 'fastest' else '`MARGIN`'} plan ({plans[k]['duration_s']:.2f} s): before → **after** "
+              "(exact)" for k in plans))
+    rows = []
     for r in run["rows"]:
         sd = r["scale_std"]
         gain = "" if r["coupling_gain"] is None else f"; {r['coupling_gain']:.4f} ± {r['coupling_std']:.4f}"
-        cells = "".join(f" {r['turn'][k]['before_max_deg']:.3f}° → **{r['turn'][k]['after_max_deg']:.3f}°** "
-                        f"({r['turn'][k]['exact_max_deg']:.3f}°) |" for k in plans if k in r["turn"])
-        lines.append(f"| {r['plant'].replace('-', '−')} | {r['holds']} ({r['collect_s']:.0f} s) | "
-                     f"{r['torque_error_before']:.4f} → {r['torque_error_after']:.4f} ({r['ratio']:.0f}×) | "
-                     f"{r['scale_detent']:.4f} ± {sd[0]:.4f}, {r['scale_winding']:.4f} ± {sd[1]:.4f}{gain} |" + cells)
-    return "\n".join(lines)
+        rows.append((r["plant"].replace("-", "−"), f"{r['holds']} ({r['collect_s']:.0f} s)",
+                     f"{r['torque_error_before']:.4f} → {r['torque_error_after']:.4f} ({r['ratio']:.0f}×)",
+                     f"{r['scale_detent']:.4f} ± {sd[0]:.4f}, {r['scale_winding']:.4f} ± {sd[1]:.4f}{gain}",
+                     *(f"{r['turn'][k]['before_max_deg']:.3f}° → **{r['turn'][k]['after_max_deg']:.3f}°** "
+                       f"({r['turn'][k]['exact_max_deg']:.3f}°)" for k in plans if k in r["turn"])))
+    return table(head, rows, f"Measured {run['measured']}, load {run['load'][0]:.1f} → {run['load_after'][0]:.1f} "
+                 f"(`benchmarks/bench_calibration.py --json data/calibration_table.json`):")
 
 
 def calibration_summary(run: dict) -> str:
