@@ -20,6 +20,7 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
 from .. import so3
+from ..motor import Coverage
 from .potential_planner import DEFAULT_MAX_COILS, _activations
 from .._fast.threads import single_blas_thread
 
@@ -28,34 +29,16 @@ DISTINCT = math.radians(0.01)  # rad: minima closer than this are one
 
 
 @dataclass(frozen=True)
-class EquilibriumMetrics:
-    """:func:`equilibrium_metrics`' result (angles in radians; :meth:`to_dict` in degrees): ``states`` (geometric),
-    ``minima`` (strict minima among their masks' descents), ``distinct`` (those more than :data:`DISTINCT` apart:
-    the detent draws many masks to one minimum), resolution, range and graph as in
-    :class:`spherestep.motor.DesignMetrics`, and the minima's ``offset_*`` from their geometric states."""
+class EquilibriumMetrics(Coverage):
+    """:func:`equilibrium_metrics`' result: the :class:`spherestep.motor.Coverage` of the strict minima (``states``
+    the geometric states, resolution, range and graph on the minima), ``minima`` (strict minima among their masks'
+    descents), ``distinct`` (those more than :data:`DISTINCT` apart: the detent draws many masks to one minimum),
+    and the minima's ``offset_*`` from their geometric states (angles in radians; ``to_dict`` in degrees)."""
 
-    states: int
     minima: int
     distinct: int
-    samples: int
-    max_step_rad: float
-    resolution_median_rad: float
-    resolution_p95_rad: float
-    resolution_max_rad: float
-    range_fraction: float
-    state_graph_components: int
-    reaches_all: bool
     offset_median_rad: float
     offset_max_rad: float
-
-    def to_dict(self, degrees: bool = True) -> dict:
-        out = {}
-        for key, value in self.__dict__.items():
-            if key.endswith("_rad") and degrees:
-                out[key[:-4] + "_deg"] = math.degrees(value)
-            else:
-                out[key] = value
-        return out
 
 
 @single_blas_thread
@@ -97,7 +80,9 @@ def equilibrium_metrics(design, model, *, max_coils: int = DEFAULT_MAX_COILS, sa
     same = minima.neighbour_pairs(DISTINCT)
     same = coo_matrix((np.ones(len(same)), (same[:, 0], same[:, 1])), shape=(len(keep),) * 2)
     distinct = int(connected_components(same, directed=False)[0])
-    return EquilibriumMetrics(len(states), len(keep), distinct, samples, design.max_step, float(np.median(dist)),
-                              float(np.quantile(dist, 0.95)), float(dist.max()), float(np.mean(dist <= design.max_step)),
-                              components, bool(np.all(dist <= design.max_step) and components == 1),
-                              float(np.median(offset)), float(offset.max()))
+    return EquilibriumMetrics(states=len(states), minima=len(keep), distinct=distinct, samples=samples,
+                              max_step_rad=design.max_step, resolution_median_rad=float(np.median(dist)),
+                              resolution_p95_rad=float(np.quantile(dist, 0.95)), resolution_max_rad=float(dist.max()),
+                              range_fraction=float(np.mean(dist <= design.max_step)), state_graph_components=components,
+                              reaches_all=bool(np.all(dist <= design.max_step) and components == 1),
+                              offset_median_rad=float(np.median(offset)), offset_max_rad=float(offset.max()))

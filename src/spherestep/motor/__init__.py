@@ -4,9 +4,9 @@
 from .design import (DEFAULT_TOL, MAX_COILS, CoilElectrics, MotorDesign, PolarityRule, check_fingerprint, check_fits,
                      default_channel_map)
 from .prototype import prototype
-from .metrics import CoilFailure, DesignMetrics, design_metrics, single_coil_failures
+from .metrics import CoilFailure, Coverage, DesignMetrics, design_metrics, single_coil_failures
 from .states import StepperStates, coil_currents, find_states
 
-__all__ = ["DEFAULT_TOL", "MAX_COILS", "CoilElectrics", "CoilFailure", "DesignMetrics", "MotorDesign", "PolarityRule",
+__all__ = ["DEFAULT_TOL", "MAX_COILS", "CoilElectrics", "CoilFailure", "Coverage", "DesignMetrics", "MotorDesign", "PolarityRule",
            "StepperStates", "check_fingerprint", "check_fits", "coil_currents", "default_channel_map", "design_metrics",
            "find_states", "prototype", "single_coil_failures"]

@@ -90,12 +90,13 @@ def escape_violations(design, states, cone: float = ESCAPE_CONE) -> np.ndarray:
 
 
 @dataclass(frozen=True)
-class DesignMetrics:
-    """How finely and how far a design moves (see the module docstring); angles in radians, named ``*_rad``.
-
-    ``escape_violations`` is None when the escape check was skipped. :meth:`to_dict` gives a JSON-ready dict
-    with the angles in degrees (``*_deg``) or radians (``*_rad``).
-    """
+class Coverage:
+    """How finely and how far a set of ``states`` (orientations: a design's stepper states, or the equilibria the
+    rotor really rests in, :class:`spherestep.commutation.EquilibriumMetrics`) covers SO(3), from ``samples``
+    random orientations: the distance to the nearest state (``resolution_*``), the share within ``max_step_rad``
+    (``range_fraction``), the components of the graph of states within ``max_step_rad`` of each other, and
+    whether every orientation is reached (``reaches_all``). Angles in radians, named ``*_rad``; :meth:`to_dict`
+    gives a JSON-ready dict with the angles in degrees (``*_deg``) or radians (``*_rad``)."""
 
     states: int
     samples: int
@@ -106,13 +107,20 @@ class DesignMetrics:
     range_fraction: float
     state_graph_components: int
     reaches_all: bool
-    held_pairs_histogram: tuple[int, ...]
-    escape_violations: tuple[int, ...] | None
 
     def to_dict(self, degrees: bool = True) -> dict:
         """The metrics as a dict: ``*_rad`` fields become ``*_deg`` in degrees when ``degrees``; tuples lists
         (:func:`spherestep.units.result_dict`)."""
         return result_dict(self, degrees)
+
+
+@dataclass(frozen=True)
+class DesignMetrics(Coverage):
+    """How finely and how far a design moves (see the module docstring): its stepper states' :class:`Coverage`,
+    the histogram of held pairs per state and the escape check (``escape_violations`` None when skipped)."""
+
+    held_pairs_histogram: tuple[int, ...]
+    escape_violations: tuple[int, ...] | None
 
 
 @dataclass(frozen=True)
