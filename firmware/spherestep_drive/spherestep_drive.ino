@@ -17,6 +17,9 @@ const uint8_t SENSORS = 8;
 const uint16_t WATCHDOG_MS = 100;
 const uint32_t PERIOD_US = 1000;  // the current loop at 1 kHz (the PWM itself at 20 kHz)
 const char NAME[] = "spherestep-t41";
+// HELLO,2 reports the supply, the coils' resistance and inductance and the current limit from LIMITS and LOOP, and
+// the host refuses to drive a design whose DriveLimits differ by more than 2 % (docs/protocol.md): set them to the
+// coils actually wired (the prototype's iron coil is 82.96 ohm, 0.650 H, 0.289 A; these are docs/hardware.md's).
 // limits: 1 A per coil, duty 0.95, 100 W, 1 A continuous with a 60 s winding time constant, 24 ohm, trip at 1.25 A
 const spherestep::Limits LIMITS = {1.0, 0.95, 100.0, 1.0, 60.0, 24.0, 1.25};
 // loop: 24 V, 18.7 mH, 2 pi 40 Hz closed-loop bandwidth, relay-mode current 1000 mA, 8118 nT per count (+-266 mT)

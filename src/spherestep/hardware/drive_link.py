@@ -79,8 +79,9 @@ class DriveInfo:
             if abs(device - design) > AGREE * abs(design) + step:
                 error = DeviceMismatch(
                     f"{where} ({self.name}) reports a {label} of {device:.4g} {unit}, but the design's drive has "
-                    f"{name} = {design:.4g} {unit}; flash the firmware with the design's coils and supply, or give "
-                    "the drive limits of the motor this device drives (every coil is off)")
+                    f"{name} = {design:.4g} {unit}; flash the firmware with the design's coils and supply, or drive "
+                    "it with the design of the motor it is wired to (a design file's coil:, docs/design-files.md); "
+                    "every coil is off")
                 error.field = name
                 raise error
 

@@ -80,7 +80,8 @@ class RelayLink:
         return {int(k): int(signs[k]) for k in np.flatnonzero(signs)}
 
     def drive(self, currents, *, within: float | None = None) -> State:
-        """Switch the relays to ``currents`` (A per coil: 0 or ``±I_n``) and return :meth:`read`."""
+        """Switch the relays to ``currents`` (A per coil: 0 or ``±I_n``) and return :meth:`read` (``within`` does not
+        apply: the back end answers before it returns)."""
         if self.info is None:
             raise LinkError("the relay link is not open")
         state = self.states(currents)
