@@ -5,7 +5,7 @@ import dataclasses
 import math
 
 from spherestep.commutation import EquilibriumMetrics
-from spherestep.motor import Coverage, DesignMetrics, design_metrics, prototype
+from spherestep.motor import Coverage, DesignMetrics
 
 COMMON = [f.name for f in dataclasses.fields(Coverage)]
 
@@ -18,10 +18,11 @@ def test_both_metrics_share_the_coverage_fields_in_order():
 
 
 def test_both_turn_their_angles_to_degrees():
-    m = design_metrics(prototype(), samples=500, escape=False)
-    d = m.to_dict()
-    assert d["resolution_median_deg"] == math.degrees(m.resolution_median_rad) and d["escape_violations"] is None
-    common = {k: getattr(m, k) for k in COMMON}
+    common = dict(states=12, samples=500, max_step_rad=0.2, resolution_median_rad=0.05, resolution_p95_rad=0.1,
+                  resolution_max_rad=0.15, range_fraction=1.0, state_graph_components=1, reaches_all=True)
+    d = DesignMetrics(**common, held_pairs_histogram=(0, 12), escape_violations=None).to_dict()
+    assert d["resolution_median_deg"] == math.degrees(0.05) and d["escape_violations"] is None
+    assert d["held_pairs_histogram"] == [0, 12]
     e = EquilibriumMetrics(**common, minima=3, distinct=2, offset_median_rad=0.01, offset_max_rad=0.02)
     assert e.to_dict(degrees=False) == {**Coverage(**common).to_dict(degrees=False), "minima": 3, "distinct": 2,
                                         "offset_median_rad": 0.01, "offset_max_rad": 0.02}
