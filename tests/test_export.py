@@ -36,7 +36,7 @@ def design():
 def test_tables_match_the_design(design, tmp_path, unit):
     written = write_exports(design, tmp_path, unit=unit)
     assert sorted(p.name for p in tmp_path.iterdir()) == sorted(p.name for p in written) == \
-        ["coils.csv", "layout.json", "layout.stl", "magnets.csv"]
+        ["coils.csv", "layout.json", "layout.stl", "magnets.csv", "spherestep_config.h"]
     scale = 1000.0 / MM_PER[unit]  # metres → unit
     R, g = design.radius * scale, design.air_gap * scale
 
@@ -135,7 +135,7 @@ def test_export_command(tmp_path, capsys):
     capsys.readouterr()
     assert main(["export", str(path), "--out", str(out), "--unit", "in", "--sphere"]) == 0
     assert "92 magnets, 29 coils" in capsys.readouterr().out
-    assert sorted(p.name for p in out.iterdir()) == ["coils.csv", "layout.json", "layout.stl", "magnets.csv"]
+    assert sorted(p.name for p in out.iterdir()) == ["coils.csv", "layout.json", "layout.stl", "magnets.csv", "spherestep_config.h"]
     assert len(trimesh.load(out / "layout.stl").split(only_watertight=False)) == 122
     head, mag = read_csv(out / "magnets.csv")
     assert head[4] == "x_in" and np.max(np.abs(np.linalg.norm(mag[:, 4:7], axis=1) - 6.0)) < 1e-9

@@ -9,6 +9,7 @@
 #include <Wire.h>
 
 #include "drive.h"
+#include "spherestep_config.h"
 
 namespace {
 
@@ -17,13 +18,16 @@ const uint8_t SENSORS = 8;
 const uint16_t WATCHDOG_MS = 100;
 const uint32_t PERIOD_US = 1000;  // the current loop at 1 kHz (the PWM itself at 20 kHz)
 const char NAME[] = "spherestep-t41";
-// HELLO,2 reports the supply, the coils' resistance and inductance and the current limit from LIMITS and LOOP, and
-// the host refuses to drive a design whose DriveLimits differ by more than 2 % (docs/protocol.md): set them to the
-// coils actually wired (the prototype's iron coil is 82.96 ohm, 0.650 H, 0.289 A; these are docs/hardware.md's).
-// limits: 1 A per coil, duty 0.95, 100 W, 1 A continuous with a 60 s winding time constant, 24 ohm, trip at 1.25 A
-const spherestep::Limits LIMITS = {1.0, 0.95, 100.0, 1.0, 60.0, 24.0, 1.25};
-// loop: 24 V, 18.7 mH, 2 pi 40 Hz closed-loop bandwidth, relay-mode current 1000 mA, 8118 nT per count (+-266 mT)
-const spherestep::Loop LOOP = {24.0, 18.7e-3, 2 * 3.14159265358979 * 40, PERIOD_US, 1000, 8118};
+// HELLO,2 reports the supply, the coils' resistance and inductance and the current limit, and the host refuses to
+// drive a design whose DriveLimits differ by more than 2 % (docs/protocol.md): the coils' constants come from the
+// design, in spherestep_config.h (`spherestep export DESIGN --out DIR` writes it; the one here is the built-in
+// prototype's iron-cored coil). Copy the header of your design next to this sketch.
+static_assert(spherestep_config::COILS == COILS, "spherestep_config.h is for a design with another coil count");
+const spherestep::Limits LIMITS = spherestep_config::LIMITS;
+// loop: the design's supply and inductance, 2 pi 40 Hz closed-loop bandwidth, relay-mode current (mA) at the
+// design's nominal current, 8118 nT per count (TMAG5273A2, +-266 mT)
+const spherestep::Loop LOOP = {spherestep_config::SUPPLY_V, spherestep_config::INDUCTANCE_H, 2 * 3.14159265358979 * 40,
+                               PERIOD_US, spherestep_config::NOMINAL_MA, 8118};
 
 // PWM-capable (Teensyduino's teensy4/pwm.c); 11-13 are SPI, 16-19 are I2C. Pin 41 (once coil 22's) has no PWM on
 // the 4.1, so analogWrite left that coil undriven: coil 22 is on pin 51, a bottom pad (no QSPI memory chip fitted).

@@ -199,10 +199,10 @@ int main() {
   check(csHigh, "every ADC deselected after setup");
 
   std::string r = exchange("00,HELLO,2");
-  check(r == frame("00,ACK,HELLO,2,29,8,100,1000,1000,100,8118,24000,24000,18700,spherestep-t41"), "HELLO: " + r);
+  check(r == frame("00,ACK,HELLO,2,29,8,100,1000,289,100,8118,24000,82958,650226,spherestep-t41"), "HELLO: " + r);
 
-  // coil 0 +500 mA, coil 1 -500 mA: the first step drives coil 1 reversed (PH bit 1), both EN up, supply on
-  std::string block = "01F4FE0C";
+  // the prototype's coils (spherestep_config.h: 289 mA, 82.96 ohm, 650 mH); coil 0 +200 mA, coil 1 -200 mA: the first step drives coil 1 reversed (PH bit 1), both EN up, supply on
+  std::string block = "00C8FF38";
   for (int k = 2; k < COILS; ++k) block += "0000";
   r = exchange("01,DRIVE," + block);
   check(r.compare(0, 17, "$01,ACK,DRIVE,000") == 0, "DRIVE acknowledged: " + r);
@@ -234,7 +234,7 @@ int main() {
   check(r.find(",20," + currents + ",0001FFFE0003") != std::string::npos,
         "sensor 5 stale (mask 20), sensor 0 reads 1, -2, 3: " + r);
 
-  // a trip opens the supply relay: 4095 counts on coil 2 = 2.68 A > 1.25 x 1 A: bridges asleep first, then the
+  // a trip opens the supply relay: 4095 counts on coil 2 = 2.68 A > 1.25 x 0.289 A: bridges asleep first, then the
   // supply, then every EN at 0
   adc[2] = 4095;
   events.clear();

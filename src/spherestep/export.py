@@ -29,6 +29,7 @@ import trimesh
 
 from .atomic import atomic_path, write_text
 from .errors import bad_value
+from .hardware.sketch_config import HEADER, sketch_config
 from .motor import MotorDesign
 from .sphere import angles
 from .units import METRES_PER_UNIT
@@ -147,8 +148,9 @@ def _csv(rows: list[dict], columns: tuple[str, ...], unit: str) -> str:
 
 
 def write_exports(design: MotorDesign, out: str | Path, unit: str = "mm", sphere: bool = False) -> list[Path]:
-    """Write ``magnets.csv``, ``coils.csv``, ``layout.json`` and ``layout.stl`` into folder ``out``, each
-    atomically; returns their paths."""
+    """Write ``magnets.csv``, ``coils.csv``, ``layout.json``, ``layout.stl`` and the firmware's coil constants
+    ``spherestep_config.h`` (:func:`~spherestep.hardware.sketch_config.sketch_config` of the design's drive) into
+    folder ``out``, each atomically; returns their paths."""
     scale = _check_unit(unit)
     out = Path(out)
     if out.exists() and not out.is_dir():
@@ -176,4 +178,14 @@ def write_exports(design: MotorDesign, out: str | Path, unit: str = "mm", sphere
     with atomic_path(out / "layout.stl") as tmp:
         tmp.write_bytes(stl)
     written.append(out / "layout.stl")
+    written.append(write_text(out / HEADER, firmware_header(design)))
     return written
+
+
+def firmware_header(design: MotorDesign) -> str:
+    """``spherestep_config.h`` for ``design``: its drive (:func:`~spherestep.magnetics.design_model`'s limits, the
+    iron-cored coil's winding for an iron design) as the sketch's constants."""
+    from .magnetics import design_model
+
+    return sketch_config(design_model(design).limits, coils=len(design.stator), design=design.name,
+                         fingerprint=design.fingerprint)

@@ -9,7 +9,7 @@ import typer
 from .app import app
 from .common import input_file
 
-FILES = ("magnets.csv", "coils.csv", "layout.json", "layout.stl")
+FILES = ("magnets.csv", "coils.csv", "layout.json", "layout.stl", "spherestep_config.h")
 
 
 @app.command("export")
@@ -20,7 +20,8 @@ def export(
     sphere: bool = typer.Option(False, "--sphere", help="Add the rotor ball to the STL."),
 ) -> None:
     """Magnet positions (magnets.csv), coil mounting axes and saddle angles (coils.csv), both in layout.json,
-    and the parts as an STL (layout.stl); definitions in docs/design-files.md.
+    the parts as an STL (layout.stl), and the firmware's coil constants for the design's winding
+    (spherestep_config.h, for the Teensy sketch; docs/hardware.md); definitions in docs/design-files.md.
 
     Example: [bold]spherestep export mymotor.yaml --out build --unit in[/bold]
     """
