@@ -435,7 +435,7 @@ def test_a_full_disk_is_exit_1_and_says_how_many_files_were_written(env, capsys)
     line = capsys.readouterr().err.strip()
     assert code == 1 and line.count("\n") == 0 and line.startswith("spherestep: failed: the disk is full")
     written = sorted(p.name for p in out.iterdir()) if out.exists() else []
-    assert f"{len(written)} of 4 files written" in line
+    assert f"{len(written)} of 5 files written" in line
     assert not [n for n in written if n.startswith(".")]  # no temporary file left behind
     for name in written:  # whatever was written is whole
         assert (out / name).stat().st_size > 0
