@@ -6,9 +6,11 @@ The loop itself — estimator, control law, the link with protocol version 2, al
 starts where the rotor is taken to be — the stepper state nearest the identity along the turn, as in simulation —
 and its trajectory is the fastest turn, the given ``duration`` or the fixed time where the planner refuses the model,
 as in simulation
-(:meth:`~spherestep.drive.turn.Turn.servo_trajectory`). Errors are measured against the emulated rotor (its
-published truth, every 50 ms, and at the loop's last cycle, with the servo holding; the drift in the 0.15 s after
-the coils go off is reported apart) or, on a real port, against the loop's own estimate.
+(:meth:`~spherestep.drive.turn.Turn.servo_trajectory`). The result's rows — what ``trajectory.csv`` holds — are the
+loop's cycles: its time, the rotor (the emulated rotor's truth at the cycle's reading time; on a real port the
+loop's own estimate) and the target at the trajectory time the loop followed (``report.reference_times``: a
+starved loop slows its pace). Every figure is computed from these rows: the tracking error against the target,
+the final error and the arrival against the turn's end.
 """
 
 from __future__ import annotations
@@ -25,8 +27,10 @@ STATUS_EVERY = 0.25  # s between progress lines from the loop
 
 def drive_on_hardware(design, axis, angle: float, chosen, *, duration: float | None, port: str | None,
                       emulate: bool, rate: float, log=None, tolerance: float, progress=None,
-                      firmware: str = "python"):
-    """Run the servo turn on ``port`` or the emulated motor (module docstring) on ``chosen``'s model and limits."""
+                      firmware: str = "python", **options):
+    """Run the servo turn on ``port`` or the emulated motor (module docstring) on ``chosen``'s model and limits;
+    ``options`` go to :func:`~spherestep.drive.session.servo_session` (``lockstep``, ``faults``, ``watchdog_ms``,
+    ``max_late``: an emulated run on the simulated clock, a starved device)."""
     from ..dynamics import Rotor
     from .session import SETTLE, servo_session
     from .turn import Turn, check_duration
@@ -47,43 +51,59 @@ def drive_on_hardware(design, axis, angle: float, chosen, *, duration: float | N
     where = port if not emulate else "the emulated motor" + (" (the firmware in QEMU)" if firmware == "qemu" else "")
     job.say(f"servo on {where} at {rate:g} Hz")
     session = servo_session(design, traj, traj.duration + SETTLE, port=port, emulate=emulate, rate=rate, log=log,
-                            status=status, model=chosen.model, drive=chosen.limits, firmware=firmware)
+                            status=status, model=chosen.model, drive=chosen.limits, firmware=firmware, truth_every=0.0,
+                            **options)
     if session.step_cost is not None and session.step_cost[0]:
         steps, mean, worst = session.step_cost
         job.say(f"firmware in QEMU: {steps} control steps, {mean:.0f} instructions each (most {worst:.0f}): "
                 f"{mean / 600:.1f} µs at 600 MHz and one instruction a cycle")
     report = session.report
-    end = np.asarray(session.reference(1e9)[0])
-    if report.cycles:
-        times = np.asarray(report.times, dtype=float)
-        estimates = np.asarray(report.orientations, dtype=float)
-        currents = np.asarray(report.currents, dtype=float)
-    else:  # the loop ended before its first cycle
-        times, estimates, currents = np.zeros(1), np.eye(3)[None], np.zeros((1, chosen.model.coil_count))
+    end = np.asarray(session.trajectory.end)
+    times, rotor, estimates, currents = _samples(session, emulate, chosen.model.coil_count)
     # the trajectory at the time the loop followed it (a starved loop slows its pace: report.reference_times)
-    paced = report.reference_times if report.cycles else [0.0]
+    paced = report.reference_times[:len(times)] if report.cycles else [0.0]
     targets = np.array([np.asarray(session.reference(t)[0]) for t in paced])
-    if emulate and session.truth:
-        truth_t = np.array([t for t, _ in session.truth])
-        truth_R = np.array([s.R for _, s in session.truth])
-        truth_targets = np.array([np.asarray(session.reference(t)[0]) for t in truth_t])
-        max_tracking = float(so3.distance(truth_R, truth_targets).max())
-    else:
-        max_tracking = float(so3.distance(estimates, targets).max())
-    final = session.final_error() if emulate and session.final is not None else \
-        float(so3.distance(estimates[-1], end))
+    # every figure from these rows, the ones trajectory.csv holds: the rotor against the paced target and the end
+    max_tracking = float(so3.distance(rotor, targets).max())
+    final = float(so3.distance(rotor[-1], end))
     if report.outcome != "done":
         time, arrival = math.inf, f"the loop ended with {report.outcome}: {report.message}".rstrip(": ")
     else:
-        time, arrival = _arrival(times, so3.distance(estimates, end), tolerance)
+        time, arrival = _arrival(times, so3.distance(rotor, end), tolerance)
     details = HardwareDetails(report.outcome, report.message, report.cycles, report.rate, rate, report.missed,
                               report.off_acknowledged, kind, note, float(traj.duration),
                               "" if report.log is None else str(report.log), bool(emulate), report.cpu_mean,
                               report.cpu_max, report.realtime, report.time_scale, report.slowed, report.end_error,
                               session.drift_after_off(), report.late_wakeups, report.late_readings)
     power = np.einsum("tn,tn->t", currents, currents) * chosen.limits.resistance
-    return job.result("servo", "emulated" if emulate else "port", times, estimates, targets, np.zeros(len(times)),
+    sensor_error = so3.distance(estimates, rotor) if emulate else np.zeros(len(times))
+    return job.result("servo", "emulated" if emulate else "port", times, rotor, targets, sensor_error,
                       currents, power, time, arrival, final, max_tracking, details)
+
+
+def _samples(session, emulate: bool, coils: int):
+    """``(times, rotor, estimates, currents)`` per cycle of ``session``: loop time (s), the rotor — the emulated
+    rotor at the cycle's reading time, or on a port the loop's estimate —, the loop's estimate and the commanded
+    currents (A). The emulated rotor is the device's truth taken in the cycle, stamped on the device's clock
+    (``Truth.t``), carried to the reading's time by its angular velocity: ``exp((t − t_s) ω) R`` with
+    ``t_s = Truth.t − device_start`` (a few ms at most: the truth is published every 2 ms of emulated time)."""
+    report = session.report
+    if not report.cycles:  # the loop ended before its first cycle
+        first = session.trajectory.start[None]
+        return np.zeros(1), first, first, np.zeros((1, coils))
+    times = np.asarray(report.times, dtype=float)
+    estimates = np.asarray(report.orientations, dtype=float)
+    currents = np.asarray(report.currents, dtype=float)
+    if not emulate or not session.truth:
+        return times, estimates, estimates, currents
+    n = min(len(session.truth), len(times))
+    times, estimates, currents = times[:n], estimates[:n], currents[:n]
+    R = np.array([truth.R for _, truth in session.truth[:n]])
+    if report.device_start is None:  # a loop on the host's clock: the truth as taken in the cycle
+        return times, R, estimates, currents
+    stamped = np.array([truth.t for _, truth in session.truth[:n]]) - report.device_start
+    w = np.array([truth.w for _, truth in session.truth[:n]])
+    return times, so3.exp((times - stamped)[:, None] * w) @ R, estimates, currents
 
 
 def _arrival(times, errors, tolerance: float) -> tuple[float, str]:

@@ -40,7 +40,8 @@ BANDWIDTH = 2 * math.pi * 3  # rad/s: the servo's closed-loop natural frequency 
 class Session:
     """A finished session: the loop's :class:`~spherestep.hardware.servo.ServoReport`, the
     :class:`~spherestep.control.Trajectory` it followed, and for an emulated motor the ``truth`` samples
-    ``[(loop time, Truth)]`` taken every ``truth_every`` s, ``held`` the
+    ``[(loop time, Truth)]`` taken every ``truth_every`` s (0: every cycle; the loop time is the cycle's, the
+    truth's own time ``Truth.t`` is on the device's clock: :attr:`ServoReport.device_start`), ``held`` the
     :class:`~spherestep.hardware.motor_emulator.Truth` at the loop's last cycle (the servo still holding) and
     ``final`` 0.15 s after the end (the coils off: an iron motor's detent moves the rotor into its nearest well),
     the device's ``watchdog`` (s) and when it ``started`` (``time.monotonic()``); with the firmware in QEMU its
@@ -145,7 +146,7 @@ def servo_session(design, trajectory: Trajectory, duration: float, *, port: str 
         if conn.truth is not None:
             def observe(t, R, w, currents):
                 held[0] = conn.truth()
-                if len(truth) <= int(t / truth_every):
+                if truth_every <= 0 or len(truth) <= int(t / truth_every):
                     truth.append((t, held[0]))
                 if status is not None:
                     status(t, R, w, currents)

@@ -96,8 +96,9 @@ class ServoReport:
     ``cpu_mean``/``cpu_p99``/``cpu_max`` s of the host's CPU per cycle (mean, 99th percentile, worst; this
     thread's time from the cycle's start to its end: the link's frames, estimate, law, log), ``time_scale`` the pace the
     trajectory was followed at in the end (1: as planned; see the module), ``slowed`` how often it was halved,
-    ``end_error`` rad from the last estimate to the trajectory's end (``None`` before a first cycle), and per
-    cycle ``times`` (s), ``reference_times`` (s, the trajectory time the law followed), ``orientations (T, 3,
+    ``end_error`` rad from the last estimate to the trajectory's end (``None`` before a first cycle),
+    ``device_start`` the device's clock (s) at loop time 0 (the priming reading; ``None`` on the host's clock: a
+    sample the device stamps at ``t_d`` is at loop time ``t_d − device_start``), and per cycle ``times`` (s), ``reference_times`` (s, the trajectory time the law followed), ``orientations (T, 3,
     3)`` (estimates), ``currents (T, N)`` (A commanded)."""
 
     cycles: int = 0
@@ -118,6 +119,7 @@ class ServoReport:
     late_readings: int = 0
     late_wakeups: int = 0
     end_error: float | None = None
+    device_start: float | None = None
     times: list = field(default_factory=list)
     reference_times: list = field(default_factory=list)
     orientations: list = field(default_factory=list)
@@ -290,6 +292,7 @@ def run_servo(link: Link, estimate, law, *, duration: float, rate: float = LOOP_
         state = link.read()  # prime: the first estimate and currents come from a reading, before the clock starts
         _check_state(state)
         start_us = state.time_us
+        report.device_start = start_us * 1e-6 if device_time else None
         cmd = law.step(0.0, estimate(state, law.predicted(0.0)))
         currents = law.amperes(cmd.currents)
         limits.check_setpoints(currents)
