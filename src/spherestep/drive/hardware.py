@@ -93,12 +93,15 @@ def drive_on_hardware(design, axis, angle: float, chosen, *, duration: float | N
     settled = swing = None
     if rest is not None:
         settled, swing, pose = _rested(chosen.model, rest)
-        final = float(so3.distance(pose, turn_end))
+        if settled:  # where it rests; else where it was last seen (final as above: the last row)
+            final = float(so3.distance(pose, turn_end))
     if report.outcome != "done":
         time, arrival = math.inf, f"the loop ended with {report.outcome}: {report.message}".rstrip(": ")
     elif settled is False:
-        time, arrival = math.inf, (f"the rotor had not come to rest {watched:.3g} s after the coils went off (it "
-                                   f"swung {math.degrees(swing):.3g}° about the well it was last in, "
+        detent = getattr(chosen.model, "has_bias", False)
+        how = f"it swung {math.degrees(swing):.3g}° about the well it was last in" if detent else \
+            f"coasting at {math.degrees(rest.speed):.3g}°/s"
+        time, arrival = math.inf, (f"the rotor had not come to rest {watched:.3g} s after the coils went off ({how}, "
                                    f"{math.degrees(final):.3g}° from the turn's end)"
                                    + ("; off a detent well the unpowered rotor falls: --end park ends in one"
                                       if end == "hold" and getattr(chosen.model, "has_bias", False) else ""))
@@ -126,14 +129,16 @@ def _rested(model, rest) -> tuple[bool, float, np.ndarray]:
     the bottom of the detent well it was last watched in (:func:`park_pose` from the last look: a damped swing
     ends there; the last look itself without a detent) —, ``swing`` rad the farthest it was from there over the
     last ``REST_SPAN`` s, and ``settled`` whether that is within ``REST_BAND`` (a rotor swinging in one well,
-    not tumbling from well to well)."""
+    not tumbling from well to well) — without a detent, whether it stood still (:attr:`Rest.at_rest`: a rotor
+    that coasts has not come to rest)."""
     from .session import REST_BAND, REST_SPAN
 
     last_t, last = rest.samples[-1]
     pose = park_pose(model, last)
     recent = np.array([R for t, R in rest.samples if t >= last_t - REST_SPAN - 1e-9])
     swing = float(so3.distance(recent, pose).max())
-    return swing <= REST_BAND, swing, pose
+    detent = getattr(model, "has_bias", False)
+    return (swing <= REST_BAND) if detent else rest.at_rest, swing, pose
 
 
 def park_pose(model, R) -> np.ndarray:
