@@ -63,7 +63,7 @@ def drive_on_hardware(design, axis, angle: float, chosen, *, duration: float | N
     job.say(f"servo on {where} at {rate:g} Hz")
     session = servo_session(design, traj, traj.duration + SETTLE, port=port, emulate=emulate, rate=rate, log=log,
                             status=status, model=chosen.model, drive=chosen.limits, firmware=firmware, truth_every=0.0,
-                            **options)
+                            watch=True, **options)
     if session.step_cost is not None and session.step_cost[0]:
         steps, mean, worst = session.step_cost
         job.say(f"firmware in QEMU: {steps} control steps, {mean:.0f} instructions each (most {worst:.0f}): "

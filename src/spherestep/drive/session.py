@@ -134,7 +134,8 @@ def turn_reference(start, axis, angle: float, duration: float, delay: float = 0.
 def servo_session(design, trajectory: Trajectory, duration: float, *, port: str | None = None, emulate: bool = False,
                   lockstep: bool = False, rate: float = LOOP_RATE, log=None, status=None, faults=None, sensors=None, model=None, drive=None,
                   R0=None, watchdog_ms: int | None = None, max_late: float | None = None,
-                  truth_every: float = 0.05, plant=None, cores: bool | None = None, firmware: str = "python") -> Session:
+                  truth_every: float = 0.05, plant=None, cores: bool | None = None, firmware: str = "python",
+                  watch: bool = False) -> Session:
     """Run the servo for ``duration`` s following ``trajectory`` (a :class:`~spherestep.control.Trajectory`;
     :meth:`~spherestep.control.Trajectory.hold` for a pose) on the controller at
     ``port``, or with ``emulate`` on the emulated motor (``faults`` a
@@ -153,7 +154,8 @@ def servo_session(design, trajectory: Trajectory, duration: float, *, port: str 
     iron ignored, for comparison). ``firmware`` (with ``emulate``, not ``lockstep``): ``"python"`` the Python
     device on a pseudo-terminal (:class:`~spherestep.hardware.motor_emulator.MotorPty`), ``"qemu"`` the firmware
     itself in QEMU (:class:`~spherestep.hardware.qemu.QemuMotor`; its control step's instructions in
-    :attr:`Session.step_cost`)."""
+    :attr:`Session.step_cost`). With ``watch`` the rotor is watched after the coils go off until it rests
+    (:func:`watch_rest`, :attr:`Session.rest`; what a move's end is judged by: ``drive.hardware``)."""
     from ..dynamics import Rotor
     from ..magnetics import design_model
     from ..sensing import default_array, field_model
@@ -197,15 +199,21 @@ def servo_session(design, trajectory: Trajectory, duration: float, *, port: str 
         report = run_servo(conn.link, estimate, law, duration=duration, rate=rate, log=log, status=observe,
                            **conn.timing, **options)
         if conn.truth is None:  # a board: the rest from its own readings, estimated, while the link still answers
-            return Session(report, trajectory, [], None, rest=_rest_on_port(conn.link, estimate, report))
+            return Session(report, trajectory, [], None,
+                           rest=_rest_on_port(conn.link, estimate, report) if watch else None)
         seen: list = []  # the truth at each look; the first, OFF_FIRST s after the end, is the session's final
 
         def sample():
             seen.append(conn.truth())
             return seen[-1].t, seen[-1].R
 
-        rest = watch_rest(sample, conn.release)  # the first release sends OFF; the device runs on (a watchdog trip
-        # after a lost link lands in the truth)
+        # the first release sends OFF; the device runs on (a watchdog trip after a lost link lands in the truth)
+        if watch:
+            rest = watch_rest(sample, conn.release)
+        else:
+            conn.release(OFF_FIRST)
+            sample()
+            rest = None
         cost = conn.step_cost() if conn.step_cost is not None else None
     return Session(report, trajectory, truth, seen[0], conn.watchdog, conn.started, held[0], cost, rest)
 
