@@ -32,7 +32,7 @@ def _check_firmware(ctx: typer.Context, param: typer.CallbackParam, value):
 
 
 def _check_end(ctx: typer.Context, param: typer.CallbackParam, value):
-    if value not in ("hold", "park") and not ctx.resilient_parsing:
+    if value not in (None, "hold", "park") and not ctx.resilient_parsing:
         raise typer.BadParameter(f"must be hold or park; instead received {value!r}")
     return value
 
