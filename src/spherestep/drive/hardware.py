@@ -11,6 +11,12 @@ loop's cycles: its time, the rotor (the emulated rotor's truth at the cycle's re
 loop's own estimate) and the target at the trajectory time the loop followed (``report.reference_times``: a
 starved loop slows its pace). Every figure is computed from these rows: the tracking error against the target,
 the final error and the arrival against the turn's end.
+
+The move ends in a state (``end``): ``"hold"`` holds the turn's end for the settle time, ``"park"`` moves on into
+the detent well nearest it (:func:`park_pose`, :func:`parked`) and holds that; then the coils go off and the rotor
+is watched until it rests (:func:`~spherestep.drive.session.watch_rest`): those rows follow the loop's, and the
+final error is where the rotor rests (:func:`_rested`), the verdict saying why a move that rests off the turn's
+end, or does not rest, failed. docs/hardware.md, "What a move reports, and how it ends".
 """
 
 from __future__ import annotations
