@@ -12,11 +12,18 @@ loop's own estimate) and the target at the trajectory time the loop followed (``
 starved loop slows its pace). Every figure is computed from these rows: the tracking error against the target,
 the final error and the arrival against the turn's end.
 
-The move ends in a state (``end``): ``"hold"`` holds the turn's end for the settle time, ``"park"`` moves on into
-the detent well nearest it (:func:`park_pose`, :func:`parked`) and holds that; then the coils go off and the rotor
-is watched until it rests (:func:`~spherestep.drive.session.watch_rest`): those rows follow the loop's, and the
-final error is where the rotor rests (:func:`_rested`), the verdict saying why a move that rests off the turn's
-end, or does not rest, failed. docs/hardware.md, "What a move reports, and how it ends".
+The move ends in a state (``end``, docs/hardware.md "What a move reports, and how it ends"):
+
+* ``"hold"`` (the default, what a servo user expects): the servo holds the turn's end for ``hold`` s; the final
+  error is the rotor at the hold's last row, where it rests under the servo. Then every coil goes off, and the
+  result *reports* what that release means without judging the run on it: the predicted unpowered rest
+  (:func:`park_pose` from the last row: the detent well the rotor falls into) and its distance from the target.
+* ``"park"``: the servo moves on from the turn's end into the detent well nearest it (:func:`park_pose`,
+  :func:`parked`), holds it ``hold`` s, switches off and watches the rotor until it rests
+  (:func:`~spherestep.drive.session.watch_rest`: those rows follow the loop's); the final error is where it rests
+  (:func:`_rested`) against the predicted well, and the well's distance from the requested target is reported.
+
+Either way a final error outside ``tolerance`` fails the run with the reason.
 """
 
 from __future__ import annotations
@@ -36,27 +43,31 @@ PARK_TIME = 0.5  # s: the move from the turn's end into the detent well it parks
 
 def drive_on_hardware(design, axis, angle: float, chosen, *, duration: float | None, port: str | None,
                       emulate: bool, rate: float, log=None, tolerance: float, progress=None,
-                      firmware: str = "python", end: str = "hold", **options):
+                      firmware: str = "python", end: str = "hold", hold: float | None = None, **options):
     """Run the servo turn on ``port`` or the emulated motor (module docstring) on ``chosen``'s model and limits,
-    ending by ``end`` (:data:`ENDS`: ``"hold"`` or ``"park"``, module docstring); ``options`` go to :func:`~spherestep.drive.session.servo_session` (``lockstep``, ``faults``, ``watchdog_ms``,
-    ``max_late``: an emulated run on the simulated clock, a starved device)."""
+    ending by ``end`` (:data:`ENDS`: ``"hold"`` or ``"park"``) held ``hold`` s (default
+    :data:`~spherestep.drive.session.SETTLE`, 0.5 s); ``options`` go to
+    :func:`~spherestep.drive.session.servo_session` (``lockstep``, ``faults``, ``watchdog_ms``, ``max_late``: an
+    emulated run on the simulated clock, a starved device)."""
+    from .. import checks
     from ..dynamics import Rotor
     from .session import SETTLE, servo_session
     from .turn import Turn, check_duration
 
     if end not in ENDS:
         raise bad_value("end", "hold or park", end)
+    hold = SETTLE if hold is None else checks.positive(hold, "hold", "a positive time in seconds")
     job = Turn(design, axis, angle, chosen, tolerance, progress)
     if duration is not None:
         check_duration(design, job.axis, job.angle, chosen, duration, start=job.start)
     rotor = Rotor.from_design(design)
     traj, kind, note = job.servo_trajectory(job.start, duration, rotor)
-    turn_end, park_offset = traj.end, None
+    turn_end = traj.end
     if end == "park":
         job.say("finding the detent well to park in: the model's unpowered minimum near the turn's end")
         traj = parked(traj, park_pose(chosen.model, turn_end))
-        park_offset = float(so3.distance(traj.end, turn_end))
-        job.say(f"parking in the well {math.degrees(park_offset):.3g}° from the turn's end: the predicted rest")
+        job.say(f"parking in the well {math.degrees(float(so3.distance(traj.end, turn_end))):.3g}° from the "
+                f"turn's end: the predicted rest")
     shown = [-math.inf]
 
     def status(t, R, w, currents):
@@ -67,9 +78,9 @@ def drive_on_hardware(design, axis, angle: float, chosen, *, duration: float | N
 
     where = port if not emulate else "the emulated motor" + (" (the firmware in QEMU)" if firmware == "qemu" else "")
     job.say(f"servo on {where} at {rate:g} Hz")
-    session = servo_session(design, traj, traj.duration + SETTLE, port=port, emulate=emulate, rate=rate, log=log,
+    session = servo_session(design, traj, traj.duration + hold, port=port, emulate=emulate, rate=rate, log=log,
                             status=status, model=chosen.model, drive=chosen.limits, firmware=firmware, truth_every=0.0,
-                            watch=True, **options)
+                            watch=end == "park", **options)
     if session.step_cost is not None and session.step_cost[0]:
         steps, mean, worst = session.step_cost
         job.say(f"firmware in QEMU: {steps} control steps, {mean:.0f} instructions each (most {worst:.0f}): "
@@ -79,8 +90,11 @@ def drive_on_hardware(design, axis, angle: float, chosen, *, duration: float | N
     # the trajectory at the time the loop followed it (a starved loop slows its pace: report.reference_times)
     paced = report.reference_times[:len(times)] if report.cycles else [0.0]
     targets = np.array([np.asarray(session.reference(t)[0]) for t in paced])
+    cycles = len(times)  # the loop's rows; with park the rows after them watch the rotor with the coils off
     held = float(so3.distance(rotor[-1], traj.end)) if report.cycles else None
-    cycles = len(times)  # the loop's rows; the rows after them watch the rotor with the coils off
+    # what releasing the rotor means: where the model says it rests unpowered from the hold's last row
+    predicted = traj.end if end == "park" else park_pose(chosen.model, rotor[-1])
+    rest_offset = float(so3.distance(predicted, turn_end))
     sensor_error = so3.distance(estimates, rotor) if emulate else np.zeros(len(times))
     rest = session.rest if report.cycles and report.device_start is not None else None
     watched = None  # s from the loop's last cycle to the last look at the rotor after the coils went off
@@ -93,14 +107,15 @@ def drive_on_hardware(design, axis, angle: float, chosen, *, duration: float | N
         targets = np.concatenate([targets, np.broadcast_to(traj.end, (len(after), 3, 3))])
         currents = np.concatenate([currents, np.zeros((len(after), currents.shape[1]))])
     # every figure from these rows, the ones trajectory.csv holds: the rotor against the paced target while the
-    # loop ran (the first ``cycles`` rows), and where it rests against the turn's end
+    # loop ran (the first ``cycles`` rows); the final error against what the end holds (the turn's end, or the
+    # well parked in): the hold's last row, or where the watched rotor rests
     max_tracking = float(so3.distance(rotor[:cycles], targets[:cycles]).max())
-    final = float(so3.distance(rotor[-1], turn_end))
+    final = float(so3.distance(rotor[-1], traj.end))
     settled = swing = None
     if rest is not None:
         settled, swing, pose = _rested(chosen.model, rest)
         if settled:  # where it rests; else where it was last seen (final as above: the last row)
-            final = float(so3.distance(pose, turn_end))
+            final = float(so3.distance(pose, traj.end))
     if report.outcome != "done":
         time, arrival = math.inf, f"the loop ended with {report.outcome}: {report.message}".rstrip(": ")
     elif settled is False:
@@ -108,23 +123,19 @@ def drive_on_hardware(design, axis, angle: float, chosen, *, duration: float | N
         how = f"it swung {math.degrees(swing):.3g}° about the well it was last in" if detent else \
             f"coasting at {math.degrees(rest.speed):.3g}°/s"
         time, arrival = math.inf, (f"the rotor had not come to rest {watched:.3g} s after the coils went off ({how}, "
-                                   f"{math.degrees(final):.3g}° from the turn's end)"
-                                   + ("; off a detent well the unpowered rotor falls: --end park ends in one"
-                                      if end == "hold" and getattr(chosen.model, "has_bias", False) else ""))
+                                   f"{math.degrees(final):.3g}° from the predicted well)")
     elif rest is not None and final > tolerance:
-        time, arrival = math.inf, (
-            f"the rotor came to rest {math.degrees(final):.3g}° from the turn's end after the coils went off"
-            + (f" (parked in the well predicted {math.degrees(park_offset):.3g}° from it)" if end == "park" else
-               " (the detent pulled it into the nearest well: --end park predicts where)"
-               if getattr(chosen.model, "has_bias", False) else ""))
+        time, arrival = math.inf, (f"the rotor came to rest {math.degrees(final):.3g}° from the predicted well "
+                                   f"after the coils went off, over the {math.degrees(tolerance):.3g}° tolerance")
     else:
-        time, arrival = _arrival(times[:cycles], so3.distance(rotor[:cycles], traj.end), tolerance)
+        time, arrival = _arrival(times[:cycles], so3.distance(rotor[:cycles], traj.end), tolerance,
+                                 "the turn's end" if end == "hold" else "the well")
     details = HardwareDetails(report.outcome, report.message, report.cycles, report.rate, rate, report.missed,
                               report.off_acknowledged, kind, note, float(traj.duration),
                               "" if report.log is None else str(report.log), bool(emulate), report.cpu_mean,
                               report.cpu_max, report.realtime, report.time_scale, report.slowed, report.end_error,
-                              session.drift_after_off(), report.late_wakeups, report.late_readings, end, held,
-                              park_offset, watched, settled, swing)
+                              session.drift_after_off(), report.late_wakeups, report.late_readings, end, hold, held,
+                              rest_offset, watched, settled, swing)
     power = np.einsum("tn,tn->t", currents, currents) * chosen.limits.resistance
     return job.result("servo", "emulated" if emulate else "port", times, rotor, targets, sensor_error,
                       currents, power, time, arrival, final, max_tracking, details)
@@ -199,11 +210,11 @@ def _samples(session, emulate: bool, coils: int):
     return times, so3.exp((times - stamped)[:, None] * w) @ R, estimates, currents
 
 
-def _arrival(times, errors, tolerance: float) -> tuple[float, str]:
-    """First time after which ``errors`` stay within ``tolerance``, or ``inf`` and why."""
+def _arrival(times, errors, tolerance: float, what: str = "the turn's end") -> tuple[float, str]:
+    """First time after which ``errors`` (from ``what``) stay within ``tolerance``, or ``inf`` and why."""
     outside = np.flatnonzero(errors > tolerance)
     if len(outside) == 0:
         return float(times[0]), ""
     if outside[-1] == len(errors) - 1:
-        return math.inf, f"not within {math.degrees(tolerance):.3g}° of the turn's end at the end of the loop"
+        return math.inf, f"not within {math.degrees(tolerance):.3g}° of {what} at the end of the loop"
     return float(times[outside[-1] + 1]), ""

@@ -83,11 +83,13 @@ class Session:
 
     def drift_after_off(self) -> float | None:
         """How far (rad) the rotor moved from the loop's last cycle to where it was last watched after the coils
-        went off (:attr:`rest`; None without a watch)."""
-        if self.rest is None or not self.report.orientations:
+        went off (:attr:`rest`; without a watch, the emulated rotor ``OFF_FIRST`` s after: :attr:`final`; None
+        when neither was seen)."""
+        if not self.report.orientations or (self.rest is None and self.final is None):
             return None
         last = self.held.R if self.held is not None else self.report.orientations[-1]
-        return float(so3.distance(self.rest.samples[-1][1], last))
+        seen = self.rest.samples[-1][1] if self.rest is not None else self.final.R
+        return float(so3.distance(seen, last))
 
 
 @dataclass(frozen=True)
