@@ -14,7 +14,10 @@ One period, at loop time ``t`` (s):
 2. *correct*: a measurement ``R_m`` taken at ``t_m`` (default ``t``; a sensor of latency ``δ`` delivers
    ``t_m = t − δ``) corrects it against the estimate of that time; the first measurement starts it;
 3. *feedback*: :class:`~spherestep.control.controller.GeometricPD` gives the torque ``τ*`` from ``(R̂, ω̂)`` and
-   the trajectory's ``(R_d, ω_d, α_d)(t)``;
+   the trajectory's ``(R_d, ω_d, α_d)(t)``; with a ``lead`` (hardware: the command takes effect a period after
+   the reading and acts over the next, so ``lead`` = 1.5 periods, the middle of that period) both at ``t + lead``:
+   the state carried on under the torque already commanded (:meth:`ServoLaw._ahead`), the target taken there,
+   and steps 4–5 at that state;
 4. *model*: ``K(R̂)`` (3 × N, N·m per unit current) and the bias ``b(R̂) = τ(R̂, 0)`` from :class:`ModelCache`,
    re-evaluated only when ``R̂`` has turned more than ``K_REUSE`` since they were last evaluated (the bias only
    for a model that has one); for a model with a bias, while the trajectory turns slower than ``SLOPE_SPEED``,
@@ -239,7 +242,8 @@ class ServoLaw:
     rad (see :class:`ModelCache`);
     ``delay`` the control periods between a command and the drive applying it (0 in simulation; 1 on hardware,
     where the currents computed in a cycle are sent at the next cycle's start): the observer predicts with the
-    torque promised ``delay`` periods before. ``voltage`` (default on): the allocation within the period's supply
+    torque promised ``delay`` periods before; ``lead`` s (default 0) how far ahead of the reading the command
+    acts (step 3 of the module). ``voltage`` (default on): the allocation within the period's supply
     box at ``ω̂``; ``slew`` (default off): also within the coil's slew; ``adapt`` (default: with a bias and a
     disturbance estimate) the scales :attr:`scales` (see the module); ``supply`` (default on): the power ball
     bounds the supply's power ``Σ R i² + Σ e_k i_k ≤ P`` at ``ω̂`` rather than the copper loss alone
@@ -252,7 +256,7 @@ class ServoLaw:
                  observer_bandwidth: float | None = None, disturbance_bandwidth: float | None = None,
                  motion_bandwidth: float | None = None, reuse: float = K_REUSE, delay: int = 0,
                  voltage: bool = True, slew: bool = False, adapt: bool | None = None, supply: bool = True,
-                 inductive: bool = False):
+                 inductive: bool = False, lead: float = 0.0):
         if not isinstance(trajectory, Trajectory):
             raise bad_value("trajectory", "a spherestep.control.Trajectory", type(trajectory).__name__)
         if not isinstance(controller, GeometricPD):
@@ -275,6 +279,7 @@ class ServoLaw:
         self._failed = tuple(model.failed)
         self._lam = None
         self.delay = checks.count(delay, "delay", 0, 8)
+        self.lead = checks.non_negative(lead, "lead")
         self._promised = deque([np.zeros(3)] * (self.delay + 1), maxlen=self.delay + 1)
         self.voltage = bool(voltage)
         self.supply = bool(supply)
@@ -337,16 +342,31 @@ class ServoLaw:
                 obs.correct(measurement, measured_at, self._speed)
         if self.adapt and measurement is not None and h > 0 and float(wd @ wd) > ADAPT_SPEED * ADAPT_SPEED:
             self._adapt(h)
-        tau = self.controller.torque(obs.R, obs.w, Rd, wd, ad)
+        R, w = obs.R, obs.w
+        if self.lead > 0 and self.started:  # the state when this command takes effect (see the module, step 3)
+            R, w = self._ahead(self.lead)
+            Rd, wd, ad = self.trajectory.at(t + self.lead)
+        tau = self.controller.torque(R, w, Rd, wd, ad)
         if obs.l3:
             tau = tau - obs.d
-        alloc = self._allocate(tau, obs.R, self.cache.has_bias and float(wd @ wd) < SLOPE_SPEED * SLOPE_SPEED)
+        alloc = self._allocate(tau, R, self.cache.has_bias and float(wd @ wd) < SLOPE_SPEED * SLOPE_SPEED, w)
         self._promised.append(alloc.torque)
         return ServoCommand(alloc.currents, alloc.torque, tau, alloc.reachable, obs.R, obs.w, obs.d)
 
-    def _allocate(self, tau: np.ndarray, R: np.ndarray, slope: bool = False):
+    def _ahead(self, lead: float) -> tuple[np.ndarray, np.ndarray]:
+        """The observer's state carried ``lead`` s on under the torque already commanded, ``τ_p − b_d ω̂ + d̂``
+        (the newest promise: the currents the drive applies until this period's command takes effect), without
+        changing it: ``ω⁺ = ω̂ + lead (τ_p − b_d ω̂ + d̂)/I``, ``R⁺ = exp(lead (ω̂ + ω⁺)/2) R̂``."""
+        obs = self.observer
+        acc = (self._promised[-1] - self.controller.damping * obs.w + obs.d) / obs.inertia
+        w = obs.w + lead * acc
+        return so3.exp((0.5 * lead) * (obs.w + w)) @ obs.R, w
+
+    def _allocate(self, tau: np.ndarray, R: np.ndarray, slope: bool = False, w: np.ndarray | None = None):
         """Steps 4 and 5 of the module: ``K``/bias at ``R`` (to first order about the cache's anchor with
-        ``slope``), the period's current box and the warm-started allocation of ``tau``."""
+        ``slope``), the period's current box at the rate of turn ``w`` (default the observer's) and the
+        warm-started allocation of ``tau``."""
+        w = self.observer.w if w is None else w
         K, b = self.cache.at(R, slope)
         if self.adapt:
             b_nominal = b
@@ -355,10 +375,10 @@ class ServoLaw:
             K = K * kk
         bounds = emf = None
         if self.supply:  # the supply's power Σ R i² + Σ e_k i_k ≤ P at the estimated motion
-            emf = (self.observer.w * self._emf) @ K
+            emf = (w * self._emf) @ K
         if self.voltage:
             lower, upper = self._box
-            self._voltage_box(K, self.observer.w * self._emf, self._last, self._u, self._uv, self._slew, lower, upper)
+            self._voltage_box(K, w * self._emf, self._last, self._u, self._uv, self._slew, lower, upper)
             if self._failed:
                 lower[self._failed_idx] = 0.0
                 upper[self._failed_idx] = 0.0

@@ -30,6 +30,13 @@ DELAY = 1  # control periods: the currents computed in a cycle are driven at the
 # 200 Hz: max tracking error 0.31° and final 0.019° (120 rad/s: 0.44° and 0.016°; the former difference filter:
 # 0.34° and 0.043°). The iron prototype at 500 Hz (the emulator's 4 kHz current loop, 2026-11-25): the 360° turn
 # about (1, 0.5, 2) from a detent well in lockstep tracks within 0.47° and parks 0.006° off; a hold within 0.004°.
+# The law's lead (ServoLaw(lead=...)): a command computed from the reading at t takes effect one period later (the
+# device stamps a reading when it applies the frame's currents, so the link's latency separates the next frame the
+# same) and acts over the period after: its middle, 1.5 periods. Measured in lockstep at 500 Hz on the iron
+# prototype's fastest 360° turn about (1, 0.5, 2) (1.475 s; 2026-11-28): max tracking 0.866° without a lead, 0.397°
+# at 1 period, 0.314° at 1.5, 0.337° at 2; held-out turns, 270° about (-1, 2, 0.5) and 180° about (0.3, -1, 1):
+# 0.441° and 0.490° at 1 period, 0.323° and 0.299° at 1.5 (benchmarks/bench_emulated_tracking.py).
+LEAD = 1.5
 FIRMWARES = ("python", "qemu")  # the emulated motor's device: the Python CurrentDevice, or drive.cpp in QEMU
 QEMU_RATE = 100.0  # Hz: the servo's default rate on the firmware in QEMU (the DRIVE round trip in drive.connect)
 SETTLE = 0.5  # s the loop runs on after the trajectory's end
@@ -182,7 +189,7 @@ def servo_session(design, trajectory: Trajectory, duration: float, *, port: str 
     estimate = FieldTracker(estimator, R0, drive)
     controller = GeometricPD(rotor.inertia, bandwidth=BANDWIDTH, rate=rate, damping=rotor.damping)
     law = ServoLaw(model, trajectory, controller, limits=wire_limits(drive), sensor_rate=rate, delay=DELAY,
-                   observer_bandwidth=rate)
+                   observer_bandwidth=rate, lead=LEAD / rate)
     options = {} if max_late is None else {"max_late": max_late}
     kind = "port" if not emulate else "lockstep" if lockstep else "qemu" if firmware == "qemu" else "pty"
     truth: list = []
