@@ -59,11 +59,9 @@ def main() -> None:
     # interleaved: a baseline run after every runs/baseline_runs runs with the lead, so both see the same load
     plan = []
     every = max(1, runs // max(baseline_runs, 1))
-    with_lead = 0
-    for k in range(runs):
+    for done in range(1, runs + 1):
         plan.append(lead)
-        with_lead += 1
-        if with_lead % every == 0 and plan.count(0.0) < baseline_runs:
+        if done % every == 0 and plan.count(0.0) < baseline_runs:
             plan.append(0.0)
     plan += [0.0] * (baseline_runs - plan.count(0.0))
     print(f"{'lockstep' if lockstep else 'wall clock'}, 500 Hz, {len(plan)} runs; load at start "
