@@ -28,6 +28,13 @@ One period, at loop time ``t`` (s):
    ``b + K c = τ*`` within the limits, warm-started from the last period's dual; the command is ``c``, the
    torque it promises ``τ_p = b + K c`` (what step 1 uses next period) and whether ``τ*`` was reachable.
 
+6. *the current's lag* (``current_lag`` τ > 0: the drive's current follows its setpoint first order with τ):
+   over a period ``h`` from the last setpoint ``c'_prev`` toward ``c'`` the current's mean is
+   ``c' − β (c' − c'_prev)``, ``β = (τ/h)(1 − e^{−h/τ})``; the setpoint sent is the ``c'`` whose mean is the
+   allocation's ``c``, ``c' = c + β/(1 − β)(c − c'_prev)``, kept within the period's box and the power ball (the
+   torque promised stays ``b + K c``). On the emulated device's 2000 rad/s current loop (τ = 0.5 ms) at 500 Hz,
+   β = 0.245.
+
 The limits of step 5 are the period's *supply box* (``voltage=True``, the default): per coil the supply voltage
 against the back-EMF of the estimated motion, ``|R I_n c_k + K_k·ω̂/I_n| ≤ V``, with ``|c_k| ≤ u``
 (:func:`spherestep._fast.allocation.voltage_box`, asymmetric per coil and not always holding 0: a coil whose
@@ -256,7 +263,7 @@ class ServoLaw:
                  observer_bandwidth: float | None = None, disturbance_bandwidth: float | None = None,
                  motion_bandwidth: float | None = None, reuse: float = K_REUSE, delay: int = 0,
                  voltage: bool = True, slew: bool = False, adapt: bool | None = None, supply: bool = True,
-                 inductive: bool = False, lead: float = 0.0):
+                 inductive: bool = False, lead: float = 0.0, current_lag: float = 0.0):
         if not isinstance(trajectory, Trajectory):
             raise bad_value("trajectory", "a spherestep.control.Trajectory", type(trajectory).__name__)
         if not isinstance(controller, GeometricPD):
@@ -280,6 +287,10 @@ class ServoLaw:
         self._lam = None
         self.delay = checks.count(delay, "delay", 0, 8)
         self.lead = checks.non_negative(lead, "lead")
+        lag = checks.non_negative(current_lag, "current_lag")
+        h = 1.0 / controller.rate
+        beta = lag / h * (1.0 - math.exp(-h / lag)) if lag > 0 else 0.0
+        self._emphasis = beta / (1.0 - beta)  # the step's pre-emphasis β/(1 − β) (step 6 of the module)
         self._promised = deque([np.zeros(3)] * (self.delay + 1), maxlen=self.delay + 1)
         self.voltage = bool(voltage)
         self.supply = bool(supply)
@@ -294,6 +305,7 @@ class ServoLaw:
         period = 1.0 / controller.rate
         self._slew = math.exp(-period / lim.time_constant) if slew else 0.0
         self._last = np.zeros(N)
+        self._sent = np.zeros(N)  # the last setpoint sent (step 6)
         self.adapt = bool(model.has_bias and self.observer.l3) if adapt is None else bool(adapt)
         self._theta = (0.0, 0.0)  # (θ_b, θ_K): the plant's bias ≈ (1 + θ_b) b̂, its coils' torque ≈ (1 + θ_K) K̂ c
         self._normal = (0.0,) * 5  # the regression's discounted normal equations (A₀₀, A₀₁, A₁₁, y₀, y₁)
@@ -351,7 +363,23 @@ class ServoLaw:
             tau = tau - obs.d
         alloc = self._allocate(tau, R, self.cache.has_bias and float(wd @ wd) < SLOPE_SPEED * SLOPE_SPEED, w)
         self._promised.append(alloc.torque)
-        return ServoCommand(alloc.currents, alloc.torque, tau, alloc.reachable, obs.R, obs.w, obs.d)
+        currents = self._emphasised(alloc.currents) if self._emphasis else alloc.currents
+        return ServoCommand(currents, alloc.torque, tau, alloc.reachable, obs.R, obs.w, obs.d)
+
+    def _emphasised(self, c: np.ndarray) -> np.ndarray:
+        """Step 6 of the module: the setpoint ``c' = c + β/(1 − β) (c − c'_prev)`` whose first-order response from
+        the last setpoint has the mean ``c`` over the period, within the period's box and the power ball
+        (``‖c + s δ‖ ≤ ρ``, the largest ``s ≤ 1``)."""
+        lower, upper = self._box if self.voltage else (-self._u, self._u)
+        delta = np.clip(c + self._emphasis * (c - self._sent), lower, upper) - c
+        rho2 = self.limits.per_unit_power_radius ** 2
+        out = c + delta
+        if out @ out > rho2:  # |c + s δ|² = ρ²: the root s in [0, 1] (|c| ≤ ρ from the allocation)
+            a, b, cc = delta @ delta, 2.0 * (c @ delta), c @ c - rho2
+            root = (-b + math.sqrt(max(b * b - 4.0 * a * cc, 0.0))) / (2.0 * a)
+            out = c + min(max(root, 0.0), 1.0) * delta
+        self._sent = out
+        return out
 
     def _ahead(self, lead: float) -> tuple[np.ndarray, np.ndarray]:
         """The observer's state carried ``lead`` s on under the torque already commanded, ``τ_p − b_d ω̂ + d̂``

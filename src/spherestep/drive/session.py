@@ -188,10 +188,10 @@ def servo_session(design, trajectory: Trajectory, duration: float, *, port: str 
     estimator = field_model(design, sensors.positions, cores).estimator(sensors)
     estimate = FieldTracker(estimator, R0, drive)
     controller = GeometricPD(rotor.inertia, bandwidth=BANDWIDTH, rate=rate, damping=rotor.damping)
-    law = ServoLaw(model, trajectory, controller, limits=wire_limits(drive), sensor_rate=rate, delay=DELAY,
-                   observer_bandwidth=rate, lead=LEAD / rate)
     options = {} if max_late is None else {"max_late": max_late}
     kind = "port" if not emulate else "lockstep" if lockstep else "qemu" if firmware == "qemu" else "pty"
+    law = ServoLaw(model, trajectory, controller, limits=wire_limits(drive), sensor_rate=rate, delay=DELAY,
+                   observer_bandwidth=rate, lead=LEAD / rate, current_lag=current_lag(kind))
     truth: list = []
     held: list = [None]  # the truth at the latest cycle
     with connect(design, kind, port=port, plant=model if plant is None else plant, limits=drive, sensors=sensors,
@@ -225,6 +225,20 @@ def servo_session(design, trajectory: Trajectory, duration: float, *, port: str 
             rest = None
         cost = conn.step_cost() if conn.step_cost is not None else None
     return Session(report, trajectory, truth, seen[0], conn.watchdog, conn.started, held[0], cost, rest)
+
+
+def current_lag(kind: str) -> float:
+    """The time constant (s) the coil currents of a ``kind`` of device (:func:`~spherestep.drive.connect.connect`'s)
+    follow their setpoints with: the emulated motor's device's current loop, ``1/ω_c`` =
+    ``period / CURRENT_BANDWIDTH`` (0.5 ms at its 4 kHz, 2 ms for the firmware in QEMU at 1 kHz); 0 (no
+    pre-emphasis) on a board, whose HELLO does not report its loop's bandwidth."""
+    from ..hardware.motor_emulator import CURRENT_BANDWIDTH, DEVICE_PERIOD
+    from .connect import QEMU_PERIOD
+
+    if kind == "port":
+        return 0.0
+    period = QEMU_PERIOD if kind == "qemu" else DEVICE_PERIOD
+    return period / CURRENT_BANDWIDTH
 
 
 def _rest_on_port(link, estimate, report) -> Rest | None:

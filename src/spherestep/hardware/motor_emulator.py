@@ -87,6 +87,9 @@ class MotorFaults:
         return float(delay) if since <= t < until else 0.0
 
 
+DEVICE_PERIOD = 2.5e-4  # s: the emulated motor's device period (its current loop at 4 kHz)
+
+
 class EmulatedMotor:
     """Coils, rotor and magnetometers of ``design`` under ``model`` (a torque model with ``torque_matrix``);
     see the module. ``sensors`` a :class:`~spherestep.sensing.SensorArray`; ``rotor`` (``step``, ``inertia``,
@@ -95,7 +98,7 @@ class EmulatedMotor:
     ``drive`` the :class:`~spherestep.electrics.DriveLimits`; ``R0`` the start orientation."""
 
     def __init__(self, design, model, sensors, *, rotor, field, torque_cache, drive=None,
-                 current_noise: float = 0.002, R0=None, faults: MotorFaults | None = None, period: float = 2.5e-4,
+                 current_noise: float = 0.002, R0=None, faults: MotorFaults | None = None, period: float = DEVICE_PERIOD,
                  torque_refresh: float = 2e-3, seed: int = 0):
         self.design, self.model, self.sensors = design, model, sensors
         self.rotor = rotor
