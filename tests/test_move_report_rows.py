@@ -60,8 +60,11 @@ def test_a_slowed_runs_report_is_computed_from_its_csv(slowed):
     np.testing.assert_allclose(park_distance_deg(rotor, target), column, atol=1e-5)
     assert d["max_tracking_error_deg"] == pytest.approx(column.max(), abs=2e-6)
     assert column.max() < 10, column.max()  # a slowed run tracks its paced target (the false report was 170-180°)
-    # the final error is the last row's rotor against the turn's end (the last target: the loop ended after it)
+    # the end is the default hold (issue 38 §3): the rows are the loop's alone, and the final error is the last
+    # row's rotor against the turn's end (the last target: the loop ended after it), where the servo held it
+    assert d["details"]["end"] == "hold" and d["details"]["cycles"] == len(table)
     assert d["final_error_deg"] == pytest.approx(park_distance_deg(rotor[-1], target[-1]), abs=1e-5)
+    assert d["details"]["held_error_deg"] == pytest.approx(d["final_error_deg"], abs=1e-9)
     # the arrival: the first row after which the rotor stays within the tolerance of the end
     to_end = park_distance_deg(rotor, target[-1])
     outside = np.flatnonzero(to_end > d["tolerance_deg"])

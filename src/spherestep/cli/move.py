@@ -32,6 +32,12 @@ def _check_firmware(ctx: typer.Context, param: typer.CallbackParam, value):
     return value
 
 
+def _check_end(ctx: typer.Context, param: typer.CallbackParam, value):
+    if value not in (None, "hold", "park") and not ctx.resilient_parsing:
+        raise typer.BadParameter(f"must be hold or park; instead received {value!r}")
+    return value
+
+
 def _check_sensor(ctx: typer.Context, param: typer.CallbackParam, value):
     if value not in ("ideal", "hall", "imu") and not ctx.resilient_parsing:
         raise typer.BadParameter(f"must be ideal, hall or imu; instead received {value!r}")
@@ -73,6 +79,18 @@ def move(
     rate: float = typer.Option(None, "--rate", callback=number("Hz", 1, 2000, what="the loop rate"),
                                help="With --port/--emulate: the loop rate in Hz (default 500; 100 with --firmware "
                                     "qemu)."),
+    end: str = typer.Option(None, "--end", callback=_check_end,
+                            help="With --port/--emulate: how the move ends before every coil goes off: hold (the "
+                                 "default: the servo holds the turn's end for --hold s, the final error is where it "
+                                 "holds the rotor; then the coils go off and the predicted unpowered rest, the "
+                                 "detent well the rotor falls into, is reported, not judged) or park (it moves on "
+                                 "into the detent well nearest the turn's end, holds it, switches off and watches "
+                                 "the rotor up to 1 s: the final error is where it rests against the predicted "
+                                 "well)."),
+    hold: float = typer.Option(None, "--hold", callback=number("s", 0, 3600, low_open=True, what="the hold"),
+                               help="With --port/--emulate: seconds the servo holds the end before the coils go "
+                                    "off (default 0.5). Ctrl-C during the hold ends the run with every coil off "
+                                    "and nothing written."),
     firmware: str = typer.Option("python", "--firmware", callback=_check_firmware,
                                  help="With --emulate: the device behind the line: python (the emulator's) or qemu "
                                       "(firmware/spherestep's drive.cpp built for and run in QEMU's mps2-an500; "
@@ -113,6 +131,12 @@ def move(
         from ..hardware.qemu import require_tools
 
         require_tools()
+    if hold is not None and backend == "simulated":
+        raise bad_value("--hold", "given only with --emulate or --port (the simulated servo's coils never go off); "
+                        "drop --hold", hold)
+    if end is not None and backend == "simulated":
+        raise bad_value("--end", "given only with --emulate or --port (the simulated servo's coils never go off); "
+                        "drop --end", end)
     if backend != "simulated" and mode != "servo":
         raise bad_value("--mode", "servo with --port/--emulate (relay plans run with spherestep run)", mode)
     if rate is not None and backend == "simulated":
@@ -159,7 +183,7 @@ def move(
                                     model=own, duration=time, sensor=sensor, sensor_noise=noise,
                                     port=port, rate=rate, tolerance=math.radians(tolerance),
                                     log=out / "servo-log.csv" if backend != "simulated" else None, progress=say,
-                                    firmware=firmware)
+                                    firmware=firmware, end=end or "hold", hold=hold)
                 if backend != "simulated" and result.details.outcome == "INTERRUPT":  # the loop caught it, coils off
                     raise interrupt_for(received.name)
                 written = result.write(out)
@@ -188,5 +212,29 @@ def move(
                           f"{f', slowed {d.slowed}× to {d.time_scale:g} of the pace' if d.slowed else ''}); "
                           f"all off {'acknowledged' if d.off_acknowledged else 'NOT acknowledged'}"
                           + (f"; {d.message}" if d.message else ""))
+            console.print(_end_line(d))
     if not result.ok:
         raise ComputationError(result.verdict())
+
+
+def _end_line(d) -> str:
+    """The console line on the move's end: what the servo held, and what switching off meant (hold: the predicted
+    unpowered rest, reported; park: where the rotor rested with the coils off, judged)."""
+    import math
+
+    deg = math.degrees
+    held = "" if d.held_error is None else f", {deg(d.held_error):.3g}° off it at the loop's end"
+    if d.end == "hold":
+        line = f"end: hold, the servo held the turn's end {d.hold:g} s{held}; coils off"
+        if d.rest_offset is not None:
+            line += (f": released, the rotor's predicted unpowered rest is {deg(d.rest_offset):.3g}° from the "
+                     f"target (reported, not judged)")
+        if d.drift_after_off is not None:
+            line += f"; it moved {deg(d.drift_after_off):.3g}° in the first 0.15 s"
+        return line
+    line = f"end: park, the servo held the detent well {deg(d.rest_offset):.3g}° from the target {d.hold:g} s{held}"
+    if d.at_rest is None:
+        return line + "; the rotor was not watched after the coils went off"
+    rest = "came to rest" if d.at_rest else "had not come to rest"
+    return (line + f"; with the coils off the rotor {rest} within {d.rest_after:.2g} s, "
+            f"{deg(d.drift_after_off):.3g}° from where the loop left it (swing {deg(d.swing):.2g}°)")

@@ -239,7 +239,7 @@ def plan_iron(design, targets, model, *, limits=None, max_coils: int = DEFAULT_M
     first = start_state(states, targets[0]) if start is None else int(start)
     coils = _trim(states.held(first), design, states.rotations[first], max_coils)
     current = design.coil_currents(coils)
-    here = _rest(model, equilibrium(model, states.rotations[first], current), current)  # checks model and N
+    here = rest_pose(model, equilibrium(model, states.rotations[first], current), current)  # checks model and N
     min_stiffness = checks.non_negative(min_stiffness, "min_stiffness", "a non-negative stiffness in N·m/rad")
     plants = tuple(plants)
     for n, plant in enumerate(plants):
@@ -265,7 +265,7 @@ def plan_iron(design, targets, model, *, limits=None, max_coils: int = DEFAULT_M
     return plan
 
 
-def _rest(model, eq, current) -> np.ndarray:
+def rest_pose(model, eq, current) -> np.ndarray:
     """Where the rotor rests under the first mask: ``eq``'s end when it is a strict minimum; else (a saddle, on
     which a simulated rotor at rest would not stay) the lowest strict minimum descended to from it turned ±1° about
     x, y and z; ``eq``'s end if none is."""

@@ -14,7 +14,10 @@ One period, at loop time ``t`` (s):
 2. *correct*: a measurement ``R_m`` taken at ``t_m`` (default ``t``; a sensor of latency ``δ`` delivers
    ``t_m = t − δ``) corrects it against the estimate of that time; the first measurement starts it;
 3. *feedback*: :class:`~spherestep.control.controller.GeometricPD` gives the torque ``τ*`` from ``(R̂, ω̂)`` and
-   the trajectory's ``(R_d, ω_d, α_d)(t)``;
+   the trajectory's ``(R_d, ω_d, α_d)(t)``; with a ``lead`` (hardware: the command takes effect a period after
+   the reading and acts over the next, so ``lead`` = 1.5 periods, the middle of that period) both at ``t + lead``:
+   the state carried on under the torque already commanded (:meth:`ServoLaw._ahead`), the target taken there,
+   and steps 4–5 at that state;
 4. *model*: ``K(R̂)`` (3 × N, N·m per unit current) and the bias ``b(R̂) = τ(R̂, 0)`` from :class:`ModelCache`,
    re-evaluated only when ``R̂`` has turned more than ``K_REUSE`` since they were last evaluated (the bias only
    for a model that has one); for a model with a bias, while the trajectory turns slower than ``SLOPE_SPEED``,
@@ -24,6 +27,13 @@ One period, at loop time ``t`` (s):
 5. *allocation*: :func:`~spherestep.control.allocation.allocate_matrix`, least copper power with
    ``b + K c = τ*`` within the limits, warm-started from the last period's dual; the command is ``c``, the
    torque it promises ``τ_p = b + K c`` (what step 1 uses next period) and whether ``τ*`` was reachable.
+
+6. *the current's lag* (``current_lag`` τ > 0: the drive's current follows its setpoint first order with τ):
+   over a period ``h`` from the last setpoint ``c'_prev`` toward ``c'`` the current's mean is
+   ``c' − β (c' − c'_prev)``, ``β = (τ/h)(1 − e^{−h/τ})``; the setpoint sent is the ``c'`` whose mean is the
+   allocation's ``c``, ``c' = c + β/(1 − β)(c − c'_prev)``, kept within the period's box and the power ball (the
+   torque promised stays ``b + K c``). On the emulated device's 2000 rad/s current loop (τ = 0.5 ms) at 500 Hz,
+   β = 0.245.
 
 The limits of step 5 are the period's *supply box* (``voltage=True``, the default): per coil the supply voltage
 against the back-EMF of the estimated motion, ``|R I_n c_k + K_k·ω̂/I_n| ≤ V``, with ``|c_k| ≤ u``
@@ -239,7 +249,8 @@ class ServoLaw:
     rad (see :class:`ModelCache`);
     ``delay`` the control periods between a command and the drive applying it (0 in simulation; 1 on hardware,
     where the currents computed in a cycle are sent at the next cycle's start): the observer predicts with the
-    torque promised ``delay`` periods before. ``voltage`` (default on): the allocation within the period's supply
+    torque promised ``delay`` periods before; ``lead`` s (default 0) how far ahead of the reading the command
+    acts (step 3 of the module). ``voltage`` (default on): the allocation within the period's supply
     box at ``ω̂``; ``slew`` (default off): also within the coil's slew; ``adapt`` (default: with a bias and a
     disturbance estimate) the scales :attr:`scales` (see the module); ``supply`` (default on): the power ball
     bounds the supply's power ``Σ R i² + Σ e_k i_k ≤ P`` at ``ω̂`` rather than the copper loss alone
@@ -252,7 +263,7 @@ class ServoLaw:
                  observer_bandwidth: float | None = None, disturbance_bandwidth: float | None = None,
                  motion_bandwidth: float | None = None, reuse: float = K_REUSE, delay: int = 0,
                  voltage: bool = True, slew: bool = False, adapt: bool | None = None, supply: bool = True,
-                 inductive: bool = False):
+                 inductive: bool = False, lead: float = 0.0, current_lag: float = 0.0):
         if not isinstance(trajectory, Trajectory):
             raise bad_value("trajectory", "a spherestep.control.Trajectory", type(trajectory).__name__)
         if not isinstance(controller, GeometricPD):
@@ -275,6 +286,11 @@ class ServoLaw:
         self._failed = tuple(model.failed)
         self._lam = None
         self.delay = checks.count(delay, "delay", 0, 8)
+        self.lead = checks.non_negative(lead, "lead")
+        lag = checks.non_negative(current_lag, "current_lag")
+        h = 1.0 / controller.rate
+        beta = lag / h * (1.0 - math.exp(-h / lag)) if lag > 0 else 0.0
+        self._emphasis = beta / (1.0 - beta)  # the step's pre-emphasis β/(1 − β) (step 6 of the module)
         self._promised = deque([np.zeros(3)] * (self.delay + 1), maxlen=self.delay + 1)
         self.voltage = bool(voltage)
         self.supply = bool(supply)
@@ -289,6 +305,7 @@ class ServoLaw:
         period = 1.0 / controller.rate
         self._slew = math.exp(-period / lim.time_constant) if slew else 0.0
         self._last = np.zeros(N)
+        self._sent = np.zeros(N)  # the last setpoint sent (step 6)
         self.adapt = bool(model.has_bias and self.observer.l3) if adapt is None else bool(adapt)
         self._theta = (0.0, 0.0)  # (θ_b, θ_K): the plant's bias ≈ (1 + θ_b) b̂, its coils' torque ≈ (1 + θ_K) K̂ c
         self._normal = (0.0,) * 5  # the regression's discounted normal equations (A₀₀, A₀₁, A₁₁, y₀, y₁)
@@ -337,16 +354,47 @@ class ServoLaw:
                 obs.correct(measurement, measured_at, self._speed)
         if self.adapt and measurement is not None and h > 0 and float(wd @ wd) > ADAPT_SPEED * ADAPT_SPEED:
             self._adapt(h)
-        tau = self.controller.torque(obs.R, obs.w, Rd, wd, ad)
+        R, w = obs.R, obs.w
+        if self.lead > 0 and self.started:  # the state when this command takes effect (see the module, step 3)
+            R, w = self._ahead(self.lead)
+            Rd, wd, ad = self.trajectory.at(t + self.lead)
+        tau = self.controller.torque(R, w, Rd, wd, ad)
         if obs.l3:
             tau = tau - obs.d
-        alloc = self._allocate(tau, obs.R, self.cache.has_bias and float(wd @ wd) < SLOPE_SPEED * SLOPE_SPEED)
+        alloc = self._allocate(tau, R, self.cache.has_bias and float(wd @ wd) < SLOPE_SPEED * SLOPE_SPEED, w)
         self._promised.append(alloc.torque)
-        return ServoCommand(alloc.currents, alloc.torque, tau, alloc.reachable, obs.R, obs.w, obs.d)
+        currents = self._emphasised(alloc.currents) if self._emphasis else alloc.currents
+        return ServoCommand(currents, alloc.torque, tau, alloc.reachable, obs.R, obs.w, obs.d)
 
-    def _allocate(self, tau: np.ndarray, R: np.ndarray, slope: bool = False):
+    def _emphasised(self, c: np.ndarray) -> np.ndarray:
+        """Step 6 of the module: the setpoint ``c' = c + β/(1 − β) (c − c'_prev)`` whose first-order response from
+        the last setpoint has the mean ``c`` over the period, within the period's box and the power ball
+        (``‖c + s δ‖ ≤ ρ``, the largest ``s ≤ 1``)."""
+        lower, upper = self._box if self.voltage else (-self._u, self._u)
+        delta = np.clip(c + self._emphasis * (c - self._sent), lower, upper) - c
+        rho2 = self.limits.per_unit_power_radius ** 2
+        out = c + delta
+        if out @ out > rho2:  # |c + s δ|² = ρ²: the root s in [0, 1] (|c| ≤ ρ from the allocation)
+            a, b, cc = delta @ delta, 2.0 * (c @ delta), c @ c - rho2
+            root = (-b + math.sqrt(max(b * b - 4.0 * a * cc, 0.0))) / (2.0 * a)
+            out = c + min(max(root, 0.0), 1.0) * delta
+        self._sent = out
+        return out
+
+    def _ahead(self, lead: float) -> tuple[np.ndarray, np.ndarray]:
+        """The observer's state carried ``lead`` s on under the torque already commanded, ``τ_p − b_d ω̂ + d̂``
+        (the newest promise: the currents the drive applies until this period's command takes effect), without
+        changing it: ``ω⁺ = ω̂ + lead (τ_p − b_d ω̂ + d̂)/I``, ``R⁺ = exp(lead (ω̂ + ω⁺)/2) R̂``."""
+        obs = self.observer
+        acc = (self._promised[-1] - self.controller.damping * obs.w + obs.d) / obs.inertia
+        w = obs.w + lead * acc
+        return so3.exp((0.5 * lead) * (obs.w + w)) @ obs.R, w
+
+    def _allocate(self, tau: np.ndarray, R: np.ndarray, slope: bool = False, w: np.ndarray | None = None):
         """Steps 4 and 5 of the module: ``K``/bias at ``R`` (to first order about the cache's anchor with
-        ``slope``), the period's current box and the warm-started allocation of ``tau``."""
+        ``slope``), the period's current box at the rate of turn ``w`` (default the observer's) and the
+        warm-started allocation of ``tau``."""
+        w = self.observer.w if w is None else w
         K, b = self.cache.at(R, slope)
         if self.adapt:
             b_nominal = b
@@ -355,10 +403,10 @@ class ServoLaw:
             K = K * kk
         bounds = emf = None
         if self.supply:  # the supply's power Σ R i² + Σ e_k i_k ≤ P at the estimated motion
-            emf = (self.observer.w * self._emf) @ K
+            emf = (w * self._emf) @ K
         if self.voltage:
             lower, upper = self._box
-            self._voltage_box(K, self.observer.w * self._emf, self._last, self._u, self._uv, self._slew, lower, upper)
+            self._voltage_box(K, w * self._emf, self._last, self._u, self._uv, self._slew, lower, upper)
             if self._failed:
                 lower[self._failed_idx] = 0.0
                 upper[self._failed_idx] = 0.0

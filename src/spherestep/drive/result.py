@@ -132,9 +132,17 @@ class HardwareDetails(_Details):
     ``slowed`` how often it halved rate and pace for missed deadlines, ``late_wakeups`` the deadlines missed
     while the loop slept with its work done (the OS woke it late), ``late_readings`` the cycles run on the law's
     prediction because the device's answer came too late, ``end_error`` rad of its last estimate;
-    ``drift_after_off`` (emulated motor) how far the rotor moved in the 0.15 s after the coils went off — the final
-    error is judged at the loop's last cycle, with the servo holding; an iron motor's detent then pulls the unpowered
-    rotor into its nearest well."""
+    The end (:func:`~spherestep.drive.hardware.drive_on_hardware`): ``end`` ``"hold"`` (the servo holds the turn's
+    end ``hold`` s, and ``final_error`` is the rotor at the hold's last row) or ``"park"`` (it moves on into the
+    detent well nearest the turn's end, holds it ``hold`` s, every coil goes off and the rotor is watched for up
+    to a second, ``rest_after`` s from the loop's last cycle to the last look: the result's rows after the loop's
+    ``cycles``; it rests at the bottom of the well it was last in, ``at_rest`` when it stayed within 1° of it over
+    the last 0.3 s, ``swing`` rad the farthest it was, and ``final_error`` is that pose against the predicted
+    well; ``None`` fields when it was not watched). ``rest_offset`` rad: the predicted unpowered rest (hold: the
+    detent well the rotor falls into from the hold's last row, reported, not judged; park: the well parked in)
+    from the requested turn's end. ``held_error`` rad is the rotor at the loop's last cycle against what the servo
+    held (the turn's end, or the well), ``drift_after_off`` rad how far it moved from there after the coils went
+    off (0.15 s after with hold, at the last look with park; ``None`` on a port with hold)"""
 
     outcome: str
     message: str
@@ -157,12 +165,23 @@ class HardwareDetails(_Details):
     drift_after_off: float | None = None
     late_wakeups: int = 0
     late_readings: int = 0
+    end: str = "hold"
+    hold: float = 0.5
+    held_error: float | None = None
+    rest_offset: float | None = None
+    rest_after: float | None = None
+    at_rest: bool | None = None
+    swing: float | None = None
 
     KEYS: ClassVar[Keys] = (
         ("outcome", "outcome"), ("message", "message"), ("cycles", "cycles"), ("rate_Hz", "rate"),
         ("loop_rate_Hz", "loop_rate"), ("missed", "missed"), ("cpu_per_cycle_ms", "cpu_mean", _ms),
         ("cpu_max_ms", "cpu_max", _ms), ("realtime", "realtime"), ("time_scale", "time_scale"), ("slowed", "slowed"),
         ("late_wakeups", "late_wakeups"), ("late_readings", "late_readings"), ("loop_end_error", "end_error", ANGLE), ("drift_after_off", "drift_after_off", ANGLE),
+        ("end", "end"), ("hold_s", "hold"), ("held_error", "held_error", ANGLE),
+        ("predicted_rest_from_target", "rest_offset", ANGLE),
+        ("rest_after_s", "rest_after"), ("at_rest", "at_rest"),
+        ("swing", "swing", ANGLE),
         ("off_acknowledged", "off_acknowledged"), ("trajectory", "trajectory"), ("trajectory_note", "note"),
         ("motion_time_s", "motion_time"), ("log", "log"),
         ("errors_against", "truth", lambda truth: "emulated rotor" if truth else "the loop's estimate"))

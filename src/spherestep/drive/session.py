@@ -19,7 +19,7 @@ from dataclasses import dataclass
 
 from .. import checks, so3
 from ..control import GeometricPD, ServoLaw, Trajectory
-from ..errors import bad_value
+from ..errors import ComputationError, bad_value
 from ..hardware import LOOP_RATE, FieldTracker, ServoReport, run_servo, wire_limits
 from .connect import EMULATED_DAMPING, connect
 
@@ -30,9 +30,25 @@ DELAY = 1  # control periods: the currents computed in a cycle are driven at the
 # 200 Hz: max tracking error 0.31° and final 0.019° (120 rad/s: 0.44° and 0.016°; the former difference filter:
 # 0.34° and 0.043°). The iron prototype at 500 Hz (the emulator's 4 kHz current loop, 2026-11-25): the 360° turn
 # about (1, 0.5, 2) from a detent well in lockstep tracks within 0.47° and parks 0.006° off; a hold within 0.004°.
+# The law's lead (ServoLaw(lead=...)): a command computed from the reading at t takes effect one period later (the
+# device stamps a reading when it applies the frame's currents, so the link's latency separates the next frame the
+# same) and acts over the period after: its middle, 1.5 periods. Measured in lockstep at 500 Hz on the iron
+# prototype's fastest 360° turn about (1, 0.5, 2) (1.475 s; 2026-11-28): max tracking 0.866° without a lead, 0.397°
+# at 1 period, 0.314° at 1.5, 0.337° at 2; held-out turns, 270° about (-1, 2, 0.5) and 180° about (0.3, -1, 1):
+# 0.441° and 0.490° at 1 period, 0.323° and 0.299° at 1.5 (benchmarks/bench_emulated_tracking.py).
+LEAD = 1.5
 FIRMWARES = ("python", "qemu")  # the emulated motor's device: the Python CurrentDevice, or drive.cpp in QEMU
 QEMU_RATE = 100.0  # Hz: the servo's default rate on the firmware in QEMU (the DRIVE round trip in drive.connect)
 SETTLE = 0.5  # s the loop runs on after the trajectory's end
+# After the coils go off the rotor is watched until it rests: sampled OFF_FIRST s after and then every REST_EVERY s,
+# at rest once it moved at most REST_MOTION in each of two intervals in a row (0.2°/s: an air rotor coasting on the
+# speed the hold left it, ~0.16°/s, counts as at rest), for at most REST_LIMIT s (an unpowered iron rotor released
+# off a detent well tumbles for seconds: the emulated rotor's damping decays its swing over 2J/c ≈ 14 s).
+OFF_FIRST, REST_EVERY, REST_MOTION, REST_LIMIT = 0.15, 0.05, math.radians(0.01), 1.0
+# A rotor still swinging at the limit rests at the bottom of the well it swings in (drive.hardware: the model's
+# unpowered minimum from the last look) if it stayed within REST_BAND of it over the last REST_SPAN s — a swing in
+# one well (the wells of the iron prototype lie 9-14° apart), not a tumble from well to well.
+REST_SPAN, REST_BAND = 0.3, math.radians(1.0)
 BANDWIDTH = 2 * math.pi * 3  # rad/s: the servo's closed-loop natural frequency on hardware (a 5 ms loop, ~1 cycle late)
 
 
@@ -45,7 +61,9 @@ class Session:
     :class:`~spherestep.hardware.motor_emulator.Truth` at the loop's last cycle (the servo still holding) and
     ``final`` 0.15 s after the end (the coils off: an iron motor's detent moves the rotor into its nearest well),
     the device's ``watchdog`` (s) and when it ``started`` (``time.monotonic()``); with the firmware in QEMU its
-    ``step_cost`` ``(steps, mean, max)`` in instructions per control step that drove the coils."""
+    ``step_cost`` ``(steps, mean, max)`` in instructions per control step that drove the coils; ``rest`` the
+    :class:`Rest` watched after the coils went off (the emulated rotor's truth, or on a port the loop's estimate
+    from the device's readings; ``None`` when the watch could not be made)."""
 
     report: ServoReport
     trajectory: Trajectory
@@ -55,6 +73,7 @@ class Session:
     started: float | None = None
     held: object | None = None
     step_cost: tuple | None = None
+    rest: Rest | None = None
 
     @property
     def reference(self):
@@ -70,10 +89,43 @@ class Session:
         return float(so3.distance(end.R, self.trajectory.end))
 
     def drift_after_off(self) -> float | None:
-        """How far (rad) the emulated rotor moved in the 0.15 s after the coils went off (None on hardware)."""
-        if self.held is None or self.final is None:
+        """How far (rad) the rotor moved from the loop's last cycle to where it was last watched after the coils
+        went off (:attr:`rest`; without a watch, the emulated rotor ``OFF_FIRST`` s after: :attr:`final`; None
+        when neither was seen)."""
+        if not self.report.orientations or (self.rest is None and self.final is None):
             return None
-        return float(so3.distance(self.final.R, self.held.R))
+        last = self.held.R if self.held is not None else self.report.orientations[-1]
+        seen = self.rest.samples[-1][1] if self.rest is not None else self.final.R
+        return float(so3.distance(seen, last))
+
+
+@dataclass(frozen=True)
+class Rest:
+    """The rotor watched after the coils went off (module constants ``OFF_FIRST`` … ``REST_LIMIT``): ``samples``
+    ``[(device time s, R)]``, ``at_rest`` whether it came to rest (else it was still moving at the limit) and the
+    ``speed`` (rad/s) over the last interval."""
+
+    samples: list
+    at_rest: bool
+    speed: float
+
+
+def watch_rest(sample, wait) -> Rest:
+    """Watch the rotor after the coils went off: ``wait(s)`` lets time pass, ``sample()`` gives ``(device time s,
+    R)``; stops at rest or after ``REST_LIMIT`` s (module constants)."""
+    wait(OFF_FIRST)
+    samples, calm, waited = [sample()], 0, OFF_FIRST
+    while waited < REST_LIMIT - 1e-9:
+        wait(REST_EVERY)
+        waited += REST_EVERY
+        samples.append(sample())
+        moved = float(so3.distance(samples[-1][1], samples[-2][1]))
+        calm = calm + 1 if moved <= REST_MOTION else 0
+        if calm >= 2:
+            break
+    span = samples[-1][0] - samples[-2][0] if len(samples) > 1 else 0.0
+    speed = float(so3.distance(samples[-1][1], samples[-2][1])) / span if span > 0 else math.nan
+    return Rest(samples, calm >= 2, speed)
 
 
 def turn_reference(start, axis, angle: float, duration: float, delay: float = 0.0) -> Trajectory:
@@ -91,7 +143,8 @@ def turn_reference(start, axis, angle: float, duration: float, delay: float = 0.
 def servo_session(design, trajectory: Trajectory, duration: float, *, port: str | None = None, emulate: bool = False,
                   lockstep: bool = False, rate: float = LOOP_RATE, log=None, status=None, faults=None, sensors=None, model=None, drive=None,
                   R0=None, watchdog_ms: int | None = None, max_late: float | None = None,
-                  truth_every: float = 0.05, plant=None, cores: bool | None = None, firmware: str = "python") -> Session:
+                  truth_every: float = 0.05, plant=None, cores: bool | None = None, firmware: str = "python",
+                  watch: bool = False) -> Session:
     """Run the servo for ``duration`` s following ``trajectory`` (a :class:`~spherestep.control.Trajectory`;
     :meth:`~spherestep.control.Trajectory.hold` for a pose) on the controller at
     ``port``, or with ``emulate`` on the emulated motor (``faults`` a
@@ -110,7 +163,8 @@ def servo_session(design, trajectory: Trajectory, duration: float, *, port: str 
     iron ignored, for comparison). ``firmware`` (with ``emulate``, not ``lockstep``): ``"python"`` the Python
     device on a pseudo-terminal (:class:`~spherestep.hardware.motor_emulator.MotorPty`), ``"qemu"`` the firmware
     itself in QEMU (:class:`~spherestep.hardware.qemu.QemuMotor`; its control step's instructions in
-    :attr:`Session.step_cost`)."""
+    :attr:`Session.step_cost`). With ``watch`` the rotor is watched after the coils go off until it rests
+    (:func:`watch_rest`, :attr:`Session.rest`; what a move's end is judged by: ``drive.hardware``)."""
     from ..dynamics import Rotor
     from ..magnetics import design_model
     from ..sensing import default_array, field_model
@@ -134,10 +188,10 @@ def servo_session(design, trajectory: Trajectory, duration: float, *, port: str 
     estimator = field_model(design, sensors.positions, cores).estimator(sensors)
     estimate = FieldTracker(estimator, R0, drive)
     controller = GeometricPD(rotor.inertia, bandwidth=BANDWIDTH, rate=rate, damping=rotor.damping)
-    law = ServoLaw(model, trajectory, controller, limits=wire_limits(drive), sensor_rate=rate, delay=DELAY,
-                   observer_bandwidth=rate)
     options = {} if max_late is None else {"max_late": max_late}
     kind = "port" if not emulate else "lockstep" if lockstep else "qemu" if firmware == "qemu" else "pty"
+    law = ServoLaw(model, trajectory, controller, limits=wire_limits(drive), sensor_rate=rate, delay=DELAY,
+                   observer_bandwidth=rate, lead=LEAD / rate, current_lag=current_lag(kind))
     truth: list = []
     held: list = [None]  # the truth at the latest cycle
     with connect(design, kind, port=port, plant=model if plant is None else plant, limits=drive, sensors=sensors,
@@ -153,11 +207,53 @@ def servo_session(design, trajectory: Trajectory, duration: float, *, port: str 
 
         report = run_servo(conn.link, estimate, law, duration=duration, rate=rate, log=log, status=observe,
                            **conn.timing, **options)
-        if conn.truth is None:
-            return Session(report, trajectory, [], None)
-        final = conn.release(0.15)  # the device runs on: a watchdog trip after a lost link lands in the truth
+        if conn.truth is None:  # a board: the rest from its own readings, estimated, while the link still answers
+            return Session(report, trajectory, [], None,
+                           rest=_rest_on_port(conn.link, estimate, report) if watch else None)
+        seen: list = []  # the truth at each look; the first, OFF_FIRST s after the end, is the session's final
+
+        def sample():
+            seen.append(conn.truth())
+            return seen[-1].t, seen[-1].R
+
+        # the first release sends OFF; the device runs on (a watchdog trip after a lost link lands in the truth)
+        if watch:
+            rest = watch_rest(sample, conn.release)
+        else:
+            conn.release(OFF_FIRST)
+            sample()
+            rest = None
         cost = conn.step_cost() if conn.step_cost is not None else None
-    return Session(report, trajectory, truth, final, conn.watchdog, conn.started, held[0], cost)
+    return Session(report, trajectory, truth, seen[0], conn.watchdog, conn.started, held[0], cost, rest)
+
+
+def current_lag(kind: str) -> float:
+    """The time constant (s) the coil currents of a ``kind`` of device (:func:`~spherestep.drive.connect.connect`'s)
+    follow their setpoints with: the emulated motor's device's current loop, ``1/ω_c`` =
+    ``period / CURRENT_BANDWIDTH`` (0.5 ms at its 4 kHz, 2 ms for the firmware in QEMU at 1 kHz); 0 (no
+    pre-emphasis) on a board, whose HELLO does not report its loop's bandwidth."""
+    from ..hardware.motor_emulator import CURRENT_BANDWIDTH, DEVICE_PERIOD
+    from .connect import QEMU_PERIOD
+
+    if kind == "port":
+        return 0.0
+    period = QEMU_PERIOD if kind == "qemu" else DEVICE_PERIOD
+    return period / CURRENT_BANDWIDTH
+
+
+def _rest_on_port(link, estimate, report) -> Rest | None:
+    """:func:`watch_rest` on a board's readings (``READ``, coils off), estimated from the loop's last estimate;
+    None when the loop never ran or the link no longer answers."""
+    import time as clock
+
+    from ..hardware import LinkError
+
+    if not report.orientations or report.device_start is None:
+        return None
+    try:
+        return watch_rest(lambda: (lambda state: (state.time_us * 1e-6, estimate(state)))(link.read()), clock.sleep)
+    except (LinkError, ComputationError):
+        return None
 
 
 def move_on_hardware(design, axis, angle: float, *, duration: float | None = None, port: str | None = None,

@@ -317,7 +317,7 @@ def drive_turn(design, axis, angle_rad: float, *, mode: str = "servo", backend: 
                limits=None, duration: float | None = None, sensor: str = "ideal", sensor_noise: float = 0.0,
                port: str | None = None, rate: float | None = None, tolerance: float = TOLERANCE, seed: int = 0,
                rates=None, log=None, progress: Callable[[str], None] | None = None,
-               firmware: str = "python") -> DriveResult:
+               firmware: str = "python", end: str = "hold", hold: float | None = None) -> DriveResult:
     """Drive a turn of ``angle_rad`` about ``axis`` (fixed frame) in ``mode`` on ``backend`` (module docstring).
 
     ``model``/``limits``: default the design's own (:func:`spherestep.magnetics.design_model`). ``duration`` (s):
@@ -329,12 +329,20 @@ def drive_turn(design, axis, angle_rad: float, *, mode: str = "servo", backend: 
     ``rates``: the ramped cruise rates tried. ``firmware`` (backend ``"emulated"``): the device behind the line,
     ``"python"`` or ``"qemu"`` (:func:`~spherestep.drive.session.servo_session`; its rate then defaults to
     :data:`~spherestep.drive.session.QEMU_RATE`).
+    ``end`` (emulated motor or port): ``"hold"`` or ``"park"``, how the move ends before the coils go off
+    and ``hold`` s it is held (default 0.5; :func:`~spherestep.drive.hardware.drive_on_hardware`: hold is judged
+    where the servo holds the rotor, park where it rests in the predicted well with the coils off).
     ``tolerance`` (rad): a result is :attr:`~DriveResult.ok` only within it. ``progress(text)`` hears each stage.
     """
     check_options(mode, backend, duration=duration, sensor=sensor, sensor_noise=sensor_noise, port=port, rate=rate)
     if firmware != "python" and backend != "emulated":
         raise bad_value("firmware", "python unless backend='emulated' (the firmware in QEMU drives the emulated "
                         "motor)", firmware)
+    if hold is not None and backend == "simulated":
+        raise bad_value("hold", "left out on the simulated motor (its coils never go off)", hold)
+    if end != "hold" and backend == "simulated":
+        raise bad_value("end", "hold on the simulated motor (park ends a move on an emulated motor or a port, "
+                        "where the coils go off)", end)
     chosen = choose_model(design, model, limits)
     if backend != "simulated":
         from ..hardware import LOOP_RATE
@@ -344,7 +352,8 @@ def drive_turn(design, axis, angle_rad: float, *, mode: str = "servo", backend: 
         default = QEMU_RATE if firmware == "qemu" else LOOP_RATE
         return drive_on_hardware(design, axis, angle_rad, chosen, duration=duration, port=port,
                                  emulate=backend == "emulated", rate=default if rate is None else rate, log=log,
-                                 tolerance=tolerance, progress=progress, firmware=firmware)
+                                 tolerance=tolerance, progress=progress, firmware=firmware, end=end,
+                                 hold=hold)
     job = Turn(design, axis, angle_rad, chosen, tolerance, progress)
     if duration is not None:
         check_duration(design, job.axis, job.angle, chosen, duration, start=job.start)

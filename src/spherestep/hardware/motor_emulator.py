@@ -16,7 +16,9 @@
   there, while in lockstep, whose truth is read every cycle, it did not),
   with ``K`` and ``b`` at the orientation predicted for the middle of the step (``torque_cache``, passed in: the
   control room's :class:`~spherestep.control.ModelCache`, the servo law's cache, re-evaluated when that
-  orientation has turned more than ``K_REUSE``) and ``ī`` the coils' mean current over it; in between, the sensors see
+  orientation has turned more than ``K_REUSE`` and carried to first order about it in between: held constant, the
+  iron's detent torque lagged the rotor and pumped energy — released unpowered 0.11° off a well, the rotor swung
+  out to 3° in 3 s; to first order it keeps its 0.11°) and ``ī`` the coils' mean current over it; in between, the sensors see
   :meth:`EmulatedMotor.orientation`, the last step continued to second order.
 * Magnetometers: ``field`` (passed in): the sensing room's :func:`~spherestep.sensing.field_model` of the design, the one the
   simulated Hall sensor reads and the session's estimator fits: the rotor's field table, on an iron design the
@@ -85,6 +87,9 @@ class MotorFaults:
         return float(delay) if since <= t < until else 0.0
 
 
+DEVICE_PERIOD = 2.5e-4  # s: the emulated motor's device period (its current loop at 4 kHz)
+
+
 class EmulatedMotor:
     """Coils, rotor and magnetometers of ``design`` under ``model`` (a torque model with ``torque_matrix``);
     see the module. ``sensors`` a :class:`~spherestep.sensing.SensorArray`; ``rotor`` (``step``, ``inertia``,
@@ -93,7 +98,7 @@ class EmulatedMotor:
     ``drive`` the :class:`~spherestep.electrics.DriveLimits`; ``R0`` the start orientation."""
 
     def __init__(self, design, model, sensors, *, rotor, field, torque_cache, drive=None,
-                 current_noise: float = 0.002, R0=None, faults: MotorFaults | None = None, period: float = 2.5e-4,
+                 current_noise: float = 0.002, R0=None, faults: MotorFaults | None = None, period: float = DEVICE_PERIOD,
                  torque_refresh: float = 2e-3, seed: int = 0):
         self.design, self.model, self.sensors = design, model, sensors
         self.rotor = rotor
@@ -202,7 +207,7 @@ class EmulatedMotor:
         if h <= 0:
             return
         mid = so3.exp(0.5 * h * self.w) @ self.R
-        K, b = self.torque_cache.at(mid)
+        K, b = self.torque_cache.at(mid, slope=True)  # first order about the anchor (module docstring)
         tau = (b + K @ self.drive_limits.per_unit(self._charge / h))[None]
         R, w, _ = self.rotor.step(self.R[None], self.w[None], lambda _R: tau, h, tau)
         self.alpha = (w[0] - self.w) / h

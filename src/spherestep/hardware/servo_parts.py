@@ -26,15 +26,21 @@ from __future__ import annotations
 import numpy as np
 
 from .. import so3
+from .limits import CurrentLimits
 from .servo import ServoFault
 
 CURRENT_ROOM, POWER_ROOM = 0.99, 0.98  # the allocation keeps 1 % below the current limit, 2 % below the power
+MAX_DUTY = CurrentLimits.max_duty  # the bridge's largest duty (the device's and the firmware's: 0.95)
 
 
-def wire_limits(drive):
-    """``drive`` (a :class:`~spherestep.control.DriveLimits`) with ``CURRENT_ROOM`` of its current and
-    ``POWER_ROOM`` of its supply's power: what the law may allocate so that the mA on the wire stay within."""
-    return drive.replace(max_current=CURRENT_ROOM * drive.max_current, supply_power=POWER_ROOM * drive.supply_power)
+def wire_limits(drive, max_duty: float = MAX_DUTY):
+    """``drive`` (a :class:`~spherestep.control.DriveLimits`) with ``CURRENT_ROOM`` of its current,
+    ``POWER_ROOM`` of its supply's power and ``max_duty`` of its supply's voltage (the most the bridge applies,
+    :class:`~spherestep.hardware.limits.CurrentLimits`' ``max_duty``): what the law may allocate so that the mA
+    on the wire stay within and the coil can follow. The law's voltage box is then ``|R I_n c + e| ≤ d_max V``
+    (a coil holds at most ``d_max V / R``, 0.95 of the ``V / R`` its current limit allows on the prototype)."""
+    return drive.replace(max_current=CURRENT_ROOM * drive.max_current, supply_power=POWER_ROOM * drive.supply_power,
+                         supply_voltage=max_duty * drive.supply_voltage)
 
 
 class FieldTracker:
