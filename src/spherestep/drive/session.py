@@ -91,7 +91,8 @@ def turn_reference(start, axis, angle: float, duration: float, delay: float = 0.
 def servo_session(design, trajectory: Trajectory, duration: float, *, port: str | None = None, emulate: bool = False,
                   lockstep: bool = False, rate: float = LOOP_RATE, log=None, status=None, faults=None, sensors=None, model=None, drive=None,
                   R0=None, watchdog_ms: int | None = None, max_late: float | None = None,
-                  truth_every: float = 0.05, plant=None, cores: bool | None = None, firmware: str = "python") -> Session:
+                  truth_every: float = 0.05, plant=None, cores: bool | None = None, firmware: str = "python",
+                  plant_rotor=None, sensor_errors=None) -> Session:
     """Run the servo for ``duration`` s following ``trajectory`` (a :class:`~spherestep.control.Trajectory`;
     :meth:`~spherestep.control.Trajectory.hold` for a pose) on the controller at
     ``port``, or with ``emulate`` on the emulated motor (``faults`` a
@@ -110,7 +111,10 @@ def servo_session(design, trajectory: Trajectory, duration: float, *, port: str 
     iron ignored, for comparison). ``firmware`` (with ``emulate``, not ``lockstep``): ``"python"`` the Python
     device on a pseudo-terminal (:class:`~spherestep.hardware.motor_emulator.MotorPty`), ``"qemu"`` the firmware
     itself in QEMU (:class:`~spherestep.hardware.qemu.QemuMotor`; its control step's instructions in
-    :attr:`Session.step_cost`)."""
+    :attr:`Session.step_cost`). ``plant_rotor`` (with ``emulate``) the emulated rotor as built (a
+    :class:`~spherestep.dynamics.Rotor`; default the design's with damping :data:`EMULATED_DAMPING`, which the
+    controller assumes either way) and ``sensor_errors`` its magnetometers as built
+    (:class:`~spherestep.sensing.SensorErrors`; the estimator keeps the nominal ``sensors``)."""
     from ..dynamics import Rotor
     from ..magnetics import design_model
     from ..sensing import default_array, field_model
@@ -122,6 +126,11 @@ def servo_session(design, trajectory: Trajectory, duration: float, *, port: str 
         raise bad_value("port", "a serial device, or emulate=True (one of the two)", port)
     if lockstep and not emulate:
         raise bad_value("lockstep", "used only with emulate=True", lockstep)
+    for name, value in (("plant_rotor", plant_rotor), ("sensor_errors", sensor_errors)):
+        if value is not None and not emulate:
+            raise bad_value(name, "used only with emulate=True (the motor as built is the emulated one)", value)
+    if plant_rotor is not None and not isinstance(plant_rotor, Rotor):
+        raise bad_value("plant_rotor", "a spherestep.dynamics.Rotor (or None)", type(plant_rotor).__name__)
     if firmware not in FIRMWARES or (firmware != "python" and (not emulate or lockstep)):
         raise bad_value("firmware", "python, or qemu with emulate=True and no lockstep", firmware)
     sensors = default_array(design, 8) if sensors is None else sensors
@@ -141,7 +150,8 @@ def servo_session(design, trajectory: Trajectory, duration: float, *, port: str 
     truth: list = []
     held: list = [None]  # the truth at the latest cycle
     with connect(design, kind, port=port, plant=model if plant is None else plant, limits=drive, sensors=sensors,
-                 R0=R0, faults=faults, watchdog_ms=watchdog_ms, rotor=rotor) as conn:
+                 R0=R0, faults=faults, watchdog_ms=watchdog_ms, rotor=rotor if plant_rotor is None else plant_rotor,
+                 sensor_errors=sensor_errors) as conn:
         observe = status
         if conn.truth is not None:
             def observe(t, R, w, currents):
