@@ -175,10 +175,26 @@ class RotorFit:
         return float(np.sqrt(np.mean((y - X @ np.array([self.inertia, self.damping, self.friction, k])) ** 2)))
 
     def to_dict(self) -> dict:
+        """The fit as plain numbers (SI); :meth:`from_dict` reads it back."""
         return {"inertia_kg_m2": self.inertia, "damping_N_m_s": self.damping, "friction_N_m": self.friction,
                 "inertia_std": self.std[0], "damping_std": self.std[1], "friction_std": self.std[2],
                 "residual_N_m": self.sigma, "equations": self.equations, "windows": self.windows,
-                "current_lag_s": self.current_lag, "current_lag_std_s": self.lag_std, "rejected_windows": self.rejected}
+                "current_lag_s": self.current_lag, "current_lag_std_s": self.lag_std, "rejected_windows": self.rejected,
+                "period_s": self.period}
+
+    @classmethod
+    def from_dict(cls, data: dict) -> RotorFit:
+        """The fit from :meth:`to_dict`'s dict; InputError naming a missing or bad key."""
+        try:
+            return cls(float(data["inertia_kg_m2"]), float(data["damping_N_m_s"]), float(data["friction_N_m"]),
+                       (float(data["inertia_std"]), float(data["damping_std"]), float(data["friction_std"])),
+                       float(data["residual_N_m"]), int(data["equations"]), int(data["windows"]),
+                       float(data["current_lag_s"]), float(data["current_lag_std_s"]), float(data["period_s"]),
+                       int(data["rejected_windows"]))
+        except KeyError as exc:
+            raise bad_value(str(exc.args[0]), "a key of RotorFit.to_dict()", "missing") from None
+        except (TypeError, ValueError):
+            raise bad_value("rotor fit", "the numbers of RotorFit.to_dict()", "malformed values") from None
 
 
 def _stack(model, series, options) -> tuple[np.ndarray, np.ndarray]:

@@ -137,12 +137,34 @@ class ArrayCalibration:
         return CalibratedEstimator(inner, self)
 
     def to_dict(self, degrees: bool = True) -> dict:
+        """The calibration as plain numbers (angles in degrees, ``degrees=False`` radians); :meth:`from_dict` reads
+        it back."""
         k = 180.0 / math.pi if degrees else 1.0
         unit = "deg" if degrees else "rad"
         return {"references": self.references, "fitted_gains": self.fitted_gains,
-                f"rotation_angle_{unit}": self.angle * k, "rotation_vector_" + unit: (so3.log_single(self.rotation) * k).tolist(),
+                f"rotation_angle_{unit}": self.angle * k, f"rotation_vector_{unit}": (so3.log_single(self.rotation) * k).tolist(),
                 f"rotation_std_{unit}": (self.rotation_std * k).tolist(), "offsets_T": self.offsets.tolist(),
                 "offsets_std_T": self.offsets_std.tolist(), "gains": self.gains.tolist(), "residual_T": self.residual_T}
+
+    @classmethod
+    def from_dict(cls, data: dict) -> ArrayCalibration:
+        """The calibration from :meth:`to_dict`'s dict (either unit); InputError naming a missing or bad key."""
+        unit = "deg" if "rotation_vector_deg" in data else "rad"
+        k = math.pi / 180.0 if unit == "deg" else 1.0
+        try:
+            offsets = np.asarray(data["offsets_T"], dtype=float)
+            out = cls(offsets, np.asarray(data["gains"], dtype=float),
+                      so3.exp(np.asarray(data[f"rotation_vector_{unit}"], dtype=float) * k),
+                      np.asarray(data["offsets_std_T"], dtype=float),
+                      np.asarray(data[f"rotation_std_{unit}"], dtype=float) * k, float(data["residual_T"]),
+                      int(data["references"]), bool(data["fitted_gains"]))
+        except KeyError as exc:
+            raise bad_value(str(exc.args[0]), "a key of ArrayCalibration.to_dict()", "missing") from None
+        except (TypeError, ValueError):
+            raise bad_value("sensor calibration", "the numbers of ArrayCalibration.to_dict()", "malformed values") from None
+        if offsets.ndim != 2 or offsets.shape[1] != 3 or out.gains.shape != offsets.shape:
+            raise bad_value("offsets_T", "per-sensor offsets and gains of shape (S, 3)", f"shape {offsets.shape}")
+        return out
 
 
 @dataclass(frozen=True, eq=False)
