@@ -63,7 +63,8 @@ class Session:
     the device's ``watchdog`` (s) and when it ``started`` (``time.monotonic()``); with the firmware in QEMU its
     ``step_cost`` ``(steps, mean, max)`` in instructions per control step that drove the coils; ``rest`` the
     :class:`Rest` watched after the coils went off (the emulated rotor's truth, or on a port the loop's estimate
-    from the device's readings; ``None`` when the watch could not be made)."""
+    from the device's readings; ``None`` when the watch could not be made); ``after`` what the session's
+    ``after`` returned."""
 
     report: ServoReport
     trajectory: Trajectory
@@ -74,6 +75,7 @@ class Session:
     held: object | None = None
     step_cost: tuple | None = None
     rest: Rest | None = None
+    after: object | None = None
 
     @property
     def reference(self):
@@ -144,7 +146,8 @@ def servo_session(design, trajectory: Trajectory, duration: float, *, port: str 
                   lockstep: bool = False, rate: float = LOOP_RATE, log=None, status=None, faults=None, sensors=None, model=None, drive=None,
                   R0=None, watchdog_ms: int | None = None, max_late: float | None = None,
                   truth_every: float = 0.05, plant=None, cores: bool | None = None, firmware: str = "python",
-                  watch: bool = False) -> Session:
+                  watch: bool = False, plant_rotor=None, sensor_errors=None, sensor_calibration=None,
+                  after=None) -> Session:
     """Run the servo for ``duration`` s following ``trajectory`` (a :class:`~spherestep.control.Trajectory`;
     :meth:`~spherestep.control.Trajectory.hold` for a pose) on the controller at
     ``port``, or with ``emulate`` on the emulated motor (``faults`` a
@@ -164,10 +167,17 @@ def servo_session(design, trajectory: Trajectory, duration: float, *, port: str 
     device on a pseudo-terminal (:class:`~spherestep.hardware.motor_emulator.MotorPty`), ``"qemu"`` the firmware
     itself in QEMU (:class:`~spherestep.hardware.qemu.QemuMotor`; its control step's instructions in
     :attr:`Session.step_cost`). With ``watch`` the rotor is watched after the coils go off until it rests
-    (:func:`watch_rest`, :attr:`Session.rest`; what a move's end is judged by: ``drive.hardware``)."""
+    (:func:`watch_rest`, :attr:`Session.rest`; what a move's end is judged by: ``drive.hardware``). ``plant_rotor``
+    (with ``emulate``) the emulated rotor as built (a
+    :class:`~spherestep.dynamics.Rotor`; default the design's with damping :data:`EMULATED_DAMPING`, which the
+    controller assumes either way) and ``sensor_errors`` its magnetometers as built
+    (:class:`~spherestep.sensing.SensorErrors`; the estimator keeps the nominal ``sensors``). ``sensor_calibration``
+    (:class:`~spherestep.sensing.ArrayCalibration`): the estimator reads through it. ``after(conn)`` is called on the
+    open :class:`~spherestep.drive.Connection` once the loop has ended well (every coil off), before it is let go;
+    its result is :attr:`Session.after`."""
     from ..dynamics import Rotor
     from ..magnetics import design_model
-    from ..sensing import default_array, field_model
+    from ..sensing import ArrayCalibration, default_array, field_model
 
     if not isinstance(trajectory, Trajectory):
         raise bad_value("trajectory", "a spherestep.control.Trajectory (Trajectory.hold(R) for a pose)",
@@ -176,6 +186,11 @@ def servo_session(design, trajectory: Trajectory, duration: float, *, port: str 
         raise bad_value("port", "a serial device, or emulate=True (one of the two)", port)
     if lockstep and not emulate:
         raise bad_value("lockstep", "used only with emulate=True", lockstep)
+    for name, value in (("plant_rotor", plant_rotor), ("sensor_errors", sensor_errors)):
+        if value is not None and not emulate:
+            raise bad_value(name, "used only with emulate=True (the motor as built is the emulated one)", value)
+    if plant_rotor is not None and not isinstance(plant_rotor, Rotor):
+        raise bad_value("plant_rotor", "a spherestep.dynamics.Rotor (or None)", type(plant_rotor).__name__)
     if firmware not in FIRMWARES or (firmware != "python" and (not emulate or lockstep)):
         raise bad_value("firmware", "python, or qemu with emulate=True and no lockstep", firmware)
     sensors = default_array(design, 8) if sensors is None else sensors
@@ -185,7 +200,13 @@ def servo_session(design, trajectory: Trajectory, duration: float, *, port: str 
         drive = own.limits if drive is None else drive
     R0 = trajectory.start if R0 is None else so3.as_rotations(R0).reshape(3, 3)
     rotor = Rotor.from_design(design, damping=EMULATED_DAMPING)
-    estimator = field_model(design, sensors.positions, cores).estimator(sensors)
+    if sensor_calibration is None:
+        estimator = field_model(design, sensors.positions, cores).estimator(sensors)
+    elif isinstance(sensor_calibration, ArrayCalibration):
+        estimator = sensor_calibration.estimator(design, sensors, cores)
+    else:
+        raise bad_value("sensor_calibration", "a spherestep.sensing.ArrayCalibration (or None)",
+                        type(sensor_calibration).__name__)
     estimate = FieldTracker(estimator, R0, drive)
     controller = GeometricPD(rotor.inertia, bandwidth=BANDWIDTH, rate=rate, damping=rotor.damping)
     options = {} if max_late is None else {"max_late": max_late}
@@ -195,7 +216,8 @@ def servo_session(design, trajectory: Trajectory, duration: float, *, port: str 
     truth: list = []
     held: list = [None]  # the truth at the latest cycle
     with connect(design, kind, port=port, plant=model if plant is None else plant, limits=drive, sensors=sensors,
-                 R0=R0, faults=faults, watchdog_ms=watchdog_ms, rotor=rotor) as conn:
+                 R0=R0, faults=faults, watchdog_ms=watchdog_ms, rotor=rotor if plant_rotor is None else plant_rotor,
+                 sensor_errors=sensor_errors) as conn:
         observe = status
         if conn.truth is not None:
             def observe(t, R, w, currents):
@@ -207,9 +229,10 @@ def servo_session(design, trajectory: Trajectory, duration: float, *, port: str 
 
         report = run_servo(conn.link, estimate, law, duration=duration, rate=rate, log=log, status=observe,
                            **conn.timing, **options)
+        extra = after(conn) if after is not None and report.outcome == "done" else None
         if conn.truth is None:  # a board: the rest from its own readings, estimated, while the link still answers
             return Session(report, trajectory, [], None,
-                           rest=_rest_on_port(conn.link, estimate, report) if watch else None)
+                           rest=_rest_on_port(conn.link, estimate, report) if watch else None, after=extra)
         seen: list = []  # the truth at each look; the first, OFF_FIRST s after the end, is the session's final
 
         def sample():
@@ -224,7 +247,7 @@ def servo_session(design, trajectory: Trajectory, duration: float, *, port: str 
             sample()
             rest = None
         cost = conn.step_cost() if conn.step_cost is not None else None
-    return Session(report, trajectory, truth, seen[0], conn.watchdog, conn.started, held[0], cost, rest)
+    return Session(report, trajectory, truth, seen[0], conn.watchdog, conn.started, held[0], cost, rest, extra)
 
 
 def current_lag(kind: str) -> float:

@@ -15,15 +15,17 @@
   pseudo-terminal, where nothing else brings the rotor up to date, and the servo on iron tracked within ~10°
   there, while in lockstep, whose truth is read every cycle, it did not),
   with ``K`` and ``b`` at the orientation predicted for the middle of the step (``torque_cache``, passed in: the
-  control room's :class:`~spherestep.control.ModelCache`, the servo law's cache, re-evaluated when that
-  orientation has turned more than ``K_REUSE`` and carried to first order about it in between: held constant, the
-  iron's detent torque lagged the rotor and pumped energy — released unpowered 0.11° off a well, the rotor swung
-  out to 3° in 3 s; to first order it keeps its 0.11°) and ``ī`` the coils' mean current over it; in between, the sensors see
+  control room's :class:`~spherestep.control.ModelCache`, the servo law's cache; the drive room builds it exact,
+  ``reuse=0``, re-evaluated every step: reused within ``K_REUSE`` = 0.11° the iron detent's 230 N·m/rad made the
+  emulated torque a saw-tooth of up to 0.46 N·m along a move, half the residual of the rotor's identification)
+  and ``ī`` the coils' mean current over it; in between, the sensors see
   :meth:`EmulatedMotor.orientation`, the last step continued to second order.
 * Magnetometers: ``field`` (passed in): the sensing room's :func:`~spherestep.sensing.field_model` of the design, the one the
   simulated Hall sensor reads and the session's estimator fits: the rotor's field table, on an iron design the
   cores it magnetises, and the coils at the measured currents (on iron each winding with its own core), read in
-  each sensor's own axes, with the part's noise, quantised to its LSB and clipped to ±32767 counts.
+  each sensor's own axes, through each chip's own offset and gain (``chips``: the drive room's
+  :class:`~spherestep.sensing.SensorErrors`, whose array ``sensors`` and ``field`` are then the built, turned one),
+  with the part's noise, quantised to its LSB and clipped to ±32767 counts.
 
 :class:`MotorFaults` injects the faults the servo must survive: an open coil, a coil stuck at full current (a
 shorted bridge, which only the supply cut stops), a frozen current reading, a magnetometer that stops (stale)
@@ -95,12 +97,15 @@ class EmulatedMotor:
     see the module. ``sensors`` a :class:`~spherestep.sensing.SensorArray`; ``rotor`` (``step``, ``inertia``,
     ``damping``), ``field`` (``field(R, c) -> (S, 3)`` T at the sensors, currents per unit) and ``torque_cache``
     (``at(R) -> (K, b)``) the parts the drive room builds (:func:`spherestep.drive.connect.emulated_motor`);
-    ``drive`` the :class:`~spherestep.electrics.DriveLimits`; ``R0`` the start orientation."""
+    ``drive`` the :class:`~spherestep.electrics.DriveLimits`; ``R0`` the start orientation; ``chips`` (``local
+    (S, 3) -> readings``, T) each chip's own error on the field in its axes before the noise (the drive room passes
+    :meth:`spherestep.sensing.SensorErrors.read`; ``None``: exact)."""
 
     def __init__(self, design, model, sensors, *, rotor, field, torque_cache, drive=None,
                  current_noise: float = 0.002, R0=None, faults: MotorFaults | None = None, period: float = DEVICE_PERIOD,
-                 torque_refresh: float = 2e-3, seed: int = 0):
+                 torque_refresh: float = 2e-3, seed: int = 0, chips=None):
         self.design, self.model, self.sensors = design, model, sensors
+        self.chips = chips
         self.rotor = rotor
         self.drive_limits = drive if drive is not None else DriveLimits()
         self.current_noise = float(current_noise)
@@ -152,6 +157,8 @@ class EmulatedMotor:
         part = self.sensors.part
         B = self.field.field(self.orientation(), self.drive_limits.per_unit(self.i))  # (S, 3), fixed frame
         local = np.einsum("sab,sa->sb", self.sensors.axes, B)  # A_sᵀ B
+        if self.chips is not None:
+            local = self.chips(local)
         local = local + part.noise_T * self.rng.standard_normal(local.shape)
         counts = np.clip(np.rint(local / part.lsb_T), -FULL_SCALE, FULL_SCALE).astype(np.int64)
         stale = 0
