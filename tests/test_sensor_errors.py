@@ -75,7 +75,7 @@ def test_emulated_magnetometers_read_the_turned_array(proto, array):
 @pytest.mark.slow
 def test_turned_array_leaves_holds_off_in_truth(proto, array):
     """Issue 37's claim, on the emulated motor in lockstep: the array turned 0.1° leaves each hold about 0.1° from
-    its target in truth while the estimate says it is within 0.02°."""
+    its target in truth while the estimate says it is within 0.02–0.03°."""
     from spherestep.control import Trajectory
     from spherestep.control.calibration import hold_orientations
     from spherestep.drive.session import servo_session
@@ -83,7 +83,7 @@ def test_turned_array_leaves_holds_off_in_truth(proto, array):
     err = SensorErrors.random(array, offset_T=0.0, bias_deg=0.1, seed=21)
     for T in hold_orientations(3, seed=21):
         s = servo_session(proto, Trajectory.hold(T), 0.6, emulate=True, lockstep=True, R0=T, sensor_errors=err)
-        assert math.degrees(s.report.end_error) < 0.02
+        assert math.degrees(s.report.end_error) < 0.03  # 0.021 worst with the delay-compensated law (issue 38 §4)
         assert 0.07 < math.degrees(s.final_error()) < 0.2
 
 
