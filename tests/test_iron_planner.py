@@ -1,7 +1,10 @@
 """The iron-aware relay planner and the many-turn verdict (issue 39): landings against brute-force minimisation,
 basins against the simulated rotor, the verdict on a design that steps and one that does not."""
 
+import json
 import math
+from dataclasses import replace
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -9,7 +12,7 @@ from scipy.optimize import minimize
 
 from spherestep import so3
 from spherestep.commutation import iron_tuning, plan_iron, supply_coils, turn, turn_targets
-from spherestep.commutation.iron_planner import SETTLE_TOL, _Landscape
+from spherestep.commutation.iron_planner import SETTLE_TOL, _Landscape, _pairs
 from spherestep.drive import many_turns, relay_planner, verdict_turns
 from spherestep.dynamics import Integrator
 from spherestep.errors import InputError
@@ -76,6 +79,51 @@ def test_a_landing_that_does_not_settle_is_refused(iron):
     R, ok = land.land(states.rotations[0], c[None])
     assert ok[0] and land.settles(states.rotations[0], c, R[0])
     assert not land.settles(states.rotations[0], c, so3.rot([0, 0, 1], 2 * SETTLE_TOL) @ R[0])
+
+
+def test_the_plans_are_the_previous_planners(iron):
+    """The speed-up (landings, margins and settling remembered per pose and mask; the settling check stopped once
+    the rotor is trapped) changes no plan: three turns (one of them with blocked steps, whose repeated poses the
+    memory serves) give the statuses, coils and landings (to 1e-6 rad) that the planner before it gave
+    (``tests/iron_plans_before.json``, from git 29370bb)."""
+    design, own, tuning = iron
+    stored = json.loads((Path(__file__).parent / "iron_plans_before.json").read_text())
+    assert stored["design"] == "prototype"
+    blocked = 0
+    for name, turn_ in stored["turns"].items():
+        plan = plan_iron(design, turn_targets(design, turn_["axis"], math.radians(turn_["angle_deg"])), own.model,
+                         limits=own.limits, tuning=tuning)
+        assert [s.status for s in plan.steps] == [s["status"] for s in turn_["steps"]], name
+        assert [{str(k): v for k, v in sorted(s.coils.items())} for s in plan.steps] == \
+            [s["coils"] for s in turn_["steps"]], name
+        assert np.abs(plan.achieved - np.array([s["achieved"] for s in turn_["steps"]])).max() < 1e-6, name
+        blocked += len(plan.failures)
+    assert blocked > 0  # the memory's case: the rotor held at one pose over several steps
+
+
+def test_the_early_settling_verdict_is_the_full_dwells(iron):
+    """The settling check's early stop (once the rotor is trapped in the landing's well) gives the verdict the full
+    dwell gives: for strict-minimum landings of the last resort's single and paired coils from a stepper state's
+    minimum, the tuned rotor integrated over the whole dwell (the tuned one, and a sixth of it, on which some do
+    not settle) ends within SETTLE_TOL exactly when :meth:`_Landscape.settles` says so."""
+    design, own, tuning = iron
+    states = design.states()
+    c0 = design.coil_currents(states.coils(0))
+    verdicts = []
+    for dwell in (tuning.dwell, tuning.dwell / 10, tuning.dwell / 40):
+        short = replace(tuning, dwell=dwell)
+        land = _Landscape(own.model, design.max_step, math.radians(1.5), 0.3, math.radians(0.1), 0.0, short)
+        here = land.land(states.rotations[0], c0[None])[0][0]
+        masks = _pairs(design, here)
+        R, ok = land.land(here, masks)
+        integrator = Integrator(own.model, short.rotor, short.dt)
+        steps = max(1, int(round(dwell / short.dt)))
+        for b in np.flatnonzero(ok)[:15]:
+            end = integrator.run(here.copy(), np.zeros(3), masks[b], dwell, record_every=steps)[0]
+            full = bool(so3.distance(end, R[b]) <= SETTLE_TOL)
+            assert land.settles(here, masks[b], R[b]) == full
+            verdicts.append(full)
+    assert any(verdicts) and not all(verdicts)
 
 
 def test_the_plan_stays_within_the_supply(iron, short_plan):

@@ -75,7 +75,11 @@ def supply_coils(limits) -> int:
 
 
 class _Landscape:
-    """The model's minima as seen from one pose: batched descents and the margin test (module docstring)."""
+    """The model's minima as seen from one pose: batched descents and the margin test (module docstring).
+
+    Each answer — a mask's landing from a pose, its margins, its settling — depends only on that pose and mask, so
+    it is remembered for the plan (keyed by their bytes): a rotor held at one pose over several steps, or a mask
+    offered again among the intermediate steps' candidates, costs no second descent."""
 
     def __init__(self, model, reach: float, margin: float, overshoot: float, land_tol: float, stiffness: float,
                  tuning=None, plants=()):
@@ -90,53 +94,99 @@ class _Landscape:
             self.integrator = Integrator(model, tuning.rotor, tuning.dt)
         self.margin, self.overshoot, self.land_tol = margin, overshoot, land_tol
         self.jiggle = so3.exp(margin * np.concatenate([np.eye(3), -np.eye(3)]))  # (6, 3, 3)
+        self.landings, self.kept, self.settled = {}, {}, {}  # (pose, mask[, R]) -> (R, ok, softest), bool, bool
+
+    @staticmethod
+    def _keys(here: np.ndarray, c: np.ndarray) -> list[bytes]:
+        pose = here.tobytes()
+        return [pose + row.tobytes() for row in c]
 
     def land(self, here: np.ndarray, c: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """``(R (B, 3, 3), ok (B,))``: the minimum descended to from ``here`` under each mask ``c (B, N)``; ``ok``
         where it converged to a strict minimum within ``reach`` of ``here``."""
-        R, _, _, H, _, converged = self.descend(self.model, np.repeat(here[None], len(c), axis=0), c)
-        ok = converged & (so3.distance(R, here) <= self.reach)
-        ok[ok] = np.linalg.eigvalsh(H[ok])[:, 0] > self.stiffness
-        return R, ok
+        keys = self._keys(here, c)
+        todo = [b for b, key in enumerate(keys) if key not in self.landings]
+        if todo:
+            R, _, _, H, _, converged = self.descend(self.model, np.repeat(here[None], len(todo), axis=0), c[todo])
+            ok = converged & (so3.distance(R, here, trusted=True) <= self.reach)
+            softest = np.full(len(todo), -np.inf)
+            softest[ok] = np.linalg.eigvalsh(H[ok])[:, 0]
+            ok &= softest > self.stiffness
+            for j, b in enumerate(todo):
+                self.landings[keys[b]] = (R[j], bool(ok[j]), float(softest[j]))
+        found = [self.landings[key] for key in keys]
+        return np.array([f[0] for f in found]).reshape(-1, 3, 3), np.array([f[1] for f in found], dtype=bool)
 
     def robust(self, here: np.ndarray, c: np.ndarray, R: np.ndarray) -> np.ndarray:
-        """Whether each landing ``R (B, 3, 3)`` of mask ``c (B, N)`` from ``here`` keeps its margins: descents from
-        ``here`` turned ``±margin`` about x, y, z and from ``R`` overshot along its step all end within
-        ``land_tol`` of ``R``."""
+        """Whether each landing ``R (B, 3, 3)`` of mask ``c (B, N)`` from ``here`` (:meth:`land`'s) keeps its
+        margins: descents from ``here`` turned ``±margin`` about x, y, z and from ``R`` overshot along its step
+        all end within ``land_tol`` of ``R``; with ``plants``, their descents from within the margin of ``here``
+        within ``margin`` of it."""
+        keys = [key + landing.tobytes() for key, landing in zip(self._keys(here, c), R)]
+        todo = np.array([b for b, key in enumerate(keys) if key not in self.kept], dtype=np.int64)
+        if len(todo):
+            for b, good in zip(todo, self._robust(here, c[todo], R[todo])):
+                self.kept[keys[b]] = bool(good)
+        return np.array([self.kept[key] for key in keys], dtype=bool)
+
+    def _robust(self, here: np.ndarray, c: np.ndarray, R: np.ndarray) -> np.ndarray:
         B = len(c)
-        step = so3.log(R @ here.T)  # (B, 3), fixed frame: R = exp(step) here
+        step = np.array([so3.log_single(m) for m in R @ here.T]).reshape(-1, 3)  # fixed frame: R = exp(step) here
         starts = np.concatenate([np.broadcast_to(self.jiggle @ here, (B, 6, 3, 3)),
                                  (so3.exp(self.overshoot * step) @ R)[:, None]], axis=1)  # (B, 7, 3, 3)
         ends, _, _, _, _, converged = self.descend(self.model, starts.reshape(-1, 3, 3).copy(),
                                                    np.repeat(c, 7, axis=0))
-        close = converged & (so3.distance(ends, np.repeat(R, 7, axis=0)) <= self.land_tol)
+        close = converged & (so3.distance(ends, np.repeat(R, 7, axis=0), trusted=True) <= self.land_tol)
         ok = close.reshape(B, 7).all(axis=1)
         for plant in self.plants:  # the pose within the margin of here, on every plant: within the margin of R
             if not ok.any():
                 break
             near = np.concatenate([here[None], self.jiggle @ here])  # (7, 3, 3)
             ends, _, _, _, _, converged = self.descend(plant, np.tile(near, (B, 1, 1)), np.repeat(c, 7, axis=0))
-            close = converged & (so3.distance(ends, np.repeat(R, 7, axis=0)) <= max(self.margin, self.land_tol))
+            apart = so3.distance(ends, np.repeat(R, 7, axis=0), trusted=True)
+            close = converged & (apart <= max(self.margin, self.land_tol))
             ok &= close.reshape(B, 7).all(axis=1)
         return ok
 
     def settles(self, here: np.ndarray, c: np.ndarray, R: np.ndarray) -> bool:
         """Whether the tuned rotor, released at rest at ``here`` under mask ``c``, ends its dwell within
-        :data:`SETTLE_TOL` of ``R`` (always true without a tuning)."""
+        :data:`SETTLE_TOL` of ``R``, :meth:`land`'s landing (always true without a tuning).
+
+        A model with compiled terms is integrated by :func:`spherestep._fast.settle.settle`, which stops once the
+        rotor is *trapped*: within ``SETTLE_TOL / 4`` of ``R`` with ``½ I|ω|² + E(R_t) − E(R) ≤ ½ k (SETTLE_TOL /
+        4)²`` (``k`` the landing's softest stiffness). Energy only falls under damping and friction, so the rotor
+        stays in that sublevel set of the well — within ``SETTLE_TOL / 4`` of ``R`` while the well is quadratic
+        that far, a factor 4 of slack — and the full dwell ends within ``SETTLE_TOL`` too
+        (``tests/test_iron_planner.py`` checks the verdicts against the full dwell). Other models run the dwell."""
         if self.tuning is None:
             return True
+        key = self._keys(here, c[None])[0]
+        landing = self.landings.get(key)
+        key += R.tobytes()
+        if key in self.settled:
+            return self.settled[key]
         steps = max(1, int(round(self.tuning.dwell / self.tuning.dt)))
-        end = self.integrator.run(here.copy(), np.zeros(3), c, self.tuning.dwell, record_every=steps)[0]
-        return bool(so3.distance(end, R) <= SETTLE_TOL)
+        softest = landing[2] if landing is not None and np.array_equal(landing[0], R) else 0.0  # R: the landing
+        packed = self.model.packed_terms(c) if softest > 0 else None
+        if packed is None:
+            end = self.integrator.run(here.copy(), np.zeros(3), c, self.tuning.dwell, record_every=steps)[0]
+        else:
+            from .._fast.settle import settle
+            from ..dynamics.rotor import YOSHIDA
+
+            rotor = self.tuning.rotor
+            end = settle(*packed[:2], np.array(here, dtype=float), *packed[2:7], rotor.inertia, rotor.damping,
+                         rotor.friction, self.tuning.dt, steps, np.array(YOSHIDA), np.ascontiguousarray(R),
+                         SETTLE_TOL / 4, 0.5 * softest * (SETTLE_TOL / 4) ** 2)[0]
+        self.settled[key] = good = bool(so3.distance(end, R, trusted=True) <= SETTLE_TOL)
+        return good
 
     def first(self, here: np.ndarray, masks: np.ndarray, R: np.ndarray, order: np.ndarray) -> int:
         """The first of the candidates ``order`` (indices into ``masks``/``R``) whose landing keeps its margins and
         settles; −1 if none."""
-        for lo in range(0, len(order), 2):  # two at a time: the nearest usually passes
-            chunk = order[lo:lo + 2]
-            for b in chunk[self.robust(here, masks[chunk], R[chunk])]:
-                if self.settles(here, masks[b], R[b]):
-                    return int(b)
+        for b in order:  # one at a time: the nearest usually passes
+            if self.robust(here, masks[b:b + 1], R[b:b + 1])[0] and self.settles(here, masks[b], R[b]):
+                return int(b)
         return -1
 
 
@@ -147,7 +197,7 @@ def _pulls(design, here, target, most) -> np.ndarray:
     """Masks drawing the rotor along the step: at each lead pose ``exp(f ω) R̃`` (``ω = log(R_i R̃ᵀ)``, ``f`` in
     :data:`LEADS`) every coil's nearest pole (polarity its pole's), the 3, 6 and ``most`` best aligned coils."""
     u, v, pol = design.rotor.centers, design.stator.centers, design.polarity
-    omega = so3.log(target @ here.T)
+    omega = so3.log_single(target @ here.T)
     poses = so3.exp(np.multiply.outer(LEADS, omega)) @ here  # (L, 3, 3)
     cos = np.einsum("lja,ka->lkj", np.einsum("lab,jb->lja", poses, u), v)  # (L, N, M): (P u_j)·v_k
     pole = np.argmax(cos, axis=2)  # (L, N) each coil's nearest pole
@@ -190,7 +240,7 @@ def _masks(design, states, target, here, current, near, reach, candidates, max_c
     with the coils energised now (not in the set) reversed, within ``most`` coils (module docstring)."""
     around = states.within(here, reach)
     if len(around):
-        around = around[np.argsort(so3.distance(states.rotations[around], target))[:candidates]]
+        around = around[np.argsort(so3.distance(states.rotations[around], target, trusted=True))[:candidates]]
     ids = np.unique(np.concatenate([near, around]).astype(np.int64))
     ranked = bool(states.counts[ids].max() > max_coils)
     sets = _activations(states, design, target, ids, max_coils, ranked)
@@ -288,8 +338,8 @@ def _step(design, states, land: _Landscape, rows: list, target, here, current, n
     """Append one step's row(s) towards ``target``; returns the new ``(here, current)`` (module docstring)."""
     masks = _masks(design, states, target, here, current, near, reach, candidates, max_coils, most)
     R, ok = land.land(here, masks)
-    gap = so3.distance(R, target)
-    stay = float(so3.distance(here, target))
+    gap = so3.distance(R, target, trusted=True)
+    stay = float(so3.distance(here, target, trusted=True))
     ahead = np.flatnonzero(ok & (gap < stay - 1e-9))
     ahead = ahead[np.argsort(gap[ahead], kind="stable")][:ROBUST_TRIES]
     b = land.first(here, masks, R, ahead)
@@ -297,13 +347,13 @@ def _step(design, states, land: _Landscape, rows: list, target, here, current, n
         rows.append((target, R[b], _coil_map(masks[b]), status))
         return R[b], masks[b]
     # intermediate masks: a robust landing that does not advance, then one that does from there
-    side = np.flatnonzero(ok & (so3.distance(R, here) > land.land_tol))
+    side = np.flatnonzero(ok & (so3.distance(R, here, trusted=True) > land.land_tol))
     for b in side[np.argsort(gap[side], kind="stable")][:ROBUST_TRIES]:
         if land.first(here, masks, R, np.array([b])) < 0:
             continue
         masks2 = _masks(design, states, target, R[b], masks[b], near, reach, candidates, max_coils, most)
         R2, ok2 = land.land(R[b], masks2)
-        gap2 = so3.distance(R2, target)
+        gap2 = so3.distance(R2, target, trusted=True)
         ahead2 = np.flatnonzero(ok2 & (gap2 < stay - 1e-9))
         b2 = land.first(R[b], masks2, R2, ahead2[np.argsort(gap2[ahead2], kind="stable")][:ROBUST_TRIES])
         if b2 >= 0:
@@ -313,7 +363,7 @@ def _step(design, states, land: _Landscape, rows: list, target, here, current, n
     # the last resort: every single coil and pair of coils facing a pole, either polarity
     wide = _pairs(design, here)
     R3, ok3 = land.land(here, wide)
-    gap3 = so3.distance(R3, target)
+    gap3 = so3.distance(R3, target, trusted=True)
     ahead3 = np.flatnonzero(ok3 & (gap3 < stay - 1e-9))
     b = land.first(here, wide, R3, ahead3[np.argsort(gap3[ahead3], kind="stable")][:ROBUST_TRIES])
     if b >= 0:
