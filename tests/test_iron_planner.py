@@ -285,3 +285,22 @@ def test_the_plan_starts_from_a_minimum_not_a_saddle():
     plan, tuning = job.plan, job.tuning
     sim = simulate(design, plan, job.chosen.model, dwell=tuning.dwell, rotor=tuning.rotor, dt=tuning.dt)
     assert sim.executed, np.degrees(sim.step_errors)
+
+
+def test_the_whole_detent_scales_with_the_coupling(iron):
+    """scaled_model's ``coupling`` scales the coupling through the cores exactly (its series are linear), so a plant
+    with detent and coupling ×1.2 has 1.2 times the whole torque with every coil off, the winding's part ×0.85;
+    without it only the pairwise part scales (the calibration's plants), ~2.6 % of the peak torque apart here."""
+    from spherestep.magnetics.mismatch import scaled_model
+
+    design, own, _ = iron
+    model = own.model
+    R = so3.random(5, np.random.default_rng(4))
+    c = np.random.default_rng(5).normal(size=(5, model.coil_count)) * 0.5
+    off = model.torque(R, np.zeros_like(c))
+    want = 1.2 * off + 0.85 * (model.torque(R, c) - off)
+    whole = scaled_model(model, winding=0.85, detent=1.2, coupling=1.2)
+    np.testing.assert_allclose(whole.torque(R, c), want, atol=1e-9 * np.abs(want).max())
+    assert np.abs(scaled_model(model, winding=0.85, detent=1.2).torque(R, c) - want).max() > 1e-3 * np.abs(want).max()
+    with pytest.raises(InputError, match="coupling"):
+        scaled_model(model, coupling=-1.0)

@@ -82,10 +82,11 @@ class _Landscape:
     offered again among the intermediate steps' candidates, costs no second descent."""
 
     def __init__(self, model, reach: float, margin: float, overshoot: float, land_tol: float, stiffness: float,
-                 tuning=None, plants=()):
+                 tuning=None, plants=(), plant_tol: float | None = None):
         from ..statics import descend
 
         self.plants = tuple(plants)
+        self.plant_tol = max(margin, land_tol) if plant_tol is None else plant_tol
         self.model, self.reach, self.descend, self.stiffness = model, reach, descend, stiffness
         self.tuning = tuning
         if tuning is not None:
@@ -121,7 +122,7 @@ class _Landscape:
         """Whether each landing ``R (B, 3, 3)`` of mask ``c (B, N)`` from ``here`` (:meth:`land`'s) keeps its
         margins: descents from ``here`` turned ``±margin`` about x, y, z and from ``R`` overshot along its step
         all end within ``land_tol`` of ``R``; with ``plants``, their descents from within the margin of ``here``
-        within ``margin`` of it."""
+        within ``plant_tol`` (default the margin) of it."""
         keys = [key + landing.tobytes() for key, landing in zip(self._keys(here, c), R)]
         todo = np.array([b for b, key in enumerate(keys) if key not in self.kept], dtype=np.int64)
         if len(todo):
@@ -138,13 +139,13 @@ class _Landscape:
                                                    np.repeat(c, 7, axis=0))
         close = converged & (so3.distance(ends, np.repeat(R, 7, axis=0), trusted=True) <= self.land_tol)
         ok = close.reshape(B, 7).all(axis=1)
-        for plant in self.plants:  # the pose within the margin of here, on every plant: within the margin of R
+        for plant in self.plants:  # the pose within the margin of here, on every plant: within plant_tol of R
             if not ok.any():
                 break
             near = np.concatenate([here[None], self.jiggle @ here])  # (7, 3, 3)
             ends, _, _, _, _, converged = self.descend(plant, np.tile(near, (B, 1, 1)), np.repeat(c, 7, axis=0))
             apart = so3.distance(ends, np.repeat(R, 7, axis=0), trusted=True)
-            close = converged & (apart <= max(self.margin, self.land_tol))
+            close = converged & (apart <= self.plant_tol)
             ok &= close.reshape(B, 7).all(axis=1)
         return ok
 
@@ -257,7 +258,7 @@ def _masks(design, states, target, here, current, near, reach, candidates, max_c
 def plan_iron(design, targets, model, *, limits=None, max_coils: int = DEFAULT_MAX_COILS,
               candidates: int = DEFAULT_CANDIDATES, max_step: float | None = None, margin: float = MARGIN,
               overshoot: float = OVERSHOOT, land_tol: float = LAND_TOL, min_stiffness: float = 0.0,
-              tuning=None, plants=(), start: int | None = None) -> Plan:
+              tuning=None, plants=(), plant_tol: float | None = None, start: int | None = None) -> Plan:
     """Commutate ``targets (n+1, 3, 3)`` on the minima of ``model``'s energy (module docstring).
 
     ``model``: a :class:`~spherestep.statics.TorqueModel` of ``design`` (the iron model of
@@ -265,9 +266,10 @@ def plan_iron(design, targets, model, *, limits=None, max_coils: int = DEFAULT_M
     supply caps the coils energised at once; default no cap beyond ``2 max_coils``); ``margin`` (rad),
     ``overshoot`` (fraction of a step) and ``land_tol`` (rad): the landing's margins; ``plants``: torque models the
     plan must also hold on (e.g. :func:`spherestep.magnetics.mismatch.scaled_model`'s winding ×0.85, detent ×1.2):
-    from within ``margin`` of the current pose each plant's minimum under the mask lies within ``margin`` of the
-    planned one, so the next step starts inside its margin again; ``start``: the stepper state whose coils hold
-    the rotor first (default nearest ``targets[0]``)."""
+    from within ``margin`` of the current pose each plant's minimum under the mask lies within ``plant_tol``
+    (rad, default ``max(margin, land_tol)``: the next step starts inside its margin again; the verdict's 0.5° or
+    less asks for masks whose minimum the plants barely move) of the planned one; ``start``: the stepper state
+    whose coils hold the rotor first (default nearest ``targets[0]``)."""
     from ..statics import equilibrium, is_torque_model
 
     targets = check_targets(targets)
@@ -296,7 +298,9 @@ def plan_iron(design, targets, model, *, limits=None, max_coils: int = DEFAULT_M
         if not is_torque_model(plant) or plant.coil_count != model.coil_count:
             raise bad_value(f"plants[{n}]", f"a torque model of the design's {model.coil_count} coils",
                             type(plant).__name__)
-    land = _Landscape(model, reach, margin, overshoot, land_tol, min_stiffness, tuning, plants)
+    if plant_tol is not None:
+        plant_tol = checks.positive(plant_tol, "plant_tol", "a positive angle in radians")
+    land = _Landscape(model, reach, margin, overshoot, land_tol, min_stiffness, tuning, plants, plant_tol)
     _, near = states.nearest(targets, k=candidates)
     rows = [(targets[0], here, coils, "ok")]
     for i in range(1, len(targets)):

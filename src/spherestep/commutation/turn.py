@@ -59,12 +59,12 @@ def turn_targets(design, axis, angle: float, steps: int | None = None) -> np.nda
 
 
 def turn(design, axis, angle: float, steps: int | None = None, planner: str = "geometric",
-         model=None, *, limits=None, tuning=None, plants=()) -> Plan:
+         model=None, *, limits=None, tuning=None, plants=(), plant_tol: float | None = None) -> Plan:
     """Plan a turn of ``angle`` rad about ``axis`` (see :func:`turn_targets`) with ``planner``:
     ``"geometric"`` (:func:`plan_geometric`), ``"potential"`` (:func:`plan_potential` on ``model``, default
     the design's :class:`~spherestep.potential.MotorPotential`) or ``"iron"`` (:func:`plan_iron` on ``model``,
     default the design's own, :func:`spherestep.magnetics.design_model`, with its ``limits`` and the relay rotor
-    ``tuning``, default :func:`iron_tuning`, and the ``plants`` it must also hold on).
+    ``tuning``, default :func:`iron_tuning`, and the ``plants`` it must also hold on, within ``plant_tol``).
 
     >>> import math
     >>> import spherestep as ss
@@ -86,7 +86,8 @@ def turn(design, axis, angle: float, steps: int | None = None, planner: str = "g
             own = design_model(design)
             model, limits = own.model, own.limits if limits is None else limits
         return plan_iron(design, targets, model, limits=limits,
-                         tuning=iron_tuning(design, model) if tuning is None else tuning, plants=plants)
+                         tuning=iron_tuning(design, model) if tuning is None else tuning, plants=plants,
+                         plant_tol=plant_tol)
     if planner == "potential":
         from ..potential import MotorPotential
         from .potential_planner import plan_potential
