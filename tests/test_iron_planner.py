@@ -304,3 +304,35 @@ def test_the_whole_detent_scales_with_the_coupling(iron):
     assert np.abs(scaled_model(model, winding=0.85, detent=1.2).torque(R, c) - want).max() > 1e-3 * np.abs(want).max()
     with pytest.raises(InputError, match="coupling"):
         scaled_model(model, coupling=-1.0)
+
+
+def test_a_plan_for_a_rate_keeps_the_coils_within_their_thermal_limits(iron, short_plan):
+    """Planned for streaming at 0.8 Hz (the iron dwell's rate) under run's default thermal limits, the 30° turn
+    passes ``ThermalLimits.check_plan`` (the plan without them keeps coil 28 on 6.25 s, over max_on = 5 s) and
+    still executes on the simulated rotor, every step within 0.5° of its planned minimum."""
+    from spherestep.drive.many_turns import run_turn
+    from spherestep.hardware import ThermalLimits
+    from spherestep.hardware.limits import ThermalLimitError
+
+    design, own, tuning = iron
+    limits = ThermalLimits()
+    with pytest.raises(ThermalLimitError, match="max_on"):
+        limits.check_plan(short_plan, 0.8)
+    plan = plan_iron(design, turn_targets(design, (0, 0, 1), math.radians(30)), own.model, limits=own.limits,
+                     tuning=tuning, thermal=limits, rate=0.8)
+    limits.check_plan(plan, 0.8)
+    outcome = run_turn(design, plan, own.model, tuning, (0, 0, 1), math.radians(30), math.radians(0.5),
+                       design.max_step)
+    assert outcome.executed and not plan.failures
+    with pytest.raises(InputError, match="rate"):
+        plan_iron(design, turn_targets(design, (0, 0, 1), 0.1), own.model, thermal=limits)
+
+
+def test_plan_refuses_a_rate_without_the_iron_planner(tmp_path, capsys):
+    from spherestep.cli import main
+
+    out = tmp_path / "p"
+    assert main(["plan", "--axis", "0,0,1", "--angle", "30", "--rate", "0.8", "--planner", "geometric", "--out",
+                 str(out)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "--rate" in err and not out.exists()

@@ -258,7 +258,8 @@ def _masks(design, states, target, here, current, near, reach, candidates, max_c
 def plan_iron(design, targets, model, *, limits=None, max_coils: int = DEFAULT_MAX_COILS,
               candidates: int = DEFAULT_CANDIDATES, max_step: float | None = None, margin: float = MARGIN,
               overshoot: float = OVERSHOOT, land_tol: float = LAND_TOL, min_stiffness: float = 0.0,
-              tuning=None, plants=(), plant_tol: float | None = None, start: int | None = None) -> Plan:
+              tuning=None, plants=(), plant_tol: float | None = None, thermal=None, rate: float | None = None,
+              start: int | None = None) -> Plan:
     """Commutate ``targets (n+1, 3, 3)`` on the minima of ``model``'s energy (module docstring).
 
     ``model``: a :class:`~spherestep.statics.TorqueModel` of ``design`` (the iron model of
@@ -269,7 +270,10 @@ def plan_iron(design, targets, model, *, limits=None, max_coils: int = DEFAULT_M
     from within ``margin`` of the current pose each plant's minimum under the mask lies within ``plant_tol``
     (rad, default ``max(margin, land_tol)``: the next step starts inside its margin again; the verdict's 0.5° or
     less asks for masks whose minimum the plants barely move) of the planned one; ``start``: the stepper state
-    whose coils hold the rotor first (default nearest ``targets[0]``)."""
+    whose coils hold the rotor first (default nearest ``targets[0]``); ``thermal`` (a
+    :class:`spherestep.hardware.ThermalLimits`) and ``rate`` (Hz): the plan will be streamed at ``rate``, so only
+    masks that keep every coil within those limits are chosen (a mask that would break them is passed over, as
+    one without margins; a step that only a hold fits keeps its coils and ``run`` refuses the plan, naming it)."""
     from ..statics import equilibrium, is_torque_model
 
     targets = check_targets(targets)
@@ -303,14 +307,19 @@ def plan_iron(design, targets, model, *, limits=None, max_coils: int = DEFAULT_M
     land = _Landscape(model, reach, margin, overshoot, land_tol, min_stiffness, tuning, plants, plant_tol)
     _, near = states.nearest(targets, k=candidates)
     rows = [(targets[0], here, coils, "ok")]
+    if (thermal is None) != (rate is None):
+        raise bad_value("thermal" if thermal is None else "rate", "given with the other (the limits, the step rate)",
+                        None)
+    fits = _fits_always if thermal is None else _Heat(thermal, checks.positive(rate, "rate", "a step rate in Hz"),
+                                                      rows).fits
     for i in range(1, len(targets)):
         here, current = _step(design, states, land, rows, targets[i], here, current, near[i], reach, candidates,
-                              max_coils, most)
+                              max_coils, most, fits=fits)
     last_near = states.nearest(targets[-1], k=candidates)[1]
     for _ in range(MAX_SETTLE_STEPS):  # the rotor lags at the end: walk on while a mask still advances
         before = len(rows)
         here, current = _step(design, states, land, rows, targets[-1], here, current, last_near, reach, candidates,
-                              max_coils, most, status=SETTLE)
+                              max_coils, most, status=SETTLE, fits=fits)
         if rows[-1][3] != SETTLE:
             del rows[before:]
             break
@@ -333,33 +342,68 @@ def _rest(model, eq, current) -> np.ndarray:
     return near.rotation[ok[np.argmin(near.energy[ok])]] if len(ok) else eq.rotation
 
 
+def _fits_always(*masks) -> bool:
+    return True
+
+
+class _Heat:
+    """The coils' thermal record along the plan being made: which masks may come next, the plan streamed at
+    ``rate`` Hz under ``limits`` (:class:`spherestep.hardware.ThermalLimits`; its guard's rule, as ``check_plan``
+    applies it: frame ``i`` held from ``i / rate`` for ``1 / rate``)."""
+
+    def __init__(self, limits, rate: float, rows: list):
+        from ..hardware.limits import ThermalGuard, ThermalLimitError
+
+        self.guard, self.error, self.period, self.rows, self.done = ThermalGuard(limits), ThermalLimitError, \
+            1.0 / rate, rows, 0
+
+    def fits(self, *masks) -> bool:
+        """Whether the ``masks`` may be the plan's next frames, in that order."""
+        import copy
+
+        for i in range(self.done, len(self.rows)):
+            self.guard.record(self.rows[i][2], i * self.period)
+        self.done = len(self.rows)
+        guard = copy.deepcopy(self.guard) if len(masks) > 1 else self.guard
+        try:
+            for n, c in enumerate(masks):
+                on, t = np.flatnonzero(c).tolist(), (len(self.rows) + n) * self.period
+                guard.check(on, t, self.period, "a candidate")
+                if n + 1 < len(masks):
+                    guard.record(on, t)
+        except self.error:
+            return False
+        return True
+
+
 def _coil_map(c: np.ndarray) -> dict[int, int]:
     return {int(k): int(np.sign(c[k])) for k in np.flatnonzero(c)}
 
 
 def _step(design, states, land: _Landscape, rows: list, target, here, current, near, reach, candidates, max_coils,
-          most, status: str = "ok"):
-    """Append one step's row(s) towards ``target``; returns the new ``(here, current)`` (module docstring)."""
+          most, status: str = "ok", fits=_fits_always):
+    """Append one step's row(s) towards ``target``; returns the new ``(here, current)`` (module docstring).
+    ``fits``: whether masks may come next (the coils' heat, :class:`_Heat`)."""
     masks = _masks(design, states, target, here, current, near, reach, candidates, max_coils, most)
     R, ok = land.land(here, masks)
     gap = so3.distance(R, target, trusted=True)
     stay = float(so3.distance(here, target, trusted=True))
-    ahead = np.flatnonzero(ok & (gap < stay - 1e-9))
-    ahead = ahead[np.argsort(gap[ahead], kind="stable")][:ROBUST_TRIES]
+    ahead = _best(np.flatnonzero(ok & (gap < stay - 1e-9)), gap, lambda b: fits(masks[b]))
     b = land.first(here, masks, R, ahead)
     if b >= 0:
         rows.append((target, R[b], _coil_map(masks[b]), status))
         return R[b], masks[b]
     # intermediate masks: a robust landing that does not advance, then one that does from there
     side = np.flatnonzero(ok & (so3.distance(R, here, trusted=True) > land.land_tol))
-    for b in side[np.argsort(gap[side], kind="stable")][:ROBUST_TRIES]:
+    for b in _best(side, gap, lambda b: fits(masks[b])):
         if land.first(here, masks, R, np.array([b])) < 0:
             continue
         masks2 = _masks(design, states, target, R[b], masks[b], near, reach, candidates, max_coils, most)
         R2, ok2 = land.land(R[b], masks2)
         gap2 = so3.distance(R2, target, trusted=True)
-        ahead2 = np.flatnonzero(ok2 & (gap2 < stay - 1e-9))
-        b2 = land.first(R[b], masks2, R2, ahead2[np.argsort(gap2[ahead2], kind="stable")][:ROBUST_TRIES])
+        ahead2 = _best(np.flatnonzero(ok2 & (gap2 < stay - 1e-9)), gap2,
+                       lambda n, first=masks[b], then=masks2: fits(first, then[n]))
+        b2 = land.first(R[b], masks2, R2, ahead2)
         if b2 >= 0:
             rows.append((target, R[b], _coil_map(masks[b]), INTERMEDIATE))
             rows.append((target, R2[b2], _coil_map(masks2[b2]), status))
@@ -368,8 +412,7 @@ def _step(design, states, land: _Landscape, rows: list, target, here, current, n
     wide = _pairs(design, here)
     R3, ok3 = land.land(here, wide)
     gap3 = so3.distance(R3, target, trusted=True)
-    ahead3 = np.flatnonzero(ok3 & (gap3 < stay - 1e-9))
-    b = land.first(here, wide, R3, ahead3[np.argsort(gap3[ahead3], kind="stable")][:ROBUST_TRIES])
+    b = land.first(here, wide, R3, _best(np.flatnonzero(ok3 & (gap3 < stay - 1e-9)), gap3, lambda n: fits(wide[n])))
     if b >= 0:
         rows.append((target, R3[b], _coil_map(wide[b]), status))
         return R3[b], wide[b]
@@ -382,6 +425,13 @@ def _step(design, states, land: _Landscape, rows: list, target, here, current, n
     rows.append((target, here, _coil_map(current), f"blocked: {_why(land, here, masks, R, ok, ahead)}" if blocked
                  else "hold"))
     return here, current
+
+
+def _best(found: np.ndarray, gap: np.ndarray, fits) -> np.ndarray:
+    """The candidates ``found`` nearest the target first (``gap``), those that ``fits``, the first
+    :data:`ROBUST_TRIES`."""
+    ordered = found[np.argsort(gap[found], kind="stable")]
+    return np.array([b for b in ordered if fits(b)], dtype=np.int64)[:ROBUST_TRIES]
 
 
 def _why(land: _Landscape, here, masks, R, ok, ahead) -> str:
