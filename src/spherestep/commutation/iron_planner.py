@@ -20,8 +20,10 @@ One step, from the current equilibrium ``R̃`` under the current mask, towards t
   by ``±margin`` about the three fixed axes (the pose is known only to the model's error and the open loop's
   drift) and from the landing overshot by ``overshoot`` of the step along its own axis (the rotor arrives with
   momentum) all end within ``land_tol`` of the same minimum; on each of ``plants`` (optional) the descents from
-  within the margin end within the margin of it; and the tuned rotor (``tuning``, :func:`iron_tuning`) released
-  at rest at ``R̃`` ends its dwell within :data:`SETTLE_TOL` of it (one compiled integration);
+  within the margin end within ``plant_tol`` (default the margin) of it; and the tuned rotor (``tuning``,
+  :func:`iron_tuning`) released at rest at ``R̃`` ends its dwell within :data:`SETTLE_TOL` of it (one compiled
+  integration, stopped once the rotor is trapped: :meth:`_Landscape.settles`); with ``thermal`` and ``rate``
+  (optional) only masks that keep every coil within the thermal limits, the plan streamed at ``rate``;
 * **intermediate masks** — when no candidate both advances and is robust, a two-mask step: a robust candidate
   that does not advance, then from its minimum one that does (status ``intermediate: …``);
 * **the last resort** — every single coil and pair among the :data:`FACING` coils nearest a pole, either polarity;

@@ -31,8 +31,12 @@ see: :func:`relay_rung_seconds`, :data:`MANY_TURNS_SECONDS` — a design that pa
 prototype, ``examples/designs/relays-iron.yaml``: 823 steps, 16.6 s CPU, 20 ms a step planned on iron and
 integrated over its dwell; 2026-11-28, after issue 39's planner speed-up), one that fails stops after 2–3 (the
 prototype as built: 3 turns, 136 steps, 6.8 s, its blocked steps the costly ones). The quick budget's relay
-runs measured the rung at 70–90 % of a task's seconds (the prototype's 92 × 33 layout: 110 s of a row against
-the enumeration's 8.5 s estimate, at load 12), so without it the ETA's pace had to learn a factor of ~10.
+runs measured the rung at 70–90 % of a task's seconds of the rows that reach it (the prototype's 92 × 33
+layout: 110 s of a row against the enumeration's 8.5 s estimate, at load 12). A task pruned at a cheaper rung
+never runs it: in the ``normal`` relay search 87 of 680 tasks reached it (docs/synthesis.md), so each task of a
+relay spec is charged :data:`REACH_RUNG` × :data:`MANY_TURNS_SECONDS` (2.2 s); the pace of the finished tasks
+corrects a search whose share differs (the quick budget's five all reach it). So charged, the ``normal`` relay
+searches (702 layouts) are estimated at 66 min of one worker (26 min of it the rung), ~33 min on two.
 """
 
 from __future__ import annotations
@@ -46,6 +50,7 @@ BUILD_SECONDS = 0.1  # s to build and write one finalist's design file (4 in und
 VERIFY_SECONDS = 4.0  # s of a finalist's verification beyond its ladder time (3.9-8 s measured)
 REPORT_SECONDS = 3.0  # s of the report's figures and tables (the quick budget's report: 3.4 s)
 MANY_TURNS_SECONDS = 17.0  # s of one worker: the relay rung's many-turn check of a design that passes it (below)
+REACH_RUNG = 0.13  # the share of a relay search's tasks that reach the relay rung (87 of 680, the normal budget's)
 REPORT_STATES = 0.45  # the report's states over the shown design's ladder time (21 s of 30 s; 14 s of 46 s)
 REFRESH = 10.0  # s: the longest a progress line keeps its ETA within a stage (Progress.line)
 CHANGE = 0.2  # the relative change of the ETA that refreshes the line sooner
@@ -68,9 +73,10 @@ def after_ladder(row_seconds: Sequence[float], finalists: int, slots: int) -> di
 
 
 def relay_rung_seconds(relays: bool) -> float:
-    """Estimated seconds of one worker for the relay rung's many-turn check of a task (module docstring): the
-    check of a design that passes it, :data:`MANY_TURNS_SECONDS`, for a relay spec (``relays``); 0 otherwise."""
-    return MANY_TURNS_SECONDS if relays else 0.0
+    """Estimated seconds of one worker for the relay rung's many-turn check of a task of a relay spec
+    (``relays``; 0 otherwise): the check of a design that passes it, :data:`MANY_TURNS_SECONDS`, times the share
+    of tasks that reach the rung, :data:`REACH_RUNG` (module docstring)."""
+    return REACH_RUNG * MANY_TURNS_SECONDS if relays else 0.0
 
 
 def verify_seconds(ladder_seconds: float) -> float:
