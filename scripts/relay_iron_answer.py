@@ -40,8 +40,13 @@ def _levers_module():
     return module
 
 
-def designs(which: set[str]):
-    """``(lever, value, design)`` rows: the prototype as built, then the levers asked for."""
+def designs(which: set[str], files=()):
+    """``(lever, value, design)`` rows: the design files given, the prototype as built, then the levers asked
+    for."""
+    from spherestep.motor import MotorDesign
+
+    for path in files:
+        yield "design file", Path(path).name, MotorDesign.load(path)
     if "asbuilt" in which:
         yield "as built", "motor.prototype()", prototype()
     levers = _levers_module()
@@ -68,33 +73,50 @@ def main() -> None:
     ap.add_argument("--remanence", default=None, help="only these grades (T), e.g. 0.3,0.25")
     ap.add_argument("--count", type=int, default=20)
     ap.add_argument("--plants", default=None, help="run each design's plans also on these plants, "
-                    "winding:detent scales, e.g. 0.85:1.2,0.85:1,1:1.2 (magnetics.mismatch.scaled_model)")
+                    "winding:detent[:coupling] scales, e.g. 0.85:1.2,0.85:1,1:1.2 (magnetics.mismatch.scaled_model;"
+                    " the coupling through the cores, part of the detent, scaled as the detent unless given)")
+    ap.add_argument("--design", action="append", default=[], help="a design file to judge (repeatable)")
+    ap.add_argument("--plant-tol", type=float, default=None, help="with --robust: degrees within which the plants' "
+                    "minima must lie of the planned one (default the planner's margin, 1.5)")
     ap.add_argument("--json", default=None)
     ap.add_argument("--robust", action="store_true", help="plan with the --plants as the iron planner's plants "
                     "(plans that hold on them too)")
     args = ap.parse_args()
     rows = []
-    for lever, value, design in designs(set(args.levers.split(","))):
+    for lever, value, design in designs(set(args.levers.split(",")) - {""}, args.design):
         if args.remanence and lever.startswith("remanence") and value not in args.remanence.split(","):
             continue
         t0 = time.perf_counter()
-        plants = [(1.0, 1.0)] + [tuple(float(x) for x in p.split(":")) for p in (args.plants or "").split(",") if p]
+        plants = [(1.0, 1.0, 1.0)] + [_scales(p) for p in (args.plants or "").split(",") if p]
         own = design_model(design).model
-        hold_on = tuple(scaled_model(own, winding=w, detent=d) for w, d in plants[1:]) if args.robust else ()
-        for winding, detent in plants:
+        hold_on = tuple(_plant(own, *p) for p in plants[1:]) if args.robust else ()
+        tol = None if args.plant_tol is None else math.radians(args.plant_tol)
+        for winding, detent, coupling in plants:
             t0 = time.perf_counter()
-            plant = None
-            if (winding, detent) != (1.0, 1.0):
-                plant = scaled_model(own, winding=winding, detent=detent)
-            v = many_turns(design, plant=plant, count=args.count, spec_turn=SPEC_TURN, plan_plants=hold_on)
-            row = {"lever": lever, "value": value, "plant": {"winding": winding, "detent": detent},
-                   "planned_for_plants": bool(hold_on),
+            plant = None if (winding, detent, coupling) == (1.0, 1.0, 1.0) else _plant(own, winding, detent, coupling)
+            v = many_turns(design, plant=plant, count=args.count, spec_turn=SPEC_TURN, plan_plants=hold_on,
+                           plant_tol=tol)
+            row = {"lever": lever, "value": value,
+                   "plant": {"winding": winding, "detent": detent, "coupling": coupling},
+                   "planned_for_plants": bool(hold_on), "plant_tol_deg": args.plant_tol,
                    "seconds": time.perf_counter() - t0} | v.to_dict()
             rows.append(row)
-            print(f"{lever:28s} {value:20s} plant w{winding:g} d{detent:g}: {v.line()} ({row['seconds']:.0f} s)",
-                  flush=True)
+            print(f"{lever:12s} {value:20s} plant w{winding:g} d{detent:g} c{coupling:g}"
+                  f"{' planned for the plants' if hold_on else ''}: {v.line()} ({row['seconds']:.0f} s)", flush=True)
         if args.json:
             Path(args.json).write_text(json.dumps(rows, indent=1))
+
+
+def _scales(text: str) -> tuple[float, float, float]:
+    """``winding:detent[:coupling]`` as three scales, the coupling's the detent's unless given."""
+    x = [float(v) for v in text.split(":")]
+    return x[0], x[1], x[2] if len(x) > 2 else x[1]
+
+
+def _plant(own, winding: float, detent: float, coupling: float):
+    """The plant: ``own`` scaled (the coupling only where the model has it)."""
+    return scaled_model(own, winding=winding, detent=detent,
+                        coupling=coupling if getattr(own, "coupling", None) is not None else 1.0)
 
 
 if __name__ == "__main__":

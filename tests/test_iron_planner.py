@@ -1,7 +1,10 @@
 """The iron-aware relay planner and the many-turn verdict (issue 39): landings against brute-force minimisation,
 basins against the simulated rotor, the verdict on a design that steps and one that does not."""
 
+import json
 import math
+from dataclasses import replace
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -9,7 +12,7 @@ from scipy.optimize import minimize
 
 from spherestep import so3
 from spherestep.commutation import iron_tuning, plan_iron, supply_coils, turn, turn_targets
-from spherestep.commutation.iron_planner import SETTLE_TOL, _Landscape
+from spherestep.commutation.iron_planner import SETTLE_TOL, _Landscape, _pairs
 from spherestep.drive import many_turns, relay_planner, verdict_turns
 from spherestep.dynamics import Integrator
 from spherestep.errors import InputError
@@ -76,6 +79,51 @@ def test_a_landing_that_does_not_settle_is_refused(iron):
     R, ok = land.land(states.rotations[0], c[None])
     assert ok[0] and land.settles(states.rotations[0], c, R[0])
     assert not land.settles(states.rotations[0], c, so3.rot([0, 0, 1], 2 * SETTLE_TOL) @ R[0])
+
+
+def test_the_plans_are_the_previous_planners(iron):
+    """The speed-up (landings, margins and settling remembered per pose and mask; the settling check stopped once
+    the rotor is trapped) changes no plan: three turns (one of them with blocked steps, whose repeated poses the
+    memory serves) give the statuses, coils and landings (to 1e-6 rad) that the planner before it gave
+    (``tests/iron_plans_before.json``, from git 29370bb)."""
+    design, own, tuning = iron
+    stored = json.loads((Path(__file__).parent / "iron_plans_before.json").read_text())
+    assert stored["design"] == "prototype"
+    blocked = 0
+    for name, turn_ in stored["turns"].items():
+        plan = plan_iron(design, turn_targets(design, turn_["axis"], math.radians(turn_["angle_deg"])), own.model,
+                         limits=own.limits, tuning=tuning)
+        assert [s.status for s in plan.steps] == [s["status"] for s in turn_["steps"]], name
+        assert [{str(k): v for k, v in sorted(s.coils.items())} for s in plan.steps] == \
+            [s["coils"] for s in turn_["steps"]], name
+        assert np.abs(plan.achieved - np.array([s["achieved"] for s in turn_["steps"]])).max() < 1e-6, name
+        blocked += len(plan.failures)
+    assert blocked > 0  # the memory's case: the rotor held at one pose over several steps
+
+
+def test_the_early_settling_verdict_is_the_full_dwells(iron):
+    """The settling check's early stop (once the rotor is trapped in the landing's well) gives the verdict the full
+    dwell gives: for strict-minimum landings of the last resort's single and paired coils from a stepper state's
+    minimum, the tuned rotor integrated over the whole dwell (the tuned one, and a sixth of it, on which some do
+    not settle) ends within SETTLE_TOL exactly when :meth:`_Landscape.settles` says so."""
+    design, own, tuning = iron
+    states = design.states()
+    c0 = design.coil_currents(states.coils(0))
+    verdicts = []
+    for dwell in (tuning.dwell, tuning.dwell / 10, tuning.dwell / 40):
+        short = replace(tuning, dwell=dwell)
+        land = _Landscape(own.model, design.max_step, math.radians(1.5), 0.3, math.radians(0.1), 0.0, short)
+        here = land.land(states.rotations[0], c0[None])[0][0]
+        masks = _pairs(design, here)
+        R, ok = land.land(here, masks)
+        integrator = Integrator(own.model, short.rotor, short.dt)
+        steps = max(1, int(round(dwell / short.dt)))
+        for b in np.flatnonzero(ok)[:15]:
+            end = integrator.run(here.copy(), np.zeros(3), masks[b], dwell, record_every=steps)[0]
+            full = bool(so3.distance(end, R[b]) <= SETTLE_TOL)
+            assert land.settles(here, masks[b], R[b]) == full
+            verdicts.append(full)
+    assert any(verdicts) and not all(verdicts)
 
 
 def test_the_plan_stays_within_the_supply(iron, short_plan):
@@ -237,3 +285,54 @@ def test_the_plan_starts_from_a_minimum_not_a_saddle():
     plan, tuning = job.plan, job.tuning
     sim = simulate(design, plan, job.chosen.model, dwell=tuning.dwell, rotor=tuning.rotor, dt=tuning.dt)
     assert sim.executed, np.degrees(sim.step_errors)
+
+
+def test_the_whole_detent_scales_with_the_coupling(iron):
+    """scaled_model's ``coupling`` scales the coupling through the cores exactly (its series are linear), so a plant
+    with detent and coupling ×1.2 has 1.2 times the whole torque with every coil off, the winding's part ×0.85;
+    without it only the pairwise part scales (the calibration's plants), ~2.6 % of the peak torque apart here."""
+    from spherestep.magnetics.mismatch import scaled_model
+
+    design, own, _ = iron
+    model = own.model
+    R = so3.random(5, np.random.default_rng(4))
+    c = np.random.default_rng(5).normal(size=(5, model.coil_count)) * 0.5
+    off = model.torque(R, np.zeros_like(c))
+    want = 1.2 * off + 0.85 * (model.torque(R, c) - off)
+    whole = scaled_model(model, winding=0.85, detent=1.2, coupling=1.2)
+    np.testing.assert_allclose(whole.torque(R, c), want, atol=1e-9 * np.abs(want).max())
+    assert np.abs(scaled_model(model, winding=0.85, detent=1.2).torque(R, c) - want).max() > 1e-3 * np.abs(want).max()
+    with pytest.raises(InputError, match="coupling"):
+        scaled_model(model, coupling=-1.0)
+
+
+def test_a_plan_for_a_rate_keeps_the_coils_within_their_thermal_limits(iron, short_plan):
+    """Planned for streaming at 0.8 Hz (the iron dwell's rate) under run's default thermal limits, the 30° turn
+    passes ``ThermalLimits.check_plan`` (the plan without them keeps coil 28 on 6.25 s, over max_on = 5 s) and
+    still executes on the simulated rotor, every step within 0.5° of its planned minimum."""
+    from spherestep.drive.many_turns import run_turn
+    from spherestep.hardware import ThermalLimits
+    from spherestep.hardware.limits import ThermalLimitError
+
+    design, own, tuning = iron
+    limits = ThermalLimits()
+    with pytest.raises(ThermalLimitError, match="max_on"):
+        limits.check_plan(short_plan, 0.8)
+    plan = plan_iron(design, turn_targets(design, (0, 0, 1), math.radians(30)), own.model, limits=own.limits,
+                     tuning=tuning, thermal=limits, rate=0.8)
+    limits.check_plan(plan, 0.8)
+    outcome = run_turn(design, plan, own.model, tuning, (0, 0, 1), math.radians(30), math.radians(0.5),
+                       design.max_step)
+    assert outcome.executed and not plan.failures
+    with pytest.raises(InputError, match="rate"):
+        plan_iron(design, turn_targets(design, (0, 0, 1), 0.1), own.model, thermal=limits)
+
+
+def test_plan_refuses_a_rate_without_the_iron_planner(tmp_path, capsys):
+    from spherestep.cli import main
+
+    out = tmp_path / "p"
+    assert main(["plan", "--axis", "0,0,1", "--angle", "30", "--rate", "0.8", "--planner", "geometric", "--out",
+                 str(out)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "--rate" in err and not out.exists()

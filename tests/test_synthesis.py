@@ -330,17 +330,17 @@ def test_cli_refuses_a_bad_spec(tmp_path):
 
 def test_the_eta_estimates_a_task_as_the_order_does():
     """The ETA's estimate of a ladder task (seconds of one worker) is the submission order's cost model in seconds:
-    ∝ (M N)², twice with a relay rung, and a table solve's minutes for a task that may solve iron
-    (tests/test_synthesis_eta.py tests the ETA itself)."""
-    from spherestep.synthesis.eta import ALIGNMENT_SECONDS, SOLVE_SECONDS
+    ∝ (M N)², twice with a relay rung, plus the relay rung's many-turn check, and a table solve's minutes for a
+    task that may solve iron (tests/test_synthesis_eta.py tests the ETA itself)."""
+    from spherestep.synthesis.eta import ALIGNMENT_SECONDS, SOLVE_SECONDS, relay_rung_seconds
     from spherestep.synthesis.run import cost_estimate, pairs, task_seconds
 
     relays, gimbal = load_spec(EXAMPLES / "prototype-relays-iron.yaml"), load_spec(EXAMPLES / "camera-gimbal.yaml")
     ball = 12 * 0.0254
     proto = Candidate("truncated-icosahedron", 1, "truncated-cuboctahedron", 1, 80.0, ball)
     assert pairs(proto) == 92 * 33  # the stator's caps within 80° (the built design fits 29 coils on them)
-    for spec in (relays, gimbal):
-        assert task_seconds(proto, spec) == pytest.approx(ALIGNMENT_SECONDS * cost_estimate(proto, spec))
+    for spec, turns in ((relays, relay_rung_seconds(True)), (gimbal, 0.0)):
+        assert task_seconds(proto, spec) == pytest.approx(ALIGNMENT_SECONDS * cost_estimate(proto, spec) + turns)
     assert task_seconds(proto, gimbal) == pytest.approx(ALIGNMENT_SECONDS * (92 * 33) ** 2)  # ~5.5 s
     wide = Candidate("truncated-icosahedron", 1, "truncated-cuboctahedron", 1, 80.0, ball, gap_scale=4.0)
     assert task_seconds(wide, relays, True) == pytest.approx(task_seconds(wide, relays) + SOLVE_SECONDS)

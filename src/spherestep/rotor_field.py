@@ -384,9 +384,28 @@ def pack_terms(terms, constant=0.0) -> Packed | None:
     if any(f.compiled is None or f.poles is not poles and not np.array_equal(f.poles, poles) for f in fields) \
             or any(not np.array_equal(t[2], coils) for t in terms[1:]):
         return None
-    offsets = np.concatenate([[0], np.cumsum([len(f.compiled) for f in fields])])
+    params, offsets, P = _joined(fields)
     currents = [np.asarray(t[3], dtype=float) for t in terms]
     lead = np.broadcast_shapes(*(c.shape[:-1] for c in currents))
     C = np.stack([np.broadcast_to(c, lead + c.shape[-1:]) for c in currents], axis=-2)
-    return Packed(np.concatenate([f.compiled for f in fields]), offsets, coils, C, fields[0].poles_t,
-                  np.stack([f.polarity for f in fields]), np.array([float(t[1]) for t in terms]), constant)
+    return Packed(params, offsets, coils, C, fields[0].poles_t, P, np.array([float(t[1]) for t in terms]), constant)
+
+
+_JOINED: dict = {}  # the fields' kernels' and polarities' ids -> (those arrays, the kernels joined, offsets, polarities)
+JOINED_KEPT = 8  # models whose joined kernels are kept (the coupled iron model's are 7 MB)
+
+
+def _joined(fields) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``(params, offsets, P)``: the fields' compiled kernels concatenated, where each starts, and their polarity
+    rows stacked — built once per set of fields (copying the iron model's kernels cost ~1 ms per call), kept for
+    the last :data:`JOINED_KEPT`; the entry holds the arrays, so their ids stay theirs while it is kept."""
+    held = tuple(a for f in fields for a in (f.compiled, f.polarity))
+    key = tuple(map(id, held))
+    hit = _JOINED.get(key)
+    if hit is None or any(a is not b for a, b in zip(hit[0], held)):
+        while len(_JOINED) >= JOINED_KEPT:
+            _JOINED.pop(next(iter(_JOINED)))
+        hit = _JOINED[key] = (held, np.concatenate([f.compiled for f in fields]),
+                              np.concatenate([[0], np.cumsum([len(f.compiled) for f in fields])]),
+                              np.stack([f.polarity for f in fields]))
+    return hit[1:]

@@ -24,7 +24,9 @@ What is where:
 * :mod:`.synthesis` — loops around ducc0's syntheses for large batches (positions in; energies, torques, ``K(R)``
   out);
 * :mod:`.descent` — :func:`spherestep.statics.equilibrium`'s safeguarded Newton descent, row by row;
-* :mod:`.integrate` — :meth:`spherestep.dynamics.Rotor.step` repeated under a packed model's torque.
+* :mod:`.integrate` — :meth:`spherestep.dynamics.Rotor.step` repeated under a packed model's torque;
+* :mod:`.settle` — the same steps until the rotor is trapped in a well or the dwell ends (the iron planner's
+  settling check, :mod:`spherestep.commutation.iron_planner`);
 * :mod:`.linear` — a packed model's torque as ``b(R) + K(R) c`` at one orientation, ``K`` and the bias in one call
   (:class:`spherestep.control.ModelCache`: the servo law's model and the simulation's plant);
 * :mod:`.allocation` — the allocation's semismooth Newton and the closest reachable torque

@@ -128,12 +128,19 @@ def plan(
     design_path: Path = typer.Option(None, "--design", help="Design file (YAML/TOML); default the built-in prototype."),
     planner: str = typer.Option("auto", "--planner", help="auto (iron on an iron-cored design, geometric on air), "
                                 "geometric, potential or iron (the minima of the design's own energy)."),
+    rate: float = typer.Option(None, "--rate", callback=number("a positive number of steps per second (Hz), at most "
+                                                                "1000", 0, 1000, low_open=True),
+                               help="The rate `spherestep run` will stream the plan at (Hz): the iron planner then "
+                                    "chooses only masks that keep every coil within run's thermal limits (5 s on, "
+                                    "half of any 30 s)."),
 ) -> None:
     """Commutate a rotation about an axis on the prototype (or --design FILE): plan CSV/JSON (relay masks) and figures.
 
     The summary counts the steps asked for; `spherestep run` streams one frame more (the start is held too).
 
     Example: [bold]spherestep plan --axis 0,1,1 --angle 90 --steps 20 --out plan90 --design mymotor.yaml[/bold]
+
+    Example: [bold]spherestep plan --axis 0,0,1 --angle 30 --rate 0.8 --design examples/designs/relays-iron.yaml[/bold]
     """
     from ..commutation import turn
     from ..drive import relay_planner
@@ -147,7 +154,15 @@ def plan(
     axis_vec = parse_vector(axis, "--axis")
     design = usable(design_from(design_path), "--design", design_path)
     planner = relay_planner(design, planner)
-    result = turn(design, axis_vec, math.radians(angle), steps, planner)
+    if rate is not None and planner != "iron":
+        raise bad_value("--rate", f"given only with the iron planner (the {planner} planner does not weigh the "
+                        "coils' heat); drop --rate", rate)
+    heat = {}
+    if rate is not None:
+        from ..hardware import ThermalLimits
+
+        heat = {"thermal": ThermalLimits(), "rate": rate}
+    result = turn(design, axis_vec, math.radians(angle), steps, planner, **heat)
     from ..demo import PLAN_FILES, write_plan_files
 
     files = Outputs(out, PLAN_FILES)

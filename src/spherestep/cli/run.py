@@ -119,7 +119,10 @@ def run(
 
     Example: [bold]spherestep run plan.json --rate 5 --dry-run --channels 64[/bold]
 
-    Example: [bold]spherestep run plan.json --rate 0.8 --simulate[/bold]
+    Example: [bold]spherestep run plan.json --rate 0.8 --simulate --design examples/designs/relays-iron.yaml[/bold]
+
+    An iron plan holds a coil for several steps: plan it for the rate it will run at (`spherestep plan ... --rate
+    0.8`), or the thermal check may refuse it.
     """
     if dry_run and simulate:
         raise bad_value("--dry-run/--simulate", "at most one of the two", "both")

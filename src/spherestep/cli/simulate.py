@@ -67,7 +67,8 @@ def simulate(
     plant_winding: float = typer.Option(1.0, "--plant-winding", callback=number("a scale 0.1 to 10", 0.1, 10),
                                         help="Run on a plant whose winding's torque is this many times the model's."),
     plant_detent: float = typer.Option(1.0, "--plant-detent", callback=number("a scale 0 to 10", 0, 10),
-                                       help="Run on a plant whose detent is this many times the model's (iron)."),
+                                       help="Run on a plant whose detent (pairwise and through the cores) is this "
+                                            "many times the model's (iron)."),
     turns: int = typer.Option(0, "--turns", callback=number("a whole number of random turns, 0 to 200", 0, 200),
                               help="Open loop: also the many-turn verdict — this turn and TURNS seeded random ones of "
                                    "15-360° (20 is the project's rule), each planned and run as this one; exit 1 "
@@ -121,7 +122,8 @@ def simulate(
         plant = physics
         if plant_winding != 1.0 or plant_detent != 1.0:
             try:
-                plant = scaled_model(physics, winding=plant_winding, detent=plant_detent)
+                plant = scaled_model(physics, winding=plant_winding, detent=plant_detent,  # the whole detent
+                                     coupling=plant_detent if getattr(physics, "coupling", None) is not None else 1.0)
             except ValueError as exc:
                 raise bad_value("--plant-detent", "1 on an air core (it has no detent)", plant_detent) from exc
     summary = {"design": design.name, "model": own.label, "planner": planner, "failed_coils": failed,

@@ -20,8 +20,10 @@ One step, from the current equilibrium ``R̃`` under the current mask, towards t
   by ``±margin`` about the three fixed axes (the pose is known only to the model's error and the open loop's
   drift) and from the landing overshot by ``overshoot`` of the step along its own axis (the rotor arrives with
   momentum) all end within ``land_tol`` of the same minimum; on each of ``plants`` (optional) the descents from
-  within the margin end within the margin of it; and the tuned rotor (``tuning``, :func:`iron_tuning`) released
-  at rest at ``R̃`` ends its dwell within :data:`SETTLE_TOL` of it (one compiled integration);
+  within the margin end within ``plant_tol`` (default the margin) of it; and the tuned rotor (``tuning``,
+  :func:`iron_tuning`) released at rest at ``R̃`` ends its dwell within :data:`SETTLE_TOL` of it (one compiled
+  integration, stopped once the rotor is trapped: :meth:`_Landscape.settles`); with ``thermal`` and ``rate``
+  (optional) only masks that keep every coil within the thermal limits, the plan streamed at ``rate``;
 * **intermediate masks** — when no candidate both advances and is robust, a two-mask step: a robust candidate
   that does not advance, then from its minimum one that does (status ``intermediate: …``);
 * **the last resort** — every single coil and pair among the :data:`FACING` coils nearest a pole, either polarity;
@@ -75,13 +77,18 @@ def supply_coils(limits) -> int:
 
 
 class _Landscape:
-    """The model's minima as seen from one pose: batched descents and the margin test (module docstring)."""
+    """The model's minima as seen from one pose: batched descents and the margin test (module docstring).
+
+    Each answer — a mask's landing from a pose, its margins, its settling — depends only on that pose and mask, so
+    it is remembered for the plan (keyed by their bytes): a rotor held at one pose over several steps, or a mask
+    offered again among the intermediate steps' candidates, costs no second descent."""
 
     def __init__(self, model, reach: float, margin: float, overshoot: float, land_tol: float, stiffness: float,
-                 tuning=None, plants=()):
+                 tuning=None, plants=(), plant_tol: float | None = None):
         from ..statics import descend
 
         self.plants = tuple(plants)
+        self.plant_tol = max(margin, land_tol) if plant_tol is None else plant_tol
         self.model, self.reach, self.descend, self.stiffness = model, reach, descend, stiffness
         self.tuning = tuning
         if tuning is not None:
@@ -90,53 +97,99 @@ class _Landscape:
             self.integrator = Integrator(model, tuning.rotor, tuning.dt)
         self.margin, self.overshoot, self.land_tol = margin, overshoot, land_tol
         self.jiggle = so3.exp(margin * np.concatenate([np.eye(3), -np.eye(3)]))  # (6, 3, 3)
+        self.landings, self.kept, self.settled = {}, {}, {}  # (pose, mask[, R]) -> (R, ok, softest), bool, bool
+
+    @staticmethod
+    def _keys(here: np.ndarray, c: np.ndarray) -> list[bytes]:
+        pose = here.tobytes()
+        return [pose + row.tobytes() for row in c]
 
     def land(self, here: np.ndarray, c: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """``(R (B, 3, 3), ok (B,))``: the minimum descended to from ``here`` under each mask ``c (B, N)``; ``ok``
         where it converged to a strict minimum within ``reach`` of ``here``."""
-        R, _, _, H, _, converged = self.descend(self.model, np.repeat(here[None], len(c), axis=0), c)
-        ok = converged & (so3.distance(R, here) <= self.reach)
-        ok[ok] = np.linalg.eigvalsh(H[ok])[:, 0] > self.stiffness
-        return R, ok
+        keys = self._keys(here, c)
+        todo = [b for b, key in enumerate(keys) if key not in self.landings]
+        if todo:
+            R, _, _, H, _, converged = self.descend(self.model, np.repeat(here[None], len(todo), axis=0), c[todo])
+            ok = converged & (so3.distance(R, here, trusted=True) <= self.reach)
+            softest = np.full(len(todo), -np.inf)
+            softest[ok] = np.linalg.eigvalsh(H[ok])[:, 0]
+            ok &= softest > self.stiffness
+            for j, b in enumerate(todo):
+                self.landings[keys[b]] = (R[j], bool(ok[j]), float(softest[j]))
+        found = [self.landings[key] for key in keys]
+        return np.array([f[0] for f in found]).reshape(-1, 3, 3), np.array([f[1] for f in found], dtype=bool)
 
     def robust(self, here: np.ndarray, c: np.ndarray, R: np.ndarray) -> np.ndarray:
-        """Whether each landing ``R (B, 3, 3)`` of mask ``c (B, N)`` from ``here`` keeps its margins: descents from
-        ``here`` turned ``±margin`` about x, y, z and from ``R`` overshot along its step all end within
-        ``land_tol`` of ``R``."""
+        """Whether each landing ``R (B, 3, 3)`` of mask ``c (B, N)`` from ``here`` (:meth:`land`'s) keeps its
+        margins: descents from ``here`` turned ``±margin`` about x, y, z and from ``R`` overshot along its step
+        all end within ``land_tol`` of ``R``; with ``plants``, their descents from within the margin of ``here``
+        within ``plant_tol`` (default the margin) of it."""
+        keys = [key + landing.tobytes() for key, landing in zip(self._keys(here, c), R)]
+        todo = np.array([b for b, key in enumerate(keys) if key not in self.kept], dtype=np.int64)
+        if len(todo):
+            for b, good in zip(todo, self._robust(here, c[todo], R[todo])):
+                self.kept[keys[b]] = bool(good)
+        return np.array([self.kept[key] for key in keys], dtype=bool)
+
+    def _robust(self, here: np.ndarray, c: np.ndarray, R: np.ndarray) -> np.ndarray:
         B = len(c)
-        step = so3.log(R @ here.T)  # (B, 3), fixed frame: R = exp(step) here
+        step = np.array([so3.log_single(m) for m in R @ here.T]).reshape(-1, 3)  # fixed frame: R = exp(step) here
         starts = np.concatenate([np.broadcast_to(self.jiggle @ here, (B, 6, 3, 3)),
                                  (so3.exp(self.overshoot * step) @ R)[:, None]], axis=1)  # (B, 7, 3, 3)
         ends, _, _, _, _, converged = self.descend(self.model, starts.reshape(-1, 3, 3).copy(),
                                                    np.repeat(c, 7, axis=0))
-        close = converged & (so3.distance(ends, np.repeat(R, 7, axis=0)) <= self.land_tol)
+        close = converged & (so3.distance(ends, np.repeat(R, 7, axis=0), trusted=True) <= self.land_tol)
         ok = close.reshape(B, 7).all(axis=1)
-        for plant in self.plants:  # the pose within the margin of here, on every plant: within the margin of R
+        for plant in self.plants:  # the pose within the margin of here, on every plant: within plant_tol of R
             if not ok.any():
                 break
             near = np.concatenate([here[None], self.jiggle @ here])  # (7, 3, 3)
             ends, _, _, _, _, converged = self.descend(plant, np.tile(near, (B, 1, 1)), np.repeat(c, 7, axis=0))
-            close = converged & (so3.distance(ends, np.repeat(R, 7, axis=0)) <= max(self.margin, self.land_tol))
+            apart = so3.distance(ends, np.repeat(R, 7, axis=0), trusted=True)
+            close = converged & (apart <= self.plant_tol)
             ok &= close.reshape(B, 7).all(axis=1)
         return ok
 
     def settles(self, here: np.ndarray, c: np.ndarray, R: np.ndarray) -> bool:
         """Whether the tuned rotor, released at rest at ``here`` under mask ``c``, ends its dwell within
-        :data:`SETTLE_TOL` of ``R`` (always true without a tuning)."""
+        :data:`SETTLE_TOL` of ``R``, :meth:`land`'s landing (always true without a tuning).
+
+        A model with compiled terms is integrated by :func:`spherestep._fast.settle.settle`, which stops once the
+        rotor is *trapped*: within ``SETTLE_TOL / 4`` of ``R`` with ``½ I|ω|² + E(R_t) − E(R) ≤ ½ k (SETTLE_TOL /
+        4)²`` (``k`` the landing's softest stiffness). Energy only falls under damping and friction, so the rotor
+        stays in that sublevel set of the well — within ``SETTLE_TOL / 4`` of ``R`` while the well is quadratic
+        that far, a factor 4 of slack — and the full dwell ends within ``SETTLE_TOL`` too
+        (``tests/test_iron_planner.py`` checks the verdicts against the full dwell). Other models run the dwell."""
         if self.tuning is None:
             return True
+        key = self._keys(here, c[None])[0]
+        landing = self.landings.get(key)
+        key += R.tobytes()
+        if key in self.settled:
+            return self.settled[key]
         steps = max(1, int(round(self.tuning.dwell / self.tuning.dt)))
-        end = self.integrator.run(here.copy(), np.zeros(3), c, self.tuning.dwell, record_every=steps)[0]
-        return bool(so3.distance(end, R) <= SETTLE_TOL)
+        softest = landing[2] if landing is not None and np.array_equal(landing[0], R) else 0.0  # R: the landing
+        packed = self.model.packed_terms(c) if softest > 0 else None
+        if packed is None:
+            end = self.integrator.run(here.copy(), np.zeros(3), c, self.tuning.dwell, record_every=steps)[0]
+        else:
+            from .._fast.settle import settle
+            from ..dynamics.rotor import YOSHIDA
+
+            rotor = self.tuning.rotor
+            end = settle(*packed[:2], np.array(here, dtype=float), *packed[2:7], rotor.inertia, rotor.damping,
+                         rotor.friction, self.tuning.dt, steps, np.array(YOSHIDA), np.ascontiguousarray(R),
+                         SETTLE_TOL / 4, 0.5 * softest * (SETTLE_TOL / 4) ** 2)[0]
+        self.settled[key] = good = bool(so3.distance(end, R, trusted=True) <= SETTLE_TOL)
+        return good
 
     def first(self, here: np.ndarray, masks: np.ndarray, R: np.ndarray, order: np.ndarray) -> int:
         """The first of the candidates ``order`` (indices into ``masks``/``R``) whose landing keeps its margins and
         settles; −1 if none."""
-        for lo in range(0, len(order), 2):  # two at a time: the nearest usually passes
-            chunk = order[lo:lo + 2]
-            for b in chunk[self.robust(here, masks[chunk], R[chunk])]:
-                if self.settles(here, masks[b], R[b]):
-                    return int(b)
+        for b in order:  # one at a time: the nearest usually passes
+            if self.robust(here, masks[b:b + 1], R[b:b + 1])[0] and self.settles(here, masks[b], R[b]):
+                return int(b)
         return -1
 
 
@@ -147,7 +200,7 @@ def _pulls(design, here, target, most) -> np.ndarray:
     """Masks drawing the rotor along the step: at each lead pose ``exp(f ω) R̃`` (``ω = log(R_i R̃ᵀ)``, ``f`` in
     :data:`LEADS`) every coil's nearest pole (polarity its pole's), the 3, 6 and ``most`` best aligned coils."""
     u, v, pol = design.rotor.centers, design.stator.centers, design.polarity
-    omega = so3.log(target @ here.T)
+    omega = so3.log_single(target @ here.T)
     poses = so3.exp(np.multiply.outer(LEADS, omega)) @ here  # (L, 3, 3)
     cos = np.einsum("lja,ka->lkj", np.einsum("lab,jb->lja", poses, u), v)  # (L, N, M): (P u_j)·v_k
     pole = np.argmax(cos, axis=2)  # (L, N) each coil's nearest pole
@@ -190,7 +243,7 @@ def _masks(design, states, target, here, current, near, reach, candidates, max_c
     with the coils energised now (not in the set) reversed, within ``most`` coils (module docstring)."""
     around = states.within(here, reach)
     if len(around):
-        around = around[np.argsort(so3.distance(states.rotations[around], target))[:candidates]]
+        around = around[np.argsort(so3.distance(states.rotations[around], target, trusted=True))[:candidates]]
     ids = np.unique(np.concatenate([near, around]).astype(np.int64))
     ranked = bool(states.counts[ids].max() > max_coils)
     sets = _activations(states, design, target, ids, max_coils, ranked)
@@ -207,7 +260,8 @@ def _masks(design, states, target, here, current, near, reach, candidates, max_c
 def plan_iron(design, targets, model, *, limits=None, max_coils: int = DEFAULT_MAX_COILS,
               candidates: int = DEFAULT_CANDIDATES, max_step: float | None = None, margin: float = MARGIN,
               overshoot: float = OVERSHOOT, land_tol: float = LAND_TOL, min_stiffness: float = 0.0,
-              tuning=None, plants=(), start: int | None = None) -> Plan:
+              tuning=None, plants=(), plant_tol: float | None = None, thermal=None, rate: float | None = None,
+              start: int | None = None) -> Plan:
     """Commutate ``targets (n+1, 3, 3)`` on the minima of ``model``'s energy (module docstring).
 
     ``model``: a :class:`~spherestep.statics.TorqueModel` of ``design`` (the iron model of
@@ -215,9 +269,13 @@ def plan_iron(design, targets, model, *, limits=None, max_coils: int = DEFAULT_M
     supply caps the coils energised at once; default no cap beyond ``2 max_coils``); ``margin`` (rad),
     ``overshoot`` (fraction of a step) and ``land_tol`` (rad): the landing's margins; ``plants``: torque models the
     plan must also hold on (e.g. :func:`spherestep.magnetics.mismatch.scaled_model`'s winding ×0.85, detent ×1.2):
-    from within ``margin`` of the current pose each plant's minimum under the mask lies within ``margin`` of the
-    planned one, so the next step starts inside its margin again; ``start``: the stepper state whose coils hold
-    the rotor first (default nearest ``targets[0]``)."""
+    from within ``margin`` of the current pose each plant's minimum under the mask lies within ``plant_tol``
+    (rad, default ``max(margin, land_tol)``: the next step starts inside its margin again; the verdict's 0.5° or
+    less asks for masks whose minimum the plants barely move) of the planned one; ``start``: the stepper state
+    whose coils hold the rotor first (default nearest ``targets[0]``); ``thermal`` (a
+    :class:`spherestep.hardware.ThermalLimits`) and ``rate`` (Hz): the plan will be streamed at ``rate``, so only
+    masks that keep every coil within those limits are chosen (a mask that would break them is passed over, as
+    one without margins; a step that only a hold fits keeps its coils and ``run`` refuses the plan, naming it)."""
     from ..statics import equilibrium, is_torque_model
 
     targets = check_targets(targets)
@@ -246,17 +304,24 @@ def plan_iron(design, targets, model, *, limits=None, max_coils: int = DEFAULT_M
         if not is_torque_model(plant) or plant.coil_count != model.coil_count:
             raise bad_value(f"plants[{n}]", f"a torque model of the design's {model.coil_count} coils",
                             type(plant).__name__)
-    land = _Landscape(model, reach, margin, overshoot, land_tol, min_stiffness, tuning, plants)
+    if plant_tol is not None:
+        plant_tol = checks.positive(plant_tol, "plant_tol", "a positive angle in radians")
+    land = _Landscape(model, reach, margin, overshoot, land_tol, min_stiffness, tuning, plants, plant_tol)
     _, near = states.nearest(targets, k=candidates)
     rows = [(targets[0], here, coils, "ok")]
+    if (thermal is None) != (rate is None):
+        raise bad_value("thermal" if thermal is None else "rate", "given with the other (the limits, the step rate)",
+                        None)
+    fits = _fits_always if thermal is None else _Heat(thermal, checks.positive(rate, "rate", "a step rate in Hz"),
+                                                      rows).fits
     for i in range(1, len(targets)):
         here, current = _step(design, states, land, rows, targets[i], here, current, near[i], reach, candidates,
-                              max_coils, most)
+                              max_coils, most, fits=fits)
     last_near = states.nearest(targets[-1], k=candidates)[1]
     for _ in range(MAX_SETTLE_STEPS):  # the rotor lags at the end: walk on while a mask still advances
         before = len(rows)
         here, current = _step(design, states, land, rows, targets[-1], here, current, last_near, reach, candidates,
-                              max_coils, most, status=SETTLE)
+                              max_coils, most, status=SETTLE, fits=fits)
         if rows[-1][3] != SETTLE:
             del rows[before:]
             break
@@ -279,33 +344,68 @@ def rest_pose(model, eq, current) -> np.ndarray:
     return near.rotation[ok[np.argmin(near.energy[ok])]] if len(ok) else eq.rotation
 
 
+def _fits_always(*masks) -> bool:
+    return True
+
+
+class _Heat:
+    """The coils' thermal record along the plan being made: which masks may come next, the plan streamed at
+    ``rate`` Hz under ``limits`` (:class:`spherestep.hardware.ThermalLimits`; its guard's rule, as ``check_plan``
+    applies it: frame ``i`` held from ``i / rate`` for ``1 / rate``)."""
+
+    def __init__(self, limits, rate: float, rows: list):
+        from ..hardware.limits import ThermalGuard, ThermalLimitError
+
+        self.guard, self.error, self.period, self.rows, self.done = ThermalGuard(limits), ThermalLimitError, \
+            1.0 / rate, rows, 0
+
+    def fits(self, *masks) -> bool:
+        """Whether the ``masks`` may be the plan's next frames, in that order."""
+        import copy
+
+        for i in range(self.done, len(self.rows)):
+            self.guard.record(self.rows[i][2], i * self.period)
+        self.done = len(self.rows)
+        guard = copy.deepcopy(self.guard) if len(masks) > 1 else self.guard
+        try:
+            for n, c in enumerate(masks):
+                on, t = np.flatnonzero(c).tolist(), (len(self.rows) + n) * self.period
+                guard.check(on, t, self.period, "a candidate")
+                if n + 1 < len(masks):
+                    guard.record(on, t)
+        except self.error:
+            return False
+        return True
+
+
 def _coil_map(c: np.ndarray) -> dict[int, int]:
     return {int(k): int(np.sign(c[k])) for k in np.flatnonzero(c)}
 
 
 def _step(design, states, land: _Landscape, rows: list, target, here, current, near, reach, candidates, max_coils,
-          most, status: str = "ok"):
-    """Append one step's row(s) towards ``target``; returns the new ``(here, current)`` (module docstring)."""
+          most, status: str = "ok", fits=_fits_always):
+    """Append one step's row(s) towards ``target``; returns the new ``(here, current)`` (module docstring).
+    ``fits``: whether masks may come next (the coils' heat, :class:`_Heat`)."""
     masks = _masks(design, states, target, here, current, near, reach, candidates, max_coils, most)
     R, ok = land.land(here, masks)
-    gap = so3.distance(R, target)
-    stay = float(so3.distance(here, target))
-    ahead = np.flatnonzero(ok & (gap < stay - 1e-9))
-    ahead = ahead[np.argsort(gap[ahead], kind="stable")][:ROBUST_TRIES]
+    gap = so3.distance(R, target, trusted=True)
+    stay = float(so3.distance(here, target, trusted=True))
+    ahead = _best(np.flatnonzero(ok & (gap < stay - 1e-9)), gap, lambda b: fits(masks[b]))
     b = land.first(here, masks, R, ahead)
     if b >= 0:
         rows.append((target, R[b], _coil_map(masks[b]), status))
         return R[b], masks[b]
     # intermediate masks: a robust landing that does not advance, then one that does from there
-    side = np.flatnonzero(ok & (so3.distance(R, here) > land.land_tol))
-    for b in side[np.argsort(gap[side], kind="stable")][:ROBUST_TRIES]:
+    side = np.flatnonzero(ok & (so3.distance(R, here, trusted=True) > land.land_tol))
+    for b in _best(side, gap, lambda b: fits(masks[b])):
         if land.first(here, masks, R, np.array([b])) < 0:
             continue
         masks2 = _masks(design, states, target, R[b], masks[b], near, reach, candidates, max_coils, most)
         R2, ok2 = land.land(R[b], masks2)
-        gap2 = so3.distance(R2, target)
-        ahead2 = np.flatnonzero(ok2 & (gap2 < stay - 1e-9))
-        b2 = land.first(R[b], masks2, R2, ahead2[np.argsort(gap2[ahead2], kind="stable")][:ROBUST_TRIES])
+        gap2 = so3.distance(R2, target, trusted=True)
+        ahead2 = _best(np.flatnonzero(ok2 & (gap2 < stay - 1e-9)), gap2,
+                       lambda n, first=masks[b], then=masks2: fits(first, then[n]))
+        b2 = land.first(R[b], masks2, R2, ahead2)
         if b2 >= 0:
             rows.append((target, R[b], _coil_map(masks[b]), INTERMEDIATE))
             rows.append((target, R2[b2], _coil_map(masks2[b2]), status))
@@ -313,9 +413,8 @@ def _step(design, states, land: _Landscape, rows: list, target, here, current, n
     # the last resort: every single coil and pair of coils facing a pole, either polarity
     wide = _pairs(design, here)
     R3, ok3 = land.land(here, wide)
-    gap3 = so3.distance(R3, target)
-    ahead3 = np.flatnonzero(ok3 & (gap3 < stay - 1e-9))
-    b = land.first(here, wide, R3, ahead3[np.argsort(gap3[ahead3], kind="stable")][:ROBUST_TRIES])
+    gap3 = so3.distance(R3, target, trusted=True)
+    b = land.first(here, wide, R3, _best(np.flatnonzero(ok3 & (gap3 < stay - 1e-9)), gap3, lambda n: fits(wide[n])))
     if b >= 0:
         rows.append((target, R3[b], _coil_map(wide[b]), status))
         return R3[b], wide[b]
@@ -328,6 +427,13 @@ def _step(design, states, land: _Landscape, rows: list, target, here, current, n
     rows.append((target, here, _coil_map(current), f"blocked: {_why(land, here, masks, R, ok, ahead)}" if blocked
                  else "hold"))
     return here, current
+
+
+def _best(found: np.ndarray, gap: np.ndarray, fits) -> np.ndarray:
+    """The candidates ``found`` nearest the target first (``gap``), those that ``fits``, the first
+    :data:`ROBUST_TRIES`."""
+    ordered = found[np.argsort(gap[found], kind="stable")]
+    return np.array([b for b in ordered if fits(b)], dtype=np.int64)[:ROBUST_TRIES]
 
 
 def _why(land: _Landscape, here, masks, R, ok, ahead) -> str:

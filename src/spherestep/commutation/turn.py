@@ -59,12 +59,14 @@ def turn_targets(design, axis, angle: float, steps: int | None = None) -> np.nda
 
 
 def turn(design, axis, angle: float, steps: int | None = None, planner: str = "geometric",
-         model=None, *, limits=None, tuning=None, plants=()) -> Plan:
+         model=None, *, limits=None, tuning=None, plants=(), plant_tol: float | None = None, thermal=None,
+         rate: float | None = None) -> Plan:
     """Plan a turn of ``angle`` rad about ``axis`` (see :func:`turn_targets`) with ``planner``:
     ``"geometric"`` (:func:`plan_geometric`), ``"potential"`` (:func:`plan_potential` on ``model``, default
     the design's :class:`~spherestep.potential.MotorPotential`) or ``"iron"`` (:func:`plan_iron` on ``model``,
     default the design's own, :func:`spherestep.magnetics.design_model`, with its ``limits`` and the relay rotor
-    ``tuning``, default :func:`iron_tuning`, and the ``plants`` it must also hold on).
+    ``tuning``, default :func:`iron_tuning`, the ``plants`` it must also hold on, within ``plant_tol``, and the
+    coils' ``thermal`` limits at the streaming ``rate``).
 
     >>> import math
     >>> import spherestep as ss
@@ -76,6 +78,8 @@ def turn(design, axis, angle: float, steps: int | None = None, planner: str = "g
         raise bad_value("planner", f"one of {', '.join(PLANNERS)}", planner)
     if plants and planner != "iron":
         raise bad_value("plants", "given only with planner='iron'", f"{len(plants)} plants")
+    if (thermal is not None or rate is not None) and planner != "iron":
+        raise bad_value("thermal" if thermal is not None else "rate", "given only with planner='iron'", planner)
     targets = turn_targets(design, axis, angle, steps)
     if planner == "iron":
         from .iron_planner import iron_tuning, plan_iron
@@ -86,7 +90,8 @@ def turn(design, axis, angle: float, steps: int | None = None, planner: str = "g
             own = design_model(design)
             model, limits = own.model, own.limits if limits is None else limits
         return plan_iron(design, targets, model, limits=limits,
-                         tuning=iron_tuning(design, model) if tuning is None else tuning, plants=plants)
+                         tuning=iron_tuning(design, model) if tuning is None else tuning, plants=plants,
+                         plant_tol=plant_tol, thermal=thermal, rate=rate)
     if planner == "potential":
         from ..potential import MotorPotential
         from .potential_planner import plan_potential

@@ -176,12 +176,14 @@ def run_turn(design, plan, plant, tuning, axis, angle: float, tolerance: float, 
 
 def many_turns(design, model=None, *, planner: str = "auto", plant=None, count: int = COUNT, seed: int = SEED,
                spec_turn=None, tolerance: float = math.radians(0.5), path_tol: float | None = None,
-               required: float = REQUIRED, stop_early: bool = False, plan_plants=(), progress=None) -> Verdict:
+               required: float = REQUIRED, stop_early: bool = False, plan_plants=(), plant_tol: float | None = None,
+               progress=None) -> Verdict:
     """The many-turn verdict of ``design`` (module docstring). ``model``: the planning model (default the design's
     own, :func:`spherestep.magnetics.design_model`; a DesignModel or a torque model); ``plant``: the model the plans
     run on (default ``model``'s); ``spec_turn``: ``(axis, angle_rad)`` added first; ``stop_early``: stop once
     ``required`` can no longer be reached (the remaining turns are not run and the verdict counts them failed);
-    ``plan_plants``: the iron planner's ``plants`` (plans that hold on those models too)."""
+    ``plan_plants``, ``plant_tol``: the iron planner's ``plants`` (plans that hold on those models too) and how
+    near the planned minimum theirs must lie."""
     from ..commutation import turn
     from .turn import choose_model
 
@@ -198,7 +200,7 @@ def many_turns(design, model=None, *, planner: str = "auto", plant=None, count: 
         if progress is not None:
             progress(f"turn {n + 1} of {len(turns)}: {math.degrees(angle):.0f}°")
         plan = turn(design, axis, angle, planner=planner, model=chosen.model, limits=chosen.limits, tuning=tuning,
-                    plants=plan_plants)
+                    plants=plan_plants, plant_tol=plant_tol)
         outcome = run_turn(design, plan, plant, tuning, axis, angle, tolerance, path_tol)
         outcomes.append(outcome)
         failed += not outcome.executed

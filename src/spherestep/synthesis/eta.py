@@ -24,6 +24,19 @@ turn and the holds; 2–31 s measured against 0.1–46 s of ladder), the report 
 (:data:`REPORT_STATES` of its ladder time: 21 s against 30 s in one run, 14 s against 46 s in another, its ladder
 task slowed at the run's start) plus :data:`REPORT_SECONDS`. Three measured runs replay through this ETA
 (tests/test_synthesis_eta.py) within 1.8× of the time left from 10 % of the run on.
+
+A relay spec's task also runs the relay rung's many-turn check (:func:`spherestep.drive.many_turns`: 20 random
+turns planned and simulated, stopping once 95 % is out of reach), which the enumeration's ``(M N)²`` does not
+see: :func:`relay_rung_seconds`, :data:`MANY_TURNS_SECONDS` — a design that passes runs all 20 turns (the 0.25 T
+prototype, ``examples/designs/relays-iron.yaml``: 823 steps, 16.6 s CPU, 20 ms a step planned on iron and
+integrated over its dwell; 2026-11-28, after issue 39's planner speed-up), one that fails stops after 2–3 (the
+prototype as built: 3 turns, 136 steps, 6.8 s, its blocked steps the costly ones). The quick budget's relay
+runs measured the rung at 70–90 % of a task's seconds of the rows that reach it (the prototype's 92 × 33
+layout: 110 s of a row against the enumeration's 8.5 s estimate, at load 12). A task pruned at a cheaper rung
+never runs it: in the ``normal`` relay search 87 of 680 tasks reached it (docs/synthesis.md), so each task of a
+relay spec is charged :data:`REACH_RUNG` × :data:`MANY_TURNS_SECONDS` (2.2 s); the pace of the finished tasks
+corrects a search whose share differs (the quick budget's five all reach it). So charged, the ``normal`` relay
+searches (702 layouts) are estimated at 66 min of one worker (26 min of it the rung), ~33 min on two.
 """
 
 from __future__ import annotations
@@ -36,6 +49,8 @@ SOLVE_SECONDS = 180.0  # s of a task that solves an iron table first (docs/synth
 BUILD_SECONDS = 0.1  # s to build and write one finalist's design file (4 in under 0.1 s)
 VERIFY_SECONDS = 4.0  # s of a finalist's verification beyond its ladder time (3.9-8 s measured)
 REPORT_SECONDS = 3.0  # s of the report's figures and tables (the quick budget's report: 3.4 s)
+MANY_TURNS_SECONDS = 17.0  # s of one worker: the relay rung's many-turn check of a design that passes it (below)
+REACH_RUNG = 0.13  # the share of a relay search's tasks that reach the relay rung (87 of 680, the normal budget's)
 REPORT_STATES = 0.45  # the report's states over the shown design's ladder time (21 s of 30 s; 14 s of 46 s)
 REFRESH = 10.0  # s: the longest a progress line keeps its ETA within a stage (Progress.line)
 CHANGE = 0.2  # the relative change of the ETA that refreshes the line sooner
@@ -55,6 +70,13 @@ def after_ladder(row_seconds: Sequence[float], finalists: int, slots: int) -> di
     return {"finalists": BUILD_SECONDS * finalists,
             "verification": sum(map(verify_seconds, picks)) / min(max(1, int(slots)), max(finalists, 1)),
             "report": REPORT_STATES * max(picks, default=0.0) + REPORT_SECONDS}
+
+
+def relay_rung_seconds(relays: bool) -> float:
+    """Estimated seconds of one worker for the relay rung's many-turn check of a task of a relay spec
+    (``relays``; 0 otherwise): the check of a design that passes it, :data:`MANY_TURNS_SECONDS`, times the share
+    of tasks that reach the rung, :data:`REACH_RUNG` (module docstring)."""
+    return REACH_RUNG * MANY_TURNS_SECONDS if relays else 0.0
 
 
 def verify_seconds(ladder_seconds: float) -> float:

@@ -24,7 +24,7 @@ import numpy as np
 from .. import checks
 from ..errors import InputError, bad_value
 from .eta import (ALIGNMENT_SECONDS, BUILD_SECONDS, REPORT_SECONDS, REPORT_STATES, SOLVE_SECONDS, Progress,
-                  after_ladder, verify_seconds)
+                  after_ladder, relay_rung_seconds, verify_seconds)
 from .answer import _answer, closest_row, nearest_rows
 from .front import Finalist, _json, _missing, choose_finalists, pareto
 from .ladder import GRADES, N42, PROTOTYPE, WINDINGS, Candidate, _row, baseline_layout, build, climb
@@ -269,9 +269,9 @@ def cost_estimate(c: Candidate, spec, costly: bool = False) -> float:
 
 def task_seconds(c: Candidate, spec, costly: bool = False) -> float:
     """A ladder task's estimated seconds of one worker, for the ETA (:mod:`.eta`): as :func:`cost_estimate`,
-    :data:`~.eta.ALIGNMENT_SECONDS` × ``(M N)²``, twice that with a relay rung, and
-    :data:`~.eta.SOLVE_SECONDS` for a task that may solve an iron table."""
-    seconds = ALIGNMENT_SECONDS * float(pairs(c)) ** 2 * (2.0 if spec.relays else 1.0)
+    :data:`~.eta.ALIGNMENT_SECONDS` × ``(M N)²``, twice that with a relay rung and its many-turn check
+    (:func:`~.eta.relay_rung_seconds`), and :data:`~.eta.SOLVE_SECONDS` for a task that may solve an iron table."""
+    seconds = ALIGNMENT_SECONDS * float(pairs(c)) ** 2 * (2.0 if spec.relays else 1.0) + relay_rung_seconds(spec.relays)
     return seconds + (SOLVE_SECONDS if _solves(c, spec, costly) else 0.0)
 
 
