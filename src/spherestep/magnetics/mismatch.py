@@ -24,7 +24,6 @@ of the calibration (issue 26).
 
 from __future__ import annotations
 
-import copy
 import math
 from dataclasses import dataclass, replace
 from functools import lru_cache
@@ -38,6 +37,7 @@ from ..statics import TorqueModelBase
 from . import _iron
 from ._ironmap import IronTorqueMap, iron_model, read_table
 from ._table import TorqueMap
+from .calibrated import scaled_coupling
 
 SHELL_FILE = "iron_shell_table.csv"
 SHELL_CHANGES = (-0.3e-3, 0.3e-3)  # m: the stored shells of the prototype
@@ -61,7 +61,7 @@ def scaled_model(model, winding: float = 1.0, detent: float = 1.0, coupling: flo
             raise bad_value("coupling", "1 for an iron model without the coupling through the cores", coupling)
         return replace(model, detent=replace(model.detent, tau=model.detent.tau * detent),
                        linear=replace(model.linear, tau=model.linear.tau * winding),
-                       coupling=model.coupling if coupling == 1.0 else _scaled_coupling(model.coupling, coupling))
+                       coupling=model.coupling if coupling == 1.0 else scaled_coupling(model.coupling, coupling))
     if isinstance(model, TorqueMap):
         if coupling != 1.0:
             raise bad_value("coupling", "1 for an air-core torque map (it has no cores)", coupling)
@@ -69,18 +69,6 @@ def scaled_model(model, winding: float = 1.0, detent: float = 1.0, coupling: flo
             raise bad_value("detent", "1 for an air-core torque map (it has no detent)", detent)
         return replace(model, tau=model.tau * winding)
     raise bad_value("model", "a spherestep.magnetics IronTorqueMap or TorqueMap", type(model).__name__)
-
-
-def _scaled_coupling(coupling, factor: float):
-    """``coupling`` (:class:`._coupling.CoreCoupling`) with its series' spline coefficients ×``factor``: its energy
-    and torque are linear in them, so ×``factor`` exactly (the coupled tables are rebuilt for the new content)."""
-    series = []
-    for spline in coupling.series:
-        scaled = copy.copy(spline)
-        tx, ty, c = spline.tck
-        scaled.tck = (tx, ty, np.asarray(c) * factor)
-        series.append(scaled)
-    return replace(coupling, series=tuple(series))
 
 
 def shell_model(design, change: float, coil=None) -> IronTorqueMap:
