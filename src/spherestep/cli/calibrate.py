@@ -8,7 +8,7 @@ from pathlib import Path
 import typer
 
 from .app import app
-from .common import check_port, design_from, number, print_json, usable
+from .common import check_port, design_from, number, print_json, tolerance_option, usable
 from .progress import progress
 from .signals import Terminated, interrupt_of, sigterm_as_interrupt, told
 
@@ -35,6 +35,16 @@ def plant_error(text: str) -> dict:
             raise bad_value("--plant-error", expected, text)
         out[key.strip()] = factor
     return out
+
+
+def judge_holds(holds, degrees: float | None):
+    """Each hold's rest against its target (:mod:`spherestep.drive.judgement`), within ``degrees`` (default the
+    hold's 0.05°)."""
+    from .. import so3
+    from ..drive.judgement import judge, tolerance
+
+    return judge(so3.distance(holds.orientations, holds.targets), tolerance(degrees, "hold"),
+                 f"the holds ({holds.backend})", label="hold", first_index=1)
 
 
 def coils_off(interrupt: BaseException, emulate: bool) -> str:
@@ -67,17 +77,19 @@ def calibrate(
     error: str = typer.Option("detent=1.2,winding=0.85", "--plant-error",
                               help="With --emulate: the emulated plant's tables as factors on the model's."),
     seed: int = typer.Option(0, "--seed", help="Seed of the random walk of holds."),
+    tolerance: float = tolerance_option(),
     as_json: bool = typer.Option(False, "--json", help="Print the fit as JSON."),
 ) -> None:
     """Drive the servo to a walk of orientations, record the steady currents and the moves, and fit the iron
     model's detent and winding tables to them (least squares with a smoothness prior); print the fit (residuals,
-    scales, the nodes moved and their uncertainty, what the data cannot see) and write it to --out.
+    scales, the nodes moved and their uncertainty, what the data cannot see) and write it to --out. Exit status 1,
+    nothing written, when a hold rests more than --tolerance (default 0.05°) from its target.
 
     Example: [bold]spherestep calibrate --emulate --plant-error detent=1.2,winding=0.85 --out calibration.yaml[/bold]
     """
     from ..control import calibrate as fit, hold_orientations, torque_error
     from ..drive import Emulated, Port, collect_holds
-    from ..errors import bad_value
+    from ..errors import ComputationError, bad_value
     from ..magnetics import design_model
     from ..magnetics.mismatch import scaled_model
     from ..outputs import output_file
@@ -100,6 +112,9 @@ def calibrate(
     try:
         with sigterm_as_interrupt() as received, progress("calibrating", enabled=not as_json) as say:
             holds = collect_holds(design, backend, walk, model=own.model, limits=own.limits, progress=say)
+            judged = judge_holds(holds, tolerance)
+            if not judged.ok:  # before the fit: a walk that was not held is no calibration
+                raise ComputationError(f"{judged.reason}; nothing written")
             say("fitting the tables")
             cal = fit(design, own.model, holds)
             before = after = None

@@ -16,7 +16,7 @@ import typer
 
 from ..errors import InputError, bad_value
 from .app import app
-from .common import console, number, print_json
+from .common import console, number, print_json, tolerance_option
 from .signals import Terminated, exit_code, interrupt_of, sigterm_as_interrupt, signal_name, told
 
 LOG_LINE = re.compile(r"^\s*-?\d+\.\d{6} (TX|RX|NOTE) ")  # a line of Transcript.lines()
@@ -105,6 +105,7 @@ def run(
                                                             "on, in (0, 1] (default 0.5)."),
     duty_window: float = typer.Option(None, "--duty-window", callback=number("a positive number of seconds", 0, low_open=True),
                                       help="Length of the sliding window of --max-duty (seconds; default 30)."),
+    tolerance: float = tolerance_option(),
     as_json: bool = typer.Option(False, "--json", help="Print the result as JSON."),
 ) -> None:
     """Stream a commutation plan to the coil controller, one step every 1/RATE seconds.
@@ -112,6 +113,10 @@ def run(
     The plan is checked against the coils' thermal limits before anything is switched.
 
     Every coil is switched off after the last step, on any error, on Ctrl-C and on SIGTERM.
+
+    With --simulate each step is judged: exit status 1 when one settles more than --tolerance (default 0.5°) off
+    its planned state. A device reports no orientation, so on a port (and in a dry run) the judgement is that
+    every frame was acknowledged, and --tolerance is refused there.
 
     The controller's watchdog switches them off if the host falls silent (protocol: docs/protocol.md).
 
@@ -127,6 +132,9 @@ def run(
         option = "--dry-run" if dry_run else "--simulate"
         raise bad_value("--port", f"left out with {option} (it sends nothing to a device); drop --port or "
                         f"{option}", port)
+    if tolerance is not None and not simulate:
+        raise bad_value("--tolerance", "given only with --simulate (a device reports no orientation to judge; on a "
+                        "port every frame must be acknowledged)", tolerance)
     if simulate:
         port = "simulated"
     if not dry_run and port is None:
@@ -208,17 +216,22 @@ def run(
 
         settled = np.array([R for _, R in backend.orientations])
         planned = steps.achieved[:len(settled)]  # play holds every step, the first one included
-        err = np.degrees(so3.distance(settled, planned))
-        result |= {"mode": "simulated", "settled_within_0_5_deg": int(np.sum(err <= 0.5)),
-                   "settled_error_median_deg": float(np.median(err)), "settled_error_max_deg": float(err.max())}
+        from ..drive.judgement import judge, tolerance as judged_within
+
+        err = so3.distance(settled, planned)
+        judged = judge(err[1:], judged_within(tolerance, "relay"), f"the plan at {rate:g} steps/s on the simulated "
+                       "rotor", times=np.arange(1, len(err)) / rate, first_index=1)  # step k settles at k/rate
+        result |= {"mode": "simulated", "tolerance_deg": judged.to_dict()["tolerance_deg"],
+                   "settled_within_tolerance": int(judged.checked - judged.failed),
+                   "settled_error_median_deg": float(np.degrees(np.median(err[1:]))),
+                   "settled_error_max_deg": float(np.degrees(err[1:].max())), "judgement": judged.to_dict()}
     else:
         stats = backend.stats
         result |= {"mode": "serial", "port": port, "protocol": dev.protocol, "acknowledged": stats["acked"],
                    "retransmissions": stats["retransmissions"], "final_state": "all coils off, acknowledged"}
     if as_json:
         print_json(result)
-        return
-    if dry_run:
+    elif dry_run:
         from rich.table import Table
 
         table = Table(title=f"dry run of {plan.name}")
@@ -233,11 +246,13 @@ def run(
               "final state all coils off")
     elif simulate:
         print(f"simulated {frames} at {rate:g} Hz ({report.elapsed:.1f} s of rotor time): "
-              f"{result['settled_within_0_5_deg']} settled within 0.5° of the plan (median "
-              f"{result['settled_error_median_deg']:.2f}°, max {result['settled_error_max_deg']:.2f}°); "
-              "final state all coils off")
+              f"{result['settled_within_tolerance']} of {report.steps - 1} steps settled within "
+              f"{result['tolerance_deg']:g}° of the plan (median {result['settled_error_median_deg']:.2f}°, max "
+              f"{result['settled_error_max_deg']:.2f}°); final state all coils off")
     else:
         print(f"streamed {frames} at {rate:g} Hz to {port} (device {dev.name!r}, protocol {dev.protocol}, "
               f"{dev.channels} channels) in {report.elapsed:.3f} s: {result['acknowledged']} frames acknowledged, "
               f"{result['retransmissions']} retransmissions, worst step lateness {report.max_lag * 1000:.1f} ms; "
               "final state all coils off, acknowledged")
+    if simulate:
+        judged.require()
