@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 import sys
 from pathlib import Path
 
@@ -82,14 +83,16 @@ def calibrate(
 ) -> None:
     """Drive the servo to a walk of orientations, record the steady currents and the moves, and fit the iron
     model's detent and winding tables to them (least squares with a smoothness prior); print the fit (residuals,
-    scales, the nodes moved and their uncertainty, what the data cannot see) and write it to --out. Exit status 1,
-    nothing written, when a hold rests more than --tolerance (default 0.05°) from its target.
+    scales, the nodes moved and their uncertainty, what the data cannot see) and write it to --out. Each hold is
+    judged against its target within --tolerance (default 0.05°) and the line says how many held there and the
+    worst: a hold that rests off its target is still data (the fit uses where it rested), so it does not fail the
+    command.
 
     Example: [bold]spherestep calibrate --emulate --plant-error detent=1.2,winding=0.85 --out calibration.yaml[/bold]
     """
     from ..control import calibrate as fit, hold_orientations, torque_error
     from ..drive import Emulated, Port, collect_holds
-    from ..errors import ComputationError, bad_value
+    from ..errors import bad_value
     from ..magnetics import design_model
     from ..magnetics.mismatch import scaled_model
     from ..outputs import output_file
@@ -112,9 +115,7 @@ def calibrate(
     try:
         with sigterm_as_interrupt() as received, progress("calibrating", enabled=not as_json) as say:
             holds = collect_holds(design, backend, walk, model=own.model, limits=own.limits, progress=say)
-            judged = judge_holds(holds, tolerance)
-            if not judged.ok:  # before the fit: a walk that was not held is no calibration
-                raise ComputationError(f"{judged.reason}; nothing written")
+            judged = judge_holds(holds, tolerance)  # said, not fatal: the fit uses where each hold rested
             say("fitting the tables")
             cal = fit(design, own.model, holds)
             before = after = None
@@ -131,11 +132,15 @@ def calibrate(
         raise typer.Exit(143 if isinstance(interrupt, Terminated) or received.name == "SIGTERM" else 130) from None
     path = cal.save(out)
     if as_json:
-        print_json({"calibration": cal.to_dict(), "holds": holds.to_dict(), "file": str(path),
+        print_json({"calibration": cal.to_dict(), "holds": holds.to_dict(), "holds_judged": judged.to_dict(),
+                    "file": str(path),
                     "plant_error": factors if emulate else None,
                     "torque_error_before": before, "torque_error_after": after})
         return
     print(cal.summary())
+    print(f"holds: {judged.checked - judged.failed} of {judged.checked} within {math.degrees(judged.tolerance):g}° of "
+          f"their targets" + (f"; {judged.reason.split(': ', 1)[1]} (the fit uses where each rested)"
+                              if not judged.ok else ""))
     if before is not None:
         print(f"torque error against the emulated plant ({error}): {before:.4f} -> {after:.4f} "
               f"({before / after:.1f}x smaller), 200 random orientations and currents")
