@@ -96,3 +96,22 @@ def test_run_simulate_judges_every_step(tmp_path, capsys):
     assert main(["run", str(tmp_path / "iron" / "plan.json"), "--rate", "2", "--simulate", "--json"]) == 0
     r = json.loads(capsys.readouterr().out)
     assert r["judgement"]["ok"] and r["settled_within_tolerance"] == r["steps"] and r["settled_error_max_deg"] <= 0.5
+
+
+def test_the_demo_says_which_drives_failed():
+    """The demo's drives are judged as ``move`` judges them: counted in summary.json, named on the console."""
+    from spherestep.demo import drive_lines, drives_judged, drives_judged_line
+
+    ok = {"mode": "servo", "time_s": 1.5, "final_error_deg": 0.012, "max_tracking_error_deg": 0.3, "peak_power_W": 90,
+          "mean_power_W": 40, "tolerance_deg": 0.05, "within_tolerance": True, "judgement": "", "arrival_note": ""}
+    bad = ok | {"mode": "settled", "time_s": None, "within_tolerance": False, "tolerance_deg": 0.5,
+                "judgement": "settled on the simulated motor (iron): it did not arrive: the plan is blocked (final "
+                             "error 52.9°)"}
+    d = {"model": "iron", "modes": [bad, ok], "bang_bang_bound_s": None}
+    j = drives_judged(d, {"model": "air", "modes": [ok], "bang_bang_bound_s": None})
+    assert j == {"ok": 2, "drives": 3, "failed": [bad["judgement"]]}
+    assert drives_judged_line(j).startswith("2 of 3 drives did what they report; 1 did not (shown as they ran, the "
+                                            "demo still exits 0): settled on the simulated motor")
+    lines = drive_lines(d)
+    assert lines[1].endswith("; FAILED: it did not arrive: the plan is blocked (final error 52.9°)")
+    assert lines[2].endswith("; within 0.05°")

@@ -17,6 +17,7 @@ import typer
 from ..errors import InputError, bad_value
 from .app import app
 from .common import console, number, print_json, tolerance_option
+from .progress import progress
 from .signals import Terminated, exit_code, interrupt_of, sigterm_as_interrupt, signal_name, told
 
 LOG_LINE = re.compile(r"^\s*-?\d+\.\d{6} (TX|RX|NOTE) ")  # a line of Transcript.lines()
@@ -178,8 +179,15 @@ def run(
                 backend = conn.link
                 if live is not None:
                     live.start()
-                try:
-                    report = play(steps, backend, rate, limits, on_step=on_step)
+                try:  # in a pipe or a log: plain lines, at most one per 10 s, and never 10 s silent (a stream of
+                    # 10 s or more, or a simulation; a dry run takes no time)
+                    stage = f"streaming the plan at {rate:g} Hz: step"
+                    long = simulate or (not dry_run and len(steps.steps) / rate >= 10.0)
+                    with progress(stage, enabled=live is None and not as_json and long) as say:
+                        if live is None:
+                            def on_step(i, step, say=say):
+                                say(stage, done=i + 1, total=len(steps.steps))
+                        report = play(steps, backend, rate, limits, on_step=on_step)
                 finally:
                     if live is not None:
                         live.stop()
