@@ -50,18 +50,16 @@ def _design_for(design_path, plan):
     return design
 
 
-def _simulated(design_path, plan):
+def _simulated(design, plan):
     """The simulated relay back end's options for ``plan`` (:func:`spherestep.drive.connect`, kind
-    ``"simulated"``): the design's rotor under its own torque model (:func:`spherestep.magnetics.design_model`:
+    ``"simulated"``): the ``design``'s rotor under its own torque model (:func:`spherestep.magnetics.design_model`:
     iron for the prototype), tuned, starting at rest at the plan's first orientation."""
     from ..dynamics import tune
     from ..magnetics import design_model
-    from .common import usable
 
-    design = usable(_design_for(design_path, plan), "--design", design_path)
     model = design_model(design).model
     tuning = tune(design, model)
-    return design, {"plant": model, "R0": plan.steps[0].achieved, "rotor": tuning.rotor, "dt": tuning.dt}
+    return {"plant": model, "R0": plan.steps[0].achieved, "rotor": tuning.rotor, "dt": tuning.dt}
 
 
 def _progress(total: int, show: bool):
@@ -153,7 +151,11 @@ def run(
     if log is not None:
         log = check_log(log, force)
     steps = Plan.from_json(plan)
-    if design_path is not None and not simulate:
+    if simulate:  # refused before anything is built or switched
+        from .common import usable
+
+        simulated = usable(_design_for(design_path, steps), "--design", design_path)
+    elif design_path is not None:
         _design_for(design_path, steps)  # refused before anything is switched
     given = {"max_on": max_on, "max_duty": max_duty, "window": duty_window}
     limits = ThermalLimits(**{k: v for k, v in given.items() if v is not None})
@@ -171,7 +173,8 @@ def run(
                 design, options = None, {"channels": needed if channels is None else channels,
                                          "transcript": transcript}
             elif simulate:
-                design, options = _simulated(design_path, steps)
+                with progress("building the torque model and tuning the rotor", enabled=not as_json):
+                    design, options = simulated, _simulated(simulated, steps)
             else:
                 design, options = None, {"port": port, "transcript": transcript}
             kind = "dry run" if dry_run else "simulated" if simulate else "relay port"
