@@ -182,11 +182,10 @@ def run(
                 backend = conn.link
                 if live is not None:
                     live.start()
-                try:  # in a pipe or a log: plain lines, at most one per 10 s, and never 10 s silent (a stream of
-                    # 10 s or more, or a simulation; a dry run takes no time)
+                try:  # a simulation in a pipe or a log: plain lines, at most one per 10 s, never 10 s silent (a
+                    # port's stream keeps stderr for its one closing line; its --log records every frame as it goes)
                     stage = f"streaming the plan at {rate:g} Hz: step"
-                    long = simulate or (not dry_run and len(steps.steps) / rate >= 10.0)
-                    with progress(stage, enabled=live is None and not as_json and long) as say:
+                    with progress(stage, enabled=live is None and not as_json and simulate) as say:
                         if live is None:
                             def on_step(i, step, say=say):
                                 say(stage, done=i + 1, total=len(steps.steps))
