@@ -44,11 +44,12 @@ class _Plain:
             self._print(text + (f" {done}/{total}" if done is not None and total else ""), now)
 
     def beat(self) -> None:
-        """Until :attr:`stop` is set: repeat the stage when :data:`PLAIN_EVERY` s passed without a line."""
-        while not self.stop.wait(0.5):
+        """Until :attr:`stop` is set: repeat the stage when 8.5 s passed without a line (under
+        :data:`PLAIN_EVERY`)."""
+        while not self.stop.wait(0.25):
             now = time.monotonic()
-            with self.lock:
-                if now - self.shown >= PLAIN_EVERY - 0.5:
+            with self.lock:  # 1.5 s early: a compiled call holding the GIL can delay the thread by a second or so
+                if now - self.shown >= PLAIN_EVERY - 1.5:
                     self._print(f"{self.stage} … still working", now)
 
 
