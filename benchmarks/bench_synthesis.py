@@ -12,9 +12,11 @@ Each cluster is started once and warmed up (every worker imports spherestep and 
 timed repeats. "Busy workers" is the time inside the tasks, summed, over the wall time.
 
 **16 workers.** Issue 29 asks for ≥ 12× on 16 local workers; this machine has 2 cores, so that cannot be measured
-here. What can be said from the measured task times (1 worker process, the first repeat's): with ``n`` workers the
-wall time is at least ``max(Σt / n, max t)`` (a task is not split), so the speed-up is at most
-``Σt / max(Σt / n, max t)``; and a greedy list schedule (each task, in submission order, to the worker free first —
+here. What can be said from the measured task times (1 worker process, the first repeat's): a layout is cut into
+tasks (:mod:`spherestep.synthesis.tasks`: the shared rungs, then per core the capability and the relay rung side by
+side), so with ``n`` workers the wall time is at least ``max(Σt / n, max c)`` for ``c`` a layout's critical path
+(its shared rungs, then its longest per-core task), and the speed-up is at most ``Σt / max(Σt / n, max c)``; and a
+greedy list schedule of whole layouts (each task, in submission order, to the worker free first —
 what Dask does with one task per worker) shows what an order achieves: the grid's order against the search's,
 longest first by :func:`spherestep.synthesis.run.cost_estimate`. Both are printed for 16 workers.
 """
@@ -31,7 +33,7 @@ from pathlib import Path
 
 from distributed import Client, LocalCluster, as_completed
 
-from spherestep.synthesis import Candidate, Ladder, load_spec
+from spherestep.synthesis import Candidate, Ladder, load_spec, tasks
 from spherestep.synthesis.run import cost_estimate
 
 SPEC = Path(__file__).resolve().parents[1] / "examples" / "specs" / "camera-gimbal.yaml"
@@ -42,17 +44,26 @@ LAYOUTS = [Candidate(r, 0, s, sl, cap, 0.060, samples=400, capability_samples=32
 WARM_UP = Candidate("icosidodecahedron", 0, "truncated-octahedron", 0, 60.0, 0.060, samples=50, capability_samples=8)
 
 
-def run(client: Client, ladder: Ladder, layouts: list) -> tuple[float, list[float]]:
-    """Wall time of one pass over ``layouts`` (submitted as the search does, longest first by the estimate) and
-    every task's own time (s), in the order of ``layouts``."""
+def run(client: Client, ladder: Ladder, layouts: list) -> tuple[float, list[float], list[float]]:
+    """Wall time of one pass over ``layouts`` (cut into tasks and submitted as the search does,
+    :mod:`spherestep.synthesis.tasks`, longest first by the estimate), each layout's summed task seconds and its
+    critical path (the shared rungs, then the longest of its per-core tasks), in the order of ``layouts``."""
     start = time.perf_counter()
     cost = [cost_estimate(c, ladder.spec, ladder.may_solve(c)) for c in layouts]
-    futures = {client.submit(ladder, c, pure=False, priority=k): n for n, (c, k) in enumerate(zip(layouts, cost))}
-    inside = [0.0] * len(layouts)
-    for future in as_completed(list(futures)):
-        rows = future.result()
-        inside[futures[future]] = max(float(r["seconds"]) for r in rows)  # a task's time (the longest row's)
-    return time.perf_counter() - start, inside
+    parts = [tasks.submit(client, ladder, c, k) for c, k in zip(layouts, cost)]
+    owner = {f: n for n, fs in enumerate(parts) for f in fs[1:]}
+    left = [len(fs) - 1 for fs in parts]
+    inside, chain = [0.0] * len(layouts), [0.0] * len(layouts)
+    for future in as_completed(list(owner)):
+        n = owner[future]
+        left[n] -= 1
+        if left[n]:
+            continue
+        results = [f.result() for f in parts[n][1:]]
+        row, took = results[0]  # a core's row carries the shared rungs' seconds and its own task's
+        chain[n] = float(row["seconds"]) - took + max(t for _, t in results)
+        _, inside[n] = tasks.merge(ladder.spec, results)
+    return time.perf_counter() - start, inside, chain
 
 
 def list_schedule(times: list[float], workers: int) -> float:
@@ -64,15 +75,17 @@ def list_schedule(times: list[float], workers: int) -> float:
     return max(free)
 
 
-def scaling(times: list[float], estimates: list[float], workers: int = 16) -> str:
-    """The bound and the list schedules on ``workers`` for task ``times`` (grid order) with cost ``estimates``."""
-    total, longest = sum(times), max(times)
+def scaling(times: list[float], estimates: list[float], workers: int = 16, chains: list[float] | None = None) -> str:
+    """The bound and the list schedules on ``workers`` for layouts of summed task ``times`` (grid order) with cost
+    ``estimates``; ``chains`` their critical paths (default: the times, a layout in one task)."""
+    total, longest = sum(times), max(times if chains is None else chains)
     bound = total / max(total / workers, longest)
     grid = total / list_schedule(times, workers)
     order = sorted(range(len(times)), key=lambda n: -estimates[n])
     first = total / list_schedule([times[n] for n in order], workers)
     top = sorted(times, reverse=True)[:5]
-    return (f"{len(times)} tasks: Σt = {total:.1f} s, longest {', '.join(f'{t:.1f}' for t in top)} s; on {workers} "
+    paths = "" if chains is None else f", longest critical path {longest:.1f} s"
+    return (f"{len(times)} layouts: Σt = {total:.1f} s, longest {', '.join(f'{t:.1f}' for t in top)} s{paths}; on {workers} "
             f"workers the bound Σt / max(Σt/{workers}, max t) = {bound:.1f}x; a list schedule in grid order "
             f"{grid:.1f}x, longest first by the estimate {first:.1f}x")
 
@@ -115,7 +128,7 @@ def main() -> None:
           f"{os.getloadavg()[0]:.1f}")
     print(f"# work: {len(LAYOUTS)} layouts of the camera-gimbal spec; median of {repeats} repeats")
     print(f"{'cluster':<22} {'designs/s':>9} {'busy workers':>12}  repeats (designs/s)")
-    medians, tasks = {}, []
+    medians, measured, chains = {}, [], []
     for label, kwargs in (("1 worker process", dict(n_workers=1, processes=True)),
                           ("2 worker processes", dict(n_workers=2, processes=True)),
                           ("2 threads, 1 process", dict(n_workers=1, threads_per_worker=2, processes=False))):
@@ -127,11 +140,11 @@ def main() -> None:
             with Client(cluster) as client:
                 client.run(ladder, WARM_UP)
                 for _ in range(repeats):
-                    wall, inside = run(client, ladder, LAYOUTS)
+                    wall, inside, chain = run(client, ladder, LAYOUTS)
                     rates.append(len(LAYOUTS) / wall)
                     busy.append(sum(inside) / wall)
-                    if label == "1 worker process" and not tasks:
-                        tasks = inside
+                    if label == "1 worker process" and not measured:
+                        measured, chains = inside, chain
         finally:
             cluster.close()
         medians[label] = statistics.median(rates)
@@ -139,11 +152,11 @@ def main() -> None:
               f"{', '.join(f'{r:.3f}' for r in rates)}")
     ratio = medians["2 worker processes"] / medians["1 worker process"]
     threads = medians["2 threads, 1 process"] / medians["1 worker process"]
-    print(f"speed-up with 2 worker processes: {ratio:.2f}x; with 2 threads: {threads:.2f}x "
-          f"(load average at end {os.getloadavg()[0]:.1f})")
+    print(f"speed-up with 2 worker processes: {ratio:.2f}x (efficiency {ratio / 2:.0%}); with 2 threads: "
+          f"{threads:.2f}x (load average at end {os.getloadavg()[0]:.1f})")
     estimates = [cost_estimate(c, spec, ladder.may_solve(c)) for c in LAYOUTS]
     print(f"16 workers (not measurable on {os.cpu_count()} cores), from the 1-worker task times: "
-          f"{scaling(tasks, estimates)}")
+          f"{scaling(measured, estimates, chains=chains)}")
 
 
 if __name__ == "__main__":

@@ -107,7 +107,7 @@ def test_move_settled_relays_write_their_files_and_judge_the_tolerance(tmp_path,
     assert main(args + ["--out", str(tmp_path / "a")]) == 1
     captured = capsys.readouterr()
     info = _no_constants(captured.out)
-    assert captured.err.strip().splitlines()[-1].startswith("spherestep: failed: settled on the simulated motor ended")
+    assert captured.err.strip().splitlines()[-1].startswith("spherestep: failed: settled on the simulated motor (air")
     details = info["details"]
     assert details["executed"] and details["steps_settled_on_plan"] == details["steps"] >= 2
     assert info["time_s"] == pytest.approx(details["steps"] * details["dwell_s"], rel=1e-3)  # whole time steps

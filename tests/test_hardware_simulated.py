@@ -39,9 +39,15 @@ def test_run_simulate_cli(tmp_path, capsys):
     assert main(["plan", "--axis", "0,0,1", "--angle", "15", "--steps", "2", "--planner", "geometric", "--out",
                  str(tmp_path)]) == 0  # the plumbing of run, not the iron planner (its own tests)
     capsys.readouterr()
-    assert main(["run", str(tmp_path / "plan.json"), "--rate", "0.8", "--simulate"]) == 0
-    out = capsys.readouterr().out
-    assert "simulated 3 frames (the start and 2 steps)" in out and "all coils off" in out
+    # the geometric plan does not execute on the iron rotor: the run streams every frame, reports, and exits 1
+    # naming the first step that missed (issue 40 §1: it used to exit 0)
+    assert main(["run", str(tmp_path / "plan.json"), "--rate", "0.8", "--simulate"]) == 1
+    captured = capsys.readouterr()
+    assert "simulated 3 frames (the start and 2 steps)" in captured.out and "all coils off" in captured.out
+    assert captured.err.strip().splitlines()[-1].startswith("spherestep: failed: the plan at 0.8 steps/s on the "
+                                                            "simulated rotor: step ")
+    assert main(["run", str(tmp_path / "plan.json"), "--rate", "0.8", "--simulate", "--tolerance", "180"]) == 0
+    capsys.readouterr()
     for extra in (["--dry-run"], ["--design", str(tmp_path / "none.yaml")]):
         args = ["run", str(tmp_path / "plan.json"), "--rate", "1"] + extra
         if extra[0] == "--dry-run":

@@ -27,8 +27,10 @@ def listening(say: Callable[..., None]) -> Iterator[None]:
         _SAY.reset(token)
 
 
-def report(text: str, done: int | None = None, total: int | None = None) -> None:
-    """Tell the :func:`listening` caller, if any, how the work stands (``done`` of ``total`` steps)."""
+def report(text: str, done: int | None = None, total: int | None = None) -> bool:
+    """Tell the :func:`listening` caller, if any, how the work stands (``done`` of ``total`` steps); whether
+    anyone was listening."""
     say = _SAY.get()
     if say is not None:
         say(text, done=done, total=total)
+    return say is not None

@@ -22,7 +22,7 @@ import math
 import os
 
 import numpy as np
-from numba import njit
+from .compiling import njit
 
 
 def table_threads() -> int:

@@ -7,7 +7,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
+from .compiling import njit
 
 from .terms import _turn, terms_evaluate, workspace
 

@@ -7,7 +7,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
+from .compiling import njit
 
 POLE_CLIP = 1e-6  # sin ϑ is clipped here in H_φ / sin ϑ (the grid's poles lie between the cores)
 

@@ -28,7 +28,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
+from .compiling import njit
 
 from .kernels import ANGLE_SPLINE, _point, _unpack
 

@@ -13,7 +13,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
+from .compiling import njit
 
 from .integrate import _dissipate
 from .terms import _turn, terms_evaluate, workspace

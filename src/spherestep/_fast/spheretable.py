@@ -19,7 +19,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
+from .compiling import njit
 
 HALO = 8  # nodes beyond each face edge: the spline prefilter's boundary error decays as 0.268 per node
 

@@ -11,7 +11,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
+from .compiling import njit
 
 from .terms import _rotate
 

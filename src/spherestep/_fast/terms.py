@@ -11,7 +11,7 @@ synthesis glue share.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+from .compiling import njit
 
 from ..so3 import exp_entries
 from .kernels import _hessian_on_sphere, _point, _unpack

@@ -2,13 +2,14 @@
 
 from __future__ import annotations
 
+import math
 import sys
 from pathlib import Path
 
 import typer
 
 from .app import app
-from .common import check_port, design_from, number, print_json, usable
+from .common import check_port, design_from, number, print_json, tolerance_option, usable
 from .progress import progress
 from .signals import Terminated, interrupt_of, sigterm_as_interrupt, told
 
@@ -35,6 +36,16 @@ def plant_error(text: str) -> dict:
             raise bad_value("--plant-error", expected, text)
         out[key.strip()] = factor
     return out
+
+
+def judge_holds(holds, degrees: float | None):
+    """Each hold's rest against its target (:mod:`spherestep.drive.judgement`), within ``degrees`` (default the
+    hold's 0.05°)."""
+    from .. import so3
+    from ..drive.judgement import judge, tolerance
+
+    return judge(so3.distance(holds.orientations, holds.targets), tolerance(degrees, "hold"),
+                 f"the holds ({holds.backend})", label="hold", first_index=1)
 
 
 def coils_off(interrupt: BaseException, emulate: bool) -> str:
@@ -67,11 +78,15 @@ def calibrate(
     error: str = typer.Option("detent=1.2,winding=0.85", "--plant-error",
                               help="With --emulate: the emulated plant's tables as factors on the model's."),
     seed: int = typer.Option(0, "--seed", help="Seed of the random walk of holds."),
+    tolerance: float = tolerance_option(),
     as_json: bool = typer.Option(False, "--json", help="Print the fit as JSON."),
 ) -> None:
     """Drive the servo to a walk of orientations, record the steady currents and the moves, and fit the iron
     model's detent and winding tables to them (least squares with a smoothness prior); print the fit (residuals,
-    scales, the nodes moved and their uncertainty, what the data cannot see) and write it to --out.
+    scales, the nodes moved and their uncertainty, what the data cannot see) and write it to --out. Each hold is
+    judged against its target within --tolerance (default 0.05°) and the line says how many held there and the
+    worst: a hold that rests off its target is still data (the fit uses where it rested), so it does not fail the
+    command.
 
     Example: [bold]spherestep calibrate --emulate --plant-error detent=1.2,winding=0.85 --out calibration.yaml[/bold]
     """
@@ -100,6 +115,7 @@ def calibrate(
     try:
         with sigterm_as_interrupt() as received, progress("calibrating", enabled=not as_json) as say:
             holds = collect_holds(design, backend, walk, model=own.model, limits=own.limits, progress=say)
+            judged = judge_holds(holds, tolerance)  # said, not fatal: the fit uses where each hold rested
             say("fitting the tables")
             cal = fit(design, own.model, holds)
             before = after = None
@@ -116,11 +132,15 @@ def calibrate(
         raise typer.Exit(143 if isinstance(interrupt, Terminated) or received.name == "SIGTERM" else 130) from None
     path = cal.save(out)
     if as_json:
-        print_json({"calibration": cal.to_dict(), "holds": holds.to_dict(), "file": str(path),
+        print_json({"calibration": cal.to_dict(), "holds": holds.to_dict(), "holds_judged": judged.to_dict(),
+                    "file": str(path),
                     "plant_error": factors if emulate else None,
                     "torque_error_before": before, "torque_error_after": after})
         return
     print(cal.summary())
+    print(f"holds: {judged.checked - judged.failed} of {judged.checked} within {math.degrees(judged.tolerance):g}° of "
+          f"their targets" + (f"; {judged.reason.split(': ', 1)[1]} (the fit uses where each rested)"
+                              if not judged.ok else ""))
     if before is not None:
         print(f"torque error against the emulated plant ({error}): {before:.4f} -> {after:.4f} "
               f"({before / after:.1f}x smaller), 200 random orientations and currents")

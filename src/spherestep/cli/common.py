@@ -40,6 +40,19 @@ def number(expected: str, low: float | None = None, high: float | None = None, *
     return check
 
 
+TOLERANCE_HELP = ("Success is judged within this many degrees (default the run's own: 0.05° for a servo's end and a "
+                  "hold, 0.5° for each relay step against its planned state); a run that misses it exits 1 naming "
+                  "the first step or time that missed.")
+
+
+def tolerance_option():
+    """``--tolerance DEG``, the same on every command that moves a rotor (:mod:`spherestep.drive.judgement`, whose
+    SERVO_TOLERANCE and RELAY_TOLERANCE the help states; a test holds them equal): degrees, > 0 and ≤ 180; left
+    out (None), each run is judged by its own."""
+    return typer.Option(None, "--tolerance", callback=number("degrees", 0, 180, low_open=True, what="the tolerance"),
+                        help=TOLERANCE_HELP)
+
+
 def parse_vector(text: str, name: str):
     """Parse ``"X,Y,Z"`` into a non-zero 3-vector; InputError naming ``name`` otherwise."""
     import numpy as np

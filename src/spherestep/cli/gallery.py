@@ -21,7 +21,7 @@ def gallery(
                                                       "JSON."),
     out: Path = typer.Option(None, "--out", help="Also write every design file, metrics.csv and gallery.json "
                                                  "into this folder."),
-    measure: bool = typer.Option(False, "--measure", help="Measure every design now (about two minutes, the drive "
+    measure: bool = typer.Option(False, "--measure", help="Measure every design now (about 50 s, the drive "
                                                           "included) instead of "
                                                           "printing the stored metrics."),
     samples: int = typer.Option(20_000, "--samples", callback=number("a whole number of orientations from 100 to 1000000",

@@ -13,7 +13,7 @@ from ..errors import bad_value
 from ..outputs import output_folder
 from .app import app
 from .common import (check_axis, check_core, check_port, console, design_from, number, parse_vector, print_json,
-                     usable)
+                     tolerance_option, usable)
 from .motor import ANGLE
 from .signals import exit_code, interrupt_for, sigterm_as_interrupt, told
 
@@ -68,9 +68,7 @@ def move(
                                                                                what="sensor noise σ"),
                                        help="Simulated servo with --sensor ideal: orientation noise σ in degrees "
                                             "(default 0)."),
-    tolerance: float = typer.Option(0.05, "--tolerance", callback=number("degrees", 0, 180, low_open=True,
-                                                                         what="the tolerance"),
-                                    help="A run ending farther than this from the turn's end (degrees) exits 1."),
+    tolerance: float = tolerance_option(),
     out: Path = typer.Option(Path("spherestep-move"), "--out", help="Output folder."),
     as_json: bool = typer.Option(False, "--json", help="Print the summary as JSON."),
     port: str = typer.Option(None, "--port", help="Servo on hardware: the coil controller's serial device "
@@ -99,7 +97,8 @@ def move(
     """Drive a turn about an axis on the simulated motor (the design's own model: the iron-cored coils of the
     prototype, their winding's limits, 24 V / 100 W supply) and write the trajectory (trajectory.csv), coil currents
     (currents.csv), power (power.csv), a plot (move.png) and a summary (move.json), which say the model used.
-    Exit status 1 (after writing the files) when the run did not arrive within --tolerance of the turn's end.
+    Exit status 1 (after writing the files) when the run did not arrive within --tolerance of the turn's end
+    (default 0.05° for the servo; relay steps within 0.5° of their plan).
 
     Example: [bold]spherestep move --axis 1,0.5,2 --angle 360 --fastest --mode servo --sensor-noise 0.02[/bold]
 
@@ -181,7 +180,7 @@ def move(
                 out.mkdir(parents=True, exist_ok=True)
                 result = drive_turn(design, axis_vec, math.radians(angle), mode=mode, backend=backend,
                                     model=own, duration=time, sensor=sensor, sensor_noise=noise,
-                                    port=port, rate=rate, tolerance=math.radians(tolerance),
+                                    port=port, rate=rate, tolerance=None if tolerance is None else math.radians(tolerance),
                                     log=out / "servo-log.csv" if backend != "simulated" else None, progress=say,
                                     firmware=firmware, end=end or "hold", hold=hold)
                 if backend != "simulated" and result.details.outcome == "INTERRUPT":  # the loop caught it, coils off

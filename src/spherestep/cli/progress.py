@@ -1,8 +1,10 @@
 """Progress on stderr for commands that can run longer than two seconds.
 
-On a terminal a Rich spinner (a bar when the work has a known size) that disappears at the end; otherwise — a pipe,
-a log file, CI — plain lines ``spherestep: <stage> (12 s)``, one per stage and at most one every
-:data:`PLAIN_EVERY` seconds within a stage, so a long run is never silent. ``--json`` and ``--quiet`` turn it off.
+On a terminal a Rich spinner (a bar when the work has a known size) with the elapsed time, ticking every second,
+that disappears at the end; otherwise — a pipe, a log file, CI — plain lines ``spherestep: <stage> (12 s)``, one
+per stage and at most one every :data:`PLAIN_EVERY` seconds within a stage, and a heartbeat thread that repeats
+the stage (``… still working``) when :data:`PLAIN_EVERY` seconds passed without a line, so no stretch of 10 s or
+more is silent even inside one long call. ``--json`` and ``--quiet`` turn it off.
 
     with progress("building the torque model", enabled=not as_json) as say:
         say("mapping the capability", done=10, total=400)
@@ -11,6 +13,7 @@ a log file, CI — plain lines ``spherestep: <stage> (12 s)``, one per stage and
 from __future__ import annotations
 
 import sys
+import threading
 import time
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
@@ -19,20 +22,35 @@ PLAIN_EVERY = 10.0  # s between two plain lines of the same stage
 
 
 class _Plain:
-    """Periodic plain lines on stderr."""
+    """Periodic plain lines on stderr, and a heartbeat (:meth:`beat`) for the stretches between them."""
 
     def __init__(self, first: str):
         self.start = time.monotonic()
         self.stage, self.shown = None, -PLAIN_EVERY
+        self.lock = threading.Lock()
+        self.stop = threading.Event()
         self(first)
+
+    def _print(self, text: str, now: float) -> None:
+        self.shown = now
+        print(f"spherestep: {text} ({now - self.start:.0f} s)", file=sys.stderr, flush=True)
 
     def __call__(self, text: str, done: int | None = None, total: int | None = None) -> None:
         now = time.monotonic()
-        if text == self.stage and now - self.shown < PLAIN_EVERY:
-            return
-        self.stage, self.shown = text, now
-        count = f" {done}/{total}" if done is not None and total else ""
-        print(f"spherestep: {text}{count} ({now - self.start:.0f} s)", file=sys.stderr, flush=True)
+        with self.lock:
+            if text == self.stage and now - self.shown < PLAIN_EVERY:
+                return
+            self.stage = text
+            self._print(text + (f" {done}/{total}" if done is not None and total else ""), now)
+
+    def beat(self) -> None:
+        """Until :attr:`stop` is set: repeat the stage when 8.5 s passed without a line (under
+        :data:`PLAIN_EVERY`)."""
+        while not self.stop.wait(0.25):
+            now = time.monotonic()
+            with self.lock:  # 1.5 s early: a compiled call holding the GIL can delay the thread by a second or so
+                if now - self.shown >= PLAIN_EVERY - 1.5:
+                    self._print(f"{self.stage} … still working", now)
 
 
 @contextmanager
@@ -45,8 +63,14 @@ def progress(first: str, *, enabled: bool = True) -> Iterator[Callable[..., None
 
     if not sys.stderr.isatty():
         plain = _Plain(first)
-        with listening(plain):
-            yield plain
+        heart = threading.Thread(target=plain.beat, name="spherestep-progress", daemon=True)
+        heart.start()
+        try:
+            with listening(plain):
+                yield plain
+        finally:
+            plain.stop.set()
+            heart.join()
         return
     from rich.console import Console
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, SpinnerColumn, TextColumn, TimeElapsedColumn

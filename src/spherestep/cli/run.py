@@ -16,7 +16,8 @@ import typer
 
 from ..errors import InputError, bad_value
 from .app import app
-from .common import console, number, print_json
+from .common import console, number, print_json, tolerance_option
+from .progress import progress
 from .signals import Terminated, exit_code, interrupt_of, sigterm_as_interrupt, signal_name, told
 
 LOG_LINE = re.compile(r"^\s*-?\d+\.\d{6} (TX|RX|NOTE) ")  # a line of Transcript.lines()
@@ -49,18 +50,16 @@ def _design_for(design_path, plan):
     return design
 
 
-def _simulated(design_path, plan):
+def _simulated(design, plan):
     """The simulated relay back end's options for ``plan`` (:func:`spherestep.drive.connect`, kind
-    ``"simulated"``): the design's rotor under its own torque model (:func:`spherestep.magnetics.design_model`:
+    ``"simulated"``): the ``design``'s rotor under its own torque model (:func:`spherestep.magnetics.design_model`:
     iron for the prototype), tuned, starting at rest at the plan's first orientation."""
     from ..dynamics import tune
     from ..magnetics import design_model
-    from .common import usable
 
-    design = usable(_design_for(design_path, plan), "--design", design_path)
     model = design_model(design).model
     tuning = tune(design, model)
-    return design, {"plant": model, "R0": plan.steps[0].achieved, "rotor": tuning.rotor, "dt": tuning.dt}
+    return {"plant": model, "R0": plan.steps[0].achieved, "rotor": tuning.rotor, "dt": tuning.dt}
 
 
 def _progress(total: int, show: bool):
@@ -105,6 +104,7 @@ def run(
                                                             "on, in (0, 1] (default 0.5)."),
     duty_window: float = typer.Option(None, "--duty-window", callback=number("a positive number of seconds", 0, low_open=True),
                                       help="Length of the sliding window of --max-duty (seconds; default 30)."),
+    tolerance: float = tolerance_option(),
     as_json: bool = typer.Option(False, "--json", help="Print the result as JSON."),
 ) -> None:
     """Stream a commutation plan to the coil controller, one step every 1/RATE seconds.
@@ -112,6 +112,10 @@ def run(
     The plan is checked against the coils' thermal limits before anything is switched.
 
     Every coil is switched off after the last step, on any error, on Ctrl-C and on SIGTERM.
+
+    With --simulate each step is judged: exit status 1 when one settles more than --tolerance (default 0.5°) off
+    its planned state. A device reports no orientation, so on a port (and in a dry run) the judgement is that
+    every frame was acknowledged, and --tolerance is refused there.
 
     The controller's watchdog switches them off if the host falls silent (protocol: docs/protocol.md).
 
@@ -130,6 +134,9 @@ def run(
         option = "--dry-run" if dry_run else "--simulate"
         raise bad_value("--port", f"left out with {option} (it sends nothing to a device); drop --port or "
                         f"{option}", port)
+    if tolerance is not None and not simulate:
+        raise bad_value("--tolerance", "given only with --simulate (a device reports no orientation to judge; on a "
+                        "port every frame must be acknowledged)", tolerance)
     if simulate:
         port = "simulated"
     if not dry_run and port is None:
@@ -147,7 +154,11 @@ def run(
     if log is not None:
         log = check_log(log, force)
     steps = Plan.from_json(plan)
-    if design_path is not None and not simulate:
+    if simulate:  # refused before anything is built or switched
+        from .common import usable
+
+        simulated = usable(_design_for(design_path, steps), "--design", design_path)
+    elif design_path is not None:
         _design_for(design_path, steps)  # refused before anything is switched
     given = {"max_on": max_on, "max_duty": max_duty, "window": duty_window}
     limits = ThermalLimits(**{k: v for k, v in given.items() if v is not None})
@@ -165,7 +176,8 @@ def run(
                 design, options = None, {"channels": needed if channels is None else channels,
                                          "transcript": transcript}
             elif simulate:
-                design, options = _simulated(design_path, steps)
+                with progress("building the torque model and tuning the rotor", enabled=not as_json):
+                    design, options = simulated, _simulated(simulated, steps)
             else:
                 design, options = None, {"port": port, "transcript": transcript}
             kind = "dry run" if dry_run else "simulated" if simulate else "relay port"
@@ -173,8 +185,14 @@ def run(
                 backend = conn.link.backend
                 if live is not None:
                     live.start()
-                try:
-                    report = play(steps, conn.link, rate, limits, on_step=on_step)
+                try:  # a simulation in a pipe or a log: plain lines, at most one per 10 s, never 10 s silent (a
+                    # port's stream keeps stderr for its one closing line; its --log records every frame as it goes)
+                    stage = f"streaming the plan at {rate:g} Hz: step"
+                    with progress(stage, enabled=live is None and not as_json and simulate) as say:
+                        if live is None:
+                            def on_step(i, step, say=say):
+                                say(stage, done=i + 1, total=len(steps.steps))
+                        report = play(steps, conn.link, rate, limits, on_step=on_step)
                 finally:
                     if live is not None:
                         live.stop()
@@ -211,17 +229,22 @@ def run(
 
         settled = np.array([R for _, R in backend.orientations])
         planned = steps.achieved[:len(settled)]  # play holds every step, the first one included
-        err = np.degrees(so3.distance(settled, planned))
-        result |= {"mode": "simulated", "settled_within_0_5_deg": int(np.sum(err <= 0.5)),
-                   "settled_error_median_deg": float(np.median(err)), "settled_error_max_deg": float(err.max())}
+        from ..drive.judgement import judge, tolerance as judged_within
+
+        err = so3.distance(settled, planned)
+        judged = judge(err[1:], judged_within(tolerance, "relay"), f"the plan at {rate:g} steps/s on the simulated "
+                       "rotor", times=np.arange(1, len(err)) / rate, first_index=1)  # step k settles at k/rate
+        result |= {"mode": "simulated", "tolerance_deg": judged.to_dict()["tolerance_deg"],
+                   "settled_within_tolerance": int(judged.checked - judged.failed),
+                   "settled_error_median_deg": float(np.degrees(np.median(err[1:]))),
+                   "settled_error_max_deg": float(np.degrees(err[1:].max())), "judgement": judged.to_dict()}
     else:
         stats = backend.stats
         result |= {"mode": "serial", "port": port, "protocol": dev.protocol, "acknowledged": stats["acked"],
                    "retransmissions": stats["retransmissions"], "final_state": "all coils off, acknowledged"}
     if as_json:
         print_json(result)
-        return
-    if dry_run:
+    elif dry_run:
         from rich.table import Table
 
         table = Table(title=f"dry run of {plan.name}")
@@ -236,11 +259,13 @@ def run(
               "final state all coils off")
     elif simulate:
         print(f"simulated {frames} at {rate:g} Hz ({report.elapsed:.1f} s of rotor time): "
-              f"{result['settled_within_0_5_deg']} settled within 0.5° of the plan (median "
-              f"{result['settled_error_median_deg']:.2f}°, max {result['settled_error_max_deg']:.2f}°); "
-              "final state all coils off")
+              f"{result['settled_within_tolerance']} of {report.steps - 1} steps settled within "
+              f"{result['tolerance_deg']:g}° of the plan (median {result['settled_error_median_deg']:.2f}°, max "
+              f"{result['settled_error_max_deg']:.2f}°); final state all coils off")
     else:
         print(f"streamed {frames} at {rate:g} Hz to {port} (device {dev.name!r}, protocol {dev.protocol}, "
               f"{dev.channels} channels) in {report.elapsed:.3f} s: {result['acknowledged']} frames acknowledged, "
               f"{result['retransmissions']} retransmissions, worst step lateness {report.max_lag * 1000:.1f} ms; "
               "final state all coils off, acknowledged")
+    if simulate:
+        judged.require()

@@ -19,7 +19,7 @@ import numpy as np
 
 from ..errors import bad_value
 from .result import DriveResult, RampedDetails
-from .turn import MODES, TOLERANCE, Turn, choose_model
+from .turn import MODES, Turn, choose_model
 
 DEMO_AXIS = (1.0, 0.5, 2.0)
 SENSOR_NOISE = math.radians(0.02)
@@ -65,11 +65,12 @@ class DriveComparison:
 
 def compare_drives(design, axis=DEMO_AXIS, angle: float = 2 * math.pi, model=None, *, limits=None,
                    modes=MODES[::-1], sensor_noise: float = SENSOR_NOISE, rates=None, duration: float | None = None,
-                   damped_servo: bool = False, tolerance: float = TOLERANCE, seed: int = 0,
+                   damped_servo: bool = False, tolerance: float | None = None, seed: int = 0,
                    progress: Callable[[str], None] | None = None) -> DriveComparison:
     """Drive the turn of ``angle`` rad about ``axis`` (fixed frame, from the stepper state nearest the identity) in
     each of ``modes`` on ``model`` (default the design's own, :func:`spherestep.magnetics.design_model`); see the
-    module. ``rates`` the ramped cruise rates tried, ``duration`` the servo's time (default the fastest turn)."""
+    module. ``tolerance`` (rad) judges every mode (default each mode's own, :mod:`~spherestep.drive.judgement`).
+    ``rates`` the ramped cruise rates tried, ``duration`` the servo's time (default the fastest turn)."""
     from ..control import bang_bang_time
     from ..dynamics import Rotor
 

@@ -234,19 +234,19 @@ class DriveResult:
 
     @property
     def ok(self) -> bool:
-        """Arrived, and the final error is within the tolerance: the only result that may be reported as done."""
-        return self.arrived and self.final_error <= self.tolerance
+        """Arrived, and the final error is within the tolerance: the only result that may be reported as done
+        (:func:`spherestep.drive.judgement.judge_drive`)."""
+        return self.judgement().ok
+
+    def judgement(self):
+        """The :class:`~spherestep.drive.judgement.Judgement` of this run (:func:`~spherestep.drive.judgement.judge_drive`)."""
+        from .judgement import judge_drive
+
+        return judge_drive(self)
 
     def verdict(self) -> str:
         """One line: why the run is not :attr:`ok` (empty when it is)."""
-        if self.ok:
-            return ""
-        if not self.arrived:
-            return (f"{self.mode} on the {self.backend} motor did not arrive: {self.arrival_note} (final error "
-                    f"{math.degrees(self.final_error):.3g}°)")
-        return (f"{self.mode} on the {self.backend} motor ended {math.degrees(self.final_error):.3g}° from the turn's "
-                f"end, more than the tolerance {math.degrees(self.tolerance):.3g}° (--tolerance to judge it "
-                f"otherwise)")
+        return self.judgement().reason
 
     KEYS: ClassVar[Keys] = (
         ("mode", "mode"), ("backend", "backend"), ("model", "model"), ("axis", "axis", np.ndarray.tolist),
@@ -256,8 +256,10 @@ class DriveResult:
         ("mean_power_W", "mean_power"), ("tolerance", "tolerance", ANGLE), ("within_tolerance", "ok"))
 
     def to_dict(self, degrees: bool = True) -> dict:
-        """JSON-ready (no ``inf``/``NaN``): angles in degrees, or radians with ``degrees=False``."""
-        return {**keyed_dict(self, self.KEYS, degrees), "details": self.details.to_dict(degrees)}
+        """JSON-ready (no ``inf``/``NaN``): angles in degrees, or radians with ``degrees=False``; ``judgement`` the
+        one-line reason the run is not ok ("" when it is)."""
+        return {**keyed_dict(self, self.KEYS, degrees), "judgement": self.judgement().reason,
+                "details": self.details.to_dict(degrees)}
 
     def summary_line(self) -> str:
         """The console line: mode, backend, model, turn, time, errors, power."""

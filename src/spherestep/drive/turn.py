@@ -34,11 +34,12 @@ import numpy as np
 from .. import checks, so3
 from ..errors import InputError, bad_value
 from .result import DriveResult, RampedDetails, ServoDetails, SettledDetails
+from .judgement import RELAY_TOLERANCE, SERVO_TOLERANCE
 
 MODES = ("servo", "ramped", "settled")
 BACKENDS = ("simulated", "emulated", "port")
 SENSORS = ("ideal", "hall", "imu")
-TOLERANCE = math.radians(0.05)  # rad: a run ending farther than this from the turn's end did not make it
+TOLERANCE = SERVO_TOLERANCE  # rad: a servo ending farther than this from the turn's end did not make it (judgement)
 FIXED_SERVO_TIME = 3.0  # s for a full turn, where the fastest-turn planner refuses the model (module docstring)
 SETTLE = 0.5  # s the servo runs beyond its trajectory
 
@@ -82,7 +83,7 @@ class Turn:
     the design, the unit ``axis``, ``angle`` (rad), the ``chosen`` model; the geometric ``plan`` and the relay
     ``tuning`` are made on first use."""
 
-    def __init__(self, design, axis, angle: float, chosen: Chosen, tolerance: float = TOLERANCE,
+    def __init__(self, design, axis, angle: float, chosen: Chosen, tolerance: float | None = None,
                  progress: Callable[[str], None] | None = None, planner: str = "auto"):
         from ..commutation import turn_targets
         from .many_turns import relay_planner
@@ -93,7 +94,7 @@ class Turn:
         self.angle = checks.number(angle, "angle", expected="a finite non-zero angle in radians")
         if self.angle == 0:
             raise bad_value("angle", "a finite non-zero angle in radians", angle)
-        self.tolerance = checks.positive(tolerance, "tolerance", "a positive angle in radians")
+        self.given = None if tolerance is None else checks.positive(tolerance, "tolerance", "a positive angle in rad")
         ends = turn_targets(design, self.axis, self.angle, steps=1)
         self.start, self.end = ends[0], ends[-1]
         self.say = progress or (lambda _: None)
@@ -121,13 +122,20 @@ class Turn:
             self._tuning = relay_tuning(self.design, self.chosen.model, self.planner)
         return self._tuning
 
+    def tolerance(self, mode: str) -> float:
+        """The tolerance (rad) ``mode``'s result is judged by: the one given, else the mode's own
+        (:mod:`~spherestep.drive.judgement`: 0.05° for the servo, 0.5° for relay steps)."""
+        if self.given is not None:
+            return self.given
+        return SERVO_TOLERANCE if mode == "servo" else RELAY_TOLERANCE
+
     def result(self, mode: str, backend: str, times, orientations, targets, sensor_error, currents, power,
                time: float, note: str, final_error: float, max_tracking_error: float, details) -> DriveResult:
         power = np.asarray(power, dtype=float)
         return DriveResult(mode, backend, self.chosen.label, self.axis, self.angle, np.asarray(times, dtype=float),
                            np.asarray(orientations), np.asarray(targets), np.asarray(sensor_error, dtype=float),
                            np.asarray(currents, dtype=float), power, float(time), note, float(final_error),
-                           float(max_tracking_error), float(power.max()), float(power.mean()), self.tolerance,
+                           float(max_tracking_error), float(power.max()), float(power.mean()), self.tolerance(mode),
                            details)
 
     def settled(self) -> DriveResult:
@@ -137,7 +145,7 @@ class Turn:
         plan, tuning, limits = self.plan, self.tuning, self.chosen.limits
         self.say(f"simulating {len(plan.steps) - 1} settled relay steps")
         sim = simulate(self.design, plan, self.chosen.model, dwell=tuning.dwell, rotor=tuning.rotor, dt=tuning.dt,
-                       record_every=1)
+                       record_every=1, tolerance=self.tolerance("settled"))
         targets = _step_targets(sim.times, tuning.dwell * np.arange(len(plan.steps) - 1), plan.targets)
         on_plan = int(np.count_nonzero(sim.step_errors[1:] <= sim.tolerance))  # the steps, not the start
         ends_on_plan = float(so3.distance(sim.settled[-1], plan.achieved[-1])) <= sim.tolerance
@@ -165,7 +173,8 @@ class Turn:
         plan, tuning = self.plan, self.tuning
         self.say("finding the ramped relay steps' pull-out rate")
         pull = pull_out_rate(self.design, plan, self.chosen.model, rotor=tuning.rotor,
-                             rates=RATES if rates is None else rates, dt=tuning.dt, limits=self.chosen.limits)
+                             rates=RATES if rates is None else rates, dt=tuning.dt, limits=self.chosen.limits,
+                             tolerance=self.tolerance("ramped"))
         run = pull.run if pull.run is not None else pull.slowest
         s = run.summary()
         note = ""
@@ -206,13 +215,14 @@ class Turn:
         self.say(f"simulating the servo over {traj.duration + settle:.3g} s at 1 kHz")
         run = simulate_servo(self.design, traj, self.chosen.model, limits=self.chosen.limits, rotor=rotor,
                              sensor=_sensor(self.design, sensor, sensor_noise, traj.start, seed), settle=settle)
-        time = run.arrival_time(self.tolerance)
+        tolerance = self.tolerance("servo")
+        time = run.arrival_time(tolerance)
         time = math.inf if time is None else float(time)
         sensor_error = so3.distance(run.estimates, run.orientations)
         details = ServoDetails(kind, note, float(traj.duration), sensor, sensor_noise, float(sensor_error.max()),
                                rotor.damping, float(run.copper_power.mean()), float(np.abs(run.currents).max()),
                                float(np.mean(run.reachable)))
-        arrival = "" if math.isfinite(time) else (f"not within {math.degrees(self.tolerance):.3g}° of the turn's end "
+        arrival = "" if math.isfinite(time) else (f"not within {math.degrees(tolerance):.3g}° of the turn's end "
                                                   f"at the end of the run ({run.times[-1]:.3g} s)")
         return self.result("servo", "simulated", run.times, run.orientations, run.targets, sensor_error,
                            run.currents, run.power, time, arrival, float(so3.distance(run.orientations[-1], self.end)),
@@ -315,7 +325,7 @@ def check_duration(design, axis, angle: float, chosen: Chosen, duration: float, 
 
 def drive_turn(design, axis, angle_rad: float, *, mode: str = "servo", backend: str = "simulated", model=None,
                limits=None, duration: float | None = None, sensor: str = "ideal", sensor_noise: float = 0.0,
-               port: str | None = None, rate: float | None = None, tolerance: float = TOLERANCE, seed: int = 0,
+               port: str | None = None, rate: float | None = None, tolerance: float | None = None, seed: int = 0,
                rates=None, log=None, progress: Callable[[str], None] | None = None,
                firmware: str = "python", end: str = "hold", hold: float | None = None) -> DriveResult:
     """Drive a turn of ``angle_rad`` about ``axis`` (fixed frame) in ``mode`` on ``backend`` (module docstring).
@@ -332,7 +342,8 @@ def drive_turn(design, axis, angle_rad: float, *, mode: str = "servo", backend: 
     ``end`` (emulated motor or port): ``"hold"`` or ``"park"``, how the move ends before the coils go off
     and ``hold`` s it is held (default 0.5; :func:`~spherestep.drive.hardware.drive_on_hardware`: hold is judged
     where the servo holds the rotor, park where it rests in the predicted well with the coils off).
-    ``tolerance`` (rad): a result is :attr:`~DriveResult.ok` only within it. ``progress(text)`` hears each stage.
+    ``tolerance`` (rad): a result is :attr:`~DriveResult.ok` only within it (default the mode's own,
+    :mod:`~spherestep.drive.judgement`). ``progress(text)`` hears each stage.
     """
     check_options(mode, backend, duration=duration, sensor=sensor, sensor_noise=sensor_noise, port=port, rate=rate)
     if firmware != "python" and backend != "emulated":
@@ -352,8 +363,8 @@ def drive_turn(design, axis, angle_rad: float, *, mode: str = "servo", backend: 
         default = QEMU_RATE if firmware == "qemu" else LOOP_RATE
         return drive_on_hardware(design, axis, angle_rad, chosen, duration=duration, port=port,
                                  emulate=backend == "emulated", rate=default if rate is None else rate, log=log,
-                                 tolerance=tolerance, progress=progress, firmware=firmware, end=end,
-                                 hold=hold)
+                                 tolerance=SERVO_TOLERANCE if tolerance is None else tolerance, progress=progress,
+                                 firmware=firmware, end=end, hold=hold)
     job = Turn(design, axis, angle_rad, chosen, tolerance, progress)
     if duration is not None:
         check_duration(design, job.axis, job.angle, chosen, duration, start=job.start)

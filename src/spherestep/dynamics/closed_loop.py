@@ -29,7 +29,8 @@ from .._fast.threads import single_blas_thread
 @dataclass
 class ClosedLoopRun:
     """Per controller step: ``targets``, ``true`` and ``measured`` orientations (``(S, 3, 3)``), the
-    ``commanded`` state indices, whether the step was ``missed``; ``final_error`` (rad) = D(true, R_n)."""
+    ``commanded`` state indices, whether the step was ``missed``; ``final_error`` (rad) = D(true, R_n); ``goal``
+    the stepper state nearest ``R_n``, the one the loop steers to, and ``dwell`` (s) per controller step."""
 
     targets: np.ndarray
     true: np.ndarray
@@ -37,6 +38,14 @@ class ClosedLoopRun:
     commanded: np.ndarray
     missed: np.ndarray
     final_error: float
+    goal: np.ndarray
+    dwell: float
+
+    @property
+    def end_error(self) -> float:
+        """Park distance (rad) from where the rotor ends to :attr:`goal`: what the closed loop is judged on (a
+        relay can land only on its states; the goal may be a few degrees from ``R_n``)."""
+        return float(so3.distance(self.true[-1], self.goal))
 
     @property
     def errors(self) -> np.ndarray:
@@ -108,4 +117,5 @@ def run_closed_loop(design, targets, model, *, dwell: float = 0.5, noise: float 
         log_cmd.append(goal)
         log_missed.append(skip)
     return ClosedLoopRun(np.array(log_t), np.array(log_true), np.array(log_meas), np.array(log_cmd),
-                         np.array(log_missed), float(so3.distance(R, targets[-1])))
+                         np.array(log_missed), float(so3.distance(R, targets[-1])),
+                         states.rotations[int(near[n, 0])].copy(), float(dwell))

@@ -294,10 +294,12 @@ def evaluate(candidate: Candidate, spec, allow_costly: bool = False, baseline: d
     return climb(candidate, spec, allow_costly, baseline)[0]
 
 
-def climb(candidate: Candidate, spec, allow_costly: bool = False, baseline: dict | None = None
-          ) -> tuple[list[dict], dict]:
+def climb(candidate: Candidate, spec, allow_costly: bool = False, baseline: dict | None = None,
+          through: str = "capability") -> tuple[list[dict], dict]:
     """:func:`evaluate`'s rows and the designs it built, by core: the first live core's carries its stepper
-    states (computed once, by the states rung), so a later rung on it does not enumerate them again."""
+    states (computed once, by the states rung), so a later rung on it does not enumerate them again. ``through``
+    ``"states"`` stops after the shared rungs (geometry, states): a row still climbing has no ``status`` yet, and
+    :func:`capability_rung` finishes it (the search runs that per core, as its own task)."""
     from ..explore import Unbuildable
 
     start = time.perf_counter()
@@ -370,42 +372,50 @@ def climb(candidate: Candidate, spec, allow_costly: bool = False, baseline: dict
             if why:
                 stop(live, "states", "pruned", why)
                 live = []
-    R = range_orientations(spec, candidate.capability_samples, candidate.seed) if live else None
+    if through == "states":
+        seconds = time.perf_counter() - start
+        for row in rows.values():
+            row["seconds"] = seconds
+        return list(rows.values()), {core: designs[core] for core in live}
     for core in live:  # --- rung 3: capability on the design's own model ---
-        d, row = designs[core], rows[core]
-        try:
-            row.update(capability_numbers(d, spec, R, failed_check=spec.single_coil_failure and spec.servo))
-            if spec.relays and spec.torque.step is not None:
-                row["step_torque_Nm"] = step_torque(d, 4, candidate.seed)
-        except Exception as exc:  # noqa: BLE001
-            stop([core], "capability", "failed", f"{type(exc).__name__}: {exc}")
-            continue
-        row["time_estimate_s"] = time_estimate(d, spec, row["torque_median_Nm"])
-        fastest = time_estimate(d, spec, row.pop("torque_max_Nm"))
-        why = None
-        need = spec.torque.every_direction
-        loose = 1 - slack(candidate.capability_samples * 15)  # 64 orientations ~ as noisy as 1000 for the median
-        if spec.servo and need is not None and row["torque_quantile_Nm"] < need * loose:
-            why = (f"{row['torque_quantile_Nm']:.3g} N·m in every direction over {spec.torque.over_fraction:.0%} of "
-                   f"the range, under {need:.3g}")
-        elif spec.servo and row["torque_positive_fraction"] < spec.torque.over_fraction:
-            why = f"torque in every direction on only {row['torque_positive_fraction']:.0%} of the range"
-        elif spec.servo and spec.single_coil_failure and need is not None and \
-                row["failed_coil_torque_Nm"] < need * loose:
-            why = f"{row['failed_coil_torque_Nm']:.3g} N·m with the worst coil failed, under {need:.3g}"
-        elif spec.relays and spec.torque.step is not None and not row["step_torque_Nm"] >= spec.torque.step:
-            why = f"step torque {row['step_torque_Nm']:.3g} N·m under {spec.torque.step:.3g}"
-        elif spec.speed is not None and spec.servo and fastest > spec.speed.within:
-            why = (f"even a bang-bang turn at the largest sampled torque takes {fastest:.3g} s, over "
-                   f"{spec.speed.within:.3g} s")
-        if why:
-            stop([core], "capability", "pruned", why)
-        else:
-            stop([core], "capability", "ok", "")
+        capability_rung(candidate, rows[core], designs[core], spec)
     seconds = time.perf_counter() - start
     for row in rows.values():
         row["seconds"] = seconds
     return list(rows.values()), designs
+
+
+def capability_rung(candidate: Candidate, row: dict, design, spec) -> None:
+    """Rung 3 on one core's ``row`` (its ``design``): the capability on the design's own model at the spec's
+    range orientations, and the prunes that read it (module docstring); sets the row's ``stage``, ``status`` and
+    ``reason``."""
+    R = range_orientations(spec, candidate.capability_samples, candidate.seed)
+    try:
+        row.update(capability_numbers(design, spec, R, failed_check=spec.single_coil_failure and spec.servo))
+        if spec.relays and spec.torque.step is not None:
+            row["step_torque_Nm"] = step_torque(design, 4, candidate.seed)
+    except Exception as exc:  # noqa: BLE001
+        row.update(stage="capability", status="failed", reason=f"{type(exc).__name__}: {exc}")
+        return
+    row["time_estimate_s"] = time_estimate(design, spec, row["torque_median_Nm"])
+    fastest = time_estimate(design, spec, row.pop("torque_max_Nm"))
+    why = ""
+    need = spec.torque.every_direction
+    loose = 1 - slack(candidate.capability_samples * 15)  # 64 orientations ~ as noisy as 1000 for the median
+    if spec.servo and need is not None and row["torque_quantile_Nm"] < need * loose:
+        why = (f"{row['torque_quantile_Nm']:.3g} N·m in every direction over {spec.torque.over_fraction:.0%} of "
+               f"the range, under {need:.3g}")
+    elif spec.servo and row["torque_positive_fraction"] < spec.torque.over_fraction:
+        why = f"torque in every direction on only {row['torque_positive_fraction']:.0%} of the range"
+    elif spec.servo and spec.single_coil_failure and need is not None and \
+            row["failed_coil_torque_Nm"] < need * loose:
+        why = f"{row['failed_coil_torque_Nm']:.3g} N·m with the worst coil failed, under {need:.3g}"
+    elif spec.relays and spec.torque.step is not None and not row["step_torque_Nm"] >= spec.torque.step:
+        why = f"step torque {row['step_torque_Nm']:.3g} N·m under {spec.torque.step:.3g}"
+    elif spec.speed is not None and spec.servo and fastest > spec.speed.within:
+        why = (f"even a bang-bang turn at the largest sampled torque takes {fastest:.3g} s, over "
+               f"{spec.speed.within:.3g} s")
+    row.update(stage="capability", status="pruned" if why else "ok", reason=why)
 
 
 def baseline_layout(spec) -> dict | None:

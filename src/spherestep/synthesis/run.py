@@ -27,6 +27,7 @@ from .eta import (ALIGNMENT_SECONDS, BUILD_SECONDS, REPORT_SECONDS, REPORT_STATE
                   after_ladder, relay_rung_seconds, verify_seconds)
 from .answer import _answer, closest_row, nearest_rows
 from .front import Finalist, _json, _missing, choose_finalists, pareto
+from . import tasks
 from .ladder import GRADES, N42, PROTOTYPE, WINDINGS, Candidate, _row, baseline_layout, build, climb
 
 STORE = "results"
@@ -400,21 +401,26 @@ def _climb(client, runner, spec, store, todo, say, bar: Progress, stage: str, pa
         return
     cost = {c: cost_estimate(c, spec, runner.may_solve(c)) for c in fresh}  # the longest first
     work = {c: task_seconds(c, spec, runner.may_solve(c)) for c in fresh}  # the ETA's estimates (seconds)
-    futures = {client.submit(runner, c, pure=False, retries=2, priority=cost[c]): c
-               for c in sorted(fresh, key=lambda c: -cost[c])}
+    parts = {c: tasks.submit(client, runner, c, cost[c]) for c in sorted(fresh, key=lambda c: -cost[c])}
+    waiting = {f: c for c, fs in parts.items() for f in fs[1:]}  # the per-core tasks; the shared one feeds them
+    left = {c: len(fs) - 1 for c, fs in parts.items()}
     slots = _slots(client)
     bar.begin(stage, list(work.values()), slots=slots)
     what = f"geometry → states → capability{' → relays' if spec.relays else ''}"
     batch: list = []
     last = time.perf_counter()
     try:
-        for future in as_completed(list(futures)):
-            c = futures[future]
+        for future in as_completed(list(waiting)):
+            c = waiting[future]
+            left[c] -= 1
+            if left[c]:
+                continue
+            fs = parts.pop(c)
             took = None
-            if future.status == "finished":
-                rows = future.result()
-                batch.extend(rows)
-                took = _took(rows)  # its seconds pace the ETA unless it stopped at geometry or may solve
+            failed = next((f for f in fs[1:] if f.status != "finished"), None)
+            if failed is None:
+                rows, took = tasks.merge(spec, [f.result() for f in fs[1:]])
+                batch.extend(rows)  # its seconds pace the ETA unless it stopped at geometry or may solve
                 if all(r.get("stage") == "geometry" for r in rows) or _solves(c, spec, runner.may_solve(c)):
                     took = None
                 ok = [float(r["seconds"]) for r in rows if r.get("status") == "ok" and not _missing(r.get("seconds"))]
@@ -422,9 +428,10 @@ def _climb(client, runner, spec, store, todo, say, bar: Progress, stage: str, pa
                     passed.extend(ok)
                     for later, seconds in after_ladder(passed, finalists, slots).items():
                         bar.expect(later, seconds)
-            else:  # the task itself failed on the cluster (e.g. its worker killed for memory): a row says so
-                batch.extend(failed_rows(c, spec, runner.baseline, future.exception()))
-            future.release()
+            else:  # a task failed on the cluster (e.g. its worker killed for memory): a row per core says so
+                batch.extend(failed_rows(c, spec, runner.baseline, failed.exception()))
+            for f in fs:
+                f.release()
             bar.advance(work[c], took)
             say(bar.line(what), done=bar.done, total=bar.total)
             if len(batch) >= 32 or time.perf_counter() - last > 15:
@@ -432,15 +439,6 @@ def _climb(client, runner, spec, store, todo, say, bar: Progress, stage: str, pa
                 batch, last = [], time.perf_counter()
     finally:
         store.append(batch)
-
-
-def _took(rows: list[dict]) -> float | None:
-    """A ladder task's measured seconds from its rows: each row carries the cheap rungs' shared time plus its own
-    relay rung's, so the task took their sum less all but one copy of the shared (the least row's) time."""
-    seconds = [float(r["seconds"]) for r in rows if not _missing(r.get("seconds"))]
-    if not seconds:
-        return None
-    return sum(seconds) - (len(seconds) - 1) * min(seconds)
 
 
 def _search(spec, plan: Budget, out: Path, store, client, todo, base, seed, started, say) -> SynthesisResult:
