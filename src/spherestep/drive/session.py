@@ -91,7 +91,8 @@ def turn_reference(start, axis, angle: float, duration: float, delay: float = 0.
 def servo_session(design, trajectory: Trajectory, duration: float, *, port: str | None = None, emulate: bool = False,
                   lockstep: bool = False, rate: float = LOOP_RATE, log=None, status=None, faults=None, sensors=None, model=None, drive=None,
                   R0=None, watchdog_ms: int | None = None, max_late: float | None = None,
-                  truth_every: float = 0.05, plant=None, cores: bool | None = None, firmware: str = "python") -> Session:
+                  truth_every: float = 0.05, plant=None, cores: bool | None = None, firmware: str = "python",
+                  rotor=None, sensor_errors=None) -> Session:
     """Run the servo for ``duration`` s following ``trajectory`` (a :class:`~spherestep.control.Trajectory`;
     :meth:`~spherestep.control.Trajectory.hold` for a pose) on the controller at
     ``port``, or with ``emulate`` on the emulated motor (``faults`` a
@@ -103,7 +104,9 @@ def servo_session(design, trajectory: Trajectory, duration: float, *, port: str 
     :func:`~spherestep.hardware.servo.run_servo`. With ``lockstep`` (and ``emulate``) the frames go straight to
     the device in this process on a simulated clock (:class:`~spherestep.hardware.motor_emulator.LockstepLink`):
     the same loop, protocol and motor with the rate kept exactly, whatever the machine's load. ``plant`` (with
-    ``emulate``) the torque model the emulated rotor obeys, default ``model`` (a mismatched motor: calibration).
+    ``emulate``) the torque model the emulated rotor obeys, default ``model`` (a mismatched motor: calibration);
+    ``rotor`` (with ``emulate``) the emulated rotor (default the design's, damping ``EMULATED_DAMPING``: the one the
+    controller assumes) and ``sensor_errors`` its magnetometers' errors (:class:`~spherestep.drive.PlantError`).
     The estimator fits the sensing room's :func:`~spherestep.sensing.field_model` of the design, the one the
     emulated motor's magnetometers read and the simulated Hall sensor uses: on an iron design the rotor's field
     plus the cores it magnetises, and the iron coils' (``cores=False``: the rotor and the bare windings, the
@@ -130,10 +133,12 @@ def servo_session(design, trajectory: Trajectory, duration: float, *, port: str 
         model = own.model if model is None else model
         drive = own.limits if drive is None else drive
     R0 = trajectory.start if R0 is None else so3.as_rotations(R0).reshape(3, 3)
-    rotor = Rotor.from_design(design, damping=EMULATED_DAMPING)
+    believed = Rotor.from_design(design, damping=EMULATED_DAMPING)
+    if not emulate and (rotor is not None or sensor_errors is not None):
+        raise bad_value("rotor", "left out on a port (the motor's own rotor and sensors)", "given")
     estimator = field_model(design, sensors.positions, cores).estimator(sensors)
     estimate = FieldTracker(estimator, R0, drive)
-    controller = GeometricPD(rotor.inertia, bandwidth=BANDWIDTH, rate=rate, damping=rotor.damping)
+    controller = GeometricPD(believed.inertia, bandwidth=BANDWIDTH, rate=rate, damping=believed.damping)
     law = ServoLaw(model, trajectory, controller, limits=wire_limits(drive), sensor_rate=rate, delay=DELAY,
                    observer_bandwidth=rate)
     options = {} if max_late is None else {"max_late": max_late}
@@ -141,7 +146,8 @@ def servo_session(design, trajectory: Trajectory, duration: float, *, port: str 
     truth: list = []
     held: list = [None]  # the truth at the latest cycle
     with connect(design, kind, port=port, plant=model if plant is None else plant, limits=drive, sensors=sensors,
-                 R0=R0, faults=faults, watchdog_ms=watchdog_ms, rotor=rotor) as conn:
+                 R0=R0, faults=faults, watchdog_ms=watchdog_ms, rotor=believed if rotor is None else rotor,
+                 **({} if sensor_errors is None else {"sensor_errors": sensor_errors})) as conn:
         observe = status
         if conn.truth is not None:
             def observe(t, R, w, currents):
