@@ -174,7 +174,7 @@ def _session(design, backend, traj, settle: float, start, model, limits, rate: f
 
     port = backend.device if isinstance(backend, Port) else None
     emulate = isinstance(backend, Emulated)
-    options = {"plant": backend.plant, "lockstep": backend.lockstep, "rotor": backend.rotor,
+    options = {"plant": backend.plant, "lockstep": backend.lockstep, "plant_rotor": backend.rotor,
                "sensor_errors": backend.sensor_errors} if emulate else {}
     session = servo_session(design, traj, traj.duration + settle, port=port, emulate=emulate, model=model,
                             drive=limits, R0=start, **options)

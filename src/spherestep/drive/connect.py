@@ -73,21 +73,33 @@ class Connection:
         return None if self.truth is None else self.truth()
 
 
-def emulated_motor(design, plant, sensors, *, drive, R0=None, faults=None, rotor=None, period: float | None = None):
+def emulated_motor(design, plant, sensors, *, drive, R0=None, faults=None, rotor=None, period: float | None = None,
+                   sensor_errors=None):
     """The :class:`~spherestep.hardware.EmulatedMotor` of ``design`` obeying the torque model ``plant``, its
     magnetometers ``sensors`` (:class:`~spherestep.sensing.SensorArray`), with the drive's limits ``drive``:
     ``rotor`` (default the design's, damping :data:`EMULATED_DAMPING`), the sensing room's
     :func:`~spherestep.sensing.field_model` at the sensors and the servo law's :class:`~spherestep.control.ModelCache`
     of ``plant``; ``R0`` the start, ``faults`` a :class:`~spherestep.hardware.MotorFaults`, ``period`` its device's
-    current loop (s; default the emulator's)."""
+    current loop (s; default the emulator's). ``sensor_errors`` (:class:`~spherestep.sensing.SensorErrors`): the
+    magnetometers as built — the true field at the turned array, read through each chip's offset and gain — while
+    the host's estimator keeps the nominal ``sensors``."""
     from ..control import ModelCache
     from ..dynamics import Rotor
     from ..hardware import EmulatedMotor
-    from ..sensing import field_model
+    from ..sensing import FieldModel, FieldTable, SensorErrors, field_model
 
     rotor = Rotor.from_design(design, damping=EMULATED_DAMPING) if rotor is None else rotor
-    return EmulatedMotor(design, plant, sensors, rotor=rotor, field=field_model(design, sensors.positions),
-                         torque_cache=ModelCache(plant), drive=drive, R0=R0, faults=faults,
+    field, chips = field_model(design, sensors.positions), None
+    if sensor_errors is not None:
+        if not isinstance(sensor_errors, SensorErrors):
+            raise bad_value("sensor_errors", "a spherestep.sensing.SensorErrors (or None)", type(sensor_errors).__name__)
+        sensors, chips = sensor_errors.placed(sensors), sensor_errors.read
+        # the rotor's field at the turned positions exactly; on iron the cores' and the coils' field at the nominal
+        # ones (their tables at other positions take minutes to build; a 0.1° turn moves a sensor 0.3 mm)
+        field = (field_model(design, sensors.positions) if field.cores is None else
+                 FieldModel(FieldTable.build(design, sensors.positions), field.cores, field.coils))
+    return EmulatedMotor(design, plant, sensors, rotor=rotor, field=field,
+                         torque_cache=ModelCache(plant), drive=drive, R0=R0, faults=faults, chips=chips,
                          **({} if period is None else {"period": period}))
 
 
@@ -105,13 +117,14 @@ def simulated_relays(design, model, start, *, rotor=None, dt: float = 5e-3, chan
 @contextmanager
 def connect(design, kind: str, *, port: str | None = None, plant=None, limits=None, sensors=None, R0=None,
             faults=None, watchdog_ms: int | None = None, rotor=None, channels: int | None = None, transcript=None,
-            dt: float = 5e-3) -> Iterator[Connection]:
+            dt: float = 5e-3, sensor_errors=None) -> Iterator[Connection]:
     """A :class:`Connection` of ``kind`` (module docstring) for ``design``, closed on leaving (every coil off).
 
     ``port``: the serial device (``"port"``, ``"relay port"``). The emulated motor (``"lockstep"``, ``"pty"``):
     ``plant`` the torque model it obeys, ``limits`` its :class:`~spherestep.electrics.DriveLimits`, ``sensors``
     its magnetometers, ``R0`` its start, ``faults`` (:class:`~spherestep.hardware.MotorFaults`), ``watchdog_ms``
-    its device's watchdog, ``rotor`` (default the design's, damping :data:`EMULATED_DAMPING`). ``"simulated"``:
+    its device's watchdog, ``rotor`` (default the design's, damping :data:`EMULATED_DAMPING`), ``sensor_errors``
+    its magnetometers as built (:func:`emulated_motor`). ``"simulated"``:
     ``plant`` the rotor's torque model, ``R0`` its start, ``rotor``, ``dt``, ``channels``. ``"dry run"``:
     ``channels``, ``transcript``; ``"relay port"``: ``transcript``."""
     from .. import hardware
@@ -144,7 +157,7 @@ def connect(design, kind: str, *, port: str | None = None, plant=None, limits=No
             yield Connection(kind, simulated_relays(design, plant, start, rotor=rotor, dt=dt, channels=channels))
             return
         motor = emulated_motor(design, plant, sensors, drive=limits, R0=start, faults=faults, rotor=rotor,
-                               period=QEMU_PERIOD if kind == "qemu" else None)
+                               period=QEMU_PERIOD if kind == "qemu" else None, sensor_errors=sensor_errors)
         if kind == "lockstep":
             link = stack.enter_context(hardware.LockstepLink(motor, **device))
             yield Connection(kind, link, motor, link.truth, {"clock": link.clock, "sleep": link.sleep},

@@ -172,15 +172,10 @@ class PlantError:
         when there are none."""
         if not self.sensor_terms:
             return None
-        try:
-            from ..sensing import SensorErrors
-        except ImportError:
-            raise bad_value(name, "no sensor-offset/sensor-bias in this build (the emulated sensors' errors are "
-                            "not available): drop them", "sensor terms") from None
-        rng = np.random.default_rng([self.seed, 3])
-        offsets = rng.standard_normal((len(sensors.positions), 3)) * self.sensor_offset * 1e-6
-        axis = rng.standard_normal(3)
-        return SensorErrors.from_parts(offsets, axis / np.linalg.norm(axis) * math.radians(self.sensor_bias))
+        from ..sensing import SensorErrors
+
+        return SensorErrors.random(sensors, offset_T=self.sensor_offset * 1e-6, bias_deg=self.sensor_bias,
+                                   seed=np.random.default_rng([self.seed, 3]))
 
     def to_dict(self) -> dict:
         out = asdict(self)

@@ -92,7 +92,7 @@ def servo_session(design, trajectory: Trajectory, duration: float, *, port: str 
                   lockstep: bool = False, rate: float = LOOP_RATE, log=None, status=None, faults=None, sensors=None, model=None, drive=None,
                   R0=None, watchdog_ms: int | None = None, max_late: float | None = None,
                   truth_every: float = 0.05, plant=None, cores: bool | None = None, firmware: str = "python",
-                  rotor=None, sensor_errors=None) -> Session:
+                  plant_rotor=None, sensor_errors=None) -> Session:
     """Run the servo for ``duration`` s following ``trajectory`` (a :class:`~spherestep.control.Trajectory`;
     :meth:`~spherestep.control.Trajectory.hold` for a pose) on the controller at
     ``port``, or with ``emulate`` on the emulated motor (``faults`` a
@@ -104,16 +104,17 @@ def servo_session(design, trajectory: Trajectory, duration: float, *, port: str 
     :func:`~spherestep.hardware.servo.run_servo`. With ``lockstep`` (and ``emulate``) the frames go straight to
     the device in this process on a simulated clock (:class:`~spherestep.hardware.motor_emulator.LockstepLink`):
     the same loop, protocol and motor with the rate kept exactly, whatever the machine's load. ``plant`` (with
-    ``emulate``) the torque model the emulated rotor obeys, default ``model`` (a mismatched motor: calibration);
-    ``rotor`` (with ``emulate``) the emulated rotor (default the design's, damping ``EMULATED_DAMPING``: the one the
-    controller assumes) and ``sensor_errors`` its magnetometers' errors (:class:`~spherestep.drive.PlantError`).
+    ``emulate``) the torque model the emulated rotor obeys, default ``model`` (a mismatched motor: calibration).
     The estimator fits the sensing room's :func:`~spherestep.sensing.field_model` of the design, the one the
     emulated motor's magnetometers read and the simulated Hall sensor uses: on an iron design the rotor's field
     plus the cores it magnetises, and the iron coils' (``cores=False``: the rotor and the bare windings, the
     iron ignored, for comparison). ``firmware`` (with ``emulate``, not ``lockstep``): ``"python"`` the Python
     device on a pseudo-terminal (:class:`~spherestep.hardware.motor_emulator.MotorPty`), ``"qemu"`` the firmware
     itself in QEMU (:class:`~spherestep.hardware.qemu.QemuMotor`; its control step's instructions in
-    :attr:`Session.step_cost`)."""
+    :attr:`Session.step_cost`). ``plant_rotor`` (with ``emulate``) the emulated rotor as built (a
+    :class:`~spherestep.dynamics.Rotor`; default the design's with damping :data:`EMULATED_DAMPING`, which the
+    controller assumes either way) and ``sensor_errors`` its magnetometers as built
+    (:class:`~spherestep.sensing.SensorErrors`; the estimator keeps the nominal ``sensors``)."""
     from ..dynamics import Rotor
     from ..magnetics import design_model
     from ..sensing import default_array, field_model
@@ -125,6 +126,11 @@ def servo_session(design, trajectory: Trajectory, duration: float, *, port: str 
         raise bad_value("port", "a serial device, or emulate=True (one of the two)", port)
     if lockstep and not emulate:
         raise bad_value("lockstep", "used only with emulate=True", lockstep)
+    for name, value in (("plant_rotor", plant_rotor), ("sensor_errors", sensor_errors)):
+        if value is not None and not emulate:
+            raise bad_value(name, "used only with emulate=True (the motor as built is the emulated one)", value)
+    if plant_rotor is not None and not isinstance(plant_rotor, Rotor):
+        raise bad_value("plant_rotor", "a spherestep.dynamics.Rotor (or None)", type(plant_rotor).__name__)
     if firmware not in FIRMWARES or (firmware != "python" and (not emulate or lockstep)):
         raise bad_value("firmware", "python, or qemu with emulate=True and no lockstep", firmware)
     sensors = default_array(design, 8) if sensors is None else sensors
@@ -133,12 +139,10 @@ def servo_session(design, trajectory: Trajectory, duration: float, *, port: str 
         model = own.model if model is None else model
         drive = own.limits if drive is None else drive
     R0 = trajectory.start if R0 is None else so3.as_rotations(R0).reshape(3, 3)
-    believed = Rotor.from_design(design, damping=EMULATED_DAMPING)
-    if not emulate and (rotor is not None or sensor_errors is not None):
-        raise bad_value("rotor", "left out on a port (the motor's own rotor and sensors)", "given")
+    rotor = Rotor.from_design(design, damping=EMULATED_DAMPING)
     estimator = field_model(design, sensors.positions, cores).estimator(sensors)
     estimate = FieldTracker(estimator, R0, drive)
-    controller = GeometricPD(believed.inertia, bandwidth=BANDWIDTH, rate=rate, damping=believed.damping)
+    controller = GeometricPD(rotor.inertia, bandwidth=BANDWIDTH, rate=rate, damping=rotor.damping)
     law = ServoLaw(model, trajectory, controller, limits=wire_limits(drive), sensor_rate=rate, delay=DELAY,
                    observer_bandwidth=rate)
     options = {} if max_late is None else {"max_late": max_late}
@@ -146,8 +150,8 @@ def servo_session(design, trajectory: Trajectory, duration: float, *, port: str 
     truth: list = []
     held: list = [None]  # the truth at the latest cycle
     with connect(design, kind, port=port, plant=model if plant is None else plant, limits=drive, sensors=sensors,
-                 R0=R0, faults=faults, watchdog_ms=watchdog_ms, rotor=believed if rotor is None else rotor,
-                 **({} if sensor_errors is None else {"sensor_errors": sensor_errors})) as conn:
+                 R0=R0, faults=faults, watchdog_ms=watchdog_ms, rotor=rotor if plant_rotor is None else plant_rotor,
+                 sensor_errors=sensor_errors) as conn:
         observe = status
         if conn.truth is not None:
             def observe(t, R, w, currents):

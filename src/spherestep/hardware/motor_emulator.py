@@ -21,7 +21,9 @@
 * Magnetometers: ``field`` (passed in): the sensing room's :func:`~spherestep.sensing.field_model` of the design, the one the
   simulated Hall sensor reads and the session's estimator fits: the rotor's field table, on an iron design the
   cores it magnetises, and the coils at the measured currents (on iron each winding with its own core), read in
-  each sensor's own axes, with the part's noise, quantised to its LSB and clipped to ±32767 counts.
+  each sensor's own axes, through each chip's own offset and gain (``chips``: the drive room's
+  :class:`~spherestep.sensing.SensorErrors`, whose array ``sensors`` and ``field`` are then the built, turned one),
+  with the part's noise, quantised to its LSB and clipped to ±32767 counts.
 
 :class:`MotorFaults` injects the faults the servo must survive: an open coil, a coil stuck at full current (a
 shorted bridge, which only the supply cut stops), a frozen current reading, a magnetometer that stops (stale)
@@ -90,12 +92,15 @@ class EmulatedMotor:
     see the module. ``sensors`` a :class:`~spherestep.sensing.SensorArray`; ``rotor`` (``step``, ``inertia``,
     ``damping``), ``field`` (``field(R, c) -> (S, 3)`` T at the sensors, currents per unit) and ``torque_cache``
     (``at(R) -> (K, b)``) the parts the drive room builds (:func:`spherestep.drive.connect.emulated_motor`);
-    ``drive`` the :class:`~spherestep.electrics.DriveLimits`; ``R0`` the start orientation."""
+    ``drive`` the :class:`~spherestep.electrics.DriveLimits`; ``R0`` the start orientation; ``chips`` (``local
+    (S, 3) -> readings``, T) each chip's own error on the field in its axes before the noise (the drive room passes
+    :meth:`spherestep.sensing.SensorErrors.read`; ``None``: exact)."""
 
     def __init__(self, design, model, sensors, *, rotor, field, torque_cache, drive=None,
                  current_noise: float = 0.002, R0=None, faults: MotorFaults | None = None, period: float = 2.5e-4,
-                 torque_refresh: float = 2e-3, seed: int = 0):
+                 torque_refresh: float = 2e-3, seed: int = 0, chips=None):
         self.design, self.model, self.sensors = design, model, sensors
+        self.chips = chips
         self.rotor = rotor
         self.drive_limits = drive if drive is not None else DriveLimits()
         self.current_noise = float(current_noise)
@@ -147,6 +152,8 @@ class EmulatedMotor:
         part = self.sensors.part
         B = self.field.field(self.orientation(), self.drive_limits.per_unit(self.i))  # (S, 3), fixed frame
         local = np.einsum("sab,sa->sb", self.sensors.axes, B)  # A_sᵀ B
+        if self.chips is not None:
+            local = self.chips(local)
         local = local + part.noise_T * self.rng.standard_normal(local.shape)
         counts = np.clip(np.rint(local / part.lsb_T), -FULL_SCALE, FULL_SCALE).astype(np.int64)
         stale = 0

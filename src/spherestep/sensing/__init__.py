@@ -13,6 +13,7 @@
 * :mod:`.readings`: simulated readings (magpylib, noise, saturation, LSB, current-sense error).
 * :mod:`.estimate`: :class:`Estimator` (Gauss–Newton / Levenberg–Marquardt on SO(3), global start).
 * :mod:`.calibration`: :func:`calibrate` (positions, gains, offsets from readings at unknown poses).
+* :mod:`.sensor_errors`: :class:`SensorErrors` (an array as built: per-sensor offsets and gains, the array turned).
 * :mod:`.symmetry`: :func:`symmetry_group`, :func:`marked_design`.
 * :mod:`.placement`: :func:`greedy_placement` (worst-case Fisher information), :func:`accuracy`.
 * :mod:`.imu`: :class:`Imu`, :class:`Mekf`, :class:`ImuSensor`, :class:`FusedSensor`.
@@ -33,6 +34,7 @@ from .imu import FusedSensor, Imu, ImuSensor, Mekf, triad
 from .parts import BMI270_BMM150, TMAG5273A2, ImuPart, MagnetometerPart
 from .placement import Accuracy, Placement, accuracy, default_array, greedy_placement, smallest_eigenvalue
 from .readings import actual_currents, sense, true_field
+from .sensor_errors import SensorErrors
 from .sensor import HallSensor, IdealSensor, NoisySensor, OrientationSensor, SampledSensor
 from .symmetry import MarkerEffect, marked_design, marker_effect, symmetry_group
 
@@ -40,7 +42,7 @@ __all__ = [
     "Accuracy", "BMI270_BMM150", "Calibration", "CoilField", "CoreField", "IronCoilField", "IronFieldTable",
     "core_response", "iron_fields", "Estimate", "Estimator", "FieldModel", "FieldTable", "FusedSensor", "HallSensor",
     "IdealSensor", "Imu", "ImuPart", "ImuSensor", "KnownField", "MagnetometerPart", "MarkerEffect", "Mekf", "NoisySensor",
-    "OrientationSensor", "Placement", "SampledSensor",
+    "OrientationSensor", "Placement", "SampledSensor", "SensorErrors",
     "SensorArray", "TMAG5273A2", "accuracy", "actual_currents", "axial_field_table", "calibrate", "field_gradient", "candidate_positions",
     "coil_collisions", "default_array", "fibonacci_directions", "field_model", "figure_layout", "greedy_placement", "marked_design", "marker_effect",
     "radial_frames", "rotor_field", "sense", "smallest_eigenvalue", "super_fibonacci", "symmetry_group",
