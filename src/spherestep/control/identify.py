@@ -30,6 +30,7 @@ import math
 from dataclasses import dataclass, replace
 
 import numpy as np
+from scipy import sparse
 from scipy.interpolate import CubicSpline
 
 from .. import checks, so3
@@ -42,7 +43,6 @@ ENVELOPE_DEG = 5.0  # the envelope of a table: the largest |τ| within this many
 UNSEEN = 0.5  # a parameter is not seen when its posterior variance exceeds this fraction of its prior's
 SIGMA_FLOOR = 1e-6  # of the peak detent: the least noise assumed
 ITERATIONS = 3  # Gauss–Newton steps
-TURN_STEP = 1e-3  # rad: central differences of a coil's torque in its placement
 HELD_OUT = 5  # every fifth hold is held out
 HOLD_FACTOR = 3.0  # held-out holds' RMS residual within this many σ_hold: consistent
 MOVE_TOLERANCE = 0.1  # held-out moves' RMS residual within this fraction of the moves' RMS torque: consistent
@@ -51,27 +51,47 @@ CHUNK = 256
 
 
 # -- per-coil torques ----------------------------------------------------------------------------------------------
-def coil_torques(nodes, detent, winding, poles, polarity, coils, R, currents, weights, equation, E: int):
-    """``(D, W)``, each ``(E, 3, N)``: per equation the weighted sums ``Σ_s w_s τ_k`` of each coil ``k``'s detent
-    torque ``Σ_j τ_d(α_jk) u_jk`` and its winding torque at its own current ``c_k Σ_j p_j τ_1(α_jk) u_jk``
-    (``u_jk = (v_k × w_j)/sin α_jk``) for the coils at ``coils (N, 3)``, samples ``R (S, 3, 3)``, ``currents (S, N)``."""
+def coil_torques(nodes, detent, winding, poles, polarity, coils, R, currents, weights, equation, E: int,
+                 turns=None):
+    """``(D, W, dD, dW)``: per equation the weighted sums ``Σ_s w_s τ_k`` of each coil ``k``'s detent torque
+    ``τ_k = v_k × Σ_j f(α_jk) w_j`` (``f = τ_d/sin α``; ``Σ_j τ_d(α_jk) (v_k × w_j)/sin α_jk``), ``(E, 3, N)``, and
+    of its winding torque at its own current ``c_k v_k × Σ_j p_j f_1(α_jk) w_j``; with ``turns (N, B, 3)`` (unit
+    rotation axes per coil) their derivatives ``(E, 3, N, B)`` for the coil turned about each axis (``v → v + δ
+    ω × v``): ``(ω × v) × G + v × Σ_j f'(α_j) α_j' w_j`` with ``α' = −(ω × v)·w / sin α``. Coils at ``coils (N, 3)``,
+    samples ``R (S, 3, 3)``, ``currents (S, N)``, ``weights (S,)``, ``equation (S,)``."""
     sd, s1 = CubicSpline(nodes, detent), CubicSpline(nodes, winding)
+    dsd, ds1 = sd.derivative(), s1.derivative()
     N = len(coils)
-    D = np.zeros((E, 3, N))
-    W = np.zeros((E, 3, N))
+    B = 0 if turns is None else turns.shape[1]
+    A = None if turns is None else np.cross(turns, coils[:, None, :])  # (N, B, 3): ω × v
+    D, W = np.zeros((E, N, 3)), np.zeros((E, N, 3))
+    dD, dW = np.zeros((E, N, B, 3)), np.zeros((E, N, B, 3))
     for s0 in range(0, len(R), CHUNK):
         Rc, cc, wc, ec = (a[s0:s0 + CHUNK] for a in (R, currents, weights, equation))
         P = np.einsum("kab,mb->kma", Rc, poles)
         cos = np.clip(np.einsum("kma,na->kmn", P, coils), -1.0, 1.0)
         alpha = np.arccos(cos)
         sin = np.sin(alpha)
-        inv = np.where(sin > 1e-12, 1.0 / np.where(sin > 1e-12, sin, 1.0), 0.0)
-        cross = np.cross(coils[None, None, :, :], P[:, :, None, :])  # (k, M, N, 3)
-        td = np.einsum("kmn,kmna->kan", sd(alpha) * inv, cross)
-        tw = np.einsum("kmn,m,kmna->kan", s1(alpha) * inv, polarity, cross) * cc[:, None, :]
-        np.add.at(D, ec, wc[:, None, None] * td)
-        np.add.at(W, ec, wc[:, None, None] * tw)
-    return D, W
+        ok = sin > 1e-4
+        inv = np.where(ok, 1.0 / np.where(ok, sin, 1.0), 0.0)
+        M = sparse.csr_matrix((wc, (ec, np.arange(len(ec)))), shape=(E, len(ec)))  # Σ_s w_s over each equation
+        for spline, slope, out, dout, pk in ((sd, dsd, D, dD, None), (s1, ds1, W, dW, polarity)):
+            tau = spline(alpha)
+            f = tau * inv if pk is None else tau * inv * pk[None, :, None]
+            G = np.einsum("kmn,kma->kna", f, P)
+            scale = 1.0 if pk is None else cc[:, :, None]
+            out += (M @ (scale * np.cross(coils[None], G)).reshape(len(ec), -1)).reshape(E, N, 3)
+            if A is None:
+                continue
+            fp = (slope(alpha) * inv - tau * cos * inv ** 2)
+            fp = fp if pk is None else fp * pk[None, :, None]
+            for b in range(B):
+                da = -np.einsum("na,kma->kmn", A[:, b], P) * inv
+                H = np.einsum("kmn,kma->kna", fp * da, P)
+                d = np.cross(A[None, :, b], G) + np.cross(coils[None], H)
+                dout[:, :, b] += (M @ (scale * d).reshape(len(ec), -1)).reshape(E, N, 3)
+    sw = (lambda X: np.swapaxes(X, 1, 2))
+    return sw(D), sw(W), np.moveaxis(dD, 3, 1), np.moveaxis(dW, 3, 1)
 
 
 def tangents(coils: np.ndarray) -> np.ndarray:
@@ -223,16 +243,12 @@ def calibrate(design, model, holds: Holds, *, prior: dict | None = None, scales:
         cols += [Ad[:, :, m_] * ed[m_] for m_ in fi] + [Al[:, :, m_] * el[m_] for m_ in fi]
         F = Ad @ det + Al @ win + g * offset
         if gains or turns:
-            Dk, Wk = coil_torques(nodes, det, win, poles, pol, coils, R, c, w, eq, E)
+            Dk, Wk, dD, dW = coil_torques(nodes, det, win, poles, pol, coils, R, c, w, eq, E,
+                                          T if turns else None)
         if gains:
             cols += [Wk[:, :, j] for j in live]
         if turns:
-            diff = np.zeros((E, 3, N, 2))
-            for b in range(2):
-                for sign in (1.0, -1.0):
-                    moved = np.einsum("kab,kb->ka", so3.exp(sign * TURN_STEP * T[:, b]), coils)
-                    Dm, Wm = coil_torques(nodes, det, win, poles, pol, moved, R, c, w, eq, E)
-                    diff[..., b] += sign * (Dm + Wm * k) / (2 * TURN_STEP)
+            diff = dD + dW * k[None, None, :, None]
             cols += [diff[:, :, j, b] for j in live for b in range(2)]
         if fit_gain:
             cols += [offset]
@@ -359,3 +375,31 @@ def verdict(holds: Holds, test: np.ndarray, residual: np.ndarray) -> dict:
         good = good and out["move_rms"] <= MOVE_TOLERANCE * out["move_torque"]
     out["consistent"] = bool(good)
     return out
+
+
+def diagnose(design, model, holds: Holds, cal: Calibration, *, gains: bool, turns: bool, **options) -> tuple[str, ...]:
+    """The terms an inconsistent ``cal`` lacks, by comparing fits: each per-coil term the fit left out
+    (``gains``/``turns`` False) is fitted in turn and named when that fit is consistent or halves the held-out
+    holds' residual (a dead coil named as such); with none to add, the held-out figures say which side
+    disagrees — moves alone: the rotor's inertia, damping or friction; holds: the sensors' offsets or a
+    saturation (terms no table or gain can take). ``options`` go to :func:`calibrate`."""
+    j = cal.judged
+    names = []
+    for term, on in (("gains", not gains), ("turns", not turns)):
+        if not on:
+            continue
+        refit = calibrate(design, model, holds, gains=gains or term == "gains", turns=turns or term == "turns",
+                          **options)
+        if refit.consistent or refit.judged["hold_rms"] < 0.5 * j["hold_rms"]:
+            if term == "gains":
+                dead = refit.dead_coils()
+                names.append("per-coil gain spread" + (f" (dead coil{'s' if len(dead) > 1 else ''} "
+                                                       f"{', '.join(map(str, dead))})" if dead else ""))
+            else:
+                names.append("coil placement")
+    if names:
+        return tuple(names)
+    holds_ok = j["hold_rms"] <= HOLD_FACTOR * j["hold_noise"]
+    if holds_ok:
+        return ("the rotor's inertia, damping or friction (the held-out moves disagree, the holds agree)",)
+    return ("a sensor offset or saturation (the held-out holds disagree with every per-coil term fitted)",)

@@ -98,8 +98,8 @@ class PlantError:
             except ValueError:
                 bad = True
             if bad:
-                raise bad_value(name, f"{key}= {'coil indices I+J' if kind == 'coils' else kind.__name__} in "
-                                f"[{low:g}, {high:g}] ({EXPECTED})", text)
+                what = "coil indices I+J…" if kind == "coils" else "a whole number" if kind is int else "a number"
+                raise bad_value(name, f"{key}= {what} from {low:g} to {high:g}", text)
             out[field_] = parsed
         return cls(**out)
 
