@@ -234,11 +234,11 @@ def test_cli_on_the_emulator(tmp_path, capsys):
                  "--out", str(out), "--json"]) == 0
     data = json.loads(capsys.readouterr().out)
     assert data["holds"]["holds"] == 3 and data["holds"]["backend"] == "emulated"
-    assert data["plant_error"] == {"detent": 1.1, "winding": 0.9}
+    assert (data["plant_error"]["detent"], data["plant_error"]["winding"]) == (1.1, 0.9)
     assert 0 < data["torque_error_after"] < data["torque_error_before"], data
     assert len(data["calibration"]["detent_Nm"]) == 68
     assert json.loads(out.read_text())["holds"] == 3  # JSON under a .json name
-    assert isinstance(data["calibration"]["consistent"], bool)
+    assert data["calibration"]["consistent"] is None  # fewer than 5 holds: none held out, not judged
     assert Calibration.load(out, prototype()).holds == 3
     assert main(["calibrate", "--emulate", "--plant-error", "detent=x", "--out", str(out)]) == 2
     err = capsys.readouterr().err

@@ -44,8 +44,7 @@ def synthetic_holds(plant, count: int, seed: int = 0) -> Holds:
     c = rng.uniform(-1.0, 1.0, (count, plant.coil_count))
     c[:, list(plant.failed)] = 0.0
     rhs = np.asarray(plant.torque(R, c)) + NOISE * rng.standard_normal((count, 3))
-    eye = np.broadcast_to(np.eye(3), (count, 3, 3))
-    return Holds(eye, eye, c, ("hold",) * count, rhs, R, c, np.ones(count), np.arange(count), 0.07, 0.0,
+    return Holds(R, R, c, ("hold",) * count, rhs, R, c, np.ones(count), np.arange(count), 0.07, 0.0,
                  "synthetic", np.zeros(count), 2 * NOISE * rng.standard_normal((count, 3)))
 
 

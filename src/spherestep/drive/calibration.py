@@ -49,7 +49,7 @@ RETRIES = 2  # re-commanded holds (each settling twice as long) before a hold is
 
 def collect_holds(design, backend, orientations, *, model=None, limits: DriveLimits | None = None,
                   move_time: float = 0.4, settle: float = 0.5, window: float = 0.25, moves: bool = True,
-                  rate: float = 1000.0, quadrature: float = 0.004, progress=None,
+                  rate: float = 1000.0, quadrature: float = 0.012, progress=None,
                   tolerance: float = HOLD_TOLERANCE) -> Holds:
     """Drive the servo (controller on ``model``, default the design's own) to each of ``orientations``
     (``(H, 3, 3)``, or a count for :func:`hold_orientations`) in turn and record the holds and moves (module
@@ -59,7 +59,8 @@ def collect_holds(design, backend, orientations, *, model=None, limits: DriveLim
     the commanded currents). Each move takes ``move_time`` s per 20° (at least ``move_time``), then ``settle``
     s at the target; the hold equation is the last ``window`` s; ``moves=False`` keeps only the holds.
     ``quadrature`` s: the move's integral by the midpoint rule on groups of periods this long (fewer samples
-    to regress; 4 ms keeps it within 0.1 % at 1 kHz). ``progress(text, done, total)`` is told of each hold.
+    to regress: the per-coil fit's cost is linear in them; 12 ms, 2–3 periods of the emulated motor's 200 Hz loop,
+    against a detent period of ~5°, a few ‰ at 1 rad/s). ``progress(text, done, total)`` is told of each hold.
 
     Holds that are holds: a hold ending farther than ``tolerance`` rad from its target by the measurement is
     commanded again from where it is (:meth:`Trajectory.hold`, the servo's disturbance estimate given twice the

@@ -121,6 +121,8 @@ class Calibration:
         if self.consistent is False:
             lines.append("INCONSISTENT: the fit does not explain the held-out holds" + (
                 f"; missing: {', '.join(self.missing)}" if self.missing else "") + "; not to be used")
+        if self.consistent is None:
+            lines.append("not judged: no hold held out (fewer than 5 holds)")
         if j.get("held_out_holds"):
             lines.append(f"held out {j['held_out_holds']} holds: residual {torque_text(j['hold_rms'], 2)} against the "
                          f"noise {torque_text(j['hold_noise'], 2)} (the window's halves); moves "
