@@ -319,6 +319,15 @@ def _result(design, model, holds, v) -> Calibration:
         if runs:
             unseen.append(f"{name} table shape at {', '.join(runs)} (posterior variance > {UNSEEN:g} of the prior's: "
                           "these pairs' torque is too small or too rarely met in the holds)")
+    if v["scales"]:
+        u = np.zeros(lay.size)  # both tables ×(1 + s) (the gains with the winding): what static holds cannot see
+        u[lay.scales] = 1.0
+        u[lay.gains] = 1.0
+        u[lay.coupling] = v["gain0"]
+        post, pri = float(u @ cov @ u), float(u @ np.linalg.inv(P + 1e-12 * np.eye(lay.size)) @ u)
+        if post / pri > UNSEEN:
+            unseen.append(f"the common scale of both tables (± {math.sqrt(post / 2):.2g}; holds at rest see only "
+                          "the ratio of detent to winding, a move's inertia fixes the scale)")
     gain_std = np.zeros(N)
     if v["gains"]:
         gain_std[live] = np.sqrt(np.diag(cov)[lay.gains])
