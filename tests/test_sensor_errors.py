@@ -85,3 +85,19 @@ def test_turned_array_leaves_holds_off_in_truth(proto, array):
         s = servo_session(proto, Trajectory.hold(T), 0.6, emulate=True, lockstep=True, R0=T, sensor_errors=err)
         assert math.degrees(s.report.end_error) < 0.02
         assert 0.07 < math.degrees(s.final_error()) < 0.2
+
+
+def test_session_options_refused_with_a_named_field(proto):
+    from spherestep.control import Trajectory
+    from spherestep.drive.session import servo_session
+    from spherestep.dynamics import Rotor
+
+    hold = Trajectory.hold(np.eye(3))
+    with pytest.raises(InputError, match="plant_rotor"):
+        servo_session(proto, hold, 0.1, port="/dev/null", plant_rotor=Rotor(0.1))
+    with pytest.raises(InputError, match="sensor_errors"):
+        servo_session(proto, hold, 0.1, port="/dev/null", sensor_errors=SensorErrors(np.zeros((8, 3))))
+    with pytest.raises(InputError, match="plant_rotor"):
+        servo_session(proto, hold, 0.1, emulate=True, lockstep=True, plant_rotor=0.1)
+    with pytest.raises(InputError, match="sensor_calibration"):
+        servo_session(proto, hold, 0.1, emulate=True, lockstep=True, sensor_calibration="calibration.yaml")

@@ -37,13 +37,16 @@ def integrate(params, offsets, R, w, coils, C, poles, P, signs, inertia, damping
     k = 0
     for n in range(1, steps + 1):
         w = _dissipate(w, inertia, damping, friction, 0.5 * h)
-        for weight in weights:
-            w = w + (0.5 * weight * h / inertia) * tau
-            _turn(weight * h * w, R, turned)
-            R[:, :] = turned
-            terms_evaluate(params, offsets, R, coils, C, poles, P, signs, 1, tau, H, work, near)
-            w = w + (0.5 * weight * h / inertia) * tau
-        w = _dissipate(w, inertia, damping, friction, 0.5 * h)
+        stuck = friction > 0 and w[0] == 0.0 and w[1] == 0.0 and w[2] == 0.0 and \
+            math.sqrt(tau[0] * tau[0] + tau[1] * tau[1] + tau[2] * tau[2]) <= friction  # static friction holds
+        if not stuck:
+            for weight in weights:
+                w = w + (0.5 * weight * h / inertia) * tau
+                _turn(weight * h * w, R, turned)
+                R[:, :] = turned
+                terms_evaluate(params, offsets, R, coils, C, poles, P, signs, 1, tau, H, work, near)
+                w = w + (0.5 * weight * h / inertia) * tau
+            w = _dissipate(w, inertia, damping, friction, 0.5 * h)
         if n % record_every == 0 or n == steps:
             Rs[k] = R
             ws[k] = w

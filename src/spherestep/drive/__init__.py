@@ -10,6 +10,10 @@ one result type.
   :func:`turn_reference`) from the hardware room's links, devices and emulators;
 * :func:`connect` (:mod:`.connect`): the one place a backend is chosen and built (``port``, ``lockstep``, ``pty``,
   ``qemu``, ``relay port``, ``dry run``, ``simulated``) → a :class:`Connection`;
+* :func:`record_moves` (:mod:`.records`): the servo's moves recorded as ``(t, R, c)`` for the rotor's
+  identification (:func:`spherestep.dynamics.fit_rotor`);
+* :func:`well_readings` (:mod:`.wells`): the magnetometers' readings at rest in the detent wells, the absolute
+  references of :func:`spherestep.sensing.calibrate_array_absolute`;
 * :func:`collect_holds` (:mod:`.calibration`): the servo sessions a calibration fits (:class:`Emulated`,
   :class:`Port`, or a torque model: the simulated plant).
 
@@ -22,6 +26,8 @@ from .calibration import Emulated, Port, collect_holds
 from .connect import KINDS, Connection, connect  # the function shadows its module's name (as design_model)
 from .many_turns import TurnOutcome, Verdict, many_turns, relay_planner, relay_tuning, verdict_turns
 from .compare import DEMO_AXIS, SENSOR_NOISE, DriveComparison, compare_drives
+from .records import record_moves
+from .wells import WellReadings, well_readings
 from .session import Session, move_on_hardware, servo_session, turn_reference
 from .result import DriveResult, HardwareDetails, RampedDetails, ServoDetails, SettledDetails, figure_drive
 from .turn import BACKENDS, FIXED_SERVO_TIME, MODES, SENSORS, TOLERANCE, check_options, choose_model, drive_turn, \
@@ -30,6 +36,6 @@ from .turn import BACKENDS, FIXED_SERVO_TIME, MODES, SENSORS, TOLERANCE, check_o
 __all__ = ["BACKENDS", "DEMO_AXIS", "FIXED_SERVO_TIME", "MODES", "SENSORS", "SENSOR_NOISE", "TOLERANCE",
            "KINDS", "Connection", "DriveComparison", "DriveResult", "Emulated", "HardwareDetails", "Port",
            "RampedDetails", "ServoDetails", "Session", "SettledDetails", "TurnOutcome", "Verdict", "check_options",
-           "choose_model", "collect_holds", "compare_drives", "connect", "drive_turn", "figure_drive",
+           "choose_model", "collect_holds", "record_moves", "WellReadings", "well_readings", "compare_drives", "connect", "drive_turn", "figure_drive",
            "fixed_servo_time", "many_turns", "move_on_hardware", "relay_planner", "relay_tuning", "servo_session",
            "turn_reference", "verdict_turns"]

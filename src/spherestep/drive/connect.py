@@ -79,7 +79,7 @@ def emulated_motor(design, plant, sensors, *, drive, R0=None, faults=None, rotor
     magnetometers ``sensors`` (:class:`~spherestep.sensing.SensorArray`), with the drive's limits ``drive``:
     ``rotor`` (default the design's, damping :data:`EMULATED_DAMPING`), the sensing room's
     :func:`~spherestep.sensing.field_model` at the sensors and the servo law's :class:`~spherestep.control.ModelCache`
-    of ``plant``; ``R0`` the start, ``faults`` a :class:`~spherestep.hardware.MotorFaults`, ``period`` its device's
+    of ``plant``, exact (re-evaluated at every rotor step); ``R0`` the start, ``faults`` a :class:`~spherestep.hardware.MotorFaults`, ``period`` its device's
     current loop (s; default the emulator's). ``sensor_errors`` (:class:`~spherestep.sensing.SensorErrors`): the
     magnetometers as built — the true field at the turned array, read through each chip's offset and gain — while
     the host's estimator keeps the nominal ``sensors``."""
@@ -99,7 +99,7 @@ def emulated_motor(design, plant, sensors, *, drive, R0=None, faults=None, rotor
         field = (field_model(design, sensors.positions) if field.cores is None else
                  FieldModel(FieldTable.build(design, sensors.positions), field.cores, field.coils))
     return EmulatedMotor(design, plant, sensors, rotor=rotor, field=field,
-                         torque_cache=ModelCache(plant), drive=drive, R0=R0, faults=faults, chips=chips,
+                         torque_cache=ModelCache(plant, reuse=0.0), drive=drive, R0=R0, faults=faults, chips=chips,
                          **({} if period is None else {"period": period}))
 
 

@@ -45,7 +45,8 @@ class Session:
     :class:`~spherestep.hardware.motor_emulator.Truth` at the loop's last cycle (the servo still holding) and
     ``final`` 0.15 s after the end (the coils off: an iron motor's detent moves the rotor into its nearest well),
     the device's ``watchdog`` (s) and when it ``started`` (``time.monotonic()``); with the firmware in QEMU its
-    ``step_cost`` ``(steps, mean, max)`` in instructions per control step that drove the coils."""
+    ``step_cost`` ``(steps, mean, max)`` in instructions per control step that drove the coils; ``after`` what the
+    session's ``after`` returned."""
 
     report: ServoReport
     trajectory: Trajectory
@@ -55,6 +56,7 @@ class Session:
     started: float | None = None
     held: object | None = None
     step_cost: tuple | None = None
+    after: object | None = None
 
     @property
     def reference(self):
@@ -92,7 +94,7 @@ def servo_session(design, trajectory: Trajectory, duration: float, *, port: str 
                   lockstep: bool = False, rate: float = LOOP_RATE, log=None, status=None, faults=None, sensors=None, model=None, drive=None,
                   R0=None, watchdog_ms: int | None = None, max_late: float | None = None,
                   truth_every: float = 0.05, plant=None, cores: bool | None = None, firmware: str = "python",
-                  plant_rotor=None, sensor_errors=None) -> Session:
+                  plant_rotor=None, sensor_errors=None, sensor_calibration=None, after=None) -> Session:
     """Run the servo for ``duration`` s following ``trajectory`` (a :class:`~spherestep.control.Trajectory`;
     :meth:`~spherestep.control.Trajectory.hold` for a pose) on the controller at
     ``port``, or with ``emulate`` on the emulated motor (``faults`` a
@@ -114,10 +116,13 @@ def servo_session(design, trajectory: Trajectory, duration: float, *, port: str 
     :attr:`Session.step_cost`). ``plant_rotor`` (with ``emulate``) the emulated rotor as built (a
     :class:`~spherestep.dynamics.Rotor`; default the design's with damping :data:`EMULATED_DAMPING`, which the
     controller assumes either way) and ``sensor_errors`` its magnetometers as built
-    (:class:`~spherestep.sensing.SensorErrors`; the estimator keeps the nominal ``sensors``)."""
+    (:class:`~spherestep.sensing.SensorErrors`; the estimator keeps the nominal ``sensors``). ``sensor_calibration``
+    (:class:`~spherestep.sensing.ArrayCalibration`): the estimator reads through it. ``after(conn)`` is called on the
+    open :class:`~spherestep.drive.Connection` once the loop has ended well (every coil off), before it is let go;
+    its result is :attr:`Session.after`."""
     from ..dynamics import Rotor
     from ..magnetics import design_model
-    from ..sensing import default_array, field_model
+    from ..sensing import ArrayCalibration, default_array, field_model
 
     if not isinstance(trajectory, Trajectory):
         raise bad_value("trajectory", "a spherestep.control.Trajectory (Trajectory.hold(R) for a pose)",
@@ -140,7 +145,13 @@ def servo_session(design, trajectory: Trajectory, duration: float, *, port: str 
         drive = own.limits if drive is None else drive
     R0 = trajectory.start if R0 is None else so3.as_rotations(R0).reshape(3, 3)
     rotor = Rotor.from_design(design, damping=EMULATED_DAMPING)
-    estimator = field_model(design, sensors.positions, cores).estimator(sensors)
+    if sensor_calibration is None:
+        estimator = field_model(design, sensors.positions, cores).estimator(sensors)
+    elif isinstance(sensor_calibration, ArrayCalibration):
+        estimator = sensor_calibration.estimator(design, sensors, cores)
+    else:
+        raise bad_value("sensor_calibration", "a spherestep.sensing.ArrayCalibration (or None)",
+                        type(sensor_calibration).__name__)
     estimate = FieldTracker(estimator, R0, drive)
     controller = GeometricPD(rotor.inertia, bandwidth=BANDWIDTH, rate=rate, damping=rotor.damping)
     law = ServoLaw(model, trajectory, controller, limits=wire_limits(drive), sensor_rate=rate, delay=DELAY,
@@ -163,11 +174,12 @@ def servo_session(design, trajectory: Trajectory, duration: float, *, port: str 
 
         report = run_servo(conn.link, estimate, law, duration=duration, rate=rate, log=log, status=observe,
                            **conn.timing, **options)
+        extra = after(conn) if after is not None and report.outcome == "done" else None
         if conn.truth is None:
-            return Session(report, trajectory, [], None)
+            return Session(report, trajectory, [], None, after=extra)
         final = conn.release(0.15)  # the device runs on: a watchdog trip after a lost link lands in the truth
         cost = conn.step_cost() if conn.step_cost is not None else None
-    return Session(report, trajectory, truth, final, conn.watchdog, conn.started, held[0], cost)
+    return Session(report, trajectory, truth, final, conn.watchdog, conn.started, held[0], cost, extra)
 
 
 def move_on_hardware(design, axis, angle: float, *, duration: float | None = None, port: str | None = None,

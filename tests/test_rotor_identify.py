@@ -1,0 +1,79 @@
+"""The rotor identified from its moves (issue 37 §1): inertia, damping and friction by the windowed rigid-body
+equation (spherestep.dynamics.identify) on plants with known values; the fit was developed on seed 0's moves,
+these run seeds 11 and 1."""
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from spherestep.drive.records import record_moves
+from spherestep.dynamics import Rotor
+from spherestep.dynamics.identify import fit_rotor, rotor_excitation
+from spherestep.errors import InputError
+from spherestep.magnetics import design_model
+
+
+@pytest.fixture(scope="module")
+def own(proto):
+    return design_model(proto)
+
+
+@pytest.fixture(scope="module")
+def plant_rotor(proto):
+    return Rotor(1.3 * Rotor.from_design(proto).inertia, damping=0.04, friction=0.04)
+
+
+def test_excitation_moves():
+    moves = rotor_excitation(speeds=(1.0, 3.0), repeats=2, seed=4)
+    assert len(moves) == 4
+    for a, b in zip(moves, moves[1:]):
+        assert np.allclose(a.end, b.start)
+    peak = [max(np.linalg.norm(m.sample(np.linspace(0, m.duration, 400))[1], axis=1)) for m in moves]
+    assert peak == pytest.approx([1.0, 3.0, 1.0, 3.0], rel=1e-3)
+
+
+def test_simulated_servo_recovers_the_rotor(proto, own, plant_rotor):
+    """The simulated servo (fourth-order integrator, exact dissipation flows) on the ×1.3 rotor with damping and
+    friction, the controller believing the design's rotor: the fit recovers each within 1 % (measured ~1e-4), a
+    current lag of zero (the simulation's currents are the period's means), and the moves it did not fit have
+    the same residual as those it did."""
+    moves = rotor_excitation(seed=11, repeats=1, speeds=(1.0, 2.5, 5.0, 1.5))
+    series = record_moves(proto, moves, plant_rotor=plant_rotor)
+    fit = fit_rotor(own.model, series[:3], lag=True)
+    assert fit.inertia == pytest.approx(plant_rotor.inertia, rel=0.01)
+    assert fit.damping == pytest.approx(plant_rotor.damping, rel=0.01)
+    assert fit.friction == pytest.approx(plant_rotor.friction, rel=0.01)
+    assert abs(fit.current_lag) < 2e-5
+    assert all(s < 0.01 * v for s, v in zip(fit.std, (fit.inertia, fit.damping, fit.friction)))
+    assert fit.residual(own.model, series[3:]) < 5 * fit.sigma
+    wrong = Rotor(plant_rotor.inertia / 1.3, 0.0, 0.0)  # the design's rotor does not explain the moves
+    assert replace(fit, inertia=wrong.inertia, damping=0.0, friction=0.0).residual(own.model, series[3:]) > 20 * fit.sigma
+
+
+@pytest.mark.slow
+def test_emulated_motor_recovers_the_rotor(proto, own, plant_rotor):
+    """The emulated motor in lockstep (the magnetometers' estimate, the commanded currents, the device's current
+    loop): inertia within 5 %, damping and friction within 20 %, each within three of its standard deviations."""
+    moves = rotor_excitation(seed=1, repeats=2)
+    fit = fit_rotor(own.model, record_moves(proto, moves, plant_rotor=plant_rotor, emulate=True), lag=True)
+    truth = (plant_rotor.inertia, plant_rotor.damping, plant_rotor.friction)
+    for value, std, true, tol in zip((fit.inertia, fit.damping, fit.friction), fit.std, truth, (0.05, 0.2, 0.2)):
+        assert value == pytest.approx(true, rel=tol)
+        assert abs(value - true) < 3 * std + 0.01 * true
+    assert 0.2e-3 < fit.current_lag < 1.5e-3  # the emulated device's current loop, ω_c = 2000 rad/s at 4 kHz
+
+
+def test_bad_input_names_the_field(own):
+    with pytest.raises(InputError, match="series"):
+        fit_rotor(own.model, [])
+    t = np.linspace(0, 1, 50)
+    at_rest = (t, np.broadcast_to(np.eye(3), (50, 3, 3)), np.zeros((50, own.model.coil_count)))
+    with pytest.raises(InputError, match="series"):
+        fit_rotor(own.model, [at_rest])
+    with pytest.raises(InputError, match="model"):
+        fit_rotor("not a model", [at_rest])
+    with pytest.raises(InputError, match="speeds"):
+        rotor_excitation(speeds=(1.0, -2.0))
+    with pytest.raises(InputError, match="plant_rotor"):
+        record_moves(None, rotor_excitation(repeats=1), plant_rotor=0.1)
