@@ -106,7 +106,7 @@ def main() -> None:
     ap.add_argument("--plant-error", default=TORQUE_TERMS)
     ap.add_argument("--holds", type=int, default=60)
     ap.add_argument("--tune-seed", type=int, default=11)
-    ap.add_argument("--seeds", type=int, nargs="*", default=[21, 22])
+    ap.add_argument("--seeds", type=int, nargs="*", default=[21])
     ap.add_argument("--check-holds", type=int, default=20)
     ap.add_argument("--json", default=None)
     a = ap.parse_args()

@@ -20,12 +20,12 @@ Held out. Every :data:`HELD_OUT`-th hold (its hold and its move equations) is no
 judged on them (:func:`verdict`): the held-out holds' residual RMS within :data:`HOLD_FACTOR` of the noise the
 sensors imply, ``σ_hold² = σ_split² + (S σ_R)²``: ``σ_split`` the difference of each hold's equation on the two
 halves of its window over 2 (same orientation and currents: model errors cancel, the loop's white noise does
-not), and the measured orientation's error at rest ``σ_R`` (:data:`ORIENTATION_NOISE`, 0.04°: the Hall array's
+not), and the measured orientation's error at rest ``σ_R`` (:data:`ORIENTATION_NOISE`, 0.02°: the Hall array's
 estimate is biased by an orientation-dependent amount the window cannot see; on the emulated motor the exact
-plant leaves 46 mN·m at the holds, 0.037° at their RMS stiffness of 71 N·m/rad) times the fitted model's RMS
+plant leaves 26 mN·m at the holds, 0.020° at their RMS stiffness of 72 N·m/rad) times the fitted model's RMS
 stiffness ``S`` at the held-out holds; and the held-out moves' residual at most :data:`MOVE_TOLERANCE` of the
 torque they needed (a move integrates the commanded currents, whose lag no noise figure covers: the exact plant
-leaves 0.64 of it on the emulated motor).
+leaves 0.81 of it on the emulated motor).
 """
 
 from __future__ import annotations
@@ -49,7 +49,7 @@ SIGMA_FLOOR = 1e-6  # of the peak detent: the least noise assumed
 ITERATIONS = 3  # Gauss–Newton steps
 HELD_OUT = 5  # every fifth hold is held out
 HOLD_FACTOR = 2.0  # held-out holds' RMS residual within this many σ_hold: consistent
-ORIENTATION_NOISE = math.radians(0.04)  # rad: the measured orientation's error at rest (module docstring)
+ORIENTATION_NOISE = math.radians(0.02)  # rad: the measured orientation's error at rest (module docstring)
 MOVE_TOLERANCE = 1.0  # held-out moves' RMS residual within this fraction of the moves' RMS torque: consistent
 DEAD = 0.2  # |k| below this: a dead coil
 CHUNK = 256
