@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import sys
-from dataclasses import replace
 from pathlib import Path
 
 import typer
@@ -15,11 +14,11 @@ from .signals import Terminated, interrupt_of, sigterm_as_interrupt, told
 
 OUT_SUFFIXES = (".yaml", ".yml", ".json")  # the suffix of --out decides the format (JSON for .json); others refused
 DEFAULT_ERROR = "detent=1.2,winding=0.85"
-TERMS = ("gains", "placements")  # per-coil terms --without may leave out
+TERMS = ("gains", "placements", "sensors", "rotor")  # what --without may leave out
 
 
 def without_terms(text: str | None) -> set:
-    """``--without gains,placements`` as a set; InputError naming ``--without`` otherwise."""
+    """``--without gains,placements,sensors,rotor`` as a set; InputError naming ``--without`` otherwise."""
     from ..errors import bad_value
 
     got = set() if not text else {t.strip() for t in text.split(",")}
@@ -60,25 +59,29 @@ def calibrate(
                                    "winding=F, winding-spread=F, dead=I[+J], coil-offset=DEG, misplaced=K, "
                                    "inertia=F, damping=NMS, friction=NM, sensor-offset=UT, sensor-bias=DEG, seed=N, "
                                    "or 'realistic' (docs/control.md)."),
-    without: str = typer.Option(None, "--without", help="Leave per-coil terms out of the fit: gains, placements "
-                                                        "(comma-separated)."),
+    without: str = typer.Option(None, "--without", help="Leave out of the run (comma-separated): gains, placements "
+                                                        "(the per-coil terms), sensors (the detent wells' "
+                                                        "array calibration; never on a port), rotor (its "
+                                                        "inertia, damping and friction from moves)."),
     accept: bool = typer.Option(False, "--accept-inconsistent-calibration",
                                 help="Write the calibration even when it does not explain its held-out holds (the "
                                      "file records the verdict; loading it then needs the same option)."),
     seed: int = typer.Option(0, "--seed", help="Seed of the random walk of holds."),
     as_json: bool = typer.Option(False, "--json", help="Print the fit as JSON."),
 ) -> None:
-    """Drive the servo to a walk of orientations, record the steady currents and the moves, and fit the iron
-    model to them: its detent and winding tables, each coil's gain and placement, the cores' coupling (least squares
-    with a prior, every parameter with its standard deviation); judge the fit on every fifth hold, held out. Print
-    the fit and write it to --out; a fit that does not explain its held-out holds exits 1 with nothing written and
-    says which term is missing (unless --accept-inconsistent-calibration).
+    """Identify the motor as built, into one file: the sensor array against the detent wells (emulated motor),
+    then the servo driven to a walk of orientations (the steady currents and the moves) and the iron model fitted to
+    them — its detent and winding tables, each coil's gain and placement, the cores' coupling (least squares with a
+    prior, every parameter with its standard deviation), judged on every fifth hold, held out — then the rotor's
+    inertia, damping and friction from moves on the calibrated model. Print the fit and write it to --out; a fit
+    that does not explain its held-out holds exits 1 with nothing written and says which term is missing (unless
+    --accept-inconsistent-calibration).
 
     Example: [bold]spherestep calibrate --emulate --plant-error detent=1.2,winding=0.85 --out calibration.yaml[/bold]
     """
-    from ..control import calibrate as fit, hold_orientations, torque_error
-    from ..control.identify import diagnose
-    from ..drive import Emulated, Port, collect_holds
+    from ..control import hold_orientations, torque_error
+    from ..drive import Emulated, Port
+    from ..drive.identify import identify_motor
     from ..drive.plant import PlantError
     from ..errors import ComputationError, bad_value
     from ..magnetics import design_model
@@ -90,7 +93,10 @@ def calibrate(
     if not emulate and error != DEFAULT_ERROR:
         raise bad_value("--plant-error", "used only with --emulate", error)
     left_out = without_terms(without)
-    terms = {"gains": "gains" not in left_out, "turns": "placements" not in left_out}
+    if not emulate and "sensors" not in left_out:
+        left_out.add("sensors")  # the wells are visited on the emulated motor only
+    terms = {"gains": "gains" not in left_out, "turns": "placements" not in left_out,
+             "sensors": "sensors" not in left_out, "rotor": "rotor" not in left_out}
     out = output_file(out, "--out", suffixes=OUT_SUFFIXES)  # before any hold: writable, and its suffix the format
     if port is not None:  # a port that cannot be opened is refused before any work, with nothing written
         check_port(port)
@@ -109,12 +115,8 @@ def calibrate(
     walk = hold_orientations(int(orientations), seed=seed)
     try:
         with sigterm_as_interrupt() as received, progress("calibrating", enabled=not as_json) as say:
-            holds = collect_holds(design, backend, walk, model=own.model, limits=own.limits, progress=say)
-            say("fitting the tables")
-            cal = fit(design, own.model, holds, **terms)
-            if cal.consistent is False:
-                say("the fit does not explain its held-out holds: comparing fits to name what is missing")
-                cal = replace(cal, missing=diagnose(design, own.model, holds, cal, **terms))
+            cal, holds = identify_motor(design, backend, walk, model=own.model, limits=own.limits, progress=say,
+                                        **terms)
             before = after = None
             if plant is not None:
                 say("measuring the torque error against the emulated plant")

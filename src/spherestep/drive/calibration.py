@@ -50,7 +50,7 @@ RETRIES = 2  # re-commanded holds (each settling twice as long) before a hold is
 def collect_holds(design, backend, orientations, *, model=None, limits: DriveLimits | None = None,
                   move_time: float = 0.4, settle: float = 0.5, window: float = 0.25, moves: bool = True,
                   rate: float = 1000.0, quadrature: float = 0.012, progress=None,
-                  tolerance: float = HOLD_TOLERANCE) -> Holds:
+                  tolerance: float = HOLD_TOLERANCE, sensor_calibration=None) -> Holds:
     """Drive the servo (controller on ``model``, default the design's own) to each of ``orientations``
     (``(H, 3, 3)``, or a count for :func:`hold_orientations`) in turn and record the holds and moves (module
     docstring). ``backend``: a torque model (the simulated plant, :func:`spherestep.dynamics.simulate_servo` at
@@ -65,7 +65,9 @@ def collect_holds(design, backend, orientations, *, model=None, limits: DriveLim
     Holds that are holds: a hold ending farther than ``tolerance`` rad from its target by the measurement is
     commanded again from where it is (:meth:`Trajectory.hold`, the servo's disturbance estimate given twice the
     time to settle, up to :data:`RETRIES` times); the hold equation is the last one's window (the move equation the
-    first run's: from rest to its end), and a hold still off is discarded (its move kept)."""
+    first run's: from rest to its end), and a hold still off is discarded (its move kept). ``sensor_calibration``
+    (an emulated motor or a port): the array's :class:`~spherestep.sensing.ArrayCalibration` the estimate reads
+    through."""
     from ..control.calibration import Holds, hold_orientations, series_equations  # the fit's maths: magnetics
     from ..dynamics import Rotor
     from ..magnetics import design_model
@@ -106,7 +108,7 @@ def collect_holds(design, backend, orientations, *, model=None, limits: DriveLim
         if progress is not None:
             progress(f"holding at orientation {i + 1} of {len(targets)} ({name})", i, len(targets))
         traj, _ = _move(here, target, move_time)
-        t, R, c = _session(design, backend, traj, settle, here, model, limits, rate)
+        t, R, c = _session(design, backend, traj, settle, here, model, limits, rate, sensor_calibration)
         every = max(1, round(quadrature / float(np.median(np.diff(t)))))
         eqs, speed = series_equations(t, R, c, window, rotor.inertia, rotor.damping, every)
         move = [e for e in eqs if e[0] == "move"]
@@ -117,7 +119,7 @@ def collect_holds(design, backend, orientations, *, model=None, limits: DriveLim
                 progress(f"holding at orientation {i + 1} of {len(targets)} again ({name}: "
                          f"{math.degrees(so3.distance(R[-1], target)):.3f}° off)", i, len(targets))
             t, R, c = _session(design, backend, Trajectory.hold(target), settle * 2 ** (attempt + 1), R[-1], model,
-                               limits, rate)
+                               limits, rate, sensor_calibration)
             eqs, speed = series_equations(t, R, c, window, rotor.inertia, rotor.damping, every)
         good = so3.distance(R[-1], target) <= tolerance
         rows.extend([e for e in eqs if e[0] == "hold" and good] + (move if moves else []))
@@ -162,7 +164,7 @@ def _move(start: np.ndarray, target: np.ndarray, move_time: float):
     return Trajectory.turn(start, rv / angle, angle, 4.0 * angle / T ** 2), T
 
 
-def _session(design, backend, traj, settle: float, start, model, limits, rate: float):
+def _session(design, backend, traj, settle: float, start, model, limits, rate: float, sensor_calibration=None):
     """``(t, R, c)``: one run of the servo along ``traj`` and ``settle`` s on: times (s), measured orientations
     and the currents per unit over each period."""
     if is_torque_model(backend):
@@ -178,7 +180,7 @@ def _session(design, backend, traj, settle: float, start, model, limits, rate: f
     options = {"plant": backend.plant, "lockstep": backend.lockstep, "plant_rotor": backend.rotor,
                "sensor_errors": backend.sensor_errors} if emulate else {}
     session = servo_session(design, traj, traj.duration + settle, port=port, emulate=emulate, model=model,
-                            drive=limits, R0=start, **options)
+                            drive=limits, R0=start, sensor_calibration=sensor_calibration, **options)
     rep = session.report
     if rep.outcome == "INTERRUPT":  # the loop caught Ctrl-C or SIGTERM and switched every coil off: unwind on,
         stop = interrupt_for(last_signal())  # saying whether the device acknowledged it (the CLI tells the user)

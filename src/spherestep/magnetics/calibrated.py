@@ -57,7 +57,8 @@ class Calibration:
     gain against the design's coupling (1: as modelled; 0: none); ``backend``; ``label``; per coil ``gains`` ±
     ``gains_std`` and field ``turns (N, 3)`` rad ± ``turns_std`` (:mod:`spherestep.magnetics.percoil`; None: not
     fitted); ``judged`` the held-out verdict's figures (N·m), ``missing`` the terms a diagnosis named, ``rotor``
-    the rotor's identified terms (when identified)."""
+    the rotor's identified terms and ``sensors`` the array's (when identified: ``RotorFit.to_dict``,
+    ``ArrayCalibration.to_dict``)."""
 
     model: object
     nodes: np.ndarray
@@ -90,6 +91,7 @@ class Calibration:
     judged: dict = field(default_factory=dict)
     missing: tuple[str, ...] = ()
     rotor: dict | None = None
+    sensors: dict | None = None
 
     @property
     def consistent(self) -> bool | None:
@@ -125,7 +127,7 @@ class Calibration:
             lines.append("not judged: no hold held out (fewer than 5 holds)")
         if j.get("held_out_holds"):
             lines.append(f"held out {j['held_out_holds']} holds: residual {torque_text(j['hold_rms'], 2)} against the "
-                         f"noise {torque_text(j['hold_noise'], 2)} (the window's halves); moves "
+                         f"noise the sensors imply {torque_text(j['hold_noise'], 2)}; moves "
                          f"{torque_text(j['move_rms'], 2)} of {torque_text(j['move_torque'], 2)}: "
                          f"{'consistent' if self.consistent else 'INCONSISTENT'}")
         if self.gains is not None:
@@ -138,7 +140,16 @@ class Calibration:
             lines.append("coil placements: " + ", ".join(f"coil {k} {ang[k]:.2f}° ± {math.degrees(self.turns_std[k]):.2f}°"
                                                           for k in top))
         if self.rotor:
-            lines.append("rotor: " + ", ".join(f"{k} {v:.4g}" for k, v in self.rotor.items()))
+            r = self.rotor
+            lines.append(f"rotor: inertia {r['inertia_kg_m2']:.4g} ± {r['inertia_std']:.2g} kg·m², damping "
+                         f"{r['damping_N_m_s']:.3g} ± {r['damping_std']:.2g} N·m·s/rad, friction {r['friction_N_m']:.3g} "
+                         f"± {r['friction_std']:.2g} N·m (from {r['windows']} windows of moves)")
+        if self.sensors:
+            a = self.sensors
+            off = np.linalg.norm(np.asarray(a["offsets_T"]), axis=1)
+            lines.append(f"sensors: the array turned {a['rotation_angle_deg']:.4f}° (± "
+                         f"{max(a['rotation_std_deg']):.4f}°), offsets up to {1e6 * off.max():.0f} µT, from "
+                         f"{a['references']} rests in the detent wells")
         lines += [f"{self.holds} holds, {self.equations} equations fitted ({self.backend}): residual RMS "
                  f"{torque_text(self.residual_before)} -> {torque_text(self.residual_after)} (noise taken "
                  f"{torque_text(self.sigma, 2)})",
@@ -180,7 +191,7 @@ class Calibration:
                 "dead_coils": self.dead_coils(), "reversed_coils": self.reversed_coils(),
                 "held_out": {k: (None if isinstance(v, float) and not math.isfinite(v) else v)
                              for k, v in self.judged.items()},
-                "missing": list(self.missing), "rotor": self.rotor}
+                "missing": list(self.missing), "rotor": self.rotor, "sensors": self.sensors}
 
     def save(self, path) -> Path:
         """Write the calibration atomically, as JSON when ``path`` ends in ``.json`` and as YAML otherwise
@@ -254,7 +265,7 @@ class Calibration:
                    str(data["backend"]), str(data.get("label", "calibrated")), gain,
                    float(data.get("coupling_std", 0.0)), design.fingerprint, coil["gains"], coil["gains_std"], turns,
                    None if coil["turns_std_deg"] is None else np.radians(coil["turns_std_deg"]), judged,
-                   tuple(data.get("missing") or ()), data.get("rotor"))
+                   tuple(data.get("missing") or ()), data.get("rotor"), data.get("sensors"))
 
 
 def calibration_beside(design_path, design=None, accept_inconsistent: bool = False) -> Path | None:
