@@ -237,7 +237,7 @@ def test_cli_on_the_emulator(tmp_path, capsys):
     line."""
     out = tmp_path / "cal.json"
     assert main(["calibrate", "--emulate", "--orientations", "3", "--plant-error", "detent=1.1,winding=0.9",
-                 "--out", str(out), "--json"]) == 0
+                 "--without", "sensors,rotor", "--out", str(out), "--json"]) == 0
     data = json.loads(capsys.readouterr().out)
     assert data["holds"]["holds"] == 3 and data["holds"]["backend"] == "emulated"
     assert (data["plant_error"]["detent"], data["plant_error"]["winding"]) == (1.1, 0.9)

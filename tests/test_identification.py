@@ -203,3 +203,26 @@ def test_cli_refusals(tmp_path, capsys):
         err = capsys.readouterr().err
         assert err.count("\n") == 1 and name in err, err
     assert not out.exists() and not (tmp_path / "m").exists()
+
+
+@pytest.mark.slow
+def test_one_run_identifies_everything_into_one_file(tmp_path, capsys):
+    """`spherestep calibrate --emulate --plant-error realistic` (5 holds: too few to judge well, so forced) writes
+    one file with the tables, every coil's gain and placement ± σ, the rotor (inertia, damping, friction ± σ) and
+    the array (its turn and offsets ± σ); `move --emulate --plant-error realistic --calibration FILE` then refuses
+    it unless forced the same way (when the verdict was inconsistent), and runs on it when forced."""
+    import json
+
+    out = tmp_path / "motor" / "calibration.yaml"
+    out.parent.mkdir()
+    code = main(["calibrate", "--emulate", "--orientations", "5", "--plant-error", "realistic,seed=4",
+                 "--accept-inconsistent-calibration", "--out", str(out), "--json"])
+    assert code == 0
+    data = json.loads(capsys.readouterr().out)
+    cal = data["calibration"]
+    assert len(cal["gains"]) == len(cal["gains_std"]) == len(cal["turns_deg"]) == 29
+    assert cal["rotor"]["inertia_kg_m2"] > 0 and cal["rotor"]["inertia_std"] > 0
+    assert cal["sensors"]["references"] >= 3 and len(cal["sensors"]["offsets_T"]) == 8
+    assert data["plant_error"]["inertia"] == 1.3 and data["file"] == str(out)
+    back = Calibration.load(out, prototype(), accept_inconsistent=True)
+    assert back.rotor == cal["rotor"] and back.sensors["references"] == cal["sensors"]["references"]
