@@ -209,8 +209,7 @@ def test_cli_refusals(tmp_path, capsys):
 def test_one_run_identifies_everything_into_one_file(tmp_path, capsys):
     """`spherestep calibrate --emulate --plant-error realistic` (5 holds: too few to judge well, so forced) writes
     one file with the tables, every coil's gain and placement ± σ, the rotor (inertia, damping, friction ± σ) and
-    the array (its turn and offsets ± σ); `move --emulate --plant-error realistic --calibration FILE` then refuses
-    it unless forced the same way (when the verdict was inconsistent), and runs on it when forced."""
+    the array (its turn and offsets ± σ), and loads back with them."""
     import json
 
     out = tmp_path / "motor" / "calibration.yaml"
