@@ -12,7 +12,8 @@ model), the fit (tables, per-coil gains and placements, judged on every fifth ho
   parameterisation;
 * ``--check-holds`` holds on the plant with the calibrated model (``servo_session`` on ``Trajectory.hold`` for 1.5 s
   from 0.5° away, the truth at the loop's last cycle; target 20 of 20 within 0.05°);
-* the same holds fitted without per-coil gains: the verdict (target: refused, naming the per-coil spread).
+* the same holds fitted without the per-coil terms (gains and placements): the verdict (target: refused, naming the
+  per-coil spread).
 
 Seeds: ``--tune-seed`` (the one the thresholds were looked at on) and ``--seeds`` (held out). JSON with ``--json``.
 """
