@@ -7,13 +7,14 @@ per-sensor offsets of 100 µT (``SensorErrors.random``, by seed).
 * rotor: ``dynamics.rotor_excitation(seed, repeats=2)`` (6 trapezoidal turns of 120° at 1, 2.5 and 5 rad/s),
   ``drive.record_moves`` on the simulated servo (1 kHz, true orientations) and on the emulated motor in lockstep
   (500 Hz, the magnetometers' estimate, commanded currents; the array's errors left in: the rotor is identified
-  after the sensors, and both orders are shown), ``dynamics.fit_rotor`` (``lag=True`` on the emulated motor);
+  after the sensors: the fit on the array as built, uncalibrated, and through its calibration are both shown),
+  ``dynamics.fit_rotor`` (``lag=True`` on the emulated motor);
   relative errors and standard deviations;
 * sensors: ``sensing.detent_wells`` (12 stiffest), ``drive.well_readings`` (4 visits each) on the emulated motor,
   ``sensing.calibrate_array_absolute``; the turn's error; then 10 holds (``control.calibration.hold_orientations``)
   in lockstep with and without the calibration, judged in truth.
 
-Run: ``OPENBLAS_NUM_THREADS=1 nice python benchmarks/bench_identify.py [--seeds 2,3] [--json PATH]``. Wall times
+Run: ``OPENBLAS_NUM_THREADS=1 nice python benchmarks/bench_identify.py [--seeds 5,6] [--json PATH]``. Wall times
 are of this machine at the load printed (2 cores shared).
 """
 
@@ -59,7 +60,7 @@ def _holds(design, targets, err, rotor, cal) -> list[float]:
 def main() -> None:
     record = Record("identify")
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    p.add_argument("--seeds", default="2,3", help="held-out seeds, comma-separated (development used 0 and 1)")
+    p.add_argument("--seeds", default="5,6", help="held-out seeds, comma-separated (development used 0-4)")
     args = p.parse_args()
     seeds = [int(s) for s in args.seeds.split(",")]
     design = prototype()
@@ -83,7 +84,7 @@ def main() -> None:
             emu = record_moves(design, moves, plant_rotor=true, emulate=True, sensor_errors=errors)
             row[f"{key}_record_s"] = time.perf_counter() - t
             row[key] = _rel(fit_rotor(own.model, emu, lag=True), true)
-        wells = detent_wells(own.model, 12, seed=seed)
+        wells = detent_wells(own.model, 12, seed=seed)  # the sensors (then the rotor through them)
         t = time.perf_counter()
         wr = well_readings(design, wells, visits=4, plant_rotor=true, sensor_errors=err, seed=seed)
         row["wells_record_s"] = time.perf_counter() - t
@@ -94,6 +95,10 @@ def main() -> None:
         row["turn_error_deg"] = math.degrees(so3.distance(cal.rotation, err.rotation))
         row["turn_std_deg"] = np.degrees(cal.rotation_std).tolist()
         row["offset_error_rms_T"] = float(np.sqrt(np.mean((cal.offsets - err.offsets) ** 2)))
+        t = time.perf_counter()
+        emu = record_moves(design, moves, plant_rotor=true, emulate=True, sensor_errors=err, sensor_calibration=cal)
+        row["rotor_emulated_calibrated_sensors_record_s"] = time.perf_counter() - t
+        row["rotor_emulated_calibrated_sensors"] = _rel(fit_rotor(own.model, emu, lag=True), true)
         targets = hold_orientations(10, seed=100 + seed)
         row["holds_truth_deg_uncalibrated"] = _holds(design, targets, err, true, None)
         row["holds_truth_deg_calibrated"] = _holds(design, targets, err, true, cal)
@@ -110,6 +115,9 @@ def main() -> None:
               f"{r['turn_error_deg']:.4f}°, offsets {r['offset_error_rms_T'] * 1e6:.1f} µT RMS; holds in truth "
               f"max {max(r['holds_truth_deg_uncalibrated']):.3f}° uncalibrated, "
               f"{max(r['holds_truth_deg_calibrated']):.4f}° calibrated")
+        c = r["rotor_emulated_calibrated_sensors"]
+        print(f"  rotor through the calibrated sensors: I {c['inertia_error']:+.2%} b {c['damping_error']:+.2%} "
+              f"f {c['friction_error']:+.2%}")
     print(f"load {os.getloadavg()[0]:.1f}")
     record.put("rows", rows)
     record.write()

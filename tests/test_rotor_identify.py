@@ -77,3 +77,16 @@ def test_bad_input_names_the_field(own):
         rotor_excitation(speeds=(1.0, -2.0))
     with pytest.raises(InputError, match="plant_rotor"):
         record_moves(None, rotor_excitation(repeats=1), plant_rotor=0.1)
+
+
+def test_fit_round_trips_through_its_dict():
+    import json
+
+    from spherestep.dynamics import RotorFit
+
+    fit = RotorFit(0.094, 0.04, 0.041, (1e-4, 7e-4, 9e-4), 0.002, 120, 40, 6.4e-4, 5e-5, 2e-3, 2)
+    assert RotorFit.from_dict(json.loads(json.dumps(fit.to_dict()))) == fit
+    bad = fit.to_dict()
+    del bad["friction_N_m"]
+    with pytest.raises(InputError, match="friction_N_m"):
+        RotorFit.from_dict(bad)

@@ -133,3 +133,21 @@ def test_wells_on_the_emulated_motor_then_holds_in_truth(setup):
         s = servo_session(design, Trajectory.hold(T), 0.6, emulate=True, lockstep=True, R0=T, sensor_errors=err,
                           plant_rotor=rotor, sensor_calibration=cal)
         assert math.degrees(s.final_error()) < 0.05
+
+
+def test_calibration_round_trips_through_its_dict():
+    import json
+
+    from spherestep.sensing import ArrayCalibration
+
+    rng = np.random.default_rng(0)
+    cal = ArrayCalibration(rng.normal(0, 1e-4, (8, 3)), 1 + rng.normal(0, 0.01, (8, 3)), so3.exp([1e-3, -2e-3, 5e-4]),
+                           np.full((8, 3), 1e-5), np.array([1e-5, 2e-5, 3e-5]), 4e-5, 48, True)
+    for degrees in (True, False):
+        back = ArrayCalibration.from_dict(json.loads(json.dumps(cal.to_dict(degrees))))
+        assert np.allclose(back.rotation, cal.rotation, atol=1e-15) and np.allclose(back.offsets, cal.offsets)
+        assert np.allclose(back.rotation_std, cal.rotation_std) and back.fitted_gains and back.references == 48
+    bad = cal.to_dict()
+    del bad["gains"]
+    with pytest.raises(InputError, match="gains"):
+        ArrayCalibration.from_dict(bad)

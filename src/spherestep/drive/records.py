@@ -21,14 +21,16 @@ SETTLE = 0.3  # s the servo runs on after each move
 
 
 def record_moves(design, moves, *, plant=None, model=None, limits=None, plant_rotor=None, sensor_errors=None,
-                 emulate: bool = False, port: str | None = None, rate: float | None = None, settle: float = SETTLE,
+                 sensor_calibration=None, emulate: bool = False, port: str | None = None, rate: float | None = None, settle: float = SETTLE,
                  progress=None) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
     """Run the servo (controller on ``model``, default the design's own, believing the design's rotor) along each
     of ``moves`` (:class:`~spherestep.control.Trajectory`, e.g. :func:`spherestep.dynamics.rotor_excitation`) and
     ``settle`` s on, and return one record ``(t (T,), R (T, 3, 3), c (T, N) per unit)`` per move. Backend: the
     simulated plant (:func:`spherestep.dynamics.simulate_servo` at ``rate``, default 1 kHz; ``plant`` the torque
     model the rotor obeys, ``plant_rotor`` the :class:`~spherestep.dynamics.Rotor` as built), the emulated motor in
-    lockstep (``emulate``; also ``sensor_errors``) or a controller on ``port``. ``progress(text, done, total)``."""
+    lockstep (``emulate``; also ``sensor_errors``) or a controller on ``port`` (both read through
+    ``sensor_calibration``, a :class:`~spherestep.sensing.ArrayCalibration`, when given: calibrate the sensors
+    first, as the torque is evaluated at the estimate). ``progress(text, done, total)``."""
     from ..control import GeometricPD
     from ..dynamics import Rotor, simulate_servo
     from ..magnetics import design_model
@@ -63,7 +65,8 @@ def record_moves(design, moves, *, plant=None, model=None, limits=None, plant_ro
         session = servo_session(design, traj, traj.duration + settle, port=port, emulate=emulate, lockstep=emulate,
                                 model=model, drive=limits, plant=plant if emulate else None,
                                 plant_rotor=plant_rotor if emulate else None,
-                                sensor_errors=sensor_errors if emulate else None, **options)
+                                sensor_errors=sensor_errors if emulate else None,
+                                sensor_calibration=sensor_calibration, **options)
         rep = session.report
         if rep.outcome == "INTERRUPT":  # the loop switched every coil off: unwind on
             stop = interrupt_for(last_signal())

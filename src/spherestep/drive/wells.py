@@ -19,6 +19,7 @@ import numpy as np
 from .. import checks, so3
 from ..control import Trajectory
 from ..errors import bad_value
+from ..interrupts import interrupt_for, last_signal
 
 READ_EVERY = 0.01  # s between readings while the rotor settles
 KICK = 0.5  # N·m
@@ -90,6 +91,11 @@ def well_readings(design, wells, *, visits: int = 4, hold: float = 0.3, settle: 
                                 drive=limits, sensors=sensors, plant=plant, plant_rotor=plant_rotor,
                                 sensor_errors=sensor_errors, R0=W_k,
                                 after=lambda conn, W_k=W_k: rest(conn, W_k))
+        rep = session.report
+        if rep.outcome == "INTERRUPT":  # the loop switched every coil off: unwind on
+            stop = interrupt_for(last_signal())
+            stop.off_acknowledged = bool(rep.off_acknowledged)
+            raise stop
         if session.after is None:
             raise bad_value("wells", "wells the servo holds to the end", f"outcome {session.report.outcome} "
                             f"({session.report.message})")

@@ -25,8 +25,9 @@ with the cores' field at the nominal positions, as the emulated motor has it)
 linear in the offsets ``o_s`` and gains ``g_s`` and, about the current ``Q₀`` (``Q = exp([δ]×) Q₀``), in ``δ``:
 ``∂/∂δ = g_s ⊙ A_sᵀ Q₀ᵀ (−J_rot(Q₀ᵀ W_k) + [B_core]×)`` (``J_rot`` the table's rotation Jacobian). Gauss–Newton on
 all of them at once (3 or 6 per sensor and 3 shared; ``3 K S`` equations), three rounds. The standard deviations
-come from the residual's RMS and ``(XᵀX)⁻¹``; the residual against the part's noise over the averaged samples says
-whether the model explains the readings.
+come from the residual's RMS and ``(XᵀX)⁻¹``, the turn's no smaller than a delete-one-well jackknife's (which sees
+the rest points' scatter over the dead band, not in the readings' noise: the formal one alone was 5–8× optimistic);
+the residual against the part's noise over the averaged samples says whether the model explains the readings.
 
 Using it. :meth:`ArrayCalibration.correct` removes offsets and gains from readings; the nominal estimator on
 corrected readings reports ``Qᵀ R``, so :meth:`ArrayCalibration.orientation` turns it back, ``R = Q R̂``;
@@ -136,12 +137,34 @@ class ArrayCalibration:
         return CalibratedEstimator(inner, self)
 
     def to_dict(self, degrees: bool = True) -> dict:
+        """The calibration as plain numbers (angles in degrees, ``degrees=False`` radians); :meth:`from_dict` reads
+        it back."""
         k = 180.0 / math.pi if degrees else 1.0
         unit = "deg" if degrees else "rad"
         return {"references": self.references, "fitted_gains": self.fitted_gains,
-                f"rotation_angle_{unit}": self.angle * k, "rotation_vector_" + unit: (so3.log_single(self.rotation) * k).tolist(),
+                f"rotation_angle_{unit}": self.angle * k, f"rotation_vector_{unit}": (so3.log_single(self.rotation) * k).tolist(),
                 f"rotation_std_{unit}": (self.rotation_std * k).tolist(), "offsets_T": self.offsets.tolist(),
                 "offsets_std_T": self.offsets_std.tolist(), "gains": self.gains.tolist(), "residual_T": self.residual_T}
+
+    @classmethod
+    def from_dict(cls, data: dict) -> ArrayCalibration:
+        """The calibration from :meth:`to_dict`'s dict (either unit); InputError naming a missing or bad key."""
+        unit = "deg" if "rotation_vector_deg" in data else "rad"
+        k = math.pi / 180.0 if unit == "deg" else 1.0
+        try:
+            offsets = np.asarray(data["offsets_T"], dtype=float)
+            out = cls(offsets, np.asarray(data["gains"], dtype=float),
+                      so3.exp(np.asarray(data[f"rotation_vector_{unit}"], dtype=float) * k),
+                      np.asarray(data["offsets_std_T"], dtype=float),
+                      np.asarray(data[f"rotation_std_{unit}"], dtype=float) * k, float(data["residual_T"]),
+                      int(data["references"]), bool(data["fitted_gains"]))
+        except KeyError as exc:
+            raise bad_value(str(exc.args[0]), "a key of ArrayCalibration.to_dict()", "missing") from None
+        except (TypeError, ValueError):
+            raise bad_value("sensor calibration", "the numbers of ArrayCalibration.to_dict()", "malformed values") from None
+        if offsets.ndim != 2 or offsets.shape[1] != 3 or out.gains.shape != offsets.shape:
+            raise bad_value("offsets_T", "per-sensor offsets and gains of shape (S, 3)", f"shape {offsets.shape}")
+        return out
 
 
 @dataclass(frozen=True, eq=False)
@@ -210,15 +233,32 @@ def calibrate_array_absolute(design, array: SensorArray, readings, references, *
     rounds = checks.count(rounds, "rounds")
     model = field_model(design, array.positions, cores)
     At = np.swapaxes(array.axes, 1, 2)
+    o, g, Q, A, resid = _fit(model, At, m, W, gains, rounds)
+    dof = max(resid.size - A.shape[1], 1)
+    sigma2 = float(np.sum(resid ** 2)) / dof
+    std = np.sqrt(np.maximum(np.diag(sigma2 * np.linalg.pinv(A.T @ A)), 0.0))
+    rotation_std = std[-3:]
+    _, well = np.unique(W.reshape(len(W), -1).round(9), axis=0, return_inverse=True)
+    n = int(well.max()) + 1
+    if n >= 4:  # delete-one-well jackknife: the rest points' scatter over each well's dead band included
+        turns = np.array([so3.log_single(_fit(model, At, m[well != i], W[well != i], gains, rounds)[2] @ Q.T)
+                          for i in range(n)])
+        jack = np.sqrt((n - 1) / n * np.sum((turns - turns.mean(0)) ** 2, axis=0))
+        rotation_std = np.maximum(rotation_std, jack)
+    return ArrayCalibration(o, g, Q, std[:-3].reshape(len(array), -1)[:, :3], rotation_std,
+                            float(np.sqrt(np.mean(resid ** 2))), len(W), bool(gains))
+
+
+def _fit(model, At: np.ndarray, m: np.ndarray, W: np.ndarray, gains: bool, rounds: int):
+    """Gauss–Newton (module doc): ``(offsets, gains, Q, the last design matrix, the residual (K, S, 3))``."""
+    S, K, per = len(At), len(W), 6 if gains else 3
     Q, o, g = np.eye(3), np.zeros((S, 3)), np.ones((S, 3))
-    K = len(W)
     for _ in range(rounds):
         BJ = [model.rotor.field_and_jacobian(R) for R in Q.T @ W]
         B, J = np.stack([b for b, _ in BJ]), np.stack([j for _, j in BJ])  # (K, S, 3), (K, S, 3, 3)
         Bc = model.cores.field(W) if model.cores is not None else np.zeros_like(B)
         local = np.einsum("sij,ksj->ksi", At, B + np.einsum("ji,ksj->ksi", Q, Bc))  # Aᵀ[B_rot + Qᵀ B_core]
         dQ = np.einsum("sij,ksjl->ksil", At, np.einsum("ji,ksjl->ksil", Q, so3.skew(Bc)) - J @ Q.T)
-        pred = g * local + o
         X = np.zeros((K, S, 3, S * per + 3))
         for s in range(S):
             X[:, s, :, per * s:per * s + 3] = np.eye(3)  # ∂/∂o
@@ -226,8 +266,7 @@ def calibrate_array_absolute(design, array: SensorArray, readings, references, *
                 X[:, s, :, per * s + 3:per * s + 6] = local[:, s, :, None] * np.eye(3)  # ∂/∂g
         X[..., -3:] = g[None, :, :, None] * dQ
         A = X.reshape(-1, S * per + 3)
-        r = (m - pred).reshape(-1)
-        step, *_ = np.linalg.lstsq(A, r, rcond=None)
+        step, *_ = np.linalg.lstsq(A, (m - (g * local + o)).reshape(-1), rcond=None)
         steps = step[:-3].reshape(S, per)
         o = o + steps[:, :3]
         if gains:
@@ -235,10 +274,4 @@ def calibrate_array_absolute(design, array: SensorArray, readings, references, *
         Q = so3.exp(step[-3:]) @ Q
     B = model.rotor.field(Q.T @ W)
     Bc = model.cores.field(W) if model.cores is not None else np.zeros_like(B)
-    resid = m - (g * np.einsum("sij,ksj->ksi", At, B + np.einsum("ji,ksj->ksi", Q, Bc)) + o)
-    dof = max(resid.size - A.shape[1], 1)
-    sigma2 = float(np.sum(resid ** 2)) / dof
-    cov = sigma2 * np.linalg.pinv(A.T @ A)
-    std = np.sqrt(np.maximum(np.diag(cov), 0.0))
-    return ArrayCalibration(o, g, Q, std[:-3].reshape(S, per)[:, :3], std[-3:], float(np.sqrt(np.mean(resid ** 2))),
-                            K, bool(gains))
+    return o, g, Q, A, m - (g * np.einsum("sij,ksj->ksi", At, B + np.einsum("ji,ksj->ksi", Q, Bc)) + o)
