@@ -21,7 +21,8 @@ The measurements. ``R(t)``, ``c(t)`` sampled by the servo loop give, with the ro
   rotation the rotor made, so this is absolute and fixes the scale (through the inertia, which a scale can
   weigh). Timing errors of the currents cancel to first order because the move starts and ends near rest.
 
-The fit. Parameters ``x = (s_d, s_1, δ_d, δ_1, g)``: the fitted tables are
+The fit (:func:`spherestep.control.identify.calibrate`, which adds each coil's gain and placement and judges the fit
+on held-out holds; its tables' part as follows). Parameters ``x = (s_d, s_1, δ_d, δ_1, g)``: the fitted tables are
 ``θ = (1 + s) θ⁰ + e ⊙ δ`` with ``θ⁰`` the model's tables, ``s`` a global scale per table (the winding's
 ``s_1`` the gain of the copper and the core, the detent's ``s_d`` that of the gap) and ``δ`` a shape
 correction per node in units of the table's local envelope ``e`` (the largest ``|θ⁰|`` within 5°, so a 10 %
@@ -43,8 +44,8 @@ scale when no move constrains it.
 What it cannot fit: a torque that is neither a sum over pole–core pairs nor the modelled coupling's shape. The
 coupling is ~0.35 N·m RMS at the prototype's holds, where the pair terms cancel it: without its gain
 (``coupling=False`` on a pairwise model) least squares shrinks both tables towards zero.
-:attr:`Calibration.consistent` (the residual after the fit within 5 % of the uncorrected model's; the simulated
-plants reach 0.1 %) says when a fit does not explain its data, and the summary warns not to use it.
+:attr:`Calibration.consistent` (the held-out verdict: :func:`spherestep.control.identify.verdict`) says when a fit
+does not explain its data; an inconsistent one is refused wherever it would be used.
 """
 
 from __future__ import annotations
