@@ -266,7 +266,8 @@ def calibration(design, own, axis, angle: float, *, holds: int = CALIBRATION_HOL
                        "max_tracking_error_deg": math.degrees(s.max_tracking_error)}
     return {"plant": f"{own.label} with the detent ×{CALIBRATION_ERROR['detent']:g} and the winding "
                      f"×{CALIBRATION_ERROR['winding']:g}", "plant_error": dict(CALIBRATION_ERROR),
-            "backend": "emulated motor (lockstep)", "holds": len(collected), "consistent": cal.consistent,
+            "backend": "emulated motor (lockstep)", "holds": len(collected),
+            "discarded": collected.discarded, "consistent": cal.consistent,
             "scale_detent": cal.scale_detent, "scale_winding": cal.scale_winding,
             "residual_before_Nm": cal.residual_before, "residual_after_Nm": cal.residual_after,
             "torque_error_before": before, "torque_error_after": after, "torque_error_orientations": 200,
