@@ -26,6 +26,10 @@ from spherestep.magnetics import IronTorqueMap, design_model
 from spherestep.motor import prototype
 
 
+TABLES = {"gains": False, "turns": False, "held_out": False}  # the tables' fit alone (issue 26), every hold fitted:
+# the per-coil terms and the held-out verdict (issue 37) are tests/test_identification.py's
+
+
 @pytest.fixture(scope="module")
 def setup():
     return _setup(coupling=True)
@@ -69,7 +73,7 @@ def test_recovers_a_known_table_perturbation(setup):
     the torque error against the plant at 200 held-out orientations and currents drops ≥ 5×, and the truth lies
     within 3σ of the fit at ≥ 90 % of those nodes (honest uncertainties)."""
     design, own, model, plant, holds = setup
-    cal = calibrate(design, model, holds)
+    cal = calibrate(design, model, holds, **TABLES)
     seen = np.degrees(cal.nodes) < 25.0
     for fit, sd, true in ((cal.detent, cal.detent_std, plant.detent.tau), (cal.winding, cal.winding_std,
                                                                           plant.linear.tau)):
@@ -79,7 +83,8 @@ def test_recovers_a_known_table_perturbation(setup):
         assert inside.mean() >= 0.9
     before, after = torque_error(model, plant), torque_error(cal.model, plant)
     assert before > 0.1 and after < before / 5
-    assert cal.residual_after < 0.05 * cal.residual_before and cal.consistent and "WARNING" not in cal.summary()
+    assert cal.residual_after < 0.05 * cal.residual_before and cal.consistent is not False \
+        and "INCONSISTENT" not in cal.summary()
     assert any(m.table == "detent" and 3.0 < math.degrees(m.angle) < 9.0 for m in cal.moved)  # the bump
 
 
@@ -90,9 +95,9 @@ def test_says_what_it_cannot_see(pairwise_setup):
     seen: a perturbation there is not recovered, and reported. (The pairwise model: with the coupling modelled,
     whose torque the tables' scale does not multiply, the holds at rest do see the scale.)"""
     design, own, model, plant, holds = pairwise_setup
-    static = calibrate(design, model, holds.without_moves())
+    static = calibrate(design, model, holds.without_moves(), **TABLES)
     assert any("common scale" in u for u in static.unseen)
-    full = calibrate(design, model, holds)
+    full = calibrate(design, model, holds, **TABLES)
     assert not any("common scale" in u for u in full.unseen)
     assert full.scale_std[1] < 0.5 * static.scale_std[1]
     # a ×3 change of the detent at 120°: invisible, so the fit stays at the prior and says so
@@ -102,7 +107,7 @@ def test_says_what_it_cannot_see(pairwise_setup):
     samples = Holds(holds.targets, holds.orientations, holds.currents, holds.kinds,
                     _rhs_for(far, holds), holds.sample_R, holds.sample_c, holds.sample_w, holds.sample_eq,
                     holds.inertia, holds.damping, "synthetic")
-    cal = calibrate(design, model, samples)
+    cal = calibrate(design, model, samples, **TABLES)
     k = int(np.argmin(np.abs(np.degrees(cal.nodes) - 120)))
     assert abs(cal.detent[k] - model.detent.tau[k]) < 0.5 * abs(far.detent.tau[k] - model.detent.tau[k])
     text = [u for u in cal.unseen if u.startswith("detent table")]
@@ -121,14 +126,15 @@ def test_recovers_the_cores_coupling(pairwise_setup):
     coupled = design_model(design).model
     truth = replace(plant, coupling=coupled.coupling)
     samples = replace(holds, rhs=_rhs_for(truth, holds), backend="synthetic")
-    cal = calibrate(design, model, samples)
+    judged = {"gains": False, "turns": False}  # the held-out verdict on: it must pass here and refuse `blind`
+    cal = calibrate(design, model, samples, **judged)
     assert cal.coupling and abs(cal.coupling_gain - 1.0) < max(3 * cal.coupling_std, 0.02)
     assert cal.coupling_std < 0.05 and "coupling" in cal.summary()
     seen = np.degrees(cal.nodes) < 25.0
     for fit, true in ((cal.detent, plant.detent.tau), (cal.winding, plant.linear.tau)):
         assert np.max(np.abs(fit - true)[seen]) < 0.03 * np.max(np.abs(true))
     before, after = torque_error(model, truth), torque_error(cal.model, truth)
-    assert after < before / 5 and cal.consistent
+    assert after < before / 5 and cal.consistent is True, cal.judged
     # the calibrated servo on the coupled plant: a 90° turn (1.2 s) tracks as the exact model does, the pairwise
     # model does worse
     axis = np.array([1.0, 0.5, 2.0]) / math.sqrt(5.25)
@@ -137,9 +143,9 @@ def test_recovers_the_cores_coupling(pairwise_setup):
                                              settle=0.3, rate=500).tracking_error))
            for name, ctrl in (("pairwise", model), ("calibrated", cal.model), ("exact", truth))}
     assert err["calibrated"] <= 1.05 * err["exact"] + math.radians(0.005) < err["pairwise"]
-    blind = calibrate(design, model, samples, coupling=False)
-    assert not blind.coupling and not blind.consistent and "WARNING" in blind.summary()
-    back = calibrate(design, coupled, holds, coupling=True)  # the holds the loop recorded on the pairwise plant
+    blind = calibrate(design, model, samples, coupling=False, **judged)
+    assert not blind.coupling and blind.consistent is False and "INCONSISTENT" in blind.summary()
+    back = calibrate(design, coupled, holds, coupling=True, **TABLES)  # the holds the loop recorded on the pairwise plant
     assert abs(back.coupling_gain) < max(3 * back.coupling_std, 0.02)
     assert torque_error(back.model, plant) < torque_error(coupled, plant) / 5
 
@@ -165,7 +171,7 @@ def test_calibrated_servo_tracks_better_on_the_mismatched_plant(setup):
     """A 90° turn (1.2 s) about (1, 0.5, 2) on the mismatched plant: the servo on the calibrated model tracks
     within half the error of the servo on the design's model and ends within 0.05°."""
     design, own, model, plant, holds = setup
-    cal = calibrate(design, model, holds)
+    cal = calibrate(design, model, holds, **TABLES)
     axis = np.array([1.0, 0.5, 2.0]) / math.sqrt(5.25)
     traj = Trajectory.turn(np.eye(3), axis, math.pi / 2, 4 * (math.pi / 2) / 1.2 ** 2)
     err = {}
@@ -181,7 +187,7 @@ def test_save_load_and_design_model(setup, tmp_path):
     """The YAML round trip keeps the tables and the model's torque; design_model(calibration=) uses it and says
     "calibrated"; calibration_beside finds calibration.yaml next to a design file; a bad file is refused."""
     design, own, model, plant, holds = setup
-    cal = calibrate(design, model, holds)
+    cal = calibrate(design, model, holds, **TABLES)
     design_file = tmp_path / "motor.yaml"
     design.save(design_file)
     path = cal.save(tmp_path / "calibration.yaml")
@@ -231,14 +237,14 @@ def test_cli_on_the_emulator(tmp_path, capsys):
     line."""
     out = tmp_path / "cal.json"
     assert main(["calibrate", "--emulate", "--orientations", "3", "--plant-error", "detent=1.1,winding=0.9",
-                 "--out", str(out), "--json"]) == 0
+                 "--without", "sensors,rotor", "--out", str(out), "--json"]) == 0
     data = json.loads(capsys.readouterr().out)
     assert data["holds"]["holds"] == 3 and data["holds"]["backend"] == "emulated"
-    assert data["plant_error"] == {"detent": 1.1, "winding": 0.9}
+    assert (data["plant_error"]["detent"], data["plant_error"]["winding"]) == (1.1, 0.9)
     assert 0 < data["torque_error_after"] < data["torque_error_before"], data
     assert len(data["calibration"]["detent_Nm"]) == 68
     assert json.loads(out.read_text())["holds"] == 3  # JSON under a .json name
-    assert isinstance(data["calibration"]["consistent"], bool)
+    assert data["calibration"]["consistent"] is None  # fewer than 5 holds: none held out, not judged
     assert Calibration.load(out, prototype()).holds == 3
     assert main(["calibrate", "--emulate", "--plant-error", "detent=x", "--out", str(out)]) == 2
     err = capsys.readouterr().err

@@ -64,8 +64,9 @@ def test_demo_writes_plan_figures_simulation_and_report(tmp_path, capsys):
     c = info["calibration"]
     from spherestep.demo import QUICK_CALIBRATION_HOLDS
 
-    assert c["plant_error"] == {"detent": 1.2, "winding": 0.85} and c["holds"] == QUICK_CALIBRATION_HOLDS
-    assert c["backend"].startswith("emulated") and c["consistent"] is True
+    assert c["plant_error"] == {"detent": 1.2, "winding": 0.85}
+    assert c["holds"] + c["discarded"] == QUICK_CALIBRATION_HOLDS and c["discarded"] <= 4  # holds never within 0.05°
+    assert c["backend"].startswith("emulated") and c["consistent"] is None  # issue 26's fit: not judged
     assert 0 < c["torque_error_after"] < c["torque_error_before"] / 5
     assert c["scale_detent"] == pytest.approx(1.2, abs=0.1) and c["scale_winding"] == pytest.approx(0.85, abs=0.1)
     for t in (c["turn_before"], c["turn_after"]):

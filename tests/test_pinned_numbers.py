@@ -61,9 +61,11 @@ def test_robustness_row_pinned(proto):
 
 @pytest.mark.slow
 def test_cli_calibration_factor_pinned(tmp_path, capsys):
-    """``spherestep calibrate --emulate`` with its defaults (60 holds, detent ×1.2, winding ×0.85, seed 0): the
-    torque error against the plant falls ≥ 5× (docs/control.md's control-notes block, measured 5.4×: 0.1699 →
-    0.0312 on 2026-11-28), the scales come back near the plant's. The error before the fit is deterministic: 0.1699
+    """``spherestep calibrate --emulate`` with its defaults (60 holds, detent ×1.2, winding ×0.85, seed 0; since
+    issue 37 also the sensors' wells, the per-coil terms, the held-out verdict — exit 0 only when consistent — and
+    the rotor): the torque error against the plant falls ≥ 5× (docs/control.md's control-notes block, measured 5.4×:
+    0.1699 → 0.0312 on 2026-11-28 with the tables alone; 7.2×, 0.1699 → 0.0237, with the per-coil terms, 2026-11-28
+    15:22, load 7–17), the scales come back near the plant's. The error before the fit is deterministic: 0.1699
     (0.1748 before issue 35 renumbered the coils, which reorders the 200 random currents it is measured at)."""
     out = tmp_path / "calibration.yaml"
     assert main(["calibrate", "--emulate", "--out", str(out), "--json"]) == 0

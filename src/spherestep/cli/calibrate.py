@@ -13,29 +13,19 @@ from .common import check_port, design_from, number, print_json, tolerance_optio
 from .progress import progress
 from .signals import Terminated, interrupt_of, sigterm_as_interrupt, told
 
-ERROR_KEYS = ("detent", "winding")
 OUT_SUFFIXES = (".yaml", ".yml", ".json")  # the suffix of --out decides the format (JSON for .json); others refused
+DEFAULT_ERROR = "detent=1.2,winding=0.85"
+TERMS = ("gains", "placements", "sensors", "rotor")  # what --without may leave out
 
 
-def plant_error(text: str) -> dict:
-    """``"detent=1.2,winding=0.85"`` as ``{"detent": 1.2, "winding": 0.85}`` (factors on the model's tables);
-    InputError naming ``--plant-error`` otherwise."""
+def without_terms(text: str | None) -> set:
+    """``--without gains,placements,sensors,rotor`` as a set; InputError naming ``--without`` otherwise."""
     from ..errors import bad_value
 
-    expected = "factors on the tables, e.g. detent=1.2,winding=0.85 (keys detent, winding; positive numbers)"
-    out = {}
-    for item in text.split(","):
-        key, sep, value = item.strip().partition("=")
-        if not sep or key.strip() not in ERROR_KEYS or key.strip() in out:
-            raise bad_value("--plant-error", expected, text)
-        try:
-            factor = float(value)
-        except ValueError:
-            raise bad_value("--plant-error", expected, text) from None
-        if not 0.0 < factor < 100.0:
-            raise bad_value("--plant-error", expected, text)
-        out[key.strip()] = factor
-    return out
+    got = set() if not text else {t.strip() for t in text.split(",")}
+    if not got <= set(TERMS):
+        raise bad_value("--without", f"a comma-separated list among {', '.join(TERMS)}", text)
+    return got
 
 
 def judge_holds(holds, degrees: float | None):
@@ -75,33 +65,52 @@ def calibrate(
     orientations: int = typer.Option(60, "--orientations", callback=number("a whole number of holds from 2 to "
                                                                            "200", 2, 200),
                                      help="How many holds (a random walk of 25° moves)."),
-    error: str = typer.Option("detent=1.2,winding=0.85", "--plant-error",
-                              help="With --emulate: the emulated plant's tables as factors on the model's."),
+    error: str = typer.Option(DEFAULT_ERROR, "--plant-error",
+                              help="With --emulate: how the emulated motor differs from its design: detent=F, "
+                                   "winding=F, winding-spread=F, dead=I[+J], coil-offset=DEG, misplaced=K, "
+                                   "inertia=F, damping=NMS, friction=NM, sensor-offset=UT, sensor-bias=DEG, seed=N, "
+                                   "or 'realistic' (docs/control.md)."),
+    without: str = typer.Option(None, "--without", help="Leave out of the run (comma-separated): gains, placements "
+                                                        "(the per-coil terms), sensors (the detent wells' "
+                                                        "array calibration; never on a port), rotor (its "
+                                                        "inertia, damping and friction from moves)."),
+    accept: bool = typer.Option(False, "--accept-inconsistent-calibration",
+                                help="Write the calibration even when it does not explain its held-out holds (the "
+                                     "file records the verdict; loading it then needs the same option)."),
     seed: int = typer.Option(0, "--seed", help="Seed of the random walk of holds."),
     tolerance: float = tolerance_option(),
     as_json: bool = typer.Option(False, "--json", help="Print the fit as JSON."),
 ) -> None:
-    """Drive the servo to a walk of orientations, record the steady currents and the moves, and fit the iron
-    model's detent and winding tables to them (least squares with a smoothness prior); print the fit (residuals,
-    scales, the nodes moved and their uncertainty, what the data cannot see) and write it to --out. Each hold is
-    judged against its target within --tolerance (default 0.05°) and the line says how many held there and the
-    worst: a hold that rests off its target is still data (the fit uses where it rested), so it does not fail the
-    command.
+    """Identify the motor as built, into one file: the sensor array against the detent wells (emulated motor),
+    then the servo driven to a walk of orientations (the steady currents and the moves) and the iron model fitted to
+    them — its detent and winding tables, each coil's gain and placement, the cores' coupling (least squares with a
+    prior, every parameter with its standard deviation), judged on every fifth hold, held out — then the rotor's
+    inertia, damping and friction from moves on the calibrated model. Print the fit and write it to --out; a fit
+    that does not explain its held-out holds exits 1 with nothing written and says which term is missing (unless
+    --accept-inconsistent-calibration). Each hold is judged against its target within
+    --tolerance (default 0.05°) and a line says how many held there and the worst: a hold that rests off its
+    target is still data (the fit uses where it rested), so it does not fail the command.
 
     Example: [bold]spherestep calibrate --emulate --plant-error detent=1.2,winding=0.85 --out calibration.yaml[/bold]
     """
-    from ..control import calibrate as fit, hold_orientations, torque_error
-    from ..drive import Emulated, Port, collect_holds
-    from ..errors import bad_value
+    from ..control import hold_orientations, torque_error
+    from ..drive import Emulated, Port
+    from ..drive.identify import identify_motor
+    from ..drive.plant import PlantError
+    from ..errors import ComputationError, bad_value
     from ..magnetics import design_model
-    from ..magnetics.mismatch import scaled_model
     from ..outputs import output_file
 
     if emulate == (port is not None):
         raise bad_value("--emulate/--port", "one of --emulate or --port DEV", "both" if emulate else "neither")
-    factors = plant_error(error)
-    if not emulate and error != "detent=1.2,winding=0.85":
+    plant_error = PlantError.parse(error)
+    if not emulate and error != DEFAULT_ERROR:
         raise bad_value("--plant-error", "used only with --emulate", error)
+    left_out = without_terms(without)
+    if not emulate and "sensors" not in left_out:
+        left_out.add("sensors")  # the wells are visited on the emulated motor only
+    terms = {"gains": "gains" not in left_out, "turns": "placements" not in left_out,
+             "sensors": "sensors" not in left_out, "rotor": "rotor" not in left_out}
     out = output_file(out, "--out", suffixes=OUT_SUFFIXES)  # before any hold: writable, and its suffix the format
     if port is not None:  # a port that cannot be opened is refused before any work, with nothing written
         check_port(port)
@@ -109,15 +118,20 @@ def calibrate(
     own = design_model(design)
     if own.core != "iron":
         raise bad_value("--design", "an iron-cored design (the fit is of the iron model's tables)", own.core)
-    plant = scaled_model(own.model, **factors) if emulate else None
-    backend = Emulated(plant) if emulate else Port(port)
+    plant = plant_error.plant(own.model) if emulate else None
+    if emulate:
+        from ..sensing import default_array
+
+        backend = Emulated(plant, rotor=plant_error.rotor(design),
+                           sensor_errors=plant_error.sensor_errors(default_array(design, 8)))
+    else:
+        backend = Port(port)
     walk = hold_orientations(int(orientations), seed=seed)
     try:
         with sigterm_as_interrupt() as received, progress("calibrating", enabled=not as_json) as say:
-            holds = collect_holds(design, backend, walk, model=own.model, limits=own.limits, progress=say)
+            cal, holds = identify_motor(design, backend, walk, model=own.model, limits=own.limits, progress=say,
+                                        **terms)
             judged = judge_holds(holds, tolerance)  # said, not fatal: the fit uses where each hold rested
-            say("fitting the tables")
-            cal = fit(design, own.model, holds)
             before = after = None
             if plant is not None:
                 say("measuring the torque error against the emulated plant")
@@ -130,18 +144,24 @@ def calibrate(
               "written", file=sys.stderr)
         told()
         raise typer.Exit(143 if isinstance(interrupt, Terminated) or received.name == "SIGTERM" else 130) from None
-    path = cal.save(out)
+    usable_fit = cal.consistent is not False or accept
+    path = cal.save(out) if usable_fit else None
     if as_json:
         print_json({"calibration": cal.to_dict(), "holds": holds.to_dict(), "holds_judged": judged.to_dict(),
-                    "file": str(path),
-                    "plant_error": factors if emulate else None,
+                    "file": None if path is None else str(path),
+                    "plant_error": plant_error.to_dict() if emulate else None,
                     "torque_error_before": before, "torque_error_after": after})
-        return
-    print(cal.summary())
-    print(f"holds: {judged.checked - judged.failed} of {judged.checked} within {math.degrees(judged.tolerance):g}° of "
-          f"their targets" + (f"; {judged.reason.split(': ', 1)[1]} (the fit uses where each rested)"
-                              if not judged.ok else ""))
-    if before is not None:
-        print(f"torque error against the emulated plant ({error}): {before:.4f} -> {after:.4f} "
-              f"({before / after:.1f}x smaller), 200 random orientations and currents")
-    print(f"wrote {path}")
+    else:
+        print(cal.summary())
+        print(f"holds: {judged.checked - judged.failed} of {judged.checked} within {math.degrees(judged.tolerance):g}° "
+              f"of their targets" + (f"; {judged.reason.split(': ', 1)[1]} (the fit uses where each rested)"
+                                     if not judged.ok else ""))
+        if before is not None:
+            print(f"torque error against the emulated plant ({error}): {before:.4f} -> {after:.4f} "
+                  f"({before / after:.1f}x smaller), 200 random orientations and currents")
+        if path is not None:
+            print(f"wrote {path}")
+    if not usable_fit:
+        raise ComputationError(f"the calibration does not explain its held-out holds (missing: "
+                               f"{', '.join(cal.missing) or 'unknown'}); nothing written to {out} (write it anyway "
+                               "with --accept-inconsistent-calibration)")

@@ -93,6 +93,14 @@ def move(
                                  help="With --emulate: the device behind the line: python (the emulator's) or qemu "
                                       "(firmware/spherestep's drive.cpp built for and run in QEMU's mps2-an500; "
                                       "needs qemu-system-arm and gcc-arm-none-eabi)."),
+    plant_error: str = typer.Option(None, "--plant-error",
+                                    help="With --emulate: the emulated motor as built (the grammar of spherestep "
+                                         "calibrate's --plant-error, e.g. realistic or winding-spread=0.2,dead=4)."),
+    calibration: Path = typer.Option(None, "--calibration", help="Drive on the model of this calibration file "
+                                                                 "(spherestep calibrate) instead of the design's."),
+    accept: bool = typer.Option(False, "--accept-inconsistent-calibration",
+                                help="Use --calibration even though it records a fit that does not explain its "
+                                     "held-out holds."),
 ) -> None:
     """Drive a turn about an axis on the simulated motor (the design's own model: the iron-cored coils of the
     prototype, their winding's limits, 24 V / 100 W supply) and write the trajectory (trajectory.csv), coil currents
@@ -159,6 +167,13 @@ def move(
     except InputError:  # say it with the text the user typed
         raise bad_value("--axis", "a non-zero 3-vector X,Y,Z (not all components zero or below 1e-150)", axis) \
             from None
+    if plant_error is not None and not emulate:
+        raise bad_value("--plant-error", "given only with --emulate (the emulated motor as built)", plant_error)
+    if accept and calibration is None:
+        raise bad_value("--accept-inconsistent-calibration", "given only with --calibration FILE", accept)
+    from ..drive.plant import PlantError
+
+    error = None if plant_error is None else PlantError.parse(plant_error)
     noise = math.radians(sensor_noise or 0.0)
     check_options(mode, backend, duration=time, sensor=sensor, sensor_noise=noise, port=port, rate=rate)
     if port is not None:  # a port that cannot be opened is refused before any work, with nothing written
@@ -167,7 +182,10 @@ def move(
     design = usable(design_from(design_path), path=design_path)
     from ..magnetics import design_model
 
-    own = design_model(design, core)
+    if calibration is not None and not calibration.is_file():
+        raise bad_value("--calibration", "an existing calibration file (spherestep calibrate --out)", str(calibration))
+    # a stale or inconsistent file: refused in one line naming the calibration and the option that forces it
+    own = design_model(design, core, calibration=calibration, accept_inconsistent=accept)
     if time is not None:  # before the progress starts: a refusal is one line
         check_duration(design, axis_vec, math.radians(angle), choose_model(design, own), time, "--time",
                        start=None)
@@ -182,7 +200,7 @@ def move(
                                     model=own, duration=time, sensor=sensor, sensor_noise=noise,
                                     port=port, rate=rate, tolerance=None if tolerance is None else math.radians(tolerance),
                                     log=out / "servo-log.csv" if backend != "simulated" else None, progress=say,
-                                    firmware=firmware, end=end or "hold", hold=hold)
+                                    firmware=firmware, end=end or "hold", hold=hold, plant_error=error)
                 if backend != "simulated" and result.details.outcome == "INTERRUPT":  # the loop caught it, coils off
                     raise interrupt_for(received.name)
                 written = result.write(out)

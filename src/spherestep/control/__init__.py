@@ -7,8 +7,9 @@
 * :mod:`.trajectory`: :class:`Trajectory` — rest-to-rest turns on SO(3), trapezoidal or tabulated speed profiles.
 * :mod:`.time_optimal`: :func:`fastest_turn` — the time-optimal turn with the detent (phase plane, detours).
 * :mod:`.controller`: :class:`GeometricPD` and :class:`Observer` — feedback on the log-map error.
-* :mod:`.calibration`: :func:`calibrate` — the torque model fitted to the motor's own holds and moves (the iron
-  model's pair tables by least squares), :class:`Calibration` saved beside the design
+* :mod:`.calibration` (the equations) and :mod:`.identify` (the fit): :func:`calibrate` — the torque model fitted
+  to the motor's own holds and moves (the iron model's pair tables, each coil's gain and placement, judged on
+  held-out holds), :class:`Calibration` saved beside the design
   (:mod:`spherestep.magnetics.calibrated`); the holds are collected by :func:`spherestep.drive.collect_holds`.
   Loaded on first use: the fit imports the magnetics room.
 * :mod:`.servo`: :class:`ServoLaw` — the one servo law (observer, feedback, cached ``K(R)``/bias, allocation) that
@@ -29,7 +30,7 @@ from .trajectory import (Segment, TimeLaw, Trajectory, bang_bang_time, path_capa
                          plan_turn)
 
 __getattr__, _lazy_dir, _lazy_all = lazy_names(__name__, {"calibration": (
-    "Calibration", "Holds", "calibrate", "calibration_beside", "hold_orientations", "torque_error")})
+    "Calibration", "Holds", "calibration_beside", "hold_orientations", "torque_error"), "identify": ("calibrate",)})
 __all__ = _lazy_all + [  # noqa: PLE0605  (the one list of names)
            "Allocation", "Capability", "DriveLimits", "GeometricPD", "ModelCache", "Observer", "Segment",
            "ServoCommand", "ServoLaw", "Trajectory", "TimeLaw", "FastestTurn", "fastest_time", "fastest_turn",

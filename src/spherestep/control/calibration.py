@@ -21,7 +21,8 @@ The measurements. ``R(t)``, ``c(t)`` sampled by the servo loop give, with the ro
   rotation the rotor made, so this is absolute and fixes the scale (through the inertia, which a scale can
   weigh). Timing errors of the currents cancel to first order because the move starts and ends near rest.
 
-The fit. Parameters ``x = (s_d, s_1, δ_d, δ_1, g)``: the fitted tables are
+The fit (:func:`spherestep.control.identify.calibrate`, which adds each coil's gain and placement and judges the fit
+on held-out holds; its tables' part as follows). Parameters ``x = (s_d, s_1, δ_d, δ_1, g)``: the fitted tables are
 ``θ = (1 + s) θ⁰ + e ⊙ δ`` with ``θ⁰`` the model's tables, ``s`` a global scale per table (the winding's
 ``s_1`` the gain of the copper and the core, the detent's ``s_d`` that of the gap) and ``δ`` a shape
 correction per node in units of the table's local envelope ``e`` (the largest ``|θ⁰|`` within 5°, so a 10 %
@@ -43,26 +44,21 @@ scale when no move constrains it.
 What it cannot fit: a torque that is neither a sum over pole–core pairs nor the modelled coupling's shape. The
 coupling is ~0.35 N·m RMS at the prototype's holds, where the pair terms cancel it: without its gain
 (``coupling=False`` on a pairwise model) least squares shrinks both tables towards zero.
-:attr:`Calibration.consistent` (the residual after the fit within 5 % of the uncorrected model's; the simulated
-plants reach 0.1 %) says when a fit does not explain its data, and the summary warns not to use it.
+:attr:`Calibration.consistent` (the held-out verdict: :func:`spherestep.control.identify.verdict`) says when a fit
+does not explain its data; an inconsistent one is refused wherever it would be used.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 
 import numpy as np
 from scipy.interpolate import CubicSpline
 
 from .. import checks, so3
-from ..errors import bad_value
-from ..magnetics.calibrated import Calibration, Moved, calibration_beside, scaled_coupling  # noqa: F401
+from ..magnetics.calibrated import Calibration, calibration_beside  # noqa: F401
 
-PRIOR = {"scale": 0.3, "node": 0.3, "curvature": 0.1, "coupling": 1.0}  # prior standard deviations (relative)
-ENVELOPE_DEG = 5.0  # the envelope of a table: the largest |τ| within this many degrees of a node
-UNSEEN = 0.5  # a parameter is not seen when its posterior variance exceeds this fraction of its prior's
-SIGMA_FLOOR = 1e-6  # of the peak detent: the least noise assumed
 
 
 # -- the regression ------------------------------------------------------------------------------------------------
@@ -144,6 +140,8 @@ class Holds:
     damping: float
     backend: str
     drift: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    noise: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
+    discarded: int = 0
 
     def __len__(self) -> int:
         return len(self.targets)
@@ -155,12 +153,13 @@ class Holds:
         s = keep[self.sample_eq]
         return Holds(self.targets, self.orientations, self.currents, tuple(k for k in self.kinds if k == "hold"),
                      self.rhs[keep], self.sample_R[s], self.sample_c[s], self.sample_w[s], renum[self.sample_eq[s]],
-                     self.inertia, self.damping, self.backend, self.drift)
+                     self.inertia, self.damping, self.backend, self.drift, self.noise, self.discarded)
 
     def to_dict(self, degrees: bool = True) -> dict:
         k = 180.0 / math.pi if degrees else 1.0
         err = so3.distance(self.orientations, self.targets) if len(self) else np.zeros(0)
-        return {"holds": len(self), "equations": len(self.kinds), "samples": int(len(self.sample_R)),
+        return {"holds": len(self), "discarded": self.discarded, "equations": len(self.kinds),
+                "samples": int(len(self.sample_R)),
                 "backend": self.backend, "inertia_kg_m2": self.inertia,
                 ("max_hold_offset_deg" if degrees else "max_hold_offset_rad"): float(np.max(err, initial=0.0) * k),
                 ("max_drift_deg_s" if degrees else "max_drift_rad_s"): float(np.max(self.drift, initial=0.0) * k)}
@@ -221,176 +220,6 @@ def _groups(R, c, t, h, idx: np.ndarray, every: int):
     mean_c /= length[:, None]
     half = 0.5 * so3.log(R[last] @ np.swapaxes(R[first], 1, 2))
     return so3.exp(half) @ R[first], mean_c, length, 0.5 * (t[first] + t[last])
-
-
-# -- the fit -------------------------------------------------------------------------------------------------------
-def _envelope(nodes: np.ndarray, table: np.ndarray) -> np.ndarray:
-    """The largest ``|τ|`` within :data:`ENVELOPE_DEG` of each node (never 0: at least 1e-9 of the peak)."""
-    near = np.abs(nodes[:, None] - nodes[None, :]) <= math.radians(ENVELOPE_DEG) + 1e-12
-    env = np.max(np.where(near, np.abs(table)[None, :], 0.0), axis=1)
-    return np.maximum(env, 1e-9 * np.max(np.abs(table)))
-
-
-def _second_differences(n: int) -> np.ndarray:
-    D = np.zeros((max(n - 2, 0), n))
-    for i in range(n - 2):
-        D[i, i:i + 3] = (1.0, -2.0, 1.0)
-    return D
-
-
-def _ranges(nodes_deg: np.ndarray, mask: np.ndarray) -> list[str]:
-    """Contiguous runs of ``mask`` as ``"a°–b°"``."""
-    out, start = [], None
-    for i, m in enumerate(mask):
-        if m and start is None:
-            start = i
-        if start is not None and (not m or i == len(mask) - 1):
-            end = i if m else i - 1
-            a, b = nodes_deg[start], nodes_deg[end]
-            out.append(f"{a:g}°" if start == end else f"{a:g}°–{b:g}°")
-            start = None
-    return out
-
-
-def calibrate(design, model, holds: Holds, *, prior: dict | None = None, scales: bool = True,
-              coupling: bool | None = None) -> Calibration:
-    """Fit the pair tables of the iron ``model`` (an :class:`~spherestep.magnetics.IronTorqueMap`, the
-    controller's) to ``holds`` (:func:`spherestep.drive.collect_holds`) and return the :class:`Calibration`
-    (module docstring).
-    ``prior`` overrides the prior's standard deviations :data:`PRIOR` (keys ``scale``, ``node``, ``curvature``,
-    ``coupling``); ``scales=False`` fits the shape corrections alone. ``coupling``: whether to fit the gain of the
-    cores' coupling (the model's from 1, or the design's own from 0 for a pairwise model); default (None) only for
-    a pairwise model — a coupled model's coupling is kept at its modelled strength, which lets the holds fix the
-    tables' common scale (module docstring); ``False``: never."""
-    from ..magnetics import IronTorqueMap, iron_model
-
-    if not isinstance(model, IronTorqueMap):
-        raise bad_value("model", "an iron torque model (spherestep.magnetics.IronTorqueMap: the pair tables "
-                        "it fits)", type(model).__name__)
-    if not isinstance(holds, Holds):
-        raise bad_value("holds", "a spherestep.control.Holds (collect_holds)", type(holds).__name__)
-    if holds.sample_c.shape[1] != model.coil_count:
-        raise bad_value("holds", f"currents for {model.coil_count} coils", f"{holds.sample_c.shape[1]} coils")
-    p = dict(PRIOR)
-    for key, value in (prior or {}).items():
-        if key not in PRIOR:
-            raise bad_value("prior", f"keys among {sorted(PRIOR)}", key)
-        p[key] = checks.positive(value, f"prior[{key!r}]")
-    nodes = model.linear.nodes
-    n = len(nodes)
-    d0, l0 = np.asarray(model.detent.tau, dtype=float), np.asarray(model.linear.tau, dtype=float)
-    E = len(holds.kinds)
-    Ad, Al = regression(model, holds.sample_R, holds.sample_c, holds.sample_w, holds.sample_eq, E)
-    # the cores' coupling: its torque (the model's at gain 1, else the design's own at gain 0) is a column of its own
-    cross, gain0 = model.coupling, 1.0
-    if cross is None and coupling is not False:
-        cross, gain0 = iron_model(design, model.coil, model.linear.meshing, coupling=True).coupling, 0.0
-    fit_gain = cross is not None and (coupling is True or (coupling is None and gain0 == 0.0))
-    offset = np.zeros((E, 3))
-    if cross is not None:
-        pair = IronTorqueMap(model.detent, model.linear, model.coil)
-        whole = replace(pair, coupling=cross)
-        tot = np.concatenate([whole.torque(holds.sample_R[i:i + 64], holds.sample_c[i:i + 64])
-                              - pair.torque(holds.sample_R[i:i + 64], holds.sample_c[i:i + 64])
-                              for i in range(0, len(holds.sample_R), 64)])  # in blocks: the coupling's memory
-        offset = np.stack([np.bincount(holds.sample_eq, holds.sample_w * tot[:, a], minlength=E) for a in range(3)], 1)
-    free = np.ones(n, dtype=bool)
-    free[[0, n - 1]] = False  # τ(0) = τ(π) = 0 by symmetry
-    ed, el = _envelope(nodes, d0), _envelope(nodes, l0)
-    cols = [Ad @ d0, Al @ l0] if scales else []
-    cols += [Ad[:, :, m] * ed[m] for m in np.nonzero(free)[0]] + [Al[:, :, m] * el[m] for m in np.nonzero(free)[0]]
-    cols += [offset] if fit_gain else []
-    X = np.stack(cols, axis=-1).reshape(3 * E, -1)
-    base = Ad @ d0 + Al @ l0 + gain0 * offset
-    y = (holds.rhs - base).reshape(-1)
-    k = 2 if scales else 0
-    nf = int(free.sum())
-    P = np.zeros((X.shape[1], X.shape[1]))
-    if scales:
-        P[0, 0] = P[1, 1] = 1.0 / p["scale"] ** 2
-    D2 = _second_differences(nf)
-    for s0 in (k, k + nf):
-        blk = slice(s0, s0 + nf)
-        P[blk, blk] = np.eye(nf) / p["node"] ** 2 + D2.T @ D2 / p["curvature"] ** 2
-    if fit_gain:
-        P[-1, -1] = 1.0 / p["coupling"] ** 2
-    # the fitted tables and their covariance: θ = (1 + s) θ⁰ + e ⊙ δ
-    J = np.zeros((2 * n, X.shape[1]))
-    if scales:
-        J[:n, 0] = d0
-        J[n:, 1] = l0
-    fi = np.nonzero(free)[0]
-    J[fi, k + np.arange(nf)] = ed[fi]
-    J[n + fi, k + nf + np.arange(nf)] = el[fi]
-    L = np.linalg.cholesky(P).T  # P = LᵀL
-    floor = SIGMA_FLOOR * float(np.max(np.abs(d0)))
-    sigma = max(float(np.sqrt(np.mean(y ** 2))), floor)
-    for _ in range(3):
-        A = np.vstack([X / sigma, L])
-        b = np.concatenate([y / sigma, np.zeros(len(L))])
-        x = np.linalg.lstsq(A, b, rcond=None)[0]
-        H = X.T @ X / sigma ** 2
-        cov = np.linalg.inv(H + P)
-        dof = float(np.trace(cov @ H))
-        res = y - X @ x
-        sigma = max(float(np.sqrt(np.sum(res ** 2) / max(len(y) - dof, 1.0))), floor)
-    H = X.T @ X / sigma ** 2
-    cov = np.linalg.inv(H + P)
-    prior_var = np.diag(np.linalg.inv(P))
-    theta = np.concatenate([d0, l0]) + J @ x
-    cov_theta = J @ cov @ J.T
-    std = np.sqrt(np.maximum(np.diag(cov_theta), 0.0))
-    # the effective scale of each table, θ⁰·θ / θ⁰·θ⁰ (what the scale and the shape together did), and its std
-    g = np.zeros((2, 2 * n))
-    g[0, :n] = d0 / (d0 @ d0)
-    g[1, n:] = l0 / (l0 @ l0)
-    eff = g @ theta
-    eff_std = np.sqrt(np.maximum(np.diag(g @ cov_theta @ g.T), 0.0))
-    det, win = theta[:n], theta[n:]
-    # what the data cannot see
-    ratio = np.diag(cov) / prior_var
-    nodes_deg = np.degrees(nodes)
-    unseen = []
-    for name, s0 in (("detent", k), ("winding", k + nf)):
-        mask = np.zeros(n, dtype=bool)
-        mask[fi] = ratio[s0:s0 + nf] > UNSEEN
-        runs = _ranges(nodes_deg, mask)
-        if runs:
-            unseen.append(f"{name} table shape at {', '.join(runs)} (posterior variance > {UNSEEN:g} of the prior's: "
-                          "these pairs' torque is too small or too rarely met in the holds)")
-    if scales:
-        v = np.zeros(X.shape[1])
-        v[0] = v[1] = 1.0  # both tables ×(1 + s): the direction static holds cannot see
-        if fit_gain:
-            v[-1] = gain0  # and the coupling with them
-        post = float(v @ cov @ v)
-        pri = float(v @ np.linalg.inv(P) @ v)
-        if post / pri > UNSEEN:
-            unseen.append(f"the common scale of both tables (± {math.sqrt(post / 2):.2g}; holds at rest see only "
-                          "the ratio of detent to winding, a move's inertia fixes the scale)")
-        for i, name in enumerate(("detent", "winding")):
-            if ratio[i] > UNSEEN:
-                unseen.append(f"the {name} scale (± {math.sqrt(cov[i, i]):.2g})")
-    moved = []
-    for name, fit, nom, sd in (("detent", det, d0, std[:n]), ("winding", win, l0, std[n:])):
-        for m in fi:
-            if abs(fit[m] - nom[m]) > 2.0 * sd[m] and abs(fit[m] - nom[m]) > 1e-3 * np.max(np.abs(nom)):
-                moved.append(Moved(name, float(nodes[m]), float(nom[m]), float(fit[m]), float(sd[m])))
-    moved.sort(key=lambda m: -abs(m.fitted - m.nominal) / max(m.std, 1e-300))
-    gain, gain_std = (gain0 + float(x[-1]), math.sqrt(float(cov[-1, -1]))) if fit_gain else (gain0, 0.0)
-    if fit_gain and ratio[-1] > UNSEEN:
-        unseen.append(f"the coupling's gain (± {gain_std:.2g})")
-    if fit_gain and gain0 == 0.0 and abs(gain) <= 2.0 * gain_std:
-        cross = None  # a pairwise model whose data show no coupling stays pairwise
-    fitted = IronTorqueMap.from_tables(design, model.coil, nodes, det, win, level=model.linear.meshing,
-                                       coupling=None if cross is None else scaled_coupling(cross, gain))
-    rms_before = float(np.sqrt(np.mean(y ** 2)))
-    rms_after = float(np.sqrt(np.mean((y - X @ x) ** 2)))
-    return Calibration(fitted, nodes.copy(), det, win, std[:n], std[n:], d0.copy(), l0.copy(),
-                       float(eff[0]), float(eff[1]), (float(eff_std[0]), float(eff_std[1])),
-                       rms_before, rms_after, sigma, len(holds), E, tuple(moved), tuple(unseen),
-                       cross is not None, holds.backend, coupling_gain=gain, coupling_std=gain_std,
-                       design_fingerprint=design.fingerprint)
 
 
 def torque_error(model, plant, *, count: int = 200, seed=1) -> float:

@@ -27,10 +27,13 @@ if TYPE_CHECKING:
 class Emulated:
     """The emulated motor as a backend of :func:`collect_holds`: ``plant`` the torque model the emulated rotor
     obeys (it should differ from the controller's), on the lockstep link (``lockstep``, the default) or a
-    pseudo-terminal."""
+    pseudo-terminal; ``rotor`` the emulated rotor (default the design's, :data:`~.connect.EMULATED_DAMPING`) and
+    ``sensor_errors`` its magnetometers' errors (both from a :class:`~spherestep.drive.PlantError`)."""
 
     plant: object
     lockstep: bool = True
+    rotor: object = None
+    sensor_errors: object = None
 
 
 @dataclass(frozen=True)
@@ -40,9 +43,14 @@ class Port:
     device: str
 
 
+HOLD_TOLERANCE = math.radians(0.05)  # rad: a hold farther than this from its target (by the estimate) is held again
+RETRIES = 2  # re-commanded holds (each settling twice as long) before a hold is discarded
+
+
 def collect_holds(design, backend, orientations, *, model=None, limits: DriveLimits | None = None,
                   move_time: float = 0.4, settle: float = 0.5, window: float = 0.25, moves: bool = True,
-                  rate: float = 1000.0, quadrature: float = 0.004, progress=None) -> Holds:
+                  rate: float = 1000.0, quadrature: float = 0.012, progress=None,
+                  tolerance: float = HOLD_TOLERANCE, sensor_calibration=None) -> Holds:
     """Drive the servo (controller on ``model``, default the design's own) to each of ``orientations``
     (``(H, 3, 3)``, or a count for :func:`hold_orientations`) in turn and record the holds and moves (module
     docstring). ``backend``: a torque model (the simulated plant, :func:`spherestep.dynamics.simulate_servo` at
@@ -51,7 +59,15 @@ def collect_holds(design, backend, orientations, *, model=None, limits: DriveLim
     the commanded currents). Each move takes ``move_time`` s per 20° (at least ``move_time``), then ``settle``
     s at the target; the hold equation is the last ``window`` s; ``moves=False`` keeps only the holds.
     ``quadrature`` s: the move's integral by the midpoint rule on groups of periods this long (fewer samples
-    to regress; 4 ms keeps it within 0.1 % at 1 kHz). ``progress(text, done, total)`` is told of each hold."""
+    to regress: the per-coil fit's cost is linear in them; 12 ms, 2–3 periods of the emulated motor's 200 Hz loop,
+    against a detent period of ~5°, a few ‰ at 1 rad/s). ``progress(text, done, total)`` is told of each hold.
+
+    Holds that are holds: a hold ending farther than ``tolerance`` rad from its target by the measurement is
+    commanded again from where it is (:meth:`Trajectory.hold`, the servo's disturbance estimate given twice the
+    time to settle, up to :data:`RETRIES` times); the hold equation is the last one's window (the move equation the
+    first run's: from rest to its end), and a hold still off is discarded (its move kept). ``sensor_calibration``
+    (an emulated motor or a port): the array's :class:`~spherestep.sensing.ArrayCalibration` the estimate reads
+    through."""
     from ..control.calibration import Holds, hold_orientations, series_equations  # the fit's maths: magnetics
     from ..dynamics import Rotor
     from ..magnetics import design_model
@@ -86,29 +102,56 @@ def collect_holds(design, backend, orientations, *, model=None, limits: DriveLim
     else:
         raise bad_value("backend", "a torque model (the simulated plant), spherestep.drive.Emulated(plant) or "
                         "spherestep.drive.Port(device)", type(backend).__name__)
-    rows, rest_R, rest_c, drift = [], [], [], []
+    rows, rest_R, rest_c, drift, noise, kept = [], [], [], [], [], []
     here = np.eye(3)
     for i, target in enumerate(targets):
         if progress is not None:
             progress(f"holding at orientation {i + 1} of {len(targets)} ({name})", i, len(targets))
         traj, _ = _move(here, target, move_time)
-        t, R, c = _session(design, backend, traj, settle, here, model, limits, rate)
+        t, R, c = _session(design, backend, traj, settle, here, model, limits, rate, sensor_calibration)
         every = max(1, round(quadrature / float(np.median(np.diff(t)))))
         eqs, speed = series_equations(t, R, c, window, rotor.inertia, rotor.damping, every)
-        rows.extend(e for e in eqs if moves or e[0] == "hold")
+        move = [e for e in eqs if e[0] == "move"]
+        for attempt in range(RETRIES):
+            if so3.distance(R[-1], target) <= tolerance:
+                break
+            if progress is not None:
+                progress(f"holding at orientation {i + 1} of {len(targets)} again ({name}: "
+                         f"{math.degrees(so3.distance(R[-1], target)):.3f}° off)", i, len(targets))
+            t, R, c = _session(design, backend, Trajectory.hold(target), settle * 2 ** (attempt + 1), R[-1], model,
+                               limits, rate, sensor_calibration)
+            eqs, speed = series_equations(t, R, c, window, rotor.inertia, rotor.damping, every)
+        good = so3.distance(R[-1], target) <= tolerance
+        rows.extend([e for e in eqs if e[0] == "hold" and good] + (move if moves else []))
         here = R[-1]
-        rest_R.append(R[-1])
-        sel = t[:-1] >= t[-1] - window
-        rest_c.append(c[:-1][sel].mean(axis=0))
-        drift.append(speed)
+        if good:
+            kept.append(i)
+            rest_R.append(R[-1])
+            sel = t[:-1] >= t[-1] - window
+            rest_c.append(c[:-1][sel].mean(axis=0))
+            drift.append(speed)
+            noise.append(_split_noise(model, eqs[0]))
     if progress is not None:
         progress(f"holding at orientation {len(targets)} of {len(targets)} ({name})", len(targets), len(targets))
+    if not kept:
+        raise bad_value("backend", f"a motor whose holds end within {math.degrees(tolerance):g}° of their targets",
+                        f"none of {len(targets)} did")
     kinds = tuple(r[0] for r in rows)
     sample_eq = np.concatenate([np.full(len(r[4]), k) for k, r in enumerate(rows)])
-    return Holds(targets, np.array(rest_R), np.array(rest_c), kinds, np.array([r[1] for r in rows]),
+    return Holds(targets[kept], np.array(rest_R), np.array(rest_c), kinds, np.array([r[1] for r in rows]),
                  np.concatenate([r[2] for r in rows]), np.concatenate([r[3] for r in rows]),
                  np.concatenate([r[4] for r in rows]), sample_eq, rotor.inertia, rotor.damping, name,
-                 np.array(drift))
+                 np.array(drift), np.array(noise).reshape(-1, 3), len(targets) - len(kept))
+
+
+def _split_noise(model, row) -> np.ndarray:
+    """The hold equation ``row`` on the first half of its window minus on the second (N·m, ``(3,)``): the model's
+    torque at the same orientation and currents, so its errors cancel and the measurement's noise stays."""
+    _, _, Rs, cs, ws = row
+    half = np.arange(len(ws)) < len(ws) // 2
+    tau = np.asarray(model.torque(Rs, cs), dtype=float)
+    mean = [np.sum(ws[m, None] * tau[m], axis=0) / np.sum(ws[m]) for m in (half, ~half)]
+    return mean[0] - mean[1]
 
 
 def _move(start: np.ndarray, target: np.ndarray, move_time: float):
@@ -121,7 +164,7 @@ def _move(start: np.ndarray, target: np.ndarray, move_time: float):
     return Trajectory.turn(start, rv / angle, angle, 4.0 * angle / T ** 2), T
 
 
-def _session(design, backend, traj, settle: float, start, model, limits, rate: float):
+def _session(design, backend, traj, settle: float, start, model, limits, rate: float, sensor_calibration=None):
     """``(t, R, c)``: one run of the servo along ``traj`` and ``settle`` s on: times (s), measured orientations
     and the currents per unit over each period."""
     if is_torque_model(backend):
@@ -134,9 +177,10 @@ def _session(design, backend, traj, settle: float, start, model, limits, rate: f
 
     port = backend.device if isinstance(backend, Port) else None
     emulate = isinstance(backend, Emulated)
-    options = {"plant": backend.plant, "lockstep": backend.lockstep} if emulate else {}
+    options = {"plant": backend.plant, "lockstep": backend.lockstep, "plant_rotor": backend.rotor,
+               "sensor_errors": backend.sensor_errors} if emulate else {}
     session = servo_session(design, traj, traj.duration + settle, port=port, emulate=emulate, model=model,
-                            drive=limits, R0=start, **options)
+                            drive=limits, R0=start, sensor_calibration=sensor_calibration, **options)
     rep = session.report
     if rep.outcome == "INTERRUPT":  # the loop caught Ctrl-C or SIGTERM and switched every coil off: unwind on,
         stop = interrupt_for(last_signal())  # saying whether the device acknowledged it (the CLI tells the user)

@@ -327,7 +327,8 @@ def drive_turn(design, axis, angle_rad: float, *, mode: str = "servo", backend: 
                limits=None, duration: float | None = None, sensor: str = "ideal", sensor_noise: float = 0.0,
                port: str | None = None, rate: float | None = None, tolerance: float | None = None, seed: int = 0,
                rates=None, log=None, progress: Callable[[str], None] | None = None,
-               firmware: str = "python", end: str = "hold", hold: float | None = None) -> DriveResult:
+               firmware: str = "python", end: str = "hold", hold: float | None = None,
+               plant_error=None) -> DriveResult:
     """Drive a turn of ``angle_rad`` about ``axis`` (fixed frame) in ``mode`` on ``backend`` (module docstring).
 
     ``model``/``limits``: default the design's own (:func:`spherestep.magnetics.design_model`). ``duration`` (s):
@@ -344,6 +345,8 @@ def drive_turn(design, axis, angle_rad: float, *, mode: str = "servo", backend: 
     where the servo holds the rotor, park where it rests in the predicted well with the coils off).
     ``tolerance`` (rad): a result is :attr:`~DriveResult.ok` only within it (default the mode's own,
     :mod:`~spherestep.drive.judgement`). ``progress(text)`` hears each stage.
+    ``plant_error`` (backend ``"emulated"``): a :class:`~spherestep.drive.PlantError`, the emulated motor as built
+    (its torque plant from the design's own model, its rotor and its sensors), whatever model the servo runs on.
     """
     check_options(mode, backend, duration=duration, sensor=sensor, sensor_noise=sensor_noise, port=port, rate=rate)
     if firmware != "python" and backend != "emulated":
@@ -355,16 +358,26 @@ def drive_turn(design, axis, angle_rad: float, *, mode: str = "servo", backend: 
         raise bad_value("end", "hold on the simulated motor (park ends a move on an emulated motor or a port, "
                         "where the coils go off)", end)
     chosen = choose_model(design, model, limits)
+    if plant_error is not None and backend != "emulated":
+        raise bad_value("plant_error", "left out unless backend='emulated' (the emulated motor as built)", plant_error)
     if backend != "simulated":
         from ..hardware import LOOP_RATE
         from .hardware import drive_on_hardware
         from .session import QEMU_RATE
 
         default = QEMU_RATE if firmware == "qemu" else LOOP_RATE
+        options = {}
+        if plant_error is not None:
+            from ..magnetics import design_model
+            from ..sensing import default_array
+
+            options = {"plant": plant_error.plant(design_model(design).model),
+                       "plant_rotor": plant_error.rotor(design),
+                       "sensor_errors": plant_error.sensor_errors(default_array(design, 8))}
         return drive_on_hardware(design, axis, angle_rad, chosen, duration=duration, port=port,
                                  emulate=backend == "emulated", rate=default if rate is None else rate, log=log,
                                  tolerance=SERVO_TOLERANCE if tolerance is None else tolerance, progress=progress,
-                                 firmware=firmware, end=end, hold=hold)
+                                 firmware=firmware, end=end, hold=hold, **options)
     job = Turn(design, axis, angle_rad, chosen, tolerance, progress)
     if duration is not None:
         check_duration(design, job.axis, job.angle, chosen, duration, start=job.start)

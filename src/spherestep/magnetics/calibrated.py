@@ -10,7 +10,7 @@ magnetics room imports neither control nor drive.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -18,7 +18,7 @@ import numpy as np
 from ..errors import bad_value
 
 CALIBRATION_FILE = "calibration.yaml"  # beside the design file
-CONSISTENT = 0.05  # a fit whose residual RMS is above this fraction of the uncorrected model's does not explain the data
+FORCE = "accept_inconsistent=True (CLI: --accept-inconsistent-calibration)"
 
 
 def torque_text(value: float, digits: int = 3) -> str:
@@ -54,7 +54,11 @@ class Calibration:
     ``residual_before`` (the base model) and ``residual_after``, ``sigma`` the noise it assumed; ``holds`` and
     ``equations`` counted; ``moved`` the nodes moved beyond 2σ; ``unseen`` what the data cannot see;
     ``coupling`` whether the fitted model has the cores' coupling, ``coupling_gain`` ± ``coupling_std`` its
-    gain against the design's coupling (1: as modelled; 0: none); ``backend``; ``label``."""
+    gain against the design's coupling (1: as modelled; 0: none); ``backend``; ``label``; per coil ``gains`` ±
+    ``gains_std`` and field ``turns (N, 3)`` rad ± ``turns_std`` (:mod:`spherestep.magnetics.percoil`; None: not
+    fitted); ``judged`` the held-out verdict's figures (N·m), ``missing`` the terms a diagnosis named, ``rotor``
+    the rotor's identified terms and ``sensors`` the array's (when identified: ``RotorFit.to_dict``,
+    ``ArrayCalibration.to_dict``)."""
 
     model: object
     nodes: np.ndarray
@@ -80,21 +84,73 @@ class Calibration:
     coupling_gain: float = 1.0
     coupling_std: float = 0.0
     design_fingerprint: str | None = None
+    gains: np.ndarray | None = None
+    gains_std: np.ndarray | None = None
+    turns: np.ndarray | None = None
+    turns_std: np.ndarray | None = None
+    judged: dict = field(default_factory=dict)
+    missing: tuple[str, ...] = ()
+    rotor: dict | None = None
+    sensors: dict | None = None
 
     @property
-    def consistent(self) -> bool:
-        """Whether the fitted model explains the data: the residual RMS after the fit within
-        :data:`CONSISTENT` of the uncorrected model's (else the holds were not at rest or the measurements are off,
-        and the fit should not be used)."""
-        return self.residual_after <= CONSISTENT * self.residual_before
+    def consistent(self) -> bool | None:
+        """The held-out verdict (:func:`spherestep.control.identify.verdict`): whether the fitted model explains
+        holds and moves it was not fitted on (None: nothing was held out)."""
+        return self.judged.get("consistent")
+
+    def dead_coils(self, below: float = 0.2) -> list[int]:
+        """Coils whose fitted gain is within ``below`` of 0 (no torque: a dead or disconnected coil)."""
+        return [] if self.gains is None else [int(k) for k in np.nonzero(np.abs(self.gains) < below)[0]]
+
+    def reversed_coils(self, below: float = 0.2) -> list[int]:
+        """Coils whose fitted gain is below −``below`` (wired the other way round)."""
+        return [] if self.gains is None else [int(k) for k in np.nonzero(self.gains < -below)[0]]
+
+    def check_usable(self, accept_inconsistent: bool = False, where: str = "calibration") -> Calibration:
+        """``self`` when its verdict is consistent (or ``accept_inconsistent``); InputError naming ``where``
+        otherwise: a fit that does not explain its held-out data is not used."""
+        if self.consistent is False and not accept_inconsistent:
+            why = f" (missing: {', '.join(self.missing)})" if self.missing else ""
+            raise bad_value(where, f"a consistent calibration: this fit does not explain its held-out holds{why}; "
+                            f"calibrate again, or force it with {FORCE}", "inconsistent")
+        return self
 
     def summary(self) -> str:
         """Lines for people: residuals, scales, parameters moved, what was not seen."""
-        lines = [] if self.consistent else [
-            f"WARNING: the fit does not explain the data (residual {self.residual_after / self.residual_before:.0%} "
-            "of the uncorrected model's): the rotor was not at rest in the holds or the measurements are off; do "
-            "not use this calibration"]
-        lines += [f"{self.holds} holds, {self.equations} equations ({self.backend}): residual RMS "
+        j = self.judged
+        lines = []
+        if self.consistent is False:
+            lines.append("INCONSISTENT: the fit does not explain the held-out holds" + (
+                f"; missing: {', '.join(self.missing)}" if self.missing else "") + "; not to be used")
+        if self.consistent is None:
+            lines.append("not judged: no hold held out (fewer than 5 holds)")
+        if j.get("held_out_holds"):
+            lines.append(f"held out {j['held_out_holds']} holds: residual {torque_text(j['hold_rms'], 2)} against the "
+                         f"noise the sensors imply {torque_text(j['hold_noise'], 2)}; moves "
+                         f"{torque_text(j['move_rms'], 2)} of {torque_text(j['move_torque'], 2)}: "
+                         f"{'consistent' if self.consistent else 'INCONSISTENT'}")
+        if self.gains is not None:
+            g, sd = self.gains, self.gains_std
+            lines.append(f"coil gains {np.min(g):.3f}…{np.max(g):.3f} (± {np.max(sd):.3f} at most); "
+                         f"dead: {self.dead_coils() or 'none'}; reversed: {self.reversed_coils() or 'none'}")
+        if self.turns is not None and np.any(self.turns):
+            ang = np.degrees(np.linalg.norm(self.turns, axis=1))
+            top = np.argsort(-ang)[:3]
+            lines.append("coil placements: " + ", ".join(f"coil {k} {ang[k]:.2f}° ± {math.degrees(self.turns_std[k]):.2f}°"
+                                                          for k in top))
+        if self.rotor:
+            r = self.rotor
+            lines.append(f"rotor: inertia {r['inertia_kg_m2']:.4g} ± {r['inertia_std']:.2g} kg·m², damping "
+                         f"{r['damping_N_m_s']:.3g} ± {r['damping_std']:.2g} N·m·s/rad, friction {r['friction_N_m']:.3g} "
+                         f"± {r['friction_std']:.2g} N·m (from {r['windows']} windows of moves)")
+        if self.sensors:
+            a = self.sensors
+            off = np.linalg.norm(np.asarray(a["offsets_T"]), axis=1)
+            lines.append(f"sensors: the array turned {a['rotation_angle_deg']:.4f}° (± "
+                         f"{max(a['rotation_std_deg']):.4f}°), offsets up to {1e6 * off.max():.0f} µT, from "
+                         f"{a['references']} rests in the detent wells")
+        lines += [f"{self.holds} holds, {self.equations} equations fitted ({self.backend}): residual RMS "
                  f"{torque_text(self.residual_before)} -> {torque_text(self.residual_after)} (noise taken "
                  f"{torque_text(self.sigma, 2)})",
                  f"detent table ×{self.scale_detent:.4f} ± {self.scale_std[0]:.4f}, winding table "
@@ -127,7 +183,15 @@ class Calibration:
                 "scale_std": [float(x) for x in self.scale_std],
                 "residual_before_Nm": self.residual_before, "residual_after_Nm": self.residual_after,
                 "sigma_Nm": self.sigma, "moved": [m.to_dict(degrees) for m in self.moved],
-                "unseen": list(self.unseen)}
+                "unseen": list(self.unseen),
+                "gains": None if self.gains is None else [float(x) for x in self.gains],
+                "gains_std": None if self.gains_std is None else [float(x) for x in self.gains_std],
+                "turns_deg": None if self.turns is None else np.degrees(self.turns).tolist(),
+                "turns_std_deg": None if self.turns_std is None else np.degrees(self.turns_std).tolist(),
+                "dead_coils": self.dead_coils(), "reversed_coils": self.reversed_coils(),
+                "held_out": {k: (None if isinstance(v, float) and not math.isfinite(v) else v)
+                             for k, v in self.judged.items()},
+                "missing": list(self.missing), "rotor": self.rotor, "sensors": self.sensors}
 
     def save(self, path) -> Path:
         """Write the calibration atomically, as JSON when ``path`` ends in ``.json`` and as YAML otherwise
@@ -147,10 +211,11 @@ class Calibration:
         return write_text(path, text + yaml.safe_dump(data, sort_keys=False))
 
     @classmethod
-    def load(cls, path, design) -> Calibration:
-        """The calibration saved at ``path`` for ``design`` (its model rebuilt from the tables; the coupling
-        re-read from the design's own when it had one). InputError naming ``calibration`` when the file is not
-        one or does not fit the design."""
+    def load(cls, path, design, accept_inconsistent: bool = False) -> Calibration:
+        """The calibration saved at ``path`` for ``design`` (its model rebuilt from the tables and the per-coil
+        terms; the coupling re-read from the design's own when it had one). InputError naming ``calibration``
+        when the file is not one, does not fit the design, or records an inconsistent fit (unless
+        ``accept_inconsistent``: :meth:`check_usable`)."""
         import yaml
 
         from ._ironmap import IronTorqueMap, iron_model
@@ -165,6 +230,9 @@ class Calibration:
                                                                  "nominal_detent_Nm", "nominal_winding_Nm")]
             moved = tuple(Moved(m["table"], math.radians(m["angle_deg"]), m["nominal_Nm"], m["fitted_Nm"],
                                 m["std_Nm"]) for m in data["moved"])
+            coil = {k: None if data.get(k) is None else np.asarray(data[k], dtype=float)
+                    for k in ("gains", "gains_std", "turns_deg", "turns_std_deg")}
+            judged = {k: (math.nan if v is None else v) for k, v in dict(data.get("held_out") or {}).items()}
         except (OSError, yaml.YAMLError, KeyError, TypeError, ValueError) as exc:
             raise bad_value("calibration", "a calibration file written by spherestep calibrate",
                             f"{path} ({type(exc).__name__}: {exc})") from None
@@ -176,22 +244,40 @@ class Calibration:
 
         check_fingerprint(design, data.get("design_fingerprint"), "calibration.design_fingerprint",
                           f"calibrate again with `spherestep calibrate` ({path})")
+        held = data.get("held_out") or {}
+        if held.get("consistent") is False and not accept_inconsistent:
+            why = f" (missing: {', '.join(data.get('missing') or [])})" if data.get("missing") else ""
+            raise bad_value("calibration", f"a consistent calibration: {path} records a fit that does not explain its "
+                            f"held-out holds{why}; calibrate again, or force it with {FORCE}", "inconsistent")
         coupling = bool(data.get("coupling", False))
         gain = float(data.get("coupling_gain", 1.0))
         cross = scaled_coupling(iron_model(design, coupling=True).coupling, gain) if coupling else None
         model = IronTorqueMap.from_tables(design, design.coil, nodes, det, win, coupling=cross)
+        turns = None if coil["turns_deg"] is None else np.radians(coil["turns_deg"]).reshape(-1, 3)
+        if coil["gains"] is not None or turns is not None:
+            from .percoil import PerCoil
+
+            model = PerCoil(model, coil["gains"], turns)
         return cls(model, nodes, det, win, *arrays, float(data["scale_detent"]), float(data["scale_winding"]),
                    tuple(float(x) for x in data["scale_std"]), float(data["residual_before_Nm"]),
                    float(data["residual_after_Nm"]), float(data["sigma_Nm"]), int(data["holds"]),
                    int(data["equations"]), moved, tuple(str(u) for u in data["unseen"]), coupling,
                    str(data["backend"]), str(data.get("label", "calibrated")), gain,
-                   float(data.get("coupling_std", 0.0)), design.fingerprint)
+                   float(data.get("coupling_std", 0.0)), design.fingerprint, coil["gains"], coil["gains_std"], turns,
+                   None if coil["turns_std_deg"] is None else np.radians(coil["turns_std_deg"]), judged,
+                   tuple(data.get("missing") or ()), data.get("rotor"), data.get("sensors"))
 
 
-def calibration_beside(design_path) -> Path | None:
-    """The calibration file beside a design file (``calibration.yaml`` in its folder), or None if there is none."""
+def calibration_beside(design_path, design=None, accept_inconsistent: bool = False) -> Path | None:
+    """The calibration file beside a design file (``calibration.yaml`` in its folder), or None if there is none;
+    with ``design``, checked for it first (:meth:`Calibration.load`: a stale or inconsistent file refused, unless
+    ``accept_inconsistent`` for the latter)."""
     path = Path(design_path).parent / CALIBRATION_FILE
-    return path if path.is_file() else None
+    if not path.is_file():
+        return None
+    if design is not None:
+        Calibration.load(path, design, accept_inconsistent)
+    return path
 
 
 def scaled_coupling(coupling, gain: float):

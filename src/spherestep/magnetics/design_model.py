@@ -40,13 +40,15 @@ class DesignModel:
         return {"model": self.label, "core": self.core, "limits": self.limits.to_dict()}
 
 
-def design_model(design, core: str | None = None, *, coupling: bool | None = None, calibration=None) -> DesignModel:
+def design_model(design, core: str | None = None, *, coupling: bool | None = None, calibration=None,
+                 accept_inconsistent: bool = False) -> DesignModel:
     """The torque model and drive limits of ``design`` as its file states them (module docstring); ``core``
     ``"air"``/``"iron"`` overrides the design's core (same winding); ``coupling`` (default: with an iron core)
     the iron's coupling term (:func:`~spherestep.magnetics.iron_model`; ``False``: the pairwise model). ``calibration`` (a path, e.g.
     :func:`spherestep.control.calibration_beside` of the design file, or a
     :class:`spherestep.magnetics.calibrated.Calibration`, the control room's fit)
-    replaces the iron model by the one fitted to the motor's holds; the label then says "calibrated"."""
+    replaces the iron model by the one fitted to the motor's holds; the label then says "calibrated". A calibration
+    whose held-out verdict is inconsistent is refused unless ``accept_inconsistent``."""
     from ..electrics import DriveLimits
     from ._inductance import iron_inductance
     from ._ironmap import iron_model
@@ -63,7 +65,7 @@ def design_model(design, core: str | None = None, *, coupling: bool | None = Non
     model = iron_model(design, coil, coupling=coupling)
     limits = DriveLimits.from_spec(coil, design, iron_inductance(coil, design) if coil.core == "iron" else None)
     if calibration is not None:
-        return _calibrated(design, coil, calibration, limits)
+        return _calibrated(design, coil, calibration, limits, accept_inconsistent)
     if coil.core == "iron":
         from ._ironscale import table_label
 
@@ -74,13 +76,14 @@ def design_model(design, core: str | None = None, *, coupling: bool | None = Non
     return DesignModel(model, limits, coil.core, label)
 
 
-def _calibrated(design, coil, calibration, limits) -> DesignModel:
+def _calibrated(design, coil, calibration, limits, accept_inconsistent: bool = False) -> DesignModel:
     """The design's model from ``calibration`` (a path or a :class:`~.calibrated.Calibration`)."""
     from .calibrated import Calibration
 
     if coil.core != "iron":
         raise bad_value("calibration", "used with the iron core (it fits the iron model's tables)", coil.core)
-    cal = calibration if isinstance(calibration, Calibration) else Calibration.load(calibration, design)
+    cal = (calibration.check_usable(accept_inconsistent) if isinstance(calibration, Calibration)
+           else Calibration.load(calibration, design, accept_inconsistent))
     if cal.design_fingerprint is not None and cal.design_fingerprint != design.fingerprint:
         from ..motor import check_fingerprint
 
