@@ -9,7 +9,7 @@ from pathlib import Path
 import typer
 
 from .app import app
-from .common import check_port, design_from, number, print_json, tolerance_option, usable
+from .common import check_device, check_port, design_from, number, print_json, tolerance_option, usable
 from .progress import progress
 from .signals import Terminated, interrupt_of, sigterm_as_interrupt, told
 
@@ -118,6 +118,8 @@ def calibrate(
     own = design_model(design)
     if own.core != "iron":
         raise bad_value("--design", "an iron-cored design (the fit is of the iron model's tables)", own.core)
+    if port is not None:  # its HELLO against the design's drive, before any hold
+        check_device(port, design, own.limits)
     plant = plant_error.plant(own.model) if emulate else None
     if emulate:
         from ..sensing import default_array

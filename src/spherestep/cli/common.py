@@ -108,6 +108,21 @@ def check_port(port: str, name: str = "--port") -> None:
         raise error from None
 
 
+def check_device(port: str, design, limits, name: str = "--port") -> None:
+    """Open the current-mode device on ``port`` (protocol 2's HELLO), check that its supply and coils are the
+    design's ``limits`` (:meth:`~spherestep.hardware.DriveInfo.check_drive`) and close it, every coil off — before
+    any model or estimator is built, so a board wound or powered otherwise is refused in a second, not after the
+    session's set-up; InputError naming ``name`` when the device does not answer as one."""
+    from ..drive import connect
+    from ..hardware import LinkError
+
+    try:
+        with connect(design, "port", port=port, limits=limits):
+            pass
+    except LinkError as exc:
+        raise bad_value(name, "a spherestep coil controller (protocol 2) on that device", f"{port}: {exc}") from None
+
+
 def design_from(path: Path | None, name: str = "--design"):
     """The design in the file at ``path`` (a regular file), or the built-in prototype."""
     from ..motor import MotorDesign, prototype

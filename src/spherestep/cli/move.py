@@ -12,7 +12,7 @@ import typer
 from ..errors import bad_value
 from ..outputs import output_folder
 from .app import app
-from .common import (check_axis, check_core, check_port, console, design_from, number, parse_vector, print_json,
+from .common import (check_axis, check_core, check_device, check_port, console, design_from, number, parse_vector, print_json,
                      tolerance_option, usable)
 from .motor import ANGLE
 from .signals import exit_code, interrupt_for, sigterm_as_interrupt, told
@@ -186,6 +186,8 @@ def move(
         raise bad_value("--calibration", "an existing calibration file (spherestep calibrate --out)", str(calibration))
     # a stale or inconsistent file: refused in one line naming the calibration and the option that forces it
     own = design_model(design, core, calibration=calibration, accept_inconsistent=accept)
+    if port is not None:  # its HELLO against the design's drive, before the session builds anything
+        check_device(port, design, own.limits)
     if time is not None:  # before the progress starts: a refusal is one line
         check_duration(design, axis_vec, math.radians(angle), choose_model(design, own), time, "--time",
                        start=None)
