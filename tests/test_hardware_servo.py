@@ -232,8 +232,12 @@ def test_in_lockstep_the_loop_meets_the_targets_at_200_hz(rig):
     assert not s.final.enabled and np.abs(s.final.i).max() < 1e-3
 
 
-def with_bias(reference_law_current: float = 0.3, coil: int = 0):
-    """A status-free way to keep one coil at a sizeable current: the servo plus ``current`` A on ``coil``."""
+def with_bias(reference_law_current: float = 0.3, coil: int = 0, step_at: float = FAULT_AT + 0.05):
+    """A status-free way to keep one coil at a sizeable current: the servo plus ``current`` A on ``coil``, 0.6 of
+    it from ``step_at`` s of the loop's time on — the demand moves after the fault, so that a sense frozen at the
+    coil's steady current is seen (the device cannot tell it from a quiet coil until the demand moves,
+    docs/hardware.md; the servo's own corrections on a quiet hold may stay within the rule's 50 mA for longer than
+    the watchdog)."""
     from dataclasses import replace
 
     from spherestep.control import ServoLaw
@@ -242,7 +246,7 @@ def with_bias(reference_law_current: float = 0.3, coil: int = 0):
         def step(self, t, measurement=None, measured_at=None):
             cmd = super().step(t, measurement, measured_at)
             c = cmd.currents.copy()
-            c[coil] += reference_law_current / self.limits.nominal_current
+            c[coil] += (reference_law_current if t < step_at else 0.6 * reference_law_current) / self.limits.nominal_current
             return replace(cmd, currents=c)
 
     return Biased

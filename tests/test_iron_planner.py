@@ -186,7 +186,9 @@ def test_simulate_on_a_perturbed_plant_fails_loudly(tmp_path, capsys):
     assert main(base + ["--out", str(tmp_path / "a"), "--json"]) == 0
     assert main(base + ["--out", str(tmp_path / "b"), "--plant-winding", "0.85", "--plant-detent", "1.2"]) == 1
     err = capsys.readouterr().err
-    assert "did not execute on this plant: step 1" in err and "Traceback" not in err
+    failed = [line for line in err.splitlines() if "failed" in line]
+    assert len(failed) == 1 and "the plan on the plant (" in failed[0] and "winding ×0.85, the detent ×1.2" in failed[0]
+    assert "step 1 (t = " in failed[0] and "Traceback" not in err
 
 
 @pytest.mark.slow

@@ -106,3 +106,22 @@ def test_the_wire_gives_the_law_the_bridges_voltage():
     assert w.supply_voltage == pytest.approx(0.95 * d.supply_voltage)
     assert w.voltage_bound == pytest.approx(0.95 * d.supply_voltage / (d.resistance * d.nominal_current))
     assert w.max_current == pytest.approx(0.99 * d.max_current)
+
+
+def test_the_period_means_of_a_lagging_current_are_a_fine_integrations():
+    """``electrics.period_means`` (what calibration regresses on) against 10⁴ exact sub-steps per period of the
+    first-order response to random setpoints (τ = 0.5 ms, h = 2 ms), from rest: within 1e-12 relative."""
+    from spherestep.electrics import period_means
+
+    rng = np.random.default_rng(3)
+    c = rng.normal(size=(6, 4))
+    tau, h, n = 5e-4, 2e-3, 10_000
+    i, means = np.zeros(4), []
+    a = np.exp(-h / n / tau)
+    for setpoint in c:  # exact step of di/dt = (c − i)/τ; the mean of each sub-step's exact integral
+        total = np.zeros(4)
+        for _ in range(n):
+            total += setpoint + (i - setpoint) * tau / (h / n) * (1 - a)
+            i = setpoint + (i - setpoint) * a
+        means.append(total / n)
+    assert np.allclose(period_means(c, tau, h), means, rtol=0, atol=1e-12 * np.abs(c).max())

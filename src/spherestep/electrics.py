@@ -217,6 +217,29 @@ def from_milliamperes(milliamperes) -> np.ndarray:
     return np.divide(np.asarray(milliamperes, dtype=float), 1000.0)
 
 
+def lag_weight(lag: float, period: float) -> float:
+    """``β = (τ/h)(1 − e^{−h/τ})``: a current following its setpoints first order with time constant ``lag`` τ (s),
+    the setpoint changed from ``c_prev`` to ``c`` at the start of a period ``h``, has the mean ``c − β (c − c_prev)``
+    over it (0 without a lag)."""
+    return lag / period * (1.0 - math.exp(-period / lag)) if lag > 0 else 0.0
+
+
+def period_means(setpoints, lag: float, period: float) -> np.ndarray:
+    """The mean current over each period of a current that follows ``setpoints`` ``(T, N)`` (each applied from its
+    period's start, from rest at the first) first order with time constant ``lag`` (s), exactly:
+    ``c_k − β (c_k − i_k)`` (:func:`lag_weight`) with ``i_k`` the current at the period's start,
+    ``i_{k+1} = c_k + (i_k − c_k) e^{−h/τ}``."""
+    c = np.asarray(setpoints, dtype=float)
+    if lag <= 0:
+        return c.copy()
+    beta, decay = lag_weight(lag, period), math.exp(-period / lag)
+    out, i = np.empty_like(c), np.zeros_like(c[0])
+    for k, setpoint in enumerate(c):
+        out[k] = setpoint - beta * (setpoint - i)
+        i = setpoint + (i - setpoint) * decay
+    return out
+
+
 def rl_step(i, v, emf, resistance: float, inductance: float, h: float) -> tuple[np.ndarray, np.ndarray]:
     """One coil as an R–L circuit, ``L di/dt = v − R i − e``, over ``h`` s with ``v`` and ``emf`` held: the exact
     current at the end, ``i∞ + (i − i∞) e^{−x}`` (``i∞ = (v − e)/R``, ``x = h R / L``), and its mean over the

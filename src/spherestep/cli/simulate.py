@@ -136,16 +136,18 @@ def simulate(
                "damping_N_m_s": tuning.rotor.damping, "dwell_s": tuning.dwell,
                "plant": {"winding": plant_winding, "detent": plant_detent}}
     tol = judged_within(tolerance, "relay")
+    where = (f"the {own.label} model" if plant is physics else  # a perturbed plant is named as such
+             f"the plant (the {own.label} model with the winding ×{plant_winding:g}, the detent ×{plant_detent:g})")
     names = ("closed_loop.csv", "closed_loop.png") if closed else ("trajectory.csv", "simulation.png")
     files = Outputs(out, names + ("simulation.json",))
     with files:
         if closed:
-            with progress(f"running the closed loop on the {own.label} model", enabled=not as_json):
+            with progress(f"running the closed loop on {where}", enabled=not as_json):
                 run = run_closed_loop(design, targets, plant, dwell=tuning.dwell, noise=math.radians(noise),
                                       missed=missed, rotor=tuning.rotor, dt=tuning.dt, rng=seed)
             run.to_csv(out / "closed_loop.csv", axis_vec)
             plots.save_figure(plots.figure_closed_loop(run, axis_vec), out / "closed_loop.png")
-            judged = judge([run.end_error], tol, f"the closed loop on the {own.label} model", label="end",
+            judged = judge([run.end_error], tol, f"the closed loop on {where}", label="end",
                            times=[len(run.missed) * run.dwell])
             summary |= {"closed_loop": True, "noise_deg": noise, "missed_fraction": missed,
                         "steps_taken": len(run.missed), "missed_steps": int(run.missed.sum()),
@@ -155,11 +157,11 @@ def simulate(
             with progress(f"planning ({planner})", enabled=not as_json):
                 plan = turn(design, axis_vec, math.radians(angle), steps, planner, physics if planner != "geometric"
                             else None, limits=own.limits, tuning=tuning if planner == "iron" else None)
-            with progress(f"simulating the plan on the {own.label} model", enabled=not as_json):
+            with progress(f"simulating the plan on {where}", enabled=not as_json):
                 from ..demo import simulate_and_write
 
                 sim, result = simulate_and_write(design, plan, axis_vec, out, plant, tuning, tolerance=tol)
-            judged = judge(sim.step_errors[1:], tol, f"the plan on the {own.label} model", first_index=1,
+            judged = judge(sim.step_errors[1:], tol, f"the plan on {where}", first_index=1,
                            times=tuning.dwell * np.arange(1, len(sim.step_errors)))
             summary |= {"closed_loop": False} | result
             if turns:

@@ -81,7 +81,7 @@ from ..errors import bad_value
 from ..statics import TorqueModel, is_torque_model
 from .allocation import allocate_matrix
 from .controller import SPEED_MEMORY, GeometricPD, Observer, disturbance_bandwidths
-from ..electrics import DriveLimits
+from ..electrics import DriveLimits, lag_weight
 from .trajectory import Trajectory
 
 K_REUSE = 2e-3  # rad: K(R) and b(R) are re-evaluated when the orientation has turned further than this
@@ -288,8 +288,7 @@ class ServoLaw:
         self.delay = checks.count(delay, "delay", 0, 8)
         self.lead = checks.non_negative(lead, "lead")
         lag = checks.non_negative(current_lag, "current_lag")
-        h = 1.0 / controller.rate
-        beta = lag / h * (1.0 - math.exp(-h / lag)) if lag > 0 else 0.0
+        beta = lag_weight(lag, 1.0 / controller.rate)
         self._emphasis = beta / (1.0 - beta)  # the step's pre-emphasis β/(1 − β) (step 6 of the module)
         self._promised = deque([np.zeros(3)] * (self.delay + 1), maxlen=self.delay + 1)
         self.voltage = bool(voltage)

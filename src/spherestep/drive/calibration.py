@@ -180,7 +180,8 @@ def _session(design, backend, traj, settle: float, start, model, limits, rate: f
         run = simulate_servo(design, traj, backend, limits=limits, controller_model=model, settle=settle,
                              start=start, rate=rate)
         return run.times, run.orientations, limits.per_unit(run.currents)
-    from .session import servo_session
+    from ..electrics import period_means
+    from .session import current_lag, servo_session
 
     port = backend.device if isinstance(backend, Port) else None
     emulate = isinstance(backend, Emulated)
@@ -198,7 +199,11 @@ def _session(design, backend, traj, settle: float, start, model, limits, rate: f
                         f"outcome {rep.outcome} ({rep.message})")
     t = np.asarray(rep.times, dtype=float)
     R = np.asarray(rep.orientations, dtype=float)
+    # the currents commanded in a cycle are driven from the next cycle's start (the session's one-period delay) and
+    # followed first order by the device's current loop: the mean over each period (the law pre-emphasises its
+    # setpoints so that this mean is the current it allocated), not the setpoint, is what the rotor felt
     c = limits.per_unit(rep.currents)
-    # the currents commanded in a cycle are driven from the next cycle's start (the session's one-period delay)
     c = np.vstack([np.zeros((1, c.shape[1])), c[:-1]])
+    kind = "port" if port is not None else "lockstep" if backend.lockstep else "pty"
+    c = period_means(c, current_lag(kind), float(np.median(np.diff(np.asarray(rep.times, dtype=float)))))
     return t, R, c
