@@ -87,13 +87,13 @@ def test_blocks_round_trip_signed_16_bit_values():
 def test_frame_sizes_for_the_prototype_match_encoded_frames():
     """29 coils, 8 sensors: the byte counts docs/protocol.md quotes, checked against real frames."""
     sizes = frame_bytes(29, 8)
-    drive = encode(0, "DRIVE", encode_block(np.zeros(29)), max_frame=MAX_FRAME2)
+    drive = encode(0, "DRIVE", encode_block(np.zeros(29)), encode_block(np.zeros(29)), max_frame=MAX_FRAME2)
     answer = encode(0, "ACK", "DRIVE", "00000000", "0", encode_block(np.zeros(29)), encode_block(np.zeros(24)),
                     max_frame=MAX_FRAME2)
-    assert (len(drive), len(answer)) == (sizes["drive"], sizes["answer"]) == (132, 244)
-    assert sizes["round_trip"] == 376
-    # 115200 baud, 10 bits per byte: at most 30 round trips a second
-    assert 115200 / 10 / sizes["round_trip"] == pytest.approx(30.6, abs=0.1)
+    assert (len(drive), len(answer)) == (sizes["drive"], sizes["answer"]) == (249, 244)  # currents and back-EMF
+    assert sizes["round_trip"] == 493
+    # 115200 baud, 10 bits per byte: at most 23 round trips a second
+    assert 115200 / 10 / sizes["round_trip"] == pytest.approx(23.4, abs=0.1)
 
 
 def test_state_is_parsed_in_si_units_and_flags_saturation():

@@ -217,6 +217,16 @@ def from_milliamperes(milliamperes) -> np.ndarray:
     return np.divide(np.asarray(milliamperes, dtype=float), 1000.0)
 
 
+def centivolts(volts) -> np.ndarray:
+    """Voltages in V as the wire's 10 mV units (a back-EMF estimate in ``DRIVE``): ``100 v``."""
+    return np.multiply(100.0, np.asarray(volts, dtype=float))
+
+
+def from_centivolts(centivolts) -> np.ndarray:
+    """Voltages in the wire's 10 mV units as V: ``v_cV / 100``."""
+    return np.divide(np.asarray(centivolts, dtype=float), 100.0)
+
+
 def rl_step(i, v, emf, resistance: float, inductance: float, h: float) -> tuple[np.ndarray, np.ndarray]:
     """One coil as an R–L circuit, ``L di/dt = v − R i − e``, over ``h`` s with ``v`` and ``emf`` held: the exact
     current at the end, ``i∞ + (i − i∞) e^{−x}`` (``i∞ = (v − e)/R``, ``x = h R / L``), and its mean over the
