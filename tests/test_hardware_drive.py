@@ -132,3 +132,20 @@ def test_device_rejects_bad_configuration():
         CurrentDevice(plant, 40, 1)
     with pytest.raises(InputError, match="nominal_ma"):
         CurrentDevice(plant, 3, 1, nominal_ma=5000)
+
+
+def test_drive_sends_the_back_emf_only_to_a_device_that_takes_it():
+    """``DRIVE``'s arguments: two blocks (mA, 10 mV) to a device whose handshake has CAP_EMF, the currents alone to
+    one without it or when no estimate is given; a bad estimate is refused naming ``emf``."""
+    from spherestep.hardware.drive_link import DriveInfo, drive_blocks
+
+    def info(caps):
+        return DriveInfo("t", 2, 0, 0.1, 1e-3, 1.0, 100.0, 8e-6, 24.0, 24.0, 18.7e-3, caps)
+
+    assert drive_blocks(info(1), [0.5, -0.2], [15.0, -0.26]) == ("01F4FF38", "05DCFFE6")
+    assert drive_blocks(info(0), [0.5, -0.2], [15.0, -0.26]) == ("01F4FF38",)
+    assert drive_blocks(info(1), [0.5, -0.2]) == ("01F4FF38",)
+    with pytest.raises(ValueError, match="emf"):
+        drive_blocks(info(1), [0.5, -0.2], [15.0, float("nan")])
+    with pytest.raises(ValueError, match="currents"):
+        drive_blocks(info(1), [0.5], [15.0])
