@@ -87,13 +87,13 @@ def test_blocks_round_trip_signed_16_bit_values():
 def test_frame_sizes_for_the_prototype_match_encoded_frames():
     """29 coils, 8 sensors: the byte counts docs/protocol.md quotes, checked against real frames."""
     sizes = frame_bytes(29, 8)
-    drive = encode(0, "DRIVE", encode_block(np.zeros(29)), max_frame=MAX_FRAME2)
+    drive = encode(0, "DRIVE", encode_block(np.zeros(29)), encode_block(np.zeros(29)), max_frame=MAX_FRAME2)
     answer = encode(0, "ACK", "DRIVE", "00000000", "0", encode_block(np.zeros(29)), encode_block(np.zeros(24)),
                     max_frame=MAX_FRAME2)
-    assert (len(drive), len(answer)) == (sizes["drive"], sizes["answer"]) == (132, 244)
-    assert sizes["round_trip"] == 376
-    # 115200 baud, 10 bits per byte: at most 30 round trips a second
-    assert 115200 / 10 / sizes["round_trip"] == pytest.approx(30.6, abs=0.1)
+    assert (len(drive), len(answer)) == (sizes["drive"], sizes["answer"]) == (249, 244)  # currents and back-EMF
+    assert sizes["round_trip"] == 493
+    # 115200 baud, 10 bits per byte: at most 23 round trips a second
+    assert 115200 / 10 / sizes["round_trip"] == pytest.approx(23.4, abs=0.1)
 
 
 def test_state_is_parsed_in_si_units_and_flags_saturation():
@@ -132,3 +132,20 @@ def test_device_rejects_bad_configuration():
         CurrentDevice(plant, 40, 1)
     with pytest.raises(InputError, match="nominal_ma"):
         CurrentDevice(plant, 3, 1, nominal_ma=5000)
+
+
+def test_drive_sends_the_back_emf_only_to_a_device_that_takes_it():
+    """``DRIVE``'s arguments: two blocks (mA, 10 mV) to a device whose handshake has CAP_EMF, the currents alone to
+    one without it or when no estimate is given; a bad estimate is refused naming ``emf``."""
+    from spherestep.hardware.drive_link import DriveInfo, drive_blocks
+
+    def info(caps):
+        return DriveInfo("t", 2, 0, 0.1, 1e-3, 1.0, 100.0, 8e-6, 24.0, 24.0, 18.7e-3, caps)
+
+    assert drive_blocks(info(1), [0.5, -0.2], [15.0, -0.26]) == ("01F4FF38", "05DCFFE6")
+    assert drive_blocks(info(0), [0.5, -0.2], [15.0, -0.26]) == ("01F4FF38",)
+    assert drive_blocks(info(1), [0.5, -0.2]) == ("01F4FF38",)
+    with pytest.raises(ValueError, match="emf"):
+        drive_blocks(info(1), [0.5, -0.2], [15.0, float("nan")])
+    with pytest.raises(ValueError, match="currents"):
+        drive_blocks(info(1), [0.5], [15.0])

@@ -17,7 +17,7 @@ from spherestep.electrics import DriveLimits
 from spherestep.hardware import CurrentDevice, LinkError
 from spherestep.hardware.drive_link import AGREE, FIRMWARE, DeviceMismatch, DriveInfo, device_info
 from spherestep.hardware.protocol import decode, encode
-from spherestep.hardware.protocol2 import MAX_FRAME2
+from spherestep.hardware.protocol2 import CAP_EMF, MAX_FRAME2
 
 
 class Quiet:
@@ -55,6 +55,16 @@ def test_the_device_reports_its_supply_and_coils_in_si():
     assert info.inductance == pytest.approx(drive.inductance, abs=5e-7)  # 18714 µH on the wire
     assert info.max_current == 1.0 and info.max_power == 100.0
     info.check_drive(drive)  # the device's defaults are the drive's own
+    assert info.capabilities == CAP_EMF and info.takes_emf and info.name == "spherestep-t41"
+
+
+def test_a_device_without_capabilities_takes_currents_only():
+    """The 12-field answer (firmware before the back-EMF block) is still a device: capabilities 0, so the host
+    sends the currents-only DRIVE; a capability field that is not hex is a malformed handshake."""
+    info = device_info(answer(2, 29, 8, 100, 1000, 1000, 100, 8118, 24000, 24000, 18700, "t41"), "test")
+    assert (info.capabilities, info.takes_emf, info.name, info.coils) == (0, False, "t41", 29)
+    with pytest.raises(LinkError, match="capabilities"):
+        device_info(answer(2, 29, 8, 100, 1000, 1000, 100, 8118, 24000, 24000, 18700, "Z", "t41"), "test")
 
 
 def test_the_older_answer_is_refused_naming_the_firmware_to_flash():

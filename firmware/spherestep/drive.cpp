@@ -81,6 +81,7 @@ CurrentDevice::CurrentDevice(Bridges& bridges, uint8_t coils, uint8_t sensors, u
 void CurrentDevice::allOff() {
   for (uint8_t k = 0; k < MAX_COILS; ++k) {
     setpoint_[k] = 0.0;
+    emf_[k] = 0.0;
     integral_[k] = 0.0;
     duty_[k] = 0.0;
     expected_[k] = 0.0;
@@ -126,12 +127,14 @@ void CurrentDevice::step(uint32_t nowUs) {
   }
   const double dmax = limits_.maxDuty;
   for (uint8_t k = 0; k < coils_; ++k) {
-    // the coil's law: the duty driven over the last period through the coil's L/R (from the reading at the start)
+    // the coil's law: the duty driven over the last period less the back-EMF, through the coil's L/R (from the
+    // reading at the start)
     const double a = coilDecay_;
-    expected_[k] = fresh_ ? amps[k] : a * expected_[k] + (1.0 - a) * duty_[k] * loop_.supply / limits_.resistance;
+    expected_[k] = fresh_ ? amps[k]
+                          : a * expected_[k] + (1.0 - a) * (duty_[k] * loop_.supply - emf_[k]) / limits_.resistance;
     const double e = setpoint_[k] - amps[k];
     integral_[k] = clampAbs(integral_[k] + ki_ * e, dmax);
-    duty_[k] = clampAbs(kp_ * e + integral_[k], dmax);
+    duty_[k] = clampAbs(kp_ * e + integral_[k] + emf_[k] / loop_.supply, dmax);  // PI plus the back-EMF fed forward
     const bool offLaw = fabs(amps[k] - expected_[k]) > FOLLOW_A + FOLLOW_REL * fabs(expected_[k]);
     follow_[k] = offLaw ? follow_[k] + 1 : 0;
   }
@@ -154,7 +157,7 @@ size_t CurrentDevice::damaged(const char* code, uint32_t nowUs, char* reply) {
   return nak(reply, -1, code);
 }
 
-bool CurrentDevice::setMa(const int32_t* ma) {
+bool CurrentDevice::setMa(const int32_t* ma, const int32_t* emfCv) {
   double amps[MAX_COILS];
   double power = 0.0;
   for (uint8_t k = 0; k < coils_; ++k) {
@@ -163,7 +166,10 @@ bool CurrentDevice::setMa(const int32_t* ma) {
   }
   for (uint8_t k = 0; k < coils_; ++k) power += amps[k] * amps[k];
   if (limits_.resistance * power > limits_.maxPower) return false;
-  for (uint8_t k = 0; k < coils_; ++k) setpoint_[k] = amps[k];
+  for (uint8_t k = 0; k < coils_; ++k) {
+    setpoint_[k] = amps[k];
+    emf_[k] = emfCv ? emfCv[k] / 100.0 : 0.0;
+  }
   driving_ = true;
   return true;
 }
@@ -234,6 +240,7 @@ size_t CurrentDevice::process(uint32_t nowUs, char* reply) {
       r.decimalField((uint32_t)lround(loop_.supply * 1000));         // mV
       r.decimalField((uint32_t)lround(limits_.resistance * 1000));   // mΩ
       r.decimalField((uint32_t)lround(loop_.inductance * 1e6));      // µH
+      r.hexField(CAP_EMF);                                             // capabilities
     }
     r.field(name_);
     return r.finish();
@@ -280,7 +287,7 @@ size_t CurrentDevice::process(uint32_t nowUs, char* reply) {
       const bool reversed = (polarity >> (coils_ + k)) & 1u;
       ma[k] = on ? (reversed ? -loop_.nominalMa : loop_.nominalMa) : 0;
     }
-    if (!setMa(ma)) return nak(reply, s, "LIMIT");
+    if (!setMa(ma, 0)) return nak(reply, s, "LIMIT");
     enable_ = enable;
     polarity_ = polarity;
     lastValidUs_ = nowUs;
@@ -294,12 +301,14 @@ size_t CurrentDevice::process(uint32_t nowUs, char* reply) {
   const bool isDrive = same(verb, "DRIVE");
   if (isDrive || same(verb, "READ")) {
     int32_t ma[MAX_COILS];
-    if (isDrive && (nargs != 1 || length(args[0]) != 4u * coils_ || !parseBlock(args[0], coils_, ma))) {
+    int32_t emfCv[MAX_COILS];
+    if (isDrive && (nargs < 1 || nargs > 2 || length(args[0]) != 4u * coils_ || !parseBlock(args[0], coils_, ma) ||
+                    (nargs == 2 && (length(args[1]) != 4u * coils_ || !parseBlock(args[1], coils_, emfCv))))) {
       return nak(reply, s, "ARGS");
     }
     if (!isDrive && nargs != 0) return nak(reply, s, "ARGS");
     if (version_ != DRIVE_VERSION) return nak(reply, s, version_ == 1 ? "VERB" : refusal);
-    if (isDrive && !setMa(ma)) return nak(reply, s, "LIMIT");
+    if (isDrive && !setMa(ma, nargs == 2 ? emfCv : 0)) return nak(reply, s, "LIMIT");
     lastValidUs_ = nowUs;
     return state(verb, s, nowUs, reply);
   }

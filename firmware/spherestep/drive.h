@@ -20,6 +20,7 @@ uint16_t crc16(const char* data, size_t length);  // protocol.cpp: CRC-16/CCITT-
 const uint8_t DRIVE_VERSION = 2;
 const size_t MAX_FRAME2 = 400;  // bytes between '$' and the end of line
 const size_t MAX_REPLY2 = 420;  // longest reply, '$' to '\n', plus a terminating NUL
+const uint8_t CAP_EMF = 1;       // capability bit in HELLO,2's answer: DRIVE takes each coil's back-EMF (10 mV)
 const uint8_t MAX_COILS = 32;
 const uint8_t MAX_SENSORS = 16;
 const uint8_t CRC_STORM = 8;     // damaged frames in a row that trip a session
@@ -87,7 +88,7 @@ class CurrentDevice {
   size_t process(uint32_t nowUs, char* reply);
   size_t damaged(const char* code, uint32_t nowUs, char* reply);
   size_t state(const char* verb, int seq, uint32_t nowUs, char* reply);
-  bool setMa(const int32_t* ma);
+  bool setMa(const int32_t* ma, const int32_t* emfCv);
   void allOff();
   void trip(const char* code, int coil);
   bool session() const { return version_ != 0; }
@@ -105,6 +106,7 @@ class CurrentDevice {
   double coilDecay_;  // e^(-R h / L): the coil's own response over one period
   uint32_t followSteps_;
   double setpoint_[MAX_COILS];
+  double emf_[MAX_COILS];  // V: each coil's back-EMF as the host last estimated it (0 without one)
   double integral_[MAX_COILS];
   double duty_[MAX_COILS];
   double heat_[MAX_COILS];

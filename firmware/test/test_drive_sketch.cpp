@@ -199,7 +199,7 @@ int main() {
   check(csHigh, "every ADC deselected after setup");
 
   std::string r = exchange("00,HELLO,2");
-  check(r == frame("00,ACK,HELLO,2,29,8,100,1000,289,100,8118,24000,82958,650226,spherestep-t41"), "HELLO: " + r);
+  check(r == frame("00,ACK,HELLO,2,29,8,100,1000,289,100,8118,24000,82958,650226,1,spherestep-t41"), "HELLO: " + r);
 
   // the prototype's coils (spherestep_config.h: 289 mA, 82.96 ohm, 650 mH); coil 0 +200 mA, coil 1 -200 mA: the first step drives coil 1 reversed (PH bit 1), both EN up, supply on
   std::string block = "00C8FF38";

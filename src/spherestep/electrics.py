@@ -217,6 +217,16 @@ def from_milliamperes(milliamperes) -> np.ndarray:
     return np.divide(np.asarray(milliamperes, dtype=float), 1000.0)
 
 
+def centivolts(volts) -> np.ndarray:
+    """Voltages in V as the wire's 10 mV units (a back-EMF estimate in ``DRIVE``): ``100 v``."""
+    return np.multiply(100.0, np.asarray(volts, dtype=float))
+
+
+def from_centivolts(centivolts) -> np.ndarray:
+    """Voltages in the wire's 10 mV units as V: ``v_cV / 100``."""
+    return np.divide(np.asarray(centivolts, dtype=float), 100.0)
+
+
 def lag_weight(lag: float, period: float) -> float:
     """``β = (τ/h)(1 − e^{−h/τ})``: a current following its setpoints first order with time constant ``lag`` τ (s),
     the setpoint changed from ``c_prev`` to ``c`` at the start of a period ``h``, has the mean ``c − β (c − c_prev)``

@@ -47,8 +47,9 @@ class Link(Protocol):
 
     info: object
 
-    def drive(self, currents, *, within: float | None = None):
-        """Set every coil's current (A) and return the device's state (None: no answer ``within`` s)."""
+    def drive(self, currents, *, emf=None, within: float | None = None):
+        """Set every coil's current (A) and return the device's state (None: no answer ``within`` s); ``emf``
+        each coil's back-EMF estimate (V), sent to a device that takes it (``info.takes_emf``)."""
 
     def read(self):
         """The device's state, the currents unchanged."""

@@ -10,8 +10,8 @@ loop per coil and writes the PWM duties to a :class:`Bridges` plant, and checks 
 
 * over-current: a measured ``|i| > trip_ratio · max_current`` → trip ``OVER``;
 * heating: the I²t model (:func:`~spherestep.hardware.limits.heating_step`) of any coil above 1 → ``HEAT``;
-* the coil's own law: each step the device predicts the current from the duties it drove, ``î ← a î + (1 − a)
-  d V / R`` with ``a = e^{−R h / L}`` (the coil's L/R; ``î`` starts at the reading when driving starts); a
+* the coil's own law: each step the device predicts the current from the duties it drove and the back-EMF the
+  host last sent, ``î ← a î + (1 − a)(d V − e) / R`` with ``a = e^{−R h / L}`` (the coil's L/R; ``î`` starts at the reading when driving starts); a
   reading off that prediction by ``|i − î| > 50 mA + 0.1 |î|`` for 20 ms → ``OPEN`` when ``|i| < 50 mA`` (no
   current: an open coil, or a sense stuck at zero), else ``STUCK`` (a bridge shorted to the supply, a frozen
   sense the PI loop winds its duty away from). A coil at its DC limit (full duty, ``i = d V / R``, the reading
@@ -21,9 +21,10 @@ loop per coil and writes the PWM duties to a :class:`Bridges` plant, and checks 
 
 A trip switches every bridge off (duty 0, drivers asleep, supply cut), ends the session and is answered to
 every later command but ``HELLO``/``OFF``. ``OFF`` (and ``HELLO``) leave the bridges asleep too, session kept,
-until the next ``DRIVE`` (or ``SET``): the loops and the monitors run only while driving. The PI loop cancels the coil's pole: ``duty = k_p e + Σ k_i e``,
+until the next ``DRIVE`` (or ``SET``): the loops and the monitors run only while driving. The PI loop cancels the coil's pole: ``duty = k_p ε + Σ k_i ε + e/V``,
 ``k_p = ω_c L / V``, ``k_i = k_p (R / L) h`` (anti-windup: the sum is clamped to ``±max_duty``), so the
-closed loop is first order with bandwidth ``ω_c`` when ``L``, ``R`` are right. Both implementations pass
+closed loop is first order with bandwidth ``ω_c`` when ``L``, ``R`` are right; ``e/V`` is the back-EMF's
+feed-forward (``e`` per coil from ``DRIVE``'s second block, V; 0 without it, after ``SET``, ``OFF`` or a trip). Both implementations pass
 ``firmware/test/vectors2.txt`` with integer mA and µs, so they answer byte for byte alike.
 
 The relay board (:meth:`CurrentDevice.relay_board`, no bridges) has ``relays`` channels (1–64) that ``SET``
@@ -43,12 +44,12 @@ from typing import Protocol
 import numpy as np
 
 from .. import checks
-from ..electrics import from_milliamperes, milliamperes
+from ..electrics import from_centivolts, from_milliamperes, milliamperes
 from ..errors import bad_value
 from .limits import DRIVE, CurrentLimits
 from .protocol import MAX_FRAME, MAX_MASK_DIGITS, FrameError, LineReader, decode, encode, format_mask, \
     parse_decimal, parse_hex
-from .protocol2 import MAX_COILS, MAX_FRAME2, MAX_SENSORS, VERSION2, decode_block, format_state
+from .protocol2 import CAP_EMF, MAX_COILS, MAX_FRAME2, MAX_SENSORS, VERSION2, decode_block, format_state
 
 _NAME_CHARS = frozenset("ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789._-")
 CRC_STORM = 8  # damaged frames in a row that trip a session
@@ -118,6 +119,7 @@ class CurrentDevice:
         self.coil_decay = math.exp(-h * lim.resistance / inductance)  # a = e^{−R h / L}
         self.follow_steps = max(1, round(FOLLOW_MS * 1000 / period_us))
         self.setpoint = np.zeros(coils)  # A
+        self.emf = np.zeros(coils)  # V: each coil's back-EMF as the host last estimated it
         self.integral = np.zeros(coils)
         self.duty = np.zeros(coils)
         self.heat = np.zeros(coils)
@@ -152,6 +154,7 @@ class CurrentDevice:
             self.off_us = now_us  # the moment the coils went from driven to off
         self.driving = False
         self.setpoint[:] = 0.0
+        self.emf[:] = 0.0
         self.integral[:] = 0.0
         self.duty[:] = 0.0
         self._follow[:] = 0
@@ -209,14 +212,14 @@ class CurrentDevice:
             return self._trip("HEAT", int(hot[0]), now_us)
         if self._fresh:
             self.expected = i.copy()
-        else:  # the duties driven over the last period, through the coil's L/R
+        else:  # the duties driven over the last period less the back-EMF, through the coil's L/R
             a = self.coil_decay
-            self.expected = a * self.expected + (1.0 - a) * self.duty * self.supply / lim.resistance
+            self.expected = a * self.expected + (1.0 - a) * (self.duty * self.supply - self.emf) / lim.resistance
         self._fresh = False
         e = self.setpoint - i
         dmax = lim.max_duty
         self.integral = np.clip(self.integral + self.ki * e, -dmax, dmax)
-        self.duty = np.clip(self.kp * e + self.integral, -dmax, dmax)
+        self.duty = np.clip(self.kp * e + self.integral + self.emf / self.supply, -dmax, dmax)
         off_law = np.abs(i - self.expected) > FOLLOW_A + FOLLOW_REL * np.abs(self.expected)
         self._follow = np.where(off_law, self._follow + 1, 0)
         lost = np.flatnonzero(self._follow >= self.follow_steps)
@@ -278,7 +281,7 @@ class CurrentDevice:
             return accepted(VERSION2, self.coils, self.sensors, self.watchdog_ms, self.period_us,
                             round(milliamperes(lim.max_current)), round(lim.max_power), self.field_lsb_nt,
                             round(self.supply * 1000), round(lim.resistance * 1000), round(self.inductance * 1e6),
-                            self.name)
+                            f"{CAP_EMF:X}", self.name)
         if verb == "OFF":
             if args:
                 return nak("ARGS")
@@ -309,20 +312,22 @@ class CurrentDevice:
             self._apply_masks(enable, polarity)
             return accepted(format_mask(self.enable), format_mask(self.polarity))
         if verb in ("DRIVE", "READ") and VERSION2 in self.versions:
-            block = None
-            if verb == "DRIVE" and len(args) == 1:
+            block = emf = None
+            if verb == "DRIVE" and len(args) in (1, 2):
                 block = decode_block(args[0], self.coils)
-            if (verb == "DRIVE" and block is None) or (verb == "READ" and args):
+                emf = decode_block(args[1], self.coils) if len(args) == 2 else np.zeros(self.coils, dtype=np.int64)
+            if (verb == "DRIVE" and (block is None or emf is None)) or (verb == "READ" and args):
                 return nak("ARGS")
             if self.version != VERSION2:
                 return nak("VERB") if self.version == 1 else refused()
-            if block is not None and not self._set(block):
+            if block is not None and not self._set(block, emf):
                 return nak("LIMIT")
             return accepted(*self._state(now_us))
         return nak("VERB")
 
-    def _set(self, ma) -> bool:
-        """Take setpoints in mA if within the current and power limits; False (nothing changed) otherwise."""
+    def _set(self, ma, emf_cv=None) -> bool:
+        """Take setpoints in mA (and the back-EMF in 10 mV units, 0 if None) if within the current and power
+        limits; False (nothing changed) otherwise."""
         lim = self.limits
         amps = from_milliamperes(ma).tolist()  # each float(m) / 1000, as the firmware's
         limit = milliamperes(lim.max_current)
@@ -331,5 +336,6 @@ class CurrentDevice:
         if lim.resistance * sum(a * a for a in amps) > lim.max_power:  # summed in order, as the firmware does
             return False
         self.setpoint = np.array(amps)
+        self.emf = from_centivolts(np.zeros(self.coils) if emf_cv is None else emf_cv)  # each float(c) / 100
         self.driving = True
         return True

@@ -19,12 +19,12 @@ from dataclasses import dataclass
 import numpy as np
 import serial as pyserial
 
-from ..electrics import from_milliamperes, milliamperes
+from ..electrics import centivolts, from_milliamperes, milliamperes
 from ..errors import InputError, bad_value
 from .backend import LinkError
 from .protocol import BAUDRATE, NAK_CODES, RETRYABLE, Frame, FrameError, LineReader, decode, encode, \
-    parse_decimal
-from .protocol2 import MAX_FRAME2, NAK_CODES2, TRIP_CODES, VERSION2, State, encode_block, parse_state
+    parse_decimal, parse_hex
+from .protocol2 import CAP_EMF, MAX_FRAME2, NAK_CODES2, TRIP_CODES, VERSION2, State, encode_block, parse_state
 from .serialport import NakError, check_link, close_quietly, open_port
 from .transcript import Transcript
 
@@ -53,7 +53,8 @@ class DeviceMismatch(InputError):
 class DriveInfo:
     """What a current-mode device reports in the handshake (SI units): ``supply_voltage`` (V), the coils'
     ``resistance`` (Ω) and ``inductance`` (H) that its current loop is tuned for, its ``max_current`` (A) and
-    ``max_power`` (W) limits."""
+    ``max_power`` (W) limits, and its ``capabilities`` (bits; :data:`~spherestep.hardware.protocol2.CAP_EMF`:
+    ``DRIVE`` takes each coil's back-EMF)."""
 
     name: str
     coils: int
@@ -66,6 +67,12 @@ class DriveInfo:
     supply_voltage: float
     resistance: float
     inductance: float
+    capabilities: int = 0
+
+    @property
+    def takes_emf(self) -> bool:
+        """The device's ``DRIVE`` takes each coil's back-EMF (a second block); else only currents (``e = 0``)."""
+        return bool(self.capabilities & CAP_EMF)
 
     def check_drive(self, drive, where: str = "the device") -> None:
         """Raise :class:`DeviceMismatch` (one line, naming the quantity) unless the supply, the coils' ``R`` and
@@ -95,14 +102,29 @@ def device_info(ack: Frame, port: str) -> DriveInfo:
                                f"(a firmware older than this host); flash {FIRMWARE}")
         error.field = "firmware"
         raise error
-    nums = [parse_decimal(x, 9) for x in d[:11]] if len(d) == 12 else [None]
-    if None in nums or nums[0] != VERSION2 or not all(nums[i] for i in (1, 3, 4, 8, 9, 10)):
+    nums = [parse_decimal(x, 9) for x in d[:11]] if len(d) in (12, 13) else [None]
+    caps = parse_hex(d[11], 1, 8) if len(d) == 13 else 0  # a 12-field answer: a device without capabilities
+    if None in nums or caps is None or nums[0] != VERSION2 or not all(nums[i] for i in (1, 3, 4, 8, 9, 10)):
         raise LinkError(f"device on {port} answered HELLO,2 with {','.join(d)!r}; expected version 2, coils, "
                         "sensors, watchdog_ms, period_us, max_mA, max_W, field_nT, supply_mV, coil_mOhm, coil_uH, "
-                        "name")
+                        "[capabilities,] name")
     _, coils, sensors, wd, period, ma, watts, lsb, mv, mohm, uh = nums
-    return DriveInfo(d[11], coils, sensors, wd / 1000, period * 1e-6, float(from_milliamperes(ma)), float(watts),
-                     lsb * 1e-9, mv / 1000, mohm / 1000, uh * 1e-6)
+    return DriveInfo(d[-1], coils, sensors, wd / 1000, period * 1e-6, float(from_milliamperes(ma)), float(watts),
+                     lsb * 1e-9, mv / 1000, mohm / 1000, uh * 1e-6, caps)
+
+
+def drive_blocks(info: DriveInfo, currents, emf=None) -> tuple[str, ...]:
+    """The arguments of ``DRIVE`` for ``info``'s device: the setpoints' block (mA) and, if the device takes it and
+    ``emf`` is given, the back-EMF block (10 mV); a clear error naming the field for a wrong shape or a NaN."""
+    c = np.asarray(currents, dtype=float)
+    if c.shape != (info.coils,) or not np.all(np.isfinite(c)):
+        raise bad_value("currents", f"{info.coils} finite coil currents in A", f"shape {c.shape}")
+    if emf is None or not info.takes_emf:
+        return (encode_block(milliamperes(c)),)
+    e = np.asarray(emf, dtype=float)
+    if e.shape != (info.coils,) or not np.all(np.isfinite(e)):
+        raise bad_value("emf", f"{info.coils} finite back-EMF estimates in V", f"shape {e.shape}")
+    return encode_block(milliamperes(c)), encode_block(centivolts(e))
 
 
 class DriveLink:
@@ -157,18 +179,18 @@ class DriveLink:
         link, self._link = self._link, None
         close_quietly(link)
 
-    def drive(self, currents, *, within: float | None = None) -> State | None:
-        """Set every coil's current (A, ``(N,)``) and return the device's state. With ``within`` (s): one attempt,
-        and ``None`` when no answer has come by then (a late reading: the frame was sent, and its answer, when it
-        comes, is skipped by its sequence number)."""
-        c = np.asarray(currents, dtype=float)
+    def drive(self, currents, *, emf=None, within: float | None = None) -> State | None:
+        """Set every coil's current (A, ``(N,)``) and return the device's state; ``emf`` (V, ``(N,)``) each coil's
+        back-EMF estimate, sent when the device takes it (:attr:`DriveInfo.takes_emf`; otherwise the
+        currents-only ``DRIVE``, ``e = 0`` on the device). With ``within`` (s): one attempt, and ``None`` when no
+        answer has come by then (a late reading: the frame was sent, and its answer, when it comes, is skipped by
+        its sequence number)."""
         if self.info is None:
             raise LinkError(f"serial link to {self.port} is not open")
-        if c.shape != (self.info.coils,) or not np.all(np.isfinite(c)):
-            raise bad_value("currents", f"{self.info.coils} finite coil currents in A", f"shape {c.shape}")
+        blocks = drive_blocks(self.info, currents, emf)
         if within is None:
-            return self._state(self._transact("DRIVE", encode_block(milliamperes(c))))
-        ack = self._transact("DRIVE", encode_block(milliamperes(c)), attempts=1, timeout=within, late_ok=True)
+            return self._state(self._transact("DRIVE", *blocks))
+        ack = self._transact("DRIVE", *blocks, attempts=1, timeout=within, late_ok=True)
         return None if ack is None else self._state(ack)
 
     def read(self) -> State:

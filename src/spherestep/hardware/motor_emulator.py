@@ -49,10 +49,10 @@ from .. import so3
 from ..electrics import DriveLimits, milliamperes, rl_step
 from .backend import LinkError
 from .current_device import CurrentDevice
-from .drive_link import DeviceTrip, device_info
+from .drive_link import DeviceTrip, device_info, drive_blocks
 from .limits import CurrentLimits
 from .protocol import decode, encode
-from .protocol2 import FULL_SCALE, MAX_FRAME2, TRIP_CODES, VERSION2, encode_block, parse_state
+from .protocol2 import FULL_SCALE, MAX_FRAME2, TRIP_CODES, VERSION2, parse_state
 from .pty_device import Faults, PtyDevice, Truth
 from .serialport import NakError
 
@@ -297,9 +297,9 @@ class LockstepLink:
             raise (DeviceTrip if code in TRIP_CODES else NakError)(f"device refused {verb}: NAK {code}", code)
         return frame
 
-    def drive(self, currents, *, within: float | None = None):
+    def drive(self, currents, *, emf=None, within: float | None = None):
         """As :meth:`DriveLink.drive`; ``within`` does not apply (the answer comes at once on the simulated clock)."""
-        return self._state(self._transact("DRIVE", encode_block(milliamperes(currents))))
+        return self._state(self._transact("DRIVE", *drive_blocks(self.info, currents, emf)))
 
     def read(self):
         return self._state(self._transact("READ"))

@@ -4,8 +4,10 @@ The framing, checksum, sequence numbers, retries and the watchdog are those of v
 (:mod:`~spherestep.hardware.protocol`); a session speaks version 2 when the host opens it with ``HELLO,2``.
 Frames may then be up to :data:`MAX_FRAME2` bytes long. New verbs:
 
-* ``DRIVE,<block>``: one current setpoint per coil, each a signed 16-bit integer in mA written as four hex
-  digits (two's complement), coil 0 first. The answer is ``ACK,DRIVE,<state>``.
+* ``DRIVE,<block>[,<emf>]``: one current setpoint per coil, each a signed 16-bit integer in mA written as four
+  hex digits (two's complement), coil 0 first; optionally each coil's back-EMF estimate ``e_k`` (V, signed, in
+  units of 10 mV, the same block format) from the host's ω (a device that reports :data:`CAP_EMF` in the
+  handshake; without it ``e = 0``). The answer is ``ACK,DRIVE,<state>``.
 * ``READ``: the state without changing anything: ``ACK,READ,<state>``.
 
 ``<state>`` is ``<time>,<stale>,<currents>,<field>``: the device's clock in µs (8 hex digits, wrapping),
@@ -33,6 +35,9 @@ VERSION2 = 2
 
 MAX_FRAME2 = 400
 """Most bytes between ``$`` and the end of line in a device that speaks version 2 (32 coils, 16 sensors)."""
+
+CAP_EMF = 1
+"""Capability bit in ``HELLO,2``'s answer: ``DRIVE`` takes a second block, each coil's back-EMF (10 mV units)."""
 
 MAX_COILS = 32
 MAX_SENSORS = 16
@@ -101,6 +106,6 @@ def parse_state(args: tuple[str, ...], coils: int, sensors: int, field_lsb: floa
 
 def frame_bytes(coils: int, sensors: int) -> dict[str, int]:
     """Bytes on the wire (``$`` to ``\\n``) of a ``DRIVE`` frame and of its answer, for the rate tables."""
-    drive = len("$00,DRIVE,") + 4 * coils + len("*CCCC\n")
+    drive = len("$00,DRIVE,") + 4 * coils + len(",") + 4 * coils + len("*CCCC\n")  # currents and back-EMF
     answer = len("$00,ACK,DRIVE,") + 8 + len(",0,") + 4 * coils + len(",") + 12 * sensors + len("*CCCC\n")
     return {"drive": drive, "answer": answer, "round_trip": drive + answer}

@@ -79,9 +79,9 @@ class RelayLink:
                             "on at its nominal current or off)", f"{self.limits.amperes(c)[k]:g} A on coil {k}")
         return {int(k): int(signs[k]) for k in np.flatnonzero(signs)}
 
-    def drive(self, currents, *, within: float | None = None) -> State:
+    def drive(self, currents, *, emf=None, within: float | None = None) -> State:
         """Switch the relays to ``currents`` (A per coil: 0 or ``±I_n``) and return :meth:`read` (``within`` does not
-        apply: the back end answers before it returns)."""
+        apply: the back end answers before it returns; nor does ``emf``: a relay has no current loop)."""
         if self.info is None:
             raise LinkError("the relay link is not open")
         state = self.states(currents)
