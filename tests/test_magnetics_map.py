@@ -107,6 +107,23 @@ def test_holding_torque(proto, tmap, settled):
     assert small.per_axis[0, 0] == pytest.approx(h[0] * 1e-3, rel=1e-3)
 
 
+def test_holding_torque_on_a_coarse_grid_finds_the_full_grids_peaks(proto, tmap, settled):
+    """``stride``: every 4th angle, then around the two best coarse maxima — the full grid's peak on every axis
+    (a subset of its points: never above it); over 90° the restoring curve passes other poles (several peaks)."""
+    _, c, eq = settled
+    for max_angle, samples in ((math.radians(20.0), 81), (math.radians(90.0), 181)):
+        full = statics.holding_torque(tmap, eq.rotation, c, max_angle=max_angle, samples=samples)
+        coarse = statics.holding_torque(tmap, eq.rotation, c, max_angle=max_angle, samples=samples, stride=4)
+        np.testing.assert_array_equal(coarse.per_axis, full.per_axis)
+        np.testing.assert_array_equal(coarse.peak_angle, full.peak_angle)
+    wide = np.radians(np.linspace(0.0, 90.0, 181))
+    restoring = statics._restoring(tmap, eq.rotation[0], c[0], full.axes[0], np.broadcast_to(wide, (32, 181)))
+    assert (np.diff(np.sign(np.diff(restoring, axis=1)), axis=1) < 0).sum(axis=1).max() >= 2  # several peaks
+    for bad in (0, 81, 2.0, True):
+        with pytest.raises(InputError, match="stride"):
+            statics.holding_torque(tmap, eq.rotation[:1], c[:1], stride=bad)
+
+
 def test_step_torque_drives_to_the_next_state(proto, tmap, settled):
     idx, c, eq = settled
     states = proto.states()

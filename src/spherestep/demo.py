@@ -44,12 +44,15 @@ QUICK_IRON_RATES = (2.0,)  # steps/s: on iron in the quick demo
 DRIVE_FILES = ("drives.json", "servo.png", "capability.png", "iron.png")
 DEMO_FILES = PLAN_FILES + SIMULATION_FILES + DRIVE_FILES + ("report.html", "summary.json")
 CAPABILITY_SAMPLES = 400
+HOLDING_STRIDE = 4  # the iron summary's holding torques: every 4th angle, then around the two best (statics.holding_torque):
+# the full grid's 1,152 axis peaks on the prototype's sampled states to the digit (seeds 0, 1, 2), 12.8 → 5.1 s CPU
 ROBUSTNESS_CASE = "winding ×0.85, detent ×1.2"  # the worst case of the table in docs/control.md (issue 25 §2)
 ROBUSTNESS_HOLDS = 5
 QUICK_CAPABILITY_SAMPLES = 60
 CALIBRATION_ERROR = {"detent": 1.2, "winding": 0.85}  # the emulated motor's stated error (scaled_model's factors)
-CALIBRATION_HOLDS = 60  # on the emulated motor: 26 s of the demo's, the fit 15 s (measured, load 2.9)
-QUICK_CALIBRATION_HOLDS = 40  # torque error ×5.15 smaller (30: ×4.2; 60: ×5.1; the emulator's floor ~3.4 %; 2026-11-26)
+CALIBRATION_HOLDS = 30  # on the emulated motor, ~0.9 s of CPU a hold: torque error 17.0 % → 2.08 % (40 holds: 1.20 %,
+# 60: 1.90 %), the turn's max tracking 0.295° → 0.195° (40: 0.187°, 60: 0.192°); 2026-11-28, docs/control.md
+QUICK_CALIBRATION_HOLDS = CALIBRATION_HOLDS  # the same fit: what the quick demo's test holds (≥ 5× better)
 
 
 def write_plan_files(design, plan, axis, out: Path) -> None:
@@ -116,7 +119,7 @@ def run_demo(design, out: Path, axis, angle_deg: float, *,
     plots.save_figure(_matplotlib_capability({own.label: capability, other.label: other_capability}),
                       out / "capability.png")
     say("measuring what the iron cores change")
-    iron_effects = iron_summary(design, **({"states": 6, "starts": 6} if quick else {}))
+    iron_effects = iron_summary(design, stride=HOLDING_STRIDE, **({"states": 6, "starts": 6} if quick else {}))
     info["iron"] = iron_effects.to_dict()
     iron_capability = capability if own.core == "iron" else other_capability
     plots.save_figure(iron_effects.figure(design), out / "iron.png")
@@ -144,14 +147,16 @@ def run_demo(design, out: Path, axis, angle_deg: float, *,
     s = planned.summary(max_step=design.max_step).to_dict()
     info["potential_plan"] = {"model": own.label, "steps": s["steps"], "moves": s["moves"],
                               "final_error_deg": s["error_final_deg"]}
-    info["robustness"] = None
+    info["robustness"] = info["calibration"] = None
     if own.core == "iron":
+        say("planning the turn within the robust margin on the pairwise model (the robustness and calibration runs')")
+        trajectory = robust_turn(design, axis, angle)
         say(f"the servo against the model's known error: the plant with {ROBUSTNESS_CASE}")
-        info["robustness"] = robustness(design, axis, angle, holds=2 if quick else ROBUSTNESS_HOLDS)
-    info["calibration"] = None
-    if own.core == "iron":
+        info["robustness"] = robustness(design, axis, angle, holds=2 if quick else ROBUSTNESS_HOLDS,
+                                        trajectory=trajectory)
         info["calibration"] = calibration(design, own, axis, angle,
-                                          holds=QUICK_CALIBRATION_HOLDS if quick else CALIBRATION_HOLDS, progress=say)
+                                          holds=QUICK_CALIBRATION_HOLDS if quick else CALIBRATION_HOLDS, progress=say,
+                                          trajectory=trajectory)
     write_text(out / "drives.json", json.dumps({"drives": info["drives"], "drives_other": info["drives_other"],
                                                 "potential_plan": info["potential_plan"],
                                                 "robustness": info["robustness"]}, indent=1, allow_nan=False))
@@ -215,20 +220,34 @@ def drives_judged_line(j: dict) -> str:
         if j["failed"] else ""))
 
 
-def robustness(design, axis, angle: float, holds: int = ROBUSTNESS_HOLDS) -> dict:
+def robust_turn(design, axis, angle: float):
+    """The turn of ``angle`` rad about ``axis`` that :func:`robustness` and :func:`calibration` drive: planned on
+    the design's pairwise model within :data:`~spherestep.control.trajectory.MARGIN` of its torque, the design's
+    limits and rotor (:func:`spherestep.dynamics.robustness.turn_plan`); one plan for both (~6 s of CPU each)."""
+    from .control.trajectory import MARGIN
+    from .dynamics import Rotor
+    from .dynamics.robustness import turn_plan
+    from .magnetics import design_model
+
+    return turn_plan(design, design_model(design, coupling=False).model, design_model(design).limits,
+                     Rotor.from_design(design), axis=axis, angle=angle, margin=MARGIN)
+
+
+def robustness(design, axis, angle: float, holds: int = ROBUSTNESS_HOLDS, trajectory=None) -> dict:
     """The servo on a plant that differs from the design's model by the worst case of docs/control.md's table
     (:data:`ROBUSTNESS_CASE`, :mod:`spherestep.magnetics.mismatch`): ``holds`` random holds and the turn of
     ``angle`` rad about ``axis``, the controller on the design's own (coupled) model (the table's,
     ``MismatchCase``), the turn planned on the pairwise model within the robust margin
     (:data:`spherestep.control.trajectory.MARGIN`, as the table: the coupled model is refused within it, and the
-    fastest plan's 0.9 leaves no torque for a model error of this size)."""
+    fastest plan's 0.9 leaves no torque for a model error of this size); ``trajectory``: that plan made already
+    (:func:`robust_turn`)."""
     from .control.trajectory import MARGIN
     from .dynamics.robustness import robustness_row
     from .magnetics.mismatch import MISMATCH_CASES
 
     case = next(c for c in MISMATCH_CASES if c.name == ROBUSTNESS_CASE)
-    return robustness_row(design, case, holds=holds, axis=axis, angle=angle,
-                          margin=MARGIN).to_dict() | {"plant": case.to_dict()}
+    return robustness_row(design, case, holds=holds, axis=axis, angle=angle, margin=MARGIN,
+                          trajectory=trajectory).to_dict() | {"plant": case.to_dict()}
 
 
 def _beyond(r: dict) -> str:
@@ -249,7 +268,8 @@ def robustness_line(r: dict) -> str:
             f"{r['mean_power_W']:.0f} W")
 
 
-def calibration(design, own, axis, angle: float, *, holds: int = CALIBRATION_HOLDS, progress=None) -> dict:
+def calibration(design, own, axis, angle: float, *, holds: int = CALIBRATION_HOLDS, progress=None,
+                trajectory=None) -> dict:
     """The calibration on the emulated motor (issue 26): the plant the design's own model ``own``
     (:func:`~spherestep.magnetics.design_model`) with :data:`CALIBRATION_ERROR`
     (:func:`~spherestep.magnetics.mismatch.scaled_model`), run by the hardware emulator
@@ -260,7 +280,8 @@ def calibration(design, own, axis, angle: float, *, holds: int = CALIBRATION_HOL
     with the servo on the model before and after, one plan for both: within
     :data:`~spherestep.control.trajectory.MARGIN` on the pairwise model, as the robustness table's (the coupled
     one is refused within it; benchmarks/bench_calibration.py); an exact sensor, as the benchmark's (with the
-    robustness line's 0.02° noise the noise's tracking error, ~0.8–0.9° on the plant, hides the model's)."""
+    robustness line's 0.02° noise the noise's tracking error, ~0.8–0.9° on the plant, hides the model's);
+    ``trajectory``: that plan made already (:func:`robust_turn`; default made here, once for both turns)."""
     from .control import calibrate, hold_orientations, torque_error
     from .drive import Emulated, collect_holds
     from .control.trajectory import MARGIN
@@ -280,11 +301,14 @@ def calibration(design, own, axis, angle: float, *, holds: int = CALIBRATION_HOL
     before, after = torque_error(own.model, plant), torque_error(cal.model, plant)
     rotor = Rotor.from_design(design)
     pairwise = design_model(design, coupling=False)
+    if trajectory is None:
+        say("calibration: planning the turn within the robust margin on the pairwise model")
+        trajectory = robust_turn(design, axis, angle)
     turns = {}
     for name, model, label in (("before", own.model, "uncalibrated"), ("after", cal.model, "calibrated")):
         say(f"calibration: the turn on the emulated motor with the {label} model")
-        traj, run = turn_run(design, plant, model, own.limits, rotor, axis=axis, angle=angle, margin=MARGIN,
-                             plan_model=pairwise.model, noise=0.0)
+        traj, run = turn_run(design, plant, model, own.limits, rotor, axis=axis, angle=angle, noise=0.0,
+                             trajectory=trajectory)
         s = run.summary()
         turns[name] = {"turn_time_s": float(traj.duration), "final_error_deg": math.degrees(s.final_error),
                        "max_tracking_error_deg": math.degrees(s.max_tracking_error)}

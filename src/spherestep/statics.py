@@ -434,13 +434,17 @@ class Holding:
 
 
 def holding_torque(model: TorqueModel, R_eq, currents, *, axes=None, max_angle: float = math.radians(20.0),
-                   samples: int = 81) -> Holding:
+                   samples: int = 81, stride: int = 1) -> Holding:
     """Peak restoring torque ``max_θ −T(exp(θ ŵ) R_eq, c) · ŵ`` for ``θ`` in ``[0, max_angle]`` (``samples``
     points) about each axis ``ŵ``; ``R_eq (K, 3, 3)``, ``currents (K, N)``.
 
     ``axes``: ``(A, 3)`` for every state, or ``(K, A, 3)`` per state; default :func:`cube_axes` plus both
     senses of the three stiffness eigen-axes of each state (so the softest direction is always tried).
+    ``stride`` > 1: every ``stride``-th point of the grid (and the last), then the grid's points within ``stride``
+    of each axis's two highest coarse local maxima — the grid's maximum wherever it lies within one coarse
+    interval of one of them (~``5/stride`` of the torque evaluations); 1: every point.
     """
+    stride = checks.count(stride, "stride", 1, max(1, samples - 1), expected="a whole number of grid points")
     R = so3.as_rotations(R_eq, "R_eq").reshape(-1, 3, 3)
     c = np.broadcast_to(as_currents(currents, model.coil_count, model.failed), (len(R), model.coil_count))
     if axes is None:
@@ -454,15 +458,37 @@ def holding_torque(model: TorqueModel, R_eq, currents, *, axes=None, max_angle: 
             raise bad_value("axes", f"non-zero axes of shape (A, 3) or ({len(R)}, A, 3)", f"shape {W.shape}")
     W = W / np.linalg.norm(W, axis=2, keepdims=True)
     theta = np.linspace(0.0, max_angle, samples)
+    coarse = np.unique(np.r_[np.arange(0, samples, stride), samples - 1])
+    near = np.r_[-np.arange(1, stride), np.arange(1, stride)]  # the fine points beside a coarse peak (none at 1)
     per_axis = np.empty(W.shape[:2])
     peak = np.empty(W.shape[:2])
     for k in range(len(R)):  # one state at a time: A × S orientations share its currents
-        turns = so3.exp(W[k][:, None, :] * theta[None, :, None])  # (A, S, 3, 3)
-        T = model.torque((turns @ R[k]).reshape(-1, 3, 3), c[k]).reshape(W.shape[1], samples, 3)
-        restoring = -np.einsum("asi,ai->as", T, W[k])
-        per_axis[k] = restoring.max(axis=1)
-        peak[k] = theta[np.argmax(restoring, axis=1)]
+        idx = np.broadcast_to(coarse, (W.shape[1], len(coarse)))
+        restoring = _restoring(model, R[k], c[k], W[k], theta[idx])
+        if stride > 1:
+            fine = np.clip(coarse[_two_peaks(restoring)][:, :, None] + near, 0, samples - 1).reshape(len(idx), -1)
+            idx = np.concatenate([idx, fine], axis=1)
+            restoring = np.concatenate([restoring, _restoring(model, R[k], c[k], W[k], theta[fine])], axis=1)
+        best = np.argmax(restoring, axis=1)
+        per_axis[k] = restoring[np.arange(len(best)), best]
+        peak[k] = theta[idx[np.arange(len(best)), best]]
     return Holding(W, per_axis, peak)
+
+
+def _two_peaks(y) -> np.ndarray:
+    """``(A, 2)`` column indices of each row's two highest local maxima of ``y (A, S)`` (the highest twice when
+    there is one)."""
+    pad = np.pad(y, ((0, 0), (1, 1)), constant_values=-np.inf)
+    peaks = np.where((y >= pad[:, :-2]) & (y >= pad[:, 2:]), y, -np.inf)
+    top = np.argsort(-peaks, axis=1, kind="stable")[:, :2]
+    return np.where(np.isfinite(np.take_along_axis(peaks, top, axis=1)), top, top[:, :1])
+
+
+def _restoring(model: TorqueModel, R, c, W, theta) -> np.ndarray:
+    """``−T(exp(θ ŵ_a) R, c) · ŵ_a`` for the angles ``theta (A, S)`` about the unit axes ``W (A, 3)``."""
+    turns = so3.exp(W[:, None, :] * theta[:, :, None])  # (A, S, 3, 3)
+    T = model.torque((turns @ R).reshape(-1, 3, 3), c).reshape(theta.shape + (3,))
+    return -np.einsum("asi,ai->as", T, W)
 
 
 @dataclass(frozen=True)

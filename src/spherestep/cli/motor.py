@@ -54,7 +54,7 @@ def demo(
     angle: float = typer.Option(None, "--angle", callback=ANGLE, help="Rotation angle in degrees (default 360; "
                                                                      "90 with --quick)."),
     quick: bool = typer.Option(False, "--quick", help="A reduced run of the same job (a 90° turn, fewer capability "
-                                                      "samples and relay rates): about 80 s."),
+                                                      "samples and relay rates): about 50 s."),
     as_json: bool = typer.Option(False, "--json", help="Print the summary as JSON (the escape-violating states "
                                                        f"cut to the first {SHOWN_ESCAPE_STATES}, as it says; all "
                                                        "in summary.json)."),

@@ -100,16 +100,25 @@ def hold_errors(design, plant, model, limits, rotor, *, holds: int = 20, seed: i
     return tuple(out)
 
 
-def turn_run(design, plant, model, limits, rotor, *, axis=TURN_AXIS, angle: float = TURN_ANGLE, seed: int = 0,
-             settle: float = 0.5, noise: float = NOISE, disturbance_bandwidth: float | None = None,
-             margin: float | None = None, plan_model=None):
-    """``(trajectory, run)``: the turn of the module planned on ``plan_model`` (default ``model``; within
-    ``margin``, default ``plan_turn``'s) and driven on ``plant`` with the servo on ``model``."""
+def turn_plan(design, model, limits, rotor, *, axis=TURN_AXIS, angle: float = TURN_ANGLE,
+              margin: float | None = None):
+    """The turn of the module (from the stepper state nearest the identity) planned on ``model`` within ``limits``
+    and ``margin`` (default ``plan_turn``'s) for ``rotor``: :func:`spherestep.control.plan_turn`'s trajectory."""
     from ..commutation.turn import turn_targets
     from ..control import plan_turn
 
     start = turn_targets(design, axis, angle, steps=1)[0]
-    traj = plan_turn(model if plan_model is None else plan_model, start, axis, angle, rotor.inertia, limits, damping=rotor.damping, margin=margin)
+    return plan_turn(model, start, axis, angle, rotor.inertia, limits, damping=rotor.damping, margin=margin)
+
+
+def turn_run(design, plant, model, limits, rotor, *, axis=TURN_AXIS, angle: float = TURN_ANGLE, seed: int = 0,
+             settle: float = 0.5, noise: float = NOISE, disturbance_bandwidth: float | None = None,
+             margin: float | None = None, plan_model=None, trajectory=None):
+    """``(trajectory, run)``: the turn of the module planned on ``plan_model`` (default ``model``; within
+    ``margin``, default ``plan_turn``'s: :func:`turn_plan`) and driven on ``plant`` with the servo on ``model``;
+    ``trajectory``: that plan made already (it is the same for every plant and controller; ~6 s of CPU each)."""
+    traj = trajectory if trajectory is not None else turn_plan(
+        design, model if plan_model is None else plan_model, limits, rotor, axis=axis, angle=angle, margin=margin)
     run = simulate_servo(design, traj, plant, limits=limits, rotor=rotor, sensor=_sensor(noise, seed),
                          settle=settle, controller_model=model, disturbance_bandwidth=disturbance_bandwidth)
     return traj, run
@@ -117,10 +126,11 @@ def turn_run(design, plant, model, limits, rotor, *, axis=TURN_AXIS, angle: floa
 
 def robustness_row(design, case, *, holds: int = 20, seed: int = 0, hold_time: float = 1.0, axis=TURN_AXIS,
                    angle: float = TURN_ANGLE, settle: float = 0.5, noise: float = NOISE,
-                   disturbance_bandwidth: float | None = None, rotor=None, margin: float | None = None
-                   ) -> RobustnessRow:
+                   disturbance_bandwidth: float | None = None, rotor=None, margin: float | None = None,
+                   trajectory=None) -> RobustnessRow:
     """The :class:`RobustnessRow` of ``case`` (a :class:`~spherestep.magnetics.mismatch.MismatchCase`) on
-    ``design`` (module docstring); ``margin`` the turn's plan's (default ``plan_turn``'s)."""
+    ``design`` (module docstring); ``margin`` the turn's plan's (default ``plan_turn``'s); ``trajectory`` that
+    plan made already (:func:`turn_plan` on the pairwise model)."""
     from ..magnetics import design_model
     from .rotor import Rotor
 
@@ -131,7 +141,8 @@ def robustness_row(design, case, *, holds: int = 20, seed: int = 0, hold_time: f
                          noise=noise, disturbance_bandwidth=disturbance_bandwidth)
     traj, run = turn_run(design, plant, model, limits, rotor, axis=axis, angle=angle, seed=seed, settle=settle,
                          noise=noise, disturbance_bandwidth=disturbance_bandwidth, margin=margin,
-                         plan_model=design_model(design, coupling=False).model)
+                         plan_model=None if trajectory is not None else design_model(design, coupling=False).model,
+                         trajectory=trajectory)
     s = run.summary()
     reach = tuple(plant_can_hold(plant, R, limits)[0] for R in so3.random(holds, seed))
     return RobustnessRow(case.name, errors, float(traj.duration), s.final_error, s.max_tracking_error, s.mean_power,
@@ -144,4 +155,4 @@ def _sensor(noise: float, seed: int):
     return NoisySensor(noise, rng=int(seed))
 
 
-__all__ = ["MAX_POWER", "MAX_TRACKING", "RobustnessRow", "hold_errors", "robustness_row", "turn_run"]
+__all__ = ["MAX_POWER", "MAX_TRACKING", "RobustnessRow", "hold_errors", "robustness_row", "turn_plan", "turn_run"]

@@ -147,12 +147,13 @@ def _iron_cored(design, coil: CoilSpec | None = None) -> CoilSpec:
 
 
 def iron_summary(design, coil: CoilSpec | None = None, *, states: int = 12, starts: int = 12, seed: int = 0,
-                 level: int = _iron.IRON_LEVEL, model: TorqueModel | None = None) -> IronSummary:
+                 level: int = _iron.IRON_LEVEL, model: TorqueModel | None = None, stride: int = 1) -> IronSummary:
     """Measure what iron cores change for ``design`` (see the module docstring) with the coils built as ``coil``
     (an iron core); default ``design.coil``, on an iron core if it has none (its winding, supply and material).
     ``model``: the whole motor's iron model for the unpowered and stepper-state equilibria and the rest poses of the
     saturation check (default: the pairwise ``iron_model(design, coil, level)``; e.g. the coupled one,
-    ``design_model(design).model``); the one-pole pair torques (detent, winding, polarity) are the pair tables'."""
+    ``design_model(design).model``); the one-pole pair torques (detent, winding, polarity) are the pair tables'.
+    ``stride``: the holding torques' coarse grid (:func:`spherestep.statics.holding_torque`; 1: every point)."""
     coil = _iron_cored(design, coil)
     rng = np.random.default_rng(seed)
     pair = iron_model(design, coil, level)
@@ -171,7 +172,7 @@ def iron_summary(design, coil: CoilSpec | None = None, *, states: int = 12, star
     off = np.zeros((starts, N))
     eq0 = equilibrium(model, R0, off, gtol=1e-9, max_step=math.radians(2.0))
     mins = np.flatnonzero(eq0.is_minimum)
-    hold0 = holding_torque(model, eq0.rotation[mins], off[mins]).torque if len(mins) else np.zeros(0)
+    hold0 = holding_torque(model, eq0.rotation[mins], off[mins], stride=stride).torque if len(mins) else np.zeros(0)
     # stepper states
     st = design.states()
     idx = np.sort(rng.choice(len(st), min(states, len(st)), replace=False))
@@ -181,7 +182,7 @@ def iron_summary(design, coil: CoilSpec | None = None, *, states: int = 12, star
         eq = equilibrium(m, st.rotations[idx], c, gtol=1e-9, max_step=math.radians(2.0))
         ok = eq.is_minimum
         offs = so3.distance(eq.rotation, st.rotations[idx])
-        hold = holding_torque(m, eq.rotation[ok], c[ok]).torque if ok.any() else np.zeros(0)
+        hold = holding_torque(m, eq.rotation[ok], c[ok], stride=stride).torque if ok.any() else np.zeros(0)
         out[name] = (int(ok.sum()), offs[ok], hold)
         rest = eq.rotation  # the last: the iron model's rest poses
     # polarity
