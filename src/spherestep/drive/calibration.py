@@ -16,7 +16,6 @@ from .. import checks, so3
 from ..control import Trajectory
 from ..electrics import DriveLimits
 from ..errors import InputError, bad_value
-from ..interrupts import interrupt_for, last_signal
 from ..statics import is_torque_model
 
 if TYPE_CHECKING:
@@ -180,8 +179,7 @@ def _session(design, backend, traj, settle: float, start, model, limits, rate: f
         run = simulate_servo(design, traj, backend, limits=limits, controller_model=model, settle=settle,
                              start=start, rate=rate)
         return run.times, run.orientations, limits.per_unit(run.currents)
-    from ..electrics import period_means
-    from .session import current_lag, servo_session
+    from .session import current_lag, servo_session, session_series
 
     port = backend.device if isinstance(backend, Port) else None
     emulate = isinstance(backend, Emulated)
@@ -189,21 +187,6 @@ def _session(design, backend, traj, settle: float, start, model, limits, rate: f
                "sensor_errors": backend.sensor_errors} if emulate else {}
     session = servo_session(design, traj, traj.duration + settle, port=port, emulate=emulate, model=model,
                             drive=limits, R0=start, sensor_calibration=sensor_calibration, **options)
-    rep = session.report
-    if rep.outcome == "INTERRUPT":  # the loop caught Ctrl-C or SIGTERM and switched every coil off: unwind on,
-        stop = interrupt_for(last_signal())  # saying whether the device acknowledged it (the CLI tells the user)
-        stop.off_acknowledged = bool(rep.off_acknowledged)
-        raise stop
-    if rep.outcome != "done" or len(rep.times) < 4:
-        raise bad_value("backend", "a motor that runs the servo to the end of each hold",
-                        f"outcome {rep.outcome} ({rep.message})")
-    t = np.asarray(rep.times, dtype=float)
-    R = np.asarray(rep.orientations, dtype=float)
-    # the currents commanded in a cycle are driven from the next cycle's start (the session's one-period delay) and
-    # followed first order by the device's current loop: the mean over each period (the law pre-emphasises its
-    # setpoints so that this mean is the current it allocated), not the setpoint, is what the rotor felt
-    c = limits.per_unit(rep.currents)
-    c = np.vstack([np.zeros((1, c.shape[1])), c[:-1]])
     kind = "port" if port is not None else "lockstep" if backend.lockstep else "pty"
-    c = period_means(c, current_lag(kind), float(np.median(np.diff(np.asarray(rep.times, dtype=float)))))
-    return t, R, c
+    return session_series(session, limits, "backend", "a motor that runs the servo to the end of each hold",
+                          current_lag(kind))

@@ -11,10 +11,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .. import so3
 from ..control import Trajectory
 from ..errors import bad_value
-from ..interrupts import interrupt_for, last_signal
 from ..statics import is_torque_model
 
 SETTLE = 0.3  # s the servo runs on after each move
@@ -34,7 +32,7 @@ def record_moves(design, moves, *, plant=None, model=None, limits=None, plant_ro
     from ..control import GeometricPD
     from ..dynamics import Rotor, simulate_servo
     from ..magnetics import design_model
-    from .session import servo_session
+    from .session import servo_session, session_series
 
     moves = tuple(moves)
     if not moves or not all(isinstance(m, Trajectory) for m in moves):
@@ -67,16 +65,8 @@ def record_moves(design, moves, *, plant=None, model=None, limits=None, plant_ro
                                 plant_rotor=plant_rotor if emulate else None,
                                 sensor_errors=sensor_errors if emulate else None,
                                 sensor_calibration=sensor_calibration, **options)
-        rep = session.report
-        if rep.outcome == "INTERRUPT":  # the loop switched every coil off: unwind on
-            stop = interrupt_for(last_signal())
-            stop.off_acknowledged = bool(rep.off_acknowledged)
-            raise stop
-        if rep.outcome != "done" or len(rep.times) < 4:
-            raise bad_value("moves", "moves the servo follows to the end", f"outcome {rep.outcome} ({rep.message})")
-        c = limits.per_unit(np.asarray(rep.currents, dtype=float))
-        c = np.vstack([np.zeros((1, c.shape[1])), c[:-1]])  # commanded in a cycle, driven from the next one's start
-        out.append((np.asarray(rep.times, dtype=float), so3.as_rotations(rep.orientations).reshape(-1, 3, 3), c))
+        # the commanded currents (no lag: fit_rotor fits the current's lag itself)
+        out.append(session_series(session, limits, "moves", "moves the servo follows to the end"))
     if progress is not None:
         progress(f"move {len(moves)} of {len(moves)}", len(moves), len(moves))
     return out

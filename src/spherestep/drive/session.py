@@ -17,6 +17,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+import numpy as np
+
 from .. import checks, so3
 from ..control import GeometricPD, ServoLaw, Trajectory
 from ..errors import ComputationError, bad_value
@@ -248,6 +250,30 @@ def servo_session(design, trajectory: Trajectory, duration: float, *, port: str 
             rest = None
         cost = conn.step_cost() if conn.step_cost is not None else None
     return Session(report, trajectory, truth, seen[0], conn.watchdog, conn.started, held[0], cost, rest, extra)
+
+
+def session_series(session: Session, limits, field: str, expected: str, lag: float = 0.0):
+    """``(t, R, c)`` of a finished session for a fit: the loop's times (s), estimated orientations and the
+    currents per unit of ``limits`` over each period — commanded in a cycle, driven from the next cycle's start (the
+    session's one-period delay) and, with the device's current ``lag`` (s, :func:`current_lag`), the mean a
+    first-order current carries over each period (:func:`~spherestep.electrics.period_means`: the law
+    pre-emphasises its setpoints so that this mean is the current it allocated). An interrupted loop (every coil
+    off) re-raises its interrupt; one that did not run to the end is an InputError naming ``field``."""
+    from ..electrics import period_means
+    from ..interrupts import interrupt_for, last_signal
+
+    rep = session.report
+    if rep.outcome == "INTERRUPT":  # the loop caught Ctrl-C or SIGTERM and switched every coil off: unwind on,
+        stop = interrupt_for(last_signal())  # saying whether the device acknowledged it (the CLI tells the user)
+        stop.off_acknowledged = bool(rep.off_acknowledged)
+        raise stop
+    if rep.outcome != "done" or len(rep.times) < 4:
+        raise bad_value(field, expected, f"outcome {rep.outcome} ({rep.message})")
+    t = np.asarray(rep.times, dtype=float)
+    R = so3.as_rotations(rep.orientations).reshape(-1, 3, 3)
+    c = limits.per_unit(np.asarray(rep.currents, dtype=float))
+    c = np.vstack([np.zeros((1, c.shape[1])), c[:-1]])
+    return t, R, period_means(c, lag, float(np.median(np.diff(t))))
 
 
 def current_lag(kind: str) -> float:
