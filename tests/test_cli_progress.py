@@ -2,6 +2,8 @@
 when stderr is not a terminal (a pipe, a log, CI), nothing with ``--json`` or ``--quiet``."""
 
 import ast
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
@@ -52,3 +54,24 @@ def test_explore_prints_plain_progress_when_not_a_terminal(tmp_path, capsys):
     assert err[0] == "spherestep: reading stored results (0 s)"
     assert any(line.startswith("spherestep: evaluating designs 1/12 ") for line in err), err
     assert err[-1].startswith("spherestep: writing the table, the Pareto set and the design files"), err
+
+
+def _console(*argv: str, every: float) -> subprocess.CompletedProcess:
+    """The console script's path (``main()`` without argv) with the heartbeat's period set to ``every`` s."""
+    code = f"import spherestep.cli.progress as p; p.PLAIN_EVERY = {every!r}; from spherestep.cli import main; main()"
+    return subprocess.run([sys.executable, "-c", code, *argv], capture_output=True, text=True, timeout=300)
+
+
+@pytest.mark.slow
+def test_start_up_is_not_silent_but_a_quick_refusal_stays_one_line(tmp_path):
+    """Issue 40 §4: the stretch before a command's first stage (libraries, the design's model: 25–53 s under a
+    load of 16–20) has the heartbeat too; a refusal before it beats is still one line."""
+    slow = _console("move", "--axis", "1,0.5,2", "--angle", "90", "--time", "0.001", "--out", str(tmp_path / "o"),
+                    every=2.5)  # the heartbeat after 1 s; the model and the duration check take longer
+    assert slow.returncode == 2, slow.stderr
+    lines = slow.stderr.strip().splitlines()
+    assert any(line.startswith("spherestep: starting: loading the libraries and the design … still working")
+               for line in lines[:-1]), lines
+    assert lines[-1].startswith("spherestep: error: --time") and not (tmp_path / "o").exists()
+    quick = _console("move", "--axis", "0,0,0", "--angle", "90", every=10.0)
+    assert quick.returncode == 2 and len(quick.stderr.strip().splitlines()) == 1, quick.stderr

@@ -29,9 +29,11 @@ from . import gallery  # noqa: F401 (registers)
 from . import synthesize  # noqa: F401 (registers)
 from . import calibrate  # noqa: F401 (registers)
 from .app import app
+from .progress import starting
 from .signals import Terminated, exit_code, interrupt_for, interrupt_of, sigterm_as_interrupt, signal_name
 
 DISK_FULL = (errno.ENOSPC, errno.EDQUOT, errno.EFBIG)
+_QUIET = {"--json", "--quiet", "--help", "-h"}  # options after which nothing but the answer is printed
 
 
 @functools.cache
@@ -59,7 +61,8 @@ def main(argv: list[str] | None = None) -> int:
     received = None
     sys.unraisablehook = _quiet_interrupts
     try:
-        with sigterm_as_interrupt() as received:
+        # the console script's start-up heartbeat (not for in-process calls: tests, embedding)
+        with sigterm_as_interrupt() as received, starting(enabled=argv is None and not _QUIET.intersection(args)):
             result = command.main(args=args, prog_name="spherestep", standalone_mode=False)
         # outside standalone mode Typer returns the code of an Exit (130 for Ctrl-C) instead of exiting
         code = result if isinstance(result, int) else 0
