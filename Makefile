@@ -35,7 +35,7 @@ NUMBERING_TESTS := tests/test_numbering.py tests/test_packing.py tests/test_gall
 # everything (CI): ruff, the suite on both cores, the numbering under another BLAS kernel, then the real-time tests
 test: $(VENV)/.installed-test browser
 	$(RUFF)
-	$(BIN)/python -m pytest -q -n $(WORKERS) -m "not realtime"
+	$(BIN)/python -m pytest -q -n $(WORKERS) -m "not realtime" --durations=25
 	OPENBLAS_CORETYPE=$$($(BIN)/python scripts/blas_kernel.py --other) \
 		$(BIN)/python -m pytest -q -n $(WORKERS) -m "not realtime" $(NUMBERING_TESTS)
 	$(BIN)/python -m pytest -q -m realtime
