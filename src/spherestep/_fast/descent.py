@@ -2,7 +2,9 @@
 
 Step ``ω = Σ_i (e_i·τ/|h_i|) e_i`` over the Hessian's eigenpairs, at most ``max_step`` long, halved until the
 Armijo condition holds (or the decrease is at rounding level and the torque falls); the iteration of the NumPy
-reference in :mod:`spherestep.statics`, step for step, on a :class:`~.terms.Packed` model.
+reference in :mod:`spherestep.statics`, step for step, on a :class:`~.terms.Packed` model, evaluated by
+:func:`.terms.terms_evaluate` (tables on one grid summed per coil; numba caches this file's kernels with that
+function inside, so a change there must touch this file too: :mod:`.compiling`).
 """
 
 from __future__ import annotations
