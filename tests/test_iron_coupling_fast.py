@@ -166,3 +166,69 @@ def test_design_model_is_coupled_by_default(design):
     pair = design_model(design, coupling=False)
     assert pair.label == "iron (pairwise, FEM table)" and pair.model.coupling is None
     assert design_model(design, "air").model is not None  # air: no coupling, no error
+
+
+def test_tables_on_one_grid_summed_per_coil_equal_each_table_evaluated(coupled, sample):
+    """The fused evaluation (the coupled model's two tables located once per coil and summed before the chain
+    rule, :func:`spherestep._fast.terms.terms_evaluate`) equals the sum of each table evaluated on its own
+    (:func:`sphere_values`, one table at a time: energy, torque ``R Σ c x × S`` and the Hessian's defining
+    property: the symmetric part of the torque's central difference, ``−∂τ/∂θ`` off equilibrium not being
+    symmetric) to rounding."""
+    from spherestep._fast.terms import terms_evaluate, workspace
+
+    R, c = sample[0][:6], np.zeros(29)
+    c[[2, 5, 11]] = [1.0, -1.0, 0.6]
+    p = coupled.packed_terms(c)
+    C = np.ascontiguousarray(p.C)
+    tau, H = np.empty(3), np.empty((3, 3))
+    work, near = workspace(p.poles)
+    for Rk in R:
+        E = terms_evaluate(p.params, p.offsets, np.ascontiguousarray(Rk), p.coils, C, p.poles, p.P, p.signs, 2,
+                           tau, H, work, near)
+        x = p.coils @ Rk  # (N, 3): x_k = Rᵀ v_k
+        E_ref, body = 0.0, np.zeros(3)
+        for i in range(len(p.signs)):
+            head = p.params[p.offsets[i]:p.offsets[i + 1]]
+            F, g, h = np.empty(len(x)), np.empty((len(x), 3)), np.empty((len(x), 3, 3))
+            sphere_values(np.ascontiguousarray(head[5:]), int(head[1]), head[3], int(head[4]), x, 1, F, g, h)
+            E_ref += p.signs[i] * C[i] @ F
+            body += p.signs[i] * (C[i][:, None] * np.cross(x, g)).sum(axis=0)
+        assert abs(E - E_ref) <= 1e-12 * max(1.0, abs(E_ref))
+        np.testing.assert_allclose(tau, Rk @ body, rtol=0, atol=1e-11 * max(1.0, np.abs(body).max()))  # 29 coils cancel
+        step = 1e-6  # H = sym(−∂τ/∂θ) (fixed frame), central differences: to the difference's error
+        fd = np.empty((3, 3))
+        for a in range(3):
+            ends = []
+            for sign in (1.0, -1.0):
+                t2 = np.empty(3)
+                Rs = np.ascontiguousarray(so3.exp(sign * step * np.eye(3)[a]) @ Rk)
+                terms_evaluate(p.params, p.offsets, Rs, p.coils, C, p.poles, p.P, p.signs, 1, t2, np.empty((3, 3)),
+                               work, near)
+                ends.append(t2)
+            fd[:, a] = -(ends[0] - ends[1]) / (2 * step)
+        np.testing.assert_allclose(H, 0.5 * (fd + fd.T), rtol=0, atol=1e-5 * max(1.0, np.abs(H).max()))
+
+
+def test_the_compiled_newton_step_is_the_eigen_sum():
+    """:func:`spherestep._fast.descent.newton_direction` (``adj(H) τ / det H`` where no eigenvalue floor can act,
+    ``eigh`` elsewhere) against the NumPy reference's eigen-sum (:func:`spherestep.statics._newton_direction`) on
+    positive definite, ill-conditioned, indefinite and singular matrices: to 1e-14 × the condition number of the
+    step's largest component."""
+    from spherestep._fast.descent import newton_direction
+    from spherestep.statics import _newton_direction
+
+    rng = np.random.default_rng(11)
+    cases = []
+    for scales in ([3.0, 2.0, 1.0], [1e3, 1.0, 1e-4], [5.0, -1.0, 2.0], [1.0, 1e-12, 2.0], [-1.0, -2.0, -3.0],
+                   [1.0, 0.0, 1.0], [1e2, 1e2, 1e-7]):
+        for _ in range(20):
+            Q = np.linalg.qr(rng.normal(size=(3, 3)))[0]
+            cases.append(Q @ np.diag(scales) @ Q.T)
+    for H in cases:
+        tau = rng.normal(size=3)
+        for max_step in (10.0, 0.05):
+            got = newton_direction(np.ascontiguousarray(H), tau, max_step)
+            want = _newton_direction(H[None], tau[None], max_step)[0]
+            h = np.abs(np.linalg.eigvalsh(H))
+            cond = h.max() / max(h.min(), 1e-8 * h.max())  # both solve in floating point: error ~ cond × eps
+            np.testing.assert_allclose(got, want, rtol=0, atol=1e-14 * cond * max(1.0, np.abs(want).max()))

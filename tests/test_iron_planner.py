@@ -81,24 +81,36 @@ def test_a_landing_that_does_not_settle_is_refused(iron):
     assert not land.settles(states.rotations[0], c, so3.rot([0, 0, 1], 2 * SETTLE_TOL) @ R[0])
 
 
-def test_the_plans_are_the_previous_planners(iron):
-    """The speed-up (landings, margins and settling remembered per pose and mask; the settling check stopped once
-    the rotor is trapped) changes no plan: three turns (one of them with blocked steps, whose repeated poses the
-    memory serves) give the statuses, coils and landings (to 1e-6 rad) that the planner before it gave
-    (``tests/iron_plans_before.json``, from git 29370bb)."""
+def _stored_plans_hold(iron, name: str) -> int:
+    """Plan every turn of ``tests/<name>`` and hold it to the stored statuses, coils and landings (1e-6 rad);
+    returns the blocked steps planned."""
     design, own, tuning = iron
-    stored = json.loads((Path(__file__).parent / "iron_plans_before.json").read_text())
+    stored = json.loads((Path(__file__).parent / name).read_text())
     assert stored["design"] == "prototype"
     blocked = 0
-    for name, turn_ in stored["turns"].items():
+    for label, turn_ in stored["turns"].items():
         plan = plan_iron(design, turn_targets(design, turn_["axis"], math.radians(turn_["angle_deg"])), own.model,
                          limits=own.limits, tuning=tuning)
-        assert [s.status for s in plan.steps] == [s["status"] for s in turn_["steps"]], name
+        assert [s.status for s in plan.steps] == [s["status"] for s in turn_["steps"]], label
         assert [{str(k): v for k, v in sorted(s.coils.items())} for s in plan.steps] == \
-            [s["coils"] for s in turn_["steps"]], name
-        assert np.abs(plan.achieved - np.array([s["achieved"] for s in turn_["steps"]])).max() < 1e-6, name
+            [s["coils"] for s in turn_["steps"]], label
+        assert np.abs(plan.achieved - np.array([s["achieved"] for s in turn_["steps"]])).max() < 1e-6, label
         blocked += len(plan.failures)
-    assert blocked > 0  # the memory's case: the rotor held at one pose over several steps
+    return blocked
+
+
+def test_the_plans_are_the_previous_planners(iron):
+    """The speed-ups (landings, margins and settling remembered per pose and mask; the settling check stopped once
+    the rotor is trapped; the iron tables summed per coil; the Newton step by the adjugate) change no plan: three
+    turns (two with blocked steps, whose repeated poses the memory serves) give the statuses, coils and landings
+    (to 1e-6 rad) that the planner before them gave (``tests/iron_plans_before.json``, from git 29370bb)."""
+    assert _stored_plans_hold(iron, "iron_plans_before.json") > 0  # the memory's case: a rotor held over steps
+
+
+def test_the_plans_are_the_previous_planners_on_held_out_turns(iron):
+    """The same on ten seeded random turns that no speed-up was tuned on (15–360°, ``tests/iron_plans_heldout.json``,
+    from git 75d235a: 404 steps, blocked ones among them)."""
+    assert _stored_plans_hold(iron, "iron_plans_heldout.json") > 0
 
 
 def test_the_early_settling_verdict_is_the_full_dwells(iron):

@@ -382,7 +382,7 @@ def pack_terms(terms, constant=0.0) -> Packed | None:
                       c[..., None, :], field.poles_t, field.polarity_row, _SIGNS[sign], constant)
     poles, coils = fields[0].poles, np.ascontiguousarray(terms[0][2], dtype=float)
     if any(f.compiled is None or f.poles is not poles and not np.array_equal(f.poles, poles) for f in fields) \
-            or any(not np.array_equal(t[2], coils) for t in terms[1:]):
+            or any(t[2] is not terms[0][2] and not np.array_equal(t[2], coils) for t in terms[1:]):
         return None
     params, offsets, P = _joined(fields)
     currents = [np.asarray(t[3], dtype=float) for t in terms]

@@ -3,7 +3,9 @@
 Every kernel is ``@njit(cache=True)``: numba compiles a kernel on its first call in a fresh clone (or after its
 file changed) and writes the machine code beside the source (``_fast/__pycache__/*.nbi, *.nbc``; under
 ``NUMBA_CACHE_DIR`` when set, or numba's user-wide cache when the tree is read-only); every later process loads it
-(milliseconds). The first compilation of a process is announced once, through :func:`spherestep.progress.report`
+(milliseconds). numba checks only the source file of the function it loads: a kernel that calls one in another
+file keeps the callee's machine code from when it was cached, so changing a kernel means touching (e.g. the
+docstring of) every file whose kernels call it, or clearing ``_fast/__pycache__``. The first compilation of a process is announced once, through :func:`spherestep.progress.report`
 (the CLI's progress lines; the first compilation while someone listens): "compiling the fast kernels once (about N s; cached for later runs)", N the
 :data:`FIRST_COMPILE_SECONDS` measured (benchmarks/bench_first_run.py, stored in data/bench_first_run.json).
 """

@@ -2,7 +2,9 @@
 
 Step ``ω = Σ_i (e_i·τ/|h_i|) e_i`` over the Hessian's eigenpairs, at most ``max_step`` long, halved until the
 Armijo condition holds (or the decrease is at rounding level and the torque falls); the iteration of the NumPy
-reference in :mod:`spherestep.statics`, step for step, on a :class:`~.terms.Packed` model.
+reference in :mod:`spherestep.statics`, step for step, on a :class:`~.terms.Packed` model, evaluated by
+:func:`.terms.terms_evaluate` (tables on one grid summed per coil; numba caches this file's kernels with that
+function inside, so a change there must touch this file too: :mod:`.compiling`).
 """
 
 from __future__ import annotations
@@ -23,14 +25,27 @@ def _norm(v):
 @njit(cache=True)
 def newton_direction(H, tau, max_step):
     """``ω = Σ_i (e_i·τ/|h_i|) e_i`` over the eigenpairs of ``H`` (``|h_i|`` floored at ``1e-8 max|h|``), shortened
-    to ``|ω| ≤ max_step`` — :func:`spherestep.statics.equilibrium`'s step."""
-    h, e = np.linalg.eigh(H)
-    floor = 1e-8 * max(abs(h[0]), abs(h[1]), abs(h[2])) + 2.2250738585072014e-308
+    to ``|ω| ≤ max_step`` — :func:`spherestep.statics.equilibrium`'s step. Where ``H`` (its lower triangle, as
+    ``eigh`` reads it) is positive definite with ``det H / ‖adj H‖_F ≥ 1e-8 tr H`` — a lower bound of its
+    smallest eigenvalue against an upper bound of its largest, so no floor acts — the sum is ``H⁻¹ τ``, taken
+    as ``adj(H) τ / det H`` (no eigen-decomposition: a descent's iterations near a minimum); else by ``eigh``."""
+    a, b, c, d, e_, f = H[0, 0], H[1, 0], H[2, 0], H[1, 1], H[2, 1], H[2, 2]
+    A00, A01, A02 = d * f - e_ * e_, c * e_ - b * f, b * e_ - c * d
+    A11, A12, A22 = a * f - c * c, b * c - a * e_, a * d - b * b
+    det = a * A00 + b * A01 + c * A02
+    adj = math.sqrt(A00 * A00 + A11 * A11 + A22 * A22 + 2.0 * (A01 * A01 + A02 * A02 + A12 * A12))
     omega = np.zeros(3)
-    for i in range(3):
-        coeff = (e[0, i] * tau[0] + e[1, i] * tau[1] + e[2, i] * tau[2]) / max(abs(h[i]), floor)
-        for a in range(3):
-            omega[a] += coeff * e[a, i]
+    if a > 0.0 and A22 > 0.0 and det > 0.0 and det >= 1e-8 * (a + d + f) * adj:
+        omega[0] = (A00 * tau[0] + A01 * tau[1] + A02 * tau[2]) / det
+        omega[1] = (A01 * tau[0] + A11 * tau[1] + A12 * tau[2]) / det
+        omega[2] = (A02 * tau[0] + A12 * tau[1] + A22 * tau[2]) / det
+    else:
+        h, e = np.linalg.eigh(H)
+        floor = 1e-8 * max(abs(h[0]), abs(h[1]), abs(h[2])) + 2.2250738585072014e-308
+        for i in range(3):
+            coeff = (e[0, i] * tau[0] + e[1, i] * tau[1] + e[2, i] * tau[2]) / max(abs(h[i]), floor)
+            for k in range(3):
+                omega[k] += coeff * e[k, i]
     length = _norm(omega)
     return omega * min(1.0, max_step / max(length, 2.2250738585072014e-308))
 

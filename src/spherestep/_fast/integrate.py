@@ -1,5 +1,7 @@
 """The rotor's Yoshida–Verlet steps under a packed model's torque, compiled (numba):
-:meth:`spherestep.dynamics.Rotor.step` repeated, equal to it to rounding (``tests/test_fast_path.py``).
+:meth:`spherestep.dynamics.Rotor.step` repeated, equal to it to rounding (``tests/test_fast_path.py``). The torque
+is :func:`.terms.terms_evaluate`'s (tables on one grid summed per coil); numba caches this file's kernels with
+that function inside, so a change there must touch this file too (:mod:`.compiling`).
 """
 
 from __future__ import annotations

@@ -21,7 +21,8 @@ type, so that a call costs one array's unboxing and numba's on-disk cache holds 
 
 * ``SPHERE_TABLE`` (``coef (6, m, m), n, halo``): not a zonal kernel but ``F`` itself on a cubed sphere
   (:mod:`.spheretable`; the coupled iron model), ``S`` and ``M`` those of its 0-homogeneous extension; the poles
-  are not visited.
+  are not visited (:func:`.spheretable.sphere_point`: ``locate``, ``contract``, ``chain``; several tables on one
+  grid share ``locate``, :func:`.terms.terms_evaluate`).
 
 ``cut``: poles with ``t < cut`` are left out of the sums — the kernel's tail beyond the cut-off angle, below a
 stated bound (:func:`spherestep.rotor_field.cutoff`; ``cut = −2`` keeps every pole). The poles inside are found

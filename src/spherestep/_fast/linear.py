@@ -16,7 +16,8 @@ of the ambient gradient drops out). :func:`affine_call` picks the evaluator once
   ~30 µs (the general :func:`~.terms.terms_evaluate` takes ~160 µs per term). Equal to the model's
   ``torque_matrix``/``torque`` to ~1e-15 of the largest column (``√(1 − t²)`` and ``sin(acos t)`` differ by
   rounding of ``t``, relative ``1e-16/α²`` within ``α`` of the axis);
-* :func:`torque_affine` otherwise (any kernel, :func:`.kernels._point`).
+* :func:`torque_affine` otherwise (any kernel, :func:`.kernels._point`; a sphere table through
+  :func:`.spheretable.sphere_point`).
 
 What the servo loop's :class:`spherestep.control.ModelCache` and the simulation's plant need when the orientation
 has moved; :func:`first_order` carries a cached ``K``, ``b`` to a nearby orientation with their derivatives (the

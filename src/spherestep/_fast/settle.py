@@ -5,7 +5,8 @@ The steps are :func:`.integrate.integrate`'s (:meth:`spherestep.dynamics.Rotor.s
 after each, the rotor is *trapped* when it lies within ``radius`` of the minimum ``R_min`` and its energy above
 the minimum, ``½ I|ω|² + E(R) − E(R_min)``, is at most ``bound``: damping and friction only take energy away, so
 it stays in that sublevel set of the well (the caller chooses ``bound`` so the set lies within ``radius`` where
-the well is quadratic).
+the well is quadratic). The energy and torque are :func:`.terms.terms_evaluate`'s (numba caches this file's
+kernels with it inside, so a change there must touch this file too: :mod:`.compiling`).
 """
 
 from __future__ import annotations

@@ -56,11 +56,16 @@ def _weights(t):
     return w, d, e
 
 
-@njit(cache=True, fastmath={"contract", "reassoc", "nsz", "arcp"})
-def sphere_point(coef, m, inv_delta, halo, x0, x1, x2, order, S, M):
-    """``F`` at the unit vector ``x`` from the flat coefficients ``coef (6 m m,)``; for ``order ≥ 1`` the ambient
-    gradient into ``S (3,)``, for ``order = 2`` the upper triangle of the ambient second derivative into ``M (6,)``
-    (00, 01, 02, 11, 12, 22) — of ``F(y/|y|)`` (module docstring)."""
+_FAST = {"contract", "reassoc", "nsz", "arcp"}
+
+
+@njit(cache=True, fastmath=_FAST)
+def locate(m, inv_delta, halo, x0, x1, x2):
+    """Where the unit vector ``x`` falls in a table of ``m × m`` nodes per face: ``(base, i, s, p, a, b, wu, du,
+    eu, wv, dv, ev)`` — the flat index of the 4 × 4 block of coefficients around it, its face's axis ``i``, sign
+    ``s`` and ``p = s x_i``, its chart coordinates ``a = x_j/p``, ``b = x_k/p`` and the B-spline weights (and
+    their derivatives) of the block's rows and columns (module docstring). Tables with the same ``m, δ, halo``
+    share it: each table is then one :func:`contract`."""
     ax0, ax1, ax2 = abs(x0), abs(x1), abs(x2)
     if ax0 >= ax1 and ax0 >= ax2:
         i, xi, xj, xk = 0, x0, x1, x2
@@ -78,56 +83,79 @@ def sphere_point(coef, m, inv_delta, halo, x0, x1, x2, order, S, M):
     nv = min(max(int(v), 1), m - 3)
     wu, du, eu = _weights(u - nu)
     wv, dv, ev = _weights(v - nv)
-    base = f * m * m + (nu - 1) * m + (nv - 1)
+    return f * m * m + (nu - 1) * m + (nv - 1), i, s, p, a, b, wu, du, eu, wv, dv, ev
+
+
+@njit(cache=True, fastmath=_FAST)
+def contract(coef, start, m, where, order):
+    """``(F, F_u, F_v, F_uu, F_uv, F_vv)`` (derivatives in node units, 0 beyond ``order``) of the table whose
+    coefficients start at ``coef[start]``, at :func:`locate`'s ``where``."""
+    base, wu, du, eu, wv, dv, ev = where[0], where[6], where[7], where[8], where[9], where[10], where[11]
     F = Fu = Fv = Fuu = Fuv = Fvv = 0.0
     for r in range(4):
-        row = base + r * m
-        wr, dr, er_ = wu[r], du[r], eu[r]
+        row = start + base + r * m
         c0, c1, c2, c3 = coef[row], coef[row + 1], coef[row + 2], coef[row + 3]
         cw = c0 * wv[0] + c1 * wv[1] + c2 * wv[2] + c3 * wv[3]
-        F += wr * cw
+        F += wu[r] * cw
         if order >= 1:
             cd = c0 * dv[0] + c1 * dv[1] + c2 * dv[2] + c3 * dv[3]
-            Fu += dr * cw
-            Fv += wr * cd
+            Fu += du[r] * cw
+            Fv += wu[r] * cd
             if order >= 2:
-                Fuu += er_ * cw
-                Fuv += dr * cd
-                Fvv += wr * (c0 * ev[0] + c1 * ev[1] + c2 * ev[2] + c3 * ev[3])
-    if order == 0:
-        return F
-    # chain rule: u = (ξ + π/4)/δ + halo, ξ = atan(a), a = y_j/p (p = s y_i); the vectors in (i, j, k) order
+                Fuu += eu[r] * cw
+                Fuv += du[r] * cd
+                Fvv += wu[r] * (c0 * ev[0] + c1 * ev[1] + c2 * ev[2] + c3 * ev[3])
+    return F, Fu, Fv, Fuu, Fuv, Fvv
+
+
+@njit(cache=True, fastmath=_FAST)
+def chain(where, inv_delta, Fu, Fv, Fuu, Fuv, Fvv, order, S, M):
+    """The ambient gradient into ``S (3,)`` (``order ≥ 1``) and the upper triangle of the ambient second
+    derivative into ``M (6,)`` (``order = 2``; 00, 01, 02, 11, 12, 22) from :func:`contract`'s node-unit
+    derivatives at :func:`locate`'s ``where`` (the module docstring's chain rule; scalar arithmetic, no
+    temporaries)."""
+    i, s, p, a, b = where[1], where[2], where[3], where[4], where[5]
+    # u = (ξ + π/4)/δ + halo, ξ = atan(a), a = y_j/p (p = s y_i); the vectors in (i, j, k) order
     ka, kb = 1.0 / (1.0 + a * a), 1.0 / (1.0 + b * b)
-    ga = (-a * s / p, 1.0 / p, 0.0)  # ∇a
-    gb = (-b * s / p, 0.0, 1.0 / p)  # ∇b
+    ga0, ga1 = -a * s / p, 1.0 / p  # ∇a = (ga0, ga1, 0)
+    gb0, gb2 = -b * s / p, 1.0 / p  # ∇b = (gb0, 0, gb2)
     Fx, Fy = Fu * inv_delta, Fv * inv_delta  # ∂F/∂ξ, ∂F/∂η
-    gx = (ka * ga[0], ka * ga[1], ka * ga[2])  # ∇ξ
-    gy = (kb * gb[0], kb * gb[1], kb * gb[2])  # ∇η
-    L = (Fx * gx[0] + Fy * gy[0], Fx * gx[1] + Fy * gy[1], Fx * gx[2] + Fy * gy[2])
-    ii, jj, kk = i, (i + 1) % 3, (i + 2) % 3
-    S[ii], S[jj], S[kk] = L[0], L[1], L[2]
+    gx0, gx1 = ka * ga0, ka * ga1  # ∇ξ = (gx0, gx1, 0)
+    gy0, gy2 = kb * gb0, kb * gb2  # ∇η = (gy0, 0, gy2)
+    jj, kk = (i + 1) % 3, (i + 2) % 3
+    S[i], S[jj], S[kk] = Fx * gx0 + Fy * gy0, Fx * gx1, Fy * gy2
     if order >= 2:
         Fxx, Fxy, Fyy = Fuu * inv_delta * inv_delta, Fuv * inv_delta * inv_delta, Fvv * inv_delta * inv_delta
-        H = np.empty((3, 3))
-        for r in range(3):
-            er = 1.0 if r == 0 else 0.0
-            for c in range(r, 3):
-                ec = 1.0 if c == 0 else 0.0
-                # ∇²a = −(s/p)(e_i ∇aᵀ + ∇a e_iᵀ); ∇²ξ = k_a ∇²a − 2 a k_a² ∇a ∇aᵀ
-                haa = -(s / p) * (er * ga[c] + ga[r] * ec)
-                hbb = -(s / p) * (er * gb[c] + gb[r] * ec)
-                hx = ka * haa - 2.0 * a * ka * ka * ga[r] * ga[c]
-                hy = kb * hbb - 2.0 * b * kb * kb * gb[r] * gb[c]
-                val = (Fxx * gx[r] * gx[c] + Fxy * (gx[r] * gy[c] + gy[r] * gx[c]) + Fyy * gy[r] * gy[c]
-                       + Fx * hx + Fy * hy)
-                H[r, c] = val
-                H[c, r] = val
-        idx = (ii, jj, kk)
-        G = np.empty((3, 3))
-        for r in range(3):
-            for c in range(3):
-                G[idx[r], idx[c]] = H[r, c]
-        M[0], M[1], M[2], M[3], M[4], M[5] = G[0, 0], G[0, 1], G[0, 2], G[1, 1], G[1, 2], G[2, 2]
+        # ∇²a = −(s/p)(e_i ∇aᵀ + ∇a e_iᵀ); ∇²ξ = k_a ∇²a − 2 a k_a² ∇a ∇aᵀ (likewise η); local (i, j, k) entries
+        q = -(s / p)
+        ca, cb = 2.0 * a * ka * ka, 2.0 * b * kb * kb
+        hx00, hx01, hx11 = ka * q * 2.0 * ga0 - ca * ga0 * ga0, ka * q * ga1 - ca * ga0 * ga1, -ca * ga1 * ga1
+        hy00, hy02, hy22 = kb * q * 2.0 * gb0 - cb * gb0 * gb0, kb * q * gb2 - cb * gb0 * gb2, -cb * gb2 * gb2
+        h00 = Fxx * gx0 * gx0 + 2.0 * Fxy * gx0 * gy0 + Fyy * gy0 * gy0 + Fx * hx00 + Fy * hy00
+        h01 = Fxx * gx0 * gx1 + Fxy * gy0 * gx1 + Fx * hx01
+        h02 = Fxy * gx0 * gy2 + Fyy * gy0 * gy2 + Fy * hy02
+        h11 = Fxx * gx1 * gx1 + Fx * hx11
+        h12 = Fxy * gx1 * gy2
+        h22 = Fyy * gy2 * gy2 + Fy * hy22
+        # to the fixed axes: local (r, c) is global ((i + r) % 3, (i + c) % 3)
+        if i == 0:
+            M[0], M[1], M[2], M[3], M[4], M[5] = h00, h01, h02, h11, h12, h22
+        elif i == 1:  # local 0, 1, 2 = global 1, 2, 0
+            M[0], M[1], M[2], M[3], M[4], M[5] = h22, h02, h12, h00, h01, h11
+        else:  # local 0, 1, 2 = global 2, 0, 1
+            M[0], M[1], M[2], M[3], M[4], M[5] = h11, h12, h01, h22, h02, h00
+
+
+@njit(cache=True, fastmath=_FAST)
+def sphere_point(coef, m, inv_delta, halo, x0, x1, x2, order, S, M):
+    """``F`` at the unit vector ``x`` from the flat coefficients ``coef (6 m m,)``; for ``order ≥ 1`` the ambient
+    gradient into ``S (3,)``, for ``order = 2`` the upper triangle of the ambient second derivative into ``M (6,)``
+    (00, 01, 02, 11, 12, 22) — of ``F(y/|y|)`` (module docstring): :func:`locate`, :func:`contract`,
+    :func:`chain`."""
+    where = locate(m, inv_delta, halo, x0, x1, x2)
+    F, Fu, Fv, Fuu, Fuv, Fvv = contract(coef, 0, m, where, order)
+    if order >= 1:
+        chain(where, inv_delta, Fu, Fv, Fuu, Fuv, Fvv, order, S, M)
     return F
 
 

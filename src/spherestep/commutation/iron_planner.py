@@ -252,8 +252,10 @@ def _masks(design, states, target, here, current, near, reach, candidates, max_c
     fits = np.count_nonzero(pushed, axis=1) <= most
     masks = np.concatenate([current[None], sets, pushed[fits & (np.count_nonzero(push, axis=1) > 0)],
                             _pulls(design, here, target, most)])
-    _, first = np.unique(masks, axis=0, return_index=True)
-    return masks[np.sort(first)]
+    first = {}  # each distinct mask's first row (the bytes of ``+ 0.0``: −0 and 0 are one current)
+    for b, row in enumerate(masks + 0.0):
+        first.setdefault(row.tobytes(), b)
+    return masks[sorted(first.values())]
 
 
 @single_blas_thread
