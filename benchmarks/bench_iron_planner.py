@@ -41,7 +41,8 @@ BASELINE = "29370bb"
 def measure(design_file: str | None, trials: int) -> tuple[list, list]:
     """``(rows, plans)``: per trial ``(wall s, steps/s, CPU s, steps/CPU s, steps, blocked)`` and the plan's steps
     as ``(status, coils, achieved rounded to 1e-9)``."""
-    from spherestep.commutation import iron_tuning, plan_iron, turn_targets
+    from spherestep.commutation import plan_iron, turn_targets
+    from spherestep.dynamics import iron_tuning
     from spherestep.magnetics import design_model
     from spherestep.motor import MotorDesign, prototype
 
