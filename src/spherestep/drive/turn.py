@@ -118,7 +118,7 @@ def relay_plan(design, axis, angle: float, steps: int | None = None, planner: st
 
 
 class Turn:
-    """A turn prepared once and driven any number of ways (:func:`drive_turn`, :func:`~.compare.compare_drives`):
+    """A turn prepared once and driven any number of ways (:func:`~.modes.drive_turn`, :func:`~.compare.compare_drives`):
     the design, the unit ``axis``, ``angle`` (rad), the ``chosen`` model; the geometric ``plan`` and the relay
     ``tuning`` are made on first use."""
 
