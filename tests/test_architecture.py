@@ -31,7 +31,6 @@ FLOORS = (
 FILE_CIRCLES = {
     ("spherestep.control.time_optimal", "spherestep.control.trajectory"): "a turn planned in time",
     ("spherestep.magnetics._ironmap", "spherestep.magnetics._ironscale"): "the iron model and its scaled tables",
-    ("spherestep.synthesis.run", "spherestep.synthesis.tasks"): "the synthesis run and the tasks it submits",
 }
 BACKENDS = {"LockstepLink", "DriveLink", "PtyDevice", "MotorPty", "Simulated", "DryRun", "Serial", "SerialPort",
             "EmulatedMotor", "RelayLink"}
