@@ -114,3 +114,20 @@ def test_drive_turn_refuses_a_time_below_the_bang_bang_bound(proto):
 
     with pytest.raises(InputError, match="^duration must be at least the bang-bang bound"):
         drive_turn(proto, [0, 0, 1], math.radians(10), model=design_model(proto, "air"), duration=1e-3)
+
+
+def test_a_sessions_kind_is_chosen_in_one_place():
+    """``drive.connect.session_kind``: the selector's kind for a servo session (what servo_session builds and what
+    calibration's current lag is read by), and its refusals naming the field."""
+    from spherestep.drive.connect import KINDS, session_kind
+
+    assert session_kind("/dev/ttyACM0") == "port"
+    assert session_kind(emulate=True) == "pty" and session_kind(emulate=True, lockstep=True) == "lockstep"
+    assert session_kind(emulate=True, firmware="qemu") == "qemu"
+    assert {"port", "pty", "lockstep", "qemu"} <= set(KINDS)
+    for kwargs, name in (({}, "port"), ({"port": "/dev/x", "emulate": True}, "port"),
+                         ({"port": "/dev/x", "lockstep": True}, "lockstep"),
+                         ({"emulate": True, "lockstep": True, "firmware": "qemu"}, "firmware"),
+                         ({"emulate": True, "firmware": "c++"}, "firmware")):
+        with pytest.raises(InputError, match=f"^{name} must be"):
+            session_kind(**kwargs)
