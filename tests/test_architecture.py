@@ -8,6 +8,7 @@ The import graph is read with ``ast`` from every module under ``src/spherestep``
 from __future__ import annotations
 
 import ast
+import functools
 import re
 from pathlib import Path
 
@@ -39,6 +40,12 @@ ELECTRICS = SRC / "electrics.py"
 CURRENTISH = re.compile(r"(^|_)(ma|amps?|amperes?|currents?)($|_)|nominal|current", re.IGNORECASE)
 
 
+@functools.cache
+def _tree(path: Path) -> ast.Module:
+    """The parsed source of ``path``, read once per test session (every check walks the same files)."""
+    return ast.parse(path.read_text(encoding="utf-8"))
+
+
 def _module(path: Path) -> tuple[str, bool]:
     """``(dotted name, is a package's __init__)`` of a file under ``src``."""
     parts = list(path.relative_to(SRC.parent).with_suffix("").parts)
@@ -55,13 +62,14 @@ def _type_only(tree) -> set[int]:
     return out
 
 
+@functools.cache
 def _imports(path: Path) -> list[tuple[str, int]]:
     """Every ``spherestep`` module (or name in one) ``path`` imports when it runs, anywhere in the file (inside
     functions too), with its line; an import under ``if TYPE_CHECKING:`` is for annotations only and not counted."""
     name, package = _module(path)
     base = name.split(".") if package else name.split(".")[:-1]
     out = []
-    tree = ast.parse(path.read_text(encoding="utf-8"))
+    tree = _tree(path)
     skip = _type_only(tree)
     for node in ast.walk(tree):
         if id(node) in skip:
@@ -251,7 +259,7 @@ def test_the_motor_floor_has_no_package_cycle():
 
 def _calls(path: Path):
     """``(name, line)`` of every call by a bare or dotted name in ``path`` (docstrings and comments ignored)."""
-    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+    for node in ast.walk(_tree(path)):
         if isinstance(node, ast.Call):
             f = node.func
             if isinstance(f, ast.Name):
@@ -284,7 +292,7 @@ def conversions(path: Path) -> list[str]:
     current-like operand (``ma``, ``amps``, ``current``...) times or over 1000 (a bare ``i`` is too common a
     name to judge by)."""
     out = []
-    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+    for node in ast.walk(_tree(path)):
         if not isinstance(node, ast.BinOp) or not isinstance(node.op, (ast.Mult, ast.Div, ast.Pow)):
             continue
         sides = (node.left, node.right)
@@ -359,9 +367,9 @@ def test_one_quaternion_order_in_every_file():
 def test_numba_lives_in_the_fast_path():
     """Only ``spherestep._fast`` imports numba (docs/conventions.md, the fast path)."""
     found = [f"{p.relative_to(ROOT)}:{line}" for p in SRC.rglob("*.py") if "_fast" not in p.parts
-             for target, line in [(a.name, n.lineno) for n in ast.walk(ast.parse(p.read_text(encoding="utf-8")))
+             for target, line in [(a.name, n.lineno) for n in ast.walk(_tree(p))
                                   if isinstance(n, ast.Import) for a in n.names]
-             + [(n.module or "", n.lineno) for n in ast.walk(ast.parse(p.read_text(encoding="utf-8")))
+             + [(n.module or "", n.lineno) for n in ast.walk(_tree(p))
                 if isinstance(n, ast.ImportFrom)]
              if target.split(".")[0] == "numba"]
     assert not found, "numba imported outside spherestep._fast: " + "; ".join(found)
@@ -429,7 +437,7 @@ def test_no_compiled_twins_on_controls_surface():
     ``_warm`` hook; the allocation's compiled entry points are ``_fast.allocation``'s (``solve_box``,
     ``solve_reachable``, ``warm``)."""
     found = [f"{p.relative_to(ROOT)}:{n.lineno} {n.name}" for p in (SRC / "control").rglob("*.py")
-             for n in ast.walk(ast.parse(p.read_text(encoding="utf-8")))
+             for n in ast.walk(_tree(p))
              if isinstance(n, ast.FunctionDef) and (n.name.endswith("_compiled") or n.name.lstrip("_") == "warm")]
     assert not found, "compiled twins in control: " + "; ".join(found)
     from spherestep._fast import allocation
