@@ -19,7 +19,7 @@ import numpy as np
 
 import spherestep.drive.session as session
 from spherestep.drive.hardware import drive_on_hardware
-from spherestep.drive.turn import choose_model
+from spherestep.drive.turn import Turn, choose_model
 from spherestep.motor import prototype
 
 AXIS, ANGLE = (1.0, 0.5, 2.0), 360.0
@@ -28,8 +28,8 @@ AXIS, ANGLE = (1.0, 0.5, 2.0), 360.0
 def one(design, chosen, lead: float, lockstep: bool) -> tuple[float, float, int, int]:
     """``(max tracking °, final °, deadlines missed, times slowed)`` of one run with the law's ``lead`` periods."""
     session.LEAD = lead
-    r = drive_on_hardware(design, AXIS, math.radians(ANGLE), chosen, duration=None, port=None, emulate=True,
-                          rate=500.0, tolerance=math.radians(0.05), **({"lockstep": True} if lockstep else {}))
+    r = drive_on_hardware(Turn(design, AXIS, math.radians(ANGLE), chosen, math.radians(0.05)), duration=None,
+                          port=None, emulate=True, rate=500.0, **({"lockstep": True} if lockstep else {}))
     d = r.details
     if d.outcome != "done":
         print(f"  run ended {d.outcome}: {d.message}")

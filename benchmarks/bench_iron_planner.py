@@ -44,7 +44,11 @@ BASELINE = "29370bb,75d235a"
 def measure(design_file: str | None, trials: int) -> tuple[list, list]:
     """``(rows, plans)``: per trial ``(wall s, steps/s, CPU s, steps/CPU s, steps, blocked)`` and the plan's steps
     as ``(status, coils, achieved)``."""
-    from spherestep.commutation import iron_tuning, plan_iron, turn_targets
+    from spherestep.commutation import plan_iron, turn_targets
+    try:  # where the tuning lives since issue 36's untying; the baselines' trees had it in commutation
+        from spherestep.dynamics import iron_tuning
+    except ImportError:
+        from spherestep.commutation import iron_tuning
     from spherestep.magnetics import design_model
     from spherestep.motor import MotorDesign, prototype
 

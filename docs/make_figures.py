@@ -228,7 +228,8 @@ def iron_basins(outdir: Path) -> Path:
     import math
 
     from spherestep import so3
-    from spherestep.commutation import iron_tuning, plan_iron, turn_targets
+    from spherestep.commutation import plan_iron, turn_targets
+    from spherestep.dynamics import iron_tuning
     from spherestep.magnetics import design_model
     from spherestep.motor import prototype
     from spherestep.statics import descend

@@ -8,6 +8,7 @@ The import graph is read with ``ast`` from every module under ``src/spherestep``
 from __future__ import annotations
 
 import ast
+import functools
 import re
 from pathlib import Path
 
@@ -16,12 +17,33 @@ import pytest
 ROOT = Path(__file__).resolve().parents[1]
 SRC = ROOT / "src" / "spherestep"
 MIDDLE = ("electrics", "magnetics", "sensing", "control", "dynamics", "hardware", "drive")
-MOTOR_FLOOR = ("sphere", "so3", "packing", "harmonics", "motor", "design_file", "statics", "rotor_field", "potential")
+MOTOR_FLOOR = ("sphere", "so3", "packing", "harmonics", "motor", "design_file", "statics", "rotor_field", "potential",
+               "commutation")
+# The house map (docs/conventions.md), bottom to top: a room imports rooms of its own floor or below, never above.
+FLOORS = (
+    ("errors", "checks", "units", "lazy", "atomic", "outputs", "progress", "channels", "interrupts"),  # plumbing
+    ("sphere", "so3", "packing", "harmonics", "_fast"),  # geometry
+    ("motor", "design_file", "statics", "rotor_field", "potential", "commutation", "fig10"),  # the motor
+    ("electrics",), ("magnetics",), ("sensing",), ("control",), ("dynamics",), ("hardware",), ("drive",),
+    ("gallery", "explore", "synthesis", "report", "plots", "demo", "export", "cli"),  # applications
+)
+# File circles (two or more modules importing one another, imports inside functions counted), each declared with
+# the one concept its files share (docs/conventions.md, the house map's declared exceptions).
+FILE_CIRCLES = {
+    ("spherestep.control.time_optimal", "spherestep.control.trajectory"): "a turn planned in time",
+    ("spherestep.magnetics._ironmap", "spherestep.magnetics._ironscale"): "the iron model and its scaled tables",
+}
 BACKENDS = {"LockstepLink", "DriveLink", "PtyDevice", "MotorPty", "Simulated", "DryRun", "Serial", "SerialPort",
             "EmulatedMotor", "RelayLink"}
 SELECTOR = SRC / "drive" / "connect.py"
 ELECTRICS = SRC / "electrics.py"
 CURRENTISH = re.compile(r"(^|_)(ma|amps?|amperes?|currents?)($|_)|nominal|current", re.IGNORECASE)
+
+
+@functools.cache
+def _tree(path: Path) -> ast.Module:
+    """The parsed source of ``path``, read once per test session (every check walks the same files)."""
+    return ast.parse(path.read_text(encoding="utf-8"))
 
 
 def _module(path: Path) -> tuple[str, bool]:
@@ -40,13 +62,14 @@ def _type_only(tree) -> set[int]:
     return out
 
 
+@functools.cache
 def _imports(path: Path) -> list[tuple[str, int]]:
     """Every ``spherestep`` module (or name in one) ``path`` imports when it runs, anywhere in the file (inside
     functions too), with its line; an import under ``if TYPE_CHECKING:`` is for annotations only and not counted."""
     name, package = _module(path)
     base = name.split(".") if package else name.split(".")[:-1]
     out = []
-    tree = ast.parse(path.read_text(encoding="utf-8"))
+    tree = _tree(path)
     skip = _type_only(tree)
     for node in ast.walk(tree):
         if id(node) in skip:
@@ -116,6 +139,96 @@ def test_the_cycle_finder_finds_a_planted_cycle():
     assert _cycle({("a", "b"): [], ("b", "c"): [], ("a", "c"): []}) is None
 
 
+def rooms() -> list[str]:
+    """Every top-level module and package under ``src/spherestep``."""
+    return sorted({_room(_module(p)[0]) for p in SRC.rglob("*.py")} - {None})
+
+
+def upward(edges, floors=FLOORS) -> list[str]:
+    """The arrows of ``edges`` that point to a higher floor than their room's, ``"a->b at module:line"``."""
+    floor = {room: k for k, names in enumerate(floors) for room in names}
+    return [f"{a}->{b} at {', '.join(where)}" for (a, b), where in sorted(edges.items()) if floor[b] > floor[a]]
+
+
+def test_every_room_is_on_a_floor_and_none_imports_upward():
+    """The house map covers every room (a new one must be placed), and no import — inside a function or not —
+    points to a higher floor. The checker can fail: a planted upward arrow is reported."""
+    placed = {room for names in FLOORS for room in names}
+    assert set(rooms()) == placed, (sorted(set(rooms()) - placed), sorted(placed - set(rooms())))
+    found = upward(package_graph(tuple(rooms())))
+    assert not found, "import to a higher floor: " + "; ".join(found)
+    assert upward({("commutation", "dynamics"): ["planted:1"], ("dynamics", "commutation"): []}) == \
+        ["commutation->dynamics at planted:1"]
+
+
+def test_no_package_cycle_anywhere():
+    """No cycle among all the rooms of ``src/spherestep``, function-level imports counted (issue 36): the
+    commutation room's iron planner once imported dynamics (its settling check) and hardware (its heat) while both
+    import the plan; its checks are now handed in (``Tuning.released``, ``ThermalLimits.guard``)."""
+    edges = package_graph(tuple(rooms()))
+    cycle = _cycle(edges)
+    assert cycle is None, "package cycle " + " -> ".join(cycle) + ": " + "; ".join(
+        f"{a}->{b} at {', '.join(edges[(a, b)])}" for a, b in zip(cycle, cycle[1:]))
+
+
+def file_graph() -> dict[str, set[str]]:
+    """Module → the modules it imports (inside functions too; a name imported from a package resolved to the
+    package's ``__init__``, which is left out as a target: a package re-exports, it is not a concept)."""
+    modules = {_module(p)[0]: _module(p)[1] for p in SRC.rglob("*.py")}
+    succ: dict[str, set[str]] = {}
+    for p in SRC.rglob("*.py"):
+        name = _module(p)[0]
+        for target, _ in _imports(p):
+            parts = target.split(".")
+            while parts and ".".join(parts) not in modules:
+                parts.pop()
+            m = ".".join(parts)
+            if m and m != name and not modules[m]:
+                succ.setdefault(name, set()).add(m)
+    return succ
+
+
+def circles(succ) -> list[tuple[str, ...]]:
+    """The strongly connected sets of two or more nodes of ``succ`` (Tarjan), each sorted, in sorted order."""
+    index: dict[str, int] = {}
+    low: dict[str, int] = {}
+    stack: list[str] = []
+    out = []
+
+    def visit(v):
+        index[v] = low[v] = len(index)
+        stack.append(v)
+        for w in sorted(succ.get(v, ())):
+            if w not in index:
+                visit(w)
+                low[v] = min(low[v], low[w])
+            elif w in stack:
+                low[v] = min(low[v], index[w])
+        if low[v] == index[v]:
+            comp = []
+            while True:
+                w = stack.pop()
+                comp.append(w)
+                if w == v:
+                    break
+            if len(comp) > 1:
+                out.append(tuple(sorted(comp)))
+
+    for v in sorted(succ):
+        if v not in index:
+            visit(v)
+    return sorted(out)
+
+
+def test_file_circles_are_only_the_declared_ones():
+    """Import-level file circles only where the files are one concept (issue 36): the circles found are exactly
+    :data:`FILE_CIRCLES`, each two files. The finder can fail: a planted three-file circle is found."""
+    assert circles({"a": {"b"}, "b": {"c"}, "c": {"a"}, "d": {"a"}}) == [("a", "b", "c")]
+    found = circles(file_graph())
+    assert found == sorted(FILE_CIRCLES), [c for c in found if c not in FILE_CIRCLES] or sorted(FILE_CIRCLES)
+    assert all(len(c) == 2 for c in found)
+
+
 def test_the_middle_floor_has_no_package_cycle():
     """No cycle among electrics, magnetics, sensing, control, dynamics, hardware and drive, function-level imports
     counted; the arrows that once tied the knot are gone (control → dynamics/drive/hardware, magnetics → control,
@@ -146,7 +259,7 @@ def test_the_motor_floor_has_no_package_cycle():
 
 def _calls(path: Path):
     """``(name, line)`` of every call by a bare or dotted name in ``path`` (docstrings and comments ignored)."""
-    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+    for node in ast.walk(_tree(path)):
         if isinstance(node, ast.Call):
             f = node.func
             if isinstance(f, ast.Name):
@@ -179,7 +292,7 @@ def conversions(path: Path) -> list[str]:
     current-like operand (``ma``, ``amps``, ``current``...) times or over 1000 (a bare ``i`` is too common a
     name to judge by)."""
     out = []
-    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+    for node in ast.walk(_tree(path)):
         if not isinstance(node, ast.BinOp) or not isinstance(node.op, (ast.Mult, ast.Div, ast.Pow)):
             continue
         sides = (node.left, node.right)
@@ -254,9 +367,9 @@ def test_one_quaternion_order_in_every_file():
 def test_numba_lives_in_the_fast_path():
     """Only ``spherestep._fast`` imports numba (docs/conventions.md, the fast path)."""
     found = [f"{p.relative_to(ROOT)}:{line}" for p in SRC.rglob("*.py") if "_fast" not in p.parts
-             for target, line in [(a.name, n.lineno) for n in ast.walk(ast.parse(p.read_text(encoding="utf-8")))
+             for target, line in [(a.name, n.lineno) for n in ast.walk(_tree(p))
                                   if isinstance(n, ast.Import) for a in n.names]
-             + [(n.module or "", n.lineno) for n in ast.walk(ast.parse(p.read_text(encoding="utf-8")))
+             + [(n.module or "", n.lineno) for n in ast.walk(_tree(p))
                 if isinstance(n, ast.ImportFrom)]
              if target.split(".")[0] == "numba"]
     assert not found, "numba imported outside spherestep._fast: " + "; ".join(found)
@@ -324,9 +437,29 @@ def test_no_compiled_twins_on_controls_surface():
     ``_warm`` hook; the allocation's compiled entry points are ``_fast.allocation``'s (``solve_box``,
     ``solve_reachable``, ``warm``)."""
     found = [f"{p.relative_to(ROOT)}:{n.lineno} {n.name}" for p in (SRC / "control").rglob("*.py")
-             for n in ast.walk(ast.parse(p.read_text(encoding="utf-8")))
+             for n in ast.walk(_tree(p))
              if isinstance(n, ast.FunctionDef) and (n.name.endswith("_compiled") or n.name.lstrip("_") == "warm")]
     assert not found, "compiled twins in control: " + "; ".join(found)
     from spherestep._fast import allocation
 
     assert all(callable(getattr(allocation, name)) for name in ("solve_box", "solve_reachable", "warm"))
+
+
+MAX_LINES = 600
+
+
+def test_no_module_over_600_lines():
+    """Rooms of one concern (issue 36 §6): no module in src/ or scripts/ over :data:`MAX_LINES` lines."""
+    long = {f"{p.relative_to(ROOT)}": n for p in _sources()
+            if (n := len(p.read_text(encoding="utf-8").splitlines())) > MAX_LINES}
+    assert not long, f"over {MAX_LINES} lines (split by concept): {long}"
+
+
+def test_the_top_level_lists_only_the_users_rooms():
+    """The namespace advertises the rooms a user works with (``ROOMS``); every other top-level module is plumbing
+    (``PLUMBING``: reachable by its path, not advertised), the private fast path or the command line."""
+    import spherestep
+
+    assert not set(spherestep.ROOMS) & set(spherestep.PLUMBING)
+    assert set(rooms()) == set(spherestep.ROOMS) | set(spherestep.PLUMBING) | {"_fast", "cli"}
+    assert spherestep.__all__ == list(spherestep.ROOMS) and not set(spherestep.PLUMBING) & set(dir(spherestep))

@@ -50,11 +50,36 @@ def test_a_result_never_claims_an_arrival_it_did_not_have():
     ({"mode": "settled", "backend": "port", "port": "/dev/null"}, "mode"),
     ({"mode": "servo", "backend": "port"}, "port"),
     ({"mode": "servo", "backend": "simulated", "port": "/dev/null"}, "port"),
+    ({"mode": "servo", "backend": "port", "port": "/dev/null", "firmware": "qemu"}, "firmware"),
+    ({"mode": "servo", "backend": "simulated", "hold": 1.0}, "hold"),
+    ({"mode": "servo", "backend": "simulated", "end": "park"}, "end"),
+    ({"mode": "servo", "backend": "port", "port": "/dev/null", "plant_error": object()}, "plant_error"),
 ])
 def test_options_that_do_not_apply_are_refused_by_name(kwargs, name):
     mode, backend = kwargs.pop("mode"), kwargs.pop("backend")
     with pytest.raises(InputError, match=f"^{name} must be"):
         check_options(mode, backend, **kwargs)
+
+
+def test_every_mode_is_one_lookup_in_the_registry(proto, monkeypatch):
+    """How a turn is driven is one registry (issue 36): each mode names the backends it runs on and has its own
+    tolerance; ``drive_turn`` checks the options, prepares the turn and calls exactly the registered runner, with
+    the options it was given (a spy in place of the settled relay steps)."""
+    from spherestep.drive import BACKENDS, DRIVE_MODES, MODES
+    from spherestep.drive.judgement import MODE_TOLERANCE, RELAY_TOLERANCE, SERVO_TOLERANCE
+
+    assert MODES == ("servo", "ramped", "settled") and set(MODE_TOLERANCE) == set(MODES)
+    assert {m: tuple(DRIVE_MODES[m].runs) for m in MODES} == {"servo": BACKENDS, "ramped": ("simulated",),
+                                                              "settled": ("simulated",)}
+    assert MODE_TOLERANCE == {"servo": SERVO_TOLERANCE, "ramped": RELAY_TOLERANCE, "settled": RELAY_TOLERANCE}
+    seen = []
+    runs = dict(DRIVE_MODES["settled"].runs, simulated=lambda job, o: seen.append((job, o)) or "ran")
+    monkeypatch.setitem(DRIVE_MODES, "settled", type(DRIVE_MODES["settled"])("settled", runs))
+    from spherestep.magnetics import design_model
+
+    assert drive_turn(proto, [0, 0, 1], 0.3, mode="settled", model=design_model(proto, "air"), rates=(1.0,)) == "ran"
+    (job, options), = seen
+    assert job.angle == 0.3 and job.tolerance("settled") == RELAY_TOLERANCE and options.rates == (1.0,)
 
 
 def test_the_fixed_time_keeps_the_demo_turn_and_its_acceleration():
@@ -89,3 +114,20 @@ def test_drive_turn_refuses_a_time_below_the_bang_bang_bound(proto):
 
     with pytest.raises(InputError, match="^duration must be at least the bang-bang bound"):
         drive_turn(proto, [0, 0, 1], math.radians(10), model=design_model(proto, "air"), duration=1e-3)
+
+
+def test_a_sessions_kind_is_chosen_in_one_place():
+    """``drive.connect.session_kind``: the selector's kind for a servo session (what servo_session builds and what
+    calibration's current lag is read by), and its refusals naming the field."""
+    from spherestep.drive.connect import KINDS, session_kind
+
+    assert session_kind("/dev/ttyACM0") == "port"
+    assert session_kind(emulate=True) == "pty" and session_kind(emulate=True, lockstep=True) == "lockstep"
+    assert session_kind(emulate=True, firmware="qemu") == "qemu"
+    assert {"port", "pty", "lockstep", "qemu"} <= set(KINDS)
+    for kwargs, name in (({}, "port"), ({"port": "/dev/x", "emulate": True}, "port"),
+                         ({"port": "/dev/x", "lockstep": True}, "lockstep"),
+                         ({"emulate": True, "lockstep": True, "firmware": "qemu"}, "firmware"),
+                         ({"emulate": True, "firmware": "c++"}, "firmware")):
+        with pytest.raises(InputError, match=f"^{name} must be"):
+            session_kind(**kwargs)

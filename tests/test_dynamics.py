@@ -13,7 +13,7 @@ import pytest
 from spherestep import so3
 from spherestep.commutation import about_axis, plan_geometric
 from spherestep.dynamics import Rotor, run_closed_loop, simulate
-from spherestep.dynamics.simulate import Integrator
+from spherestep.dynamics import Integrator
 from spherestep.errors import InputError
 from spherestep.statics import TorqueModelBase
 

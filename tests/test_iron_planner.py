@@ -11,10 +11,10 @@ import pytest
 from scipy.optimize import minimize
 
 from spherestep import so3
-from spherestep.commutation import iron_tuning, plan_iron, supply_coils, turn, turn_targets
+from spherestep.commutation import plan_iron, supply_coils, turn, turn_targets
 from spherestep.commutation.iron_planner import SETTLE_TOL, _Landscape, _pairs
 from spherestep.drive import many_turns, relay_planner, verdict_turns
-from spherestep.dynamics import Integrator
+from spherestep.dynamics import Integrator, iron_tuning
 from spherestep.errors import InputError
 from spherestep.magnetics import design_model
 from spherestep.motor import prototype

@@ -13,14 +13,14 @@ import pytest
 from spherestep import so3
 from spherestep.cli import main
 from spherestep.drive.hardware import drive_on_hardware, park_pose
-from spherestep.drive.turn import choose_model
+from spherestep.drive.turn import Turn, choose_model
 
 AXIS = (1.0, 0.5, 2.0)
 
 
 def emulated(design, angle_deg, time, end, model=None):
-    return drive_on_hardware(design, AXIS, math.radians(angle_deg), choose_model(design, model), duration=time,
-                             port=None, emulate=True, rate=200.0, tolerance=math.radians(0.05), lockstep=True,
+    job = Turn(design, AXIS, math.radians(angle_deg), choose_model(design, model), math.radians(0.05))
+    return drive_on_hardware(job, duration=time, port=None, emulate=True, rate=200.0, lockstep=True,
                              watchdog_ms=100, max_late=0.05, end=end)
 
 

@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 from spherestep.drive.hardware import drive_on_hardware
-from spherestep.drive.turn import choose_model
+from spherestep.drive.turn import Turn, choose_model
 from spherestep.hardware.motor_emulator import MotorFaults
 
 pytestmark = pytest.mark.slow
@@ -29,9 +29,9 @@ def slowed(tmp_path_factory):
     from spherestep.motor import prototype
 
     design = prototype()
-    result = drive_on_hardware(design, AXIS, ANGLE, choose_model(design), duration=TIME, port=None, emulate=True,
-                               rate=200.0, tolerance=math.radians(0.05), lockstep=True, watchdog_ms=100,
-                               max_late=0.05, faults=MotorFaults(slow_answers=(0.006, 0.5, 0.9)))
+    job = Turn(design, AXIS, ANGLE, choose_model(design), math.radians(0.05))
+    result = drive_on_hardware(job, duration=TIME, port=None, emulate=True, rate=200.0, lockstep=True,
+                               watchdog_ms=100, max_late=0.05, faults=MotorFaults(slow_answers=(0.006, 0.5, 0.9)))
     out = tmp_path_factory.mktemp("slowed")
     result.write(out)
     return result, out

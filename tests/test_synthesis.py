@@ -200,7 +200,8 @@ def test_the_relay_rung_reuses_the_states_and_gives_the_same_row():
     """The task climbs the cheap rungs and the relay rung on the same design (its states found once): the rows are
     those of the rungs run apart, the relay rung building the design again."""
     from spherestep.synthesis.ladder import climb, evaluate
-    from spherestep.synthesis.run import Ladder, relay_rung
+    from spherestep.synthesis.ladder import relay_rung
+    from spherestep.synthesis.run import Ladder
 
     spec = load_spec(EXAMPLES / "prototype-relays-iron.yaml")
     c = Candidate("truncated-icosahedron", 1, "truncated-cuboctahedron", 0, 60.0, 12 * 0.0254, samples=400,

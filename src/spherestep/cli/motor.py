@@ -145,9 +145,8 @@ def plan(
 
     Example: [bold]spherestep plan --axis 0,0,1 --angle 30 --rate 0.8 --design examples/designs/relays-iron.yaml[/bold]
     """
-    from ..commutation import turn
-    from ..drive import relay_planner
-    from ..drive.many_turns import PLANNERS
+    from ..drive import relay_plan, relay_planner
+    from ..drive.turn import PLANNERS
     from ..errors import bad_value
     from ..outputs import Outputs, output_folder
 
@@ -165,7 +164,7 @@ def plan(
         from ..hardware import ThermalLimits
 
         heat = {"thermal": ThermalLimits(), "rate": rate}
-    result = turn(design, axis_vec, math.radians(angle), steps, planner, **heat)
+    result = relay_plan(design, axis_vec, math.radians(angle), steps, planner, **heat)
     from ..demo import PLAN_FILES, write_plan_files
 
     files = Outputs(out, PLAN_FILES)

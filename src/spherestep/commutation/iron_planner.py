@@ -21,9 +21,10 @@ One step, from the current equilibrium ``R̃`` under the current mask, towards t
   drift) and from the landing overshot by ``overshoot`` of the step along its own axis (the rotor arrives with
   momentum) all end within ``land_tol`` of the same minimum; on each of ``plants`` (optional) the descents from
   within the margin end within ``plant_tol`` (default the margin) of it; and the tuned rotor (``tuning``,
-  :func:`iron_tuning`) released at rest at ``R̃`` ends its dwell within :data:`SETTLE_TOL` of it (one compiled
-  integration, stopped once the rotor is trapped: :meth:`_Landscape.settles`); with ``thermal`` and ``rate``
-  (optional) only masks that keep every coil within the thermal limits, the plan streamed at ``rate``;
+  :func:`spherestep.dynamics.iron_tuning`) released at rest at ``R̃`` ends its dwell within :data:`SETTLE_TOL` of
+  it (one compiled integration, stopped once the rotor is trapped: :meth:`_Landscape.settles`); with ``thermal``
+  and ``rate`` (optional) only masks that keep every coil within the thermal limits, the plan streamed at
+  ``rate``;
 * **intermediate masks** — when no candidate both advances and is robust, a two-mask step: a robust candidate
   that does not advance, then from its minimum one that does (status ``intermediate: …``);
 * **the last resort** — every single coil and pair among the :data:`FACING` coils nearest a pole, either polarity;
@@ -33,6 +34,11 @@ One step, from the current equilibrium ``R̃`` under the current mask, towards t
 
 The plan's ``achieved`` orientations are these minima, so a rotor simulated on the same model settles on them;
 :func:`spherestep.drive.many_turns` judges a plan by exactly that. The plan's ``planner`` is ``"iron"``.
+
+The planner stays on the motor floor (docs/conventions.md, the house map): it imports the statics' descent and the
+geometry, and what it checks against the rooms above is handed in — the rotor's settling by the ``tuning``
+(:meth:`spherestep.dynamics.Tuning.released`), the coils' heat by the ``thermal`` limits' guard
+(:meth:`spherestep.hardware.ThermalLimits.guard`), the model by the caller.
 """
 
 from __future__ import annotations
@@ -54,21 +60,8 @@ MARGIN = math.radians(1.5)  # rad: the pose's uncertainty a landing must tolerat
 OVERSHOOT = 0.3  # of the step's length: the momentum a landing must absorb
 LAND_TOL = math.radians(0.1)  # rad: descents from the margin's starts agree within this
 SETTLE_TOL = math.radians(0.25)  # rad: the tuned rotor's landing after one dwell, half the verdict's 0.5°
-DWELL_FACTOR = 4.0  # an iron relay step's dwell, in units of dynamics.tune's (which covers the well, not the transit)
 ROBUST_TRIES = 6  # candidates (nearest the target first) checked for margins per step
 INTERMEDIATE = "intermediate: a non-advancing mask first, to reach one that advances"
-
-
-def iron_tuning(design, model):
-    """The relay rotor for iron plans: :func:`spherestep.dynamics.tune`'s damping and time step, its dwell ×
-    :data:`DWELL_FACTOR` (its dwell is eight decay times of the softest well; on the iron the transit through the
-    detent's flat stretches takes longer: the prototype's misses on the tuned dwell all land at four times it)."""
-    from dataclasses import replace
-
-    from ..dynamics import tune
-
-    base = tune(design, model)
-    return replace(base, dwell=DWELL_FACTOR * base.dwell)
 
 
 def supply_coils(limits) -> int:
@@ -91,10 +84,6 @@ class _Landscape:
         self.plant_tol = max(margin, land_tol) if plant_tol is None else plant_tol
         self.model, self.reach, self.descend, self.stiffness = model, reach, descend, stiffness
         self.tuning = tuning
-        if tuning is not None:
-            from ..dynamics import Integrator
-
-            self.integrator = Integrator(model, tuning.rotor, tuning.dt)
         self.margin, self.overshoot, self.land_tol = margin, overshoot, land_tol
         self.jiggle = so3.exp(margin * np.concatenate([np.eye(3), -np.eye(3)]))  # (6, 3, 3)
         self.landings, self.kept, self.settled = {}, {}, {}  # (pose, mask[, R]) -> (R, ok, softest), bool, bool
@@ -155,12 +144,13 @@ class _Landscape:
         """Whether the tuned rotor, released at rest at ``here`` under mask ``c``, ends its dwell within
         :data:`SETTLE_TOL` of ``R``, :meth:`land`'s landing (always true without a tuning).
 
-        A model with compiled terms is integrated by :func:`spherestep._fast.settle.settle`, which stops once the
-        rotor is *trapped*: within ``SETTLE_TOL / 4`` of ``R`` with ``½ I|ω|² + E(R_t) − E(R) ≤ ½ k (SETTLE_TOL /
-        4)²`` (``k`` the landing's softest stiffness). Energy only falls under damping and friction, so the rotor
-        stays in that sublevel set of the well — within ``SETTLE_TOL / 4`` of ``R`` while the well is quadratic
-        that far, a factor 4 of slack — and the full dwell ends within ``SETTLE_TOL`` too
-        (``tests/test_iron_planner.py`` checks the verdicts against the full dwell). Other models run the dwell."""
+        A model with compiled terms is integrated by :func:`spherestep._fast.settle.settle` (the tuning's
+        :meth:`~spherestep.dynamics.Tuning.released` with a ``trap``), which stops once the rotor is *trapped*:
+        within ``SETTLE_TOL / 4`` of ``R`` with ``½ I|ω|² + E(R_t) − E(R) ≤ ½ k (SETTLE_TOL / 4)²`` (``k`` the
+        landing's softest stiffness). Energy only falls under damping and friction, so the rotor stays in that
+        sublevel set of the well — within ``SETTLE_TOL / 4`` of ``R`` while the well is quadratic that far, a
+        factor 4 of slack — and the full dwell ends within ``SETTLE_TOL`` too (``tests/test_iron_planner.py``
+        checks the verdicts against the full dwell). Other models run the dwell."""
         if self.tuning is None:
             return True
         key = self._keys(here, c[None])[0]
@@ -168,19 +158,9 @@ class _Landscape:
         key += R.tobytes()
         if key in self.settled:
             return self.settled[key]
-        steps = max(1, int(round(self.tuning.dwell / self.tuning.dt)))
         softest = landing[2] if landing is not None and np.array_equal(landing[0], R) else 0.0  # R: the landing
-        packed = self.model.packed_terms(c) if softest > 0 else None
-        if packed is None:
-            end = self.integrator.run(here.copy(), np.zeros(3), c, self.tuning.dwell, record_every=steps)[0]
-        else:
-            from .._fast.settle import settle
-            from ..dynamics.rotor import YOSHIDA
-
-            rotor = self.tuning.rotor
-            end = settle(*packed[:2], np.array(here, dtype=float), *packed[2:7], rotor.inertia, rotor.damping,
-                         rotor.friction, self.tuning.dt, steps, np.array(YOSHIDA), np.ascontiguousarray(R),
-                         SETTLE_TOL / 4, 0.5 * softest * (SETTLE_TOL / 4) ** 2)[0]
+        trap = (R, SETTLE_TOL / 4, 0.5 * softest * (SETTLE_TOL / 4) ** 2) if softest > 0 else None
+        end = self.tuning.released(self.model, here, c, trap)
         self.settled[key] = good = bool(so3.distance(end, R, trusted=True) <= SETTLE_TOL)
         return good
 
@@ -277,7 +257,9 @@ def plan_iron(design, targets, model, *, limits=None, max_coils: int = DEFAULT_M
     whose coils hold the rotor first (default nearest ``targets[0]``); ``thermal`` (a
     :class:`spherestep.hardware.ThermalLimits`) and ``rate`` (Hz): the plan will be streamed at ``rate``, so only
     masks that keep every coil within those limits are chosen (a mask that would break them is passed over, as
-    one without margins; a step that only a hold fits keeps its coils and ``run`` refuses the plan, naming it)."""
+    one without margins; a step that only a hold fits keeps its coils and ``run`` refuses the plan, naming it);
+    ``tuning`` (a :class:`spherestep.dynamics.Tuning`, :func:`spherestep.dynamics.iron_tuning` for the iron): the
+    relay rotor each landing must settle on within its dwell (None: no settling check)."""
     from ..statics import equilibrium, is_torque_model
 
     targets = check_targets(targets)
@@ -356,10 +338,7 @@ class _Heat:
     applies it: frame ``i`` held from ``i / rate`` for ``1 / rate``)."""
 
     def __init__(self, limits, rate: float, rows: list):
-        from ..hardware.limits import ThermalGuard, ThermalLimitError
-
-        self.guard, self.error, self.period, self.rows, self.done = ThermalGuard(limits), ThermalLimitError, \
-            1.0 / rate, rows, 0
+        self.guard, self.period, self.rows, self.done = limits.guard(), 1.0 / rate, rows, 0
 
     def fits(self, *masks) -> bool:
         """Whether the ``masks`` may be the plan's next frames, in that order."""
@@ -369,14 +348,12 @@ class _Heat:
             self.guard.record(self.rows[i][2], i * self.period)
         self.done = len(self.rows)
         guard = copy.deepcopy(self.guard) if len(masks) > 1 else self.guard
-        try:
-            for n, c in enumerate(masks):
-                on, t = np.flatnonzero(c).tolist(), (len(self.rows) + n) * self.period
-                guard.check(on, t, self.period, "a candidate")
-                if n + 1 < len(masks):
-                    guard.record(on, t)
-        except self.error:
-            return False
+        for n, c in enumerate(masks):
+            on, t = np.flatnonzero(c).tolist(), (len(self.rows) + n) * self.period
+            if not guard.allows(on, t, self.period):
+                return False
+            if n + 1 < len(masks):
+                guard.record(on, t)
         return True
 
 

@@ -63,10 +63,11 @@ def turn(design, axis, angle: float, steps: int | None = None, planner: str = "g
          rate: float | None = None) -> Plan:
     """Plan a turn of ``angle`` rad about ``axis`` (see :func:`turn_targets`) with ``planner``:
     ``"geometric"`` (:func:`plan_geometric`), ``"potential"`` (:func:`plan_potential` on ``model``, default
-    the design's :class:`~spherestep.potential.MotorPotential`) or ``"iron"`` (:func:`plan_iron` on ``model``,
-    default the design's own, :func:`spherestep.magnetics.design_model`, with its ``limits`` and the relay rotor
-    ``tuning``, default :func:`iron_tuning`, the ``plants`` it must also hold on, within ``plant_tol``, and the
-    coils' ``thermal`` limits at the streaming ``rate``).
+    the design's :class:`~spherestep.potential.MotorPotential`) or ``"iron"`` (:func:`plan_iron` on ``model``
+    with its ``limits`` and the relay rotor ``tuning``, both required — the design's own model
+    (:func:`spherestep.magnetics.design_model`) and :func:`spherestep.dynamics.iron_tuning` live above this room;
+    :func:`spherestep.drive.relay_plan` supplies them —, the ``plants`` it must also hold on, within
+    ``plant_tol``, and the coils' ``thermal`` limits at the streaming ``rate``).
 
     >>> import math
     >>> import spherestep as ss
@@ -82,16 +83,18 @@ def turn(design, axis, angle: float, steps: int | None = None, planner: str = "g
         raise bad_value("thermal" if thermal is not None else "rate", "given only with planner='iron'", planner)
     targets = turn_targets(design, axis, angle, steps)
     if planner == "iron":
-        from .iron_planner import iron_tuning, plan_iron
+        from .iron_planner import plan_iron
 
         if model is None:
-            from ..magnetics import design_model
-
-            own = design_model(design)
-            model, limits = own.model, own.limits if limits is None else limits
-        return plan_iron(design, targets, model, limits=limits,
-                         tuning=iron_tuning(design, model) if tuning is None else tuning, plants=plants,
-                         plant_tol=plant_tol, thermal=thermal, rate=rate)
+            raise bad_value("model", "the torque model the iron planner plans on with planner='iron' (the design's "
+                            "own: spherestep.magnetics.design_model(design).model; spherestep.drive.relay_plan "
+                            "supplies it)", model)
+        if tuning is None:
+            raise bad_value("tuning", "the relay rotor each step must settle on with planner='iron' "
+                            "(spherestep.dynamics.iron_tuning(design, model); spherestep.drive.relay_plan supplies "
+                            "it)", tuning)
+        return plan_iron(design, targets, model, limits=limits, tuning=tuning, plants=plants, plant_tol=plant_tol,
+                         thermal=thermal, rate=rate)
     if planner == "potential":
         from ..potential import MotorPotential
         from .potential_planner import plan_potential

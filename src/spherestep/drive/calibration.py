@@ -187,6 +187,5 @@ def _session(design, backend, traj, settle: float, start, model, limits, rate: f
                "sensor_errors": backend.sensor_errors} if emulate else {}
     session = servo_session(design, traj, traj.duration + settle, port=port, emulate=emulate, model=model,
                             drive=limits, R0=start, sensor_calibration=sensor_calibration, **options)
-    kind = "port" if port is not None else "lockstep" if backend.lockstep else "pty"
     return session_series(session, limits, "backend", "a motor that runs the servo to the end of each hold",
-                          current_lag(kind))
+                          current_lag(session.kind))

@@ -19,7 +19,8 @@ import numpy as np
 
 from ..errors import bad_value
 from .result import DriveResult, RampedDetails
-from .turn import MODES, Turn, choose_model
+from .modes import DRIVE_MODES, MODES, Options
+from .turn import Turn, choose_model
 
 DEMO_AXIS = (1.0, 0.5, 2.0)
 SENSOR_NOISE = math.radians(0.02)
@@ -79,15 +80,11 @@ def compare_drives(design, axis=DEMO_AXIS, angle: float = 2 * math.pi, model=Non
         raise bad_value("modes", f"some of {', '.join(MODES)}", modes)
     job = Turn(design, axis, angle, choose_model(design, model, limits), tolerance, progress)
     results = []
+    options = Options(duration, sensor_noise=sensor_noise, seed=seed, rates=rates)
     for mode in modes:
-        if mode == "settled":
-            results.append(job.settled())
-        elif mode == "ramped":
-            results.append(job.ramped(rates))
-        else:
-            results.append(job.servo(duration, sensor_noise=sensor_noise, seed=seed))
-            if damped_servo:
-                results.append(job.servo(duration, sensor_noise=sensor_noise, seed=seed + 1, rotor=job.tuning.rotor))
+        results.append(DRIVE_MODES[mode].runs["simulated"](job, options))
+        if mode == "servo" and damped_servo:  # the servo again on the relay tuning's damped rotor
+            results.append(job.servo(duration, sensor_noise=sensor_noise, seed=seed + 1, rotor=job.tuning.rotor))
     try:
         bound = bang_bang_time(job.chosen.model, job.start, job.axis, job.angle, Rotor.from_design(design).inertia,
                                job.chosen.limits)

@@ -35,6 +35,7 @@ from .. import so3
 from ..errors import bad_value
 
 KINDS = ("port", "lockstep", "pty", "qemu", "relay port", "dry run", "simulated")
+FIRMWARES = ("python", "qemu")  # the emulated motor's device: the Python CurrentDevice, or drive.cpp in QEMU
 # The firmware in QEMU: its current loop at 1 kHz (the model steps the board once per period through QEMU, 0.1-0.3
 # ms a step on a loaded 2-core machine: 4 kHz slipped), and 0.1 s for an answer on its UART0 (QEMU hands each
 # received byte over between its threads: a 29-coil DRIVE took 3-10 ms at load 9-12, measured)
@@ -73,6 +74,21 @@ class Connection:
         elif seconds > 0:
             time.sleep(seconds)
         return None if self.truth is None else self.truth()
+
+
+def session_kind(port: str | None = None, emulate: bool = False, lockstep: bool = False,
+                 firmware: str = "python") -> str:
+    """The kind (:data:`KINDS`) a servo session runs on: ``"port"`` for a serial device ``port``; with ``emulate``
+    the emulated motor, ``"lockstep"`` on the simulated clock, ``"qemu"`` with the firmware in QEMU, else
+    ``"pty"``. One of ``port`` and ``emulate``; ``lockstep`` and ``firmware`` other than ``"python"`` only with
+    ``emulate`` and not together (InputError naming the field)."""
+    if (port is None) == (not emulate):
+        raise bad_value("port", "a serial device, or emulate=True (one of the two)", port)
+    if lockstep and not emulate:
+        raise bad_value("lockstep", "used only with emulate=True", lockstep)
+    if firmware not in FIRMWARES or (firmware != "python" and (not emulate or lockstep)):
+        raise bad_value("firmware", "python, or qemu with emulate=True and no lockstep", firmware)
+    return "port" if not emulate else "lockstep" if lockstep else "qemu" if firmware == "qemu" else "pty"
 
 
 def emulated_motor(design, plant, sensors, *, drive, R0=None, faults=None, rotor=None, period: float | None = None,

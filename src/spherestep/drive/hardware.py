@@ -41,25 +41,22 @@ ENDS = ("hold", "park")
 PARK_TIME = 0.5  # s: the move from the turn's end into the detent well it parks in
 
 
-def drive_on_hardware(design, axis, angle: float, chosen, *, duration: float | None, port: str | None,
-                      emulate: bool, rate: float, log=None, tolerance: float, progress=None,
+def drive_on_hardware(job, *, duration: float | None, port: str | None, emulate: bool, rate: float, log=None,
                       firmware: str = "python", end: str = "hold", hold: float | None = None, **options):
-    """Run the servo turn on ``port`` or the emulated motor (module docstring) on ``chosen``'s model and limits,
-    ending by ``end`` (:data:`ENDS`: ``"hold"`` or ``"park"``) held ``hold`` s (default
-    :data:`~spherestep.drive.session.SETTLE`, 0.5 s); ``options`` go to
-    :func:`~spherestep.drive.session.servo_session` (``lockstep``, ``faults``, ``watchdog_ms``, ``max_late``: an
-    emulated run on the simulated clock, a starved device)."""
+    """Run the prepared servo turn ``job`` (a :class:`~spherestep.drive.turn.Turn`: its design, model, limits,
+    tolerance and progress; ``duration`` checked against the bang-bang bound by
+    :func:`~spherestep.drive.drive_turn`) on ``port`` or the emulated motor (module docstring), ending by ``end``
+    (:data:`ENDS`: ``"hold"`` or ``"park"``) held ``hold`` s (default :data:`~spherestep.drive.session.SETTLE`, 0.5
+    s); ``options`` go to :func:`~spherestep.drive.session.servo_session` (``lockstep``, ``faults``,
+    ``watchdog_ms``, ``max_late``: an emulated run on the simulated clock, a starved device)."""
     from .. import checks
     from ..dynamics import Rotor
     from .session import SETTLE, servo_session
-    from .turn import Turn, check_duration
 
     if end not in ENDS:
         raise bad_value("end", "hold or park", end)
     hold = SETTLE if hold is None else checks.positive(hold, "hold", "a positive time in seconds")
-    job = Turn(design, axis, angle, chosen, tolerance, progress)
-    if duration is not None:
-        check_duration(design, job.axis, job.angle, chosen, duration, start=job.start)
+    design, chosen, progress, tolerance = job.design, job.chosen, job.say, job.tolerance("servo")
     rotor = Rotor.from_design(design)
     traj, kind, note = job.servo_trajectory(job.start, duration, rotor)
     turn_end = traj.end
@@ -71,7 +68,7 @@ def drive_on_hardware(design, axis, angle: float, chosen, *, duration: float | N
     shown = [-math.inf]
 
     def status(t, R, w, currents):
-        if progress is not None and t - shown[0] >= STATUS_EVERY:
+        if t - shown[0] >= STATUS_EVERY:
             shown[0] = t
             progress(f"t {t:6.2f} s   turned {math.degrees(float(np.linalg.norm(so3.log(R)))):7.2f}°   "
                      f"|ω| {float(np.linalg.norm(w)):5.2f} rad/s   max |i| {float(np.abs(currents).max()):.3f} A")

@@ -27,6 +27,7 @@ import numpy as np
 SERVO_TOLERANCE = math.radians(0.05)
 RELAY_TOLERANCE = math.radians(0.5)
 KINDS = {"servo": SERVO_TOLERANCE, "hold": SERVO_TOLERANCE, "relay": RELAY_TOLERANCE}
+MODE_TOLERANCE = {"servo": SERVO_TOLERANCE, "ramped": RELAY_TOLERANCE, "settled": RELAY_TOLERANCE}  # a drive's own
 
 
 def tolerance(degrees: float | None, kind: str) -> float:

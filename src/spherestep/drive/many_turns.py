@@ -24,38 +24,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from .. import checks, so3
-from ..errors import bad_value
+from .turn import choose_model, relay_planner, relay_tuning
 
 COUNT = 20
 SEED = 0
 ANGLES = (math.radians(15.0), math.radians(360.0))
 REQUIRED = 0.95  # the fraction of turns a design that "steps on relays" executes
-PLANNERS = ("auto", "iron", "geometric", "potential")
-
-
-def relay_planner(design, planner: str = "auto", model=None) -> str:
-    """``planner`` resolved: ``"auto"`` is ``"iron"`` where the rotor feels a detent — a ``model`` that declares
-    ``has_bias`` (the iron model), or without a model an iron-cored design — and ``"geometric"`` otherwise (air)."""
-    if planner not in PLANNERS:
-        raise bad_value("planner", f"one of {', '.join(PLANNERS)}", planner)
-    if planner == "auto":
-        iron = design.coil.core == "iron" if model is None else bool(model.has_bias)
-        return "iron" if iron else "geometric"
-    return planner
-
-
-def relay_tuning(design, model, planner: str):
-    """The relay rotor a plan of ``planner`` runs with: :func:`spherestep.commutation.iron_tuning` for the iron
-    planner, :func:`spherestep.dynamics.tune` otherwise."""
-    if planner == "iron":
-        from ..commutation import iron_tuning
-
-        return iron_tuning(design, model)
-    from ..dynamics import tune
-
-    return tune(design, model)
-
-
 def verdict_turns(count: int = COUNT, seed: int = SEED, spec_turn=None) -> list[tuple[np.ndarray, float]]:
     """``(axis, angle)`` pairs: ``spec_turn`` (``(axis, angle)``, if given) first, then ``count`` random turns
     (module docstring)."""
@@ -185,7 +159,6 @@ def many_turns(design, model=None, *, planner: str = "auto", plant=None, count: 
     ``plan_plants``, ``plant_tol``: the iron planner's ``plants`` (plans that hold on those models too) and how
     near the planned minimum theirs must lie."""
     from ..commutation import turn
-    from .turn import choose_model
 
     chosen = choose_model(design, model)
     planner = relay_planner(design, planner, chosen.model)

@@ -23,7 +23,7 @@ from .. import checks, so3
 from ..control import GeometricPD, ServoLaw, Trajectory
 from ..errors import ComputationError, bad_value
 from ..hardware import LOOP_RATE, FieldTracker, ServoReport, run_servo, wire_limits
-from .connect import EMULATED_DAMPING, connect
+from .connect import EMULATED_DAMPING, connect, session_kind
 
 DELAY = 1  # control periods: the currents computed in a cycle are driven at the next cycle's start
 # The observer's bandwidth on hardware is the loop's rate in rad/s, ω_o = 1/h: its gains are then l₁ = 1, l₂ h = 1
@@ -39,7 +39,6 @@ DELAY = 1  # control periods: the currents computed in a cycle are driven at the
 # at 1 period, 0.314° at 1.5, 0.337° at 2; held-out turns, 270° about (-1, 2, 0.5) and 180° about (0.3, -1, 1):
 # 0.441° and 0.490° at 1 period, 0.323° and 0.299° at 1.5 (benchmarks/bench_emulated_tracking.py).
 LEAD = 1.5
-FIRMWARES = ("python", "qemu")  # the emulated motor's device: the Python CurrentDevice, or drive.cpp in QEMU
 QEMU_RATE = 100.0  # Hz: the servo's default rate on the firmware in QEMU (the DRIVE round trip in drive.connect)
 SETTLE = 0.5  # s the loop runs on after the trajectory's end
 # After the coils go off the rotor is watched until it rests: sampled OFF_FIRST s after and then every REST_EVERY s,
@@ -66,7 +65,7 @@ class Session:
     ``step_cost`` ``(steps, mean, max)`` in instructions per control step that drove the coils; ``rest`` the
     :class:`Rest` watched after the coils went off (the emulated rotor's truth, or on a port the loop's estimate
     from the device's readings; ``None`` when the watch could not be made); ``after`` what the session's
-    ``after`` returned."""
+    ``after`` returned; ``kind`` the :func:`~spherestep.drive.connect.connect` kind it ran on."""
 
     report: ServoReport
     trajectory: Trajectory
@@ -78,6 +77,7 @@ class Session:
     step_cost: tuple | None = None
     rest: Rest | None = None
     after: object | None = None
+    kind: str = "port"
 
     @property
     def reference(self):
@@ -184,17 +184,12 @@ def servo_session(design, trajectory: Trajectory, duration: float, *, port: str 
     if not isinstance(trajectory, Trajectory):
         raise bad_value("trajectory", "a spherestep.control.Trajectory (Trajectory.hold(R) for a pose)",
                         type(trajectory).__name__)
-    if (port is None) == (not emulate):
-        raise bad_value("port", "a serial device, or emulate=True (one of the two)", port)
-    if lockstep and not emulate:
-        raise bad_value("lockstep", "used only with emulate=True", lockstep)
+    kind = session_kind(port, emulate, lockstep, firmware)
     for name, value in (("plant_rotor", plant_rotor), ("sensor_errors", sensor_errors)):
         if value is not None and not emulate:
             raise bad_value(name, "used only with emulate=True (the motor as built is the emulated one)", value)
     if plant_rotor is not None and not isinstance(plant_rotor, Rotor):
         raise bad_value("plant_rotor", "a spherestep.dynamics.Rotor (or None)", type(plant_rotor).__name__)
-    if firmware not in FIRMWARES or (firmware != "python" and (not emulate or lockstep)):
-        raise bad_value("firmware", "python, or qemu with emulate=True and no lockstep", firmware)
     sensors = default_array(design, 8) if sensors is None else sensors
     if model is None or drive is None:
         own = design_model(design)
@@ -212,7 +207,6 @@ def servo_session(design, trajectory: Trajectory, duration: float, *, port: str 
     estimate = FieldTracker(estimator, R0, drive)
     controller = GeometricPD(rotor.inertia, bandwidth=BANDWIDTH, rate=rate, damping=rotor.damping)
     options = {} if max_late is None else {"max_late": max_late}
-    kind = "port" if not emulate else "lockstep" if lockstep else "qemu" if firmware == "qemu" else "pty"
     law = ServoLaw(model, trajectory, controller, limits=wire_limits(drive), sensor_rate=rate, delay=DELAY,
                    observer_bandwidth=rate, lead=LEAD / rate, current_lag=current_lag(kind))
     truth: list = []
@@ -234,7 +228,7 @@ def servo_session(design, trajectory: Trajectory, duration: float, *, port: str 
         extra = after(conn) if after is not None and report.outcome == "done" else None
         if conn.truth is None:  # a board: the rest from its own readings, estimated, while the link still answers
             return Session(report, trajectory, [], None,
-                           rest=_rest_on_port(conn.link, estimate, report) if watch else None, after=extra)
+                           rest=_rest_on_port(conn.link, estimate, report) if watch else None, after=extra, kind=kind)
         seen: list = []  # the truth at each look; the first, OFF_FIRST s after the end, is the session's final
 
         def sample():
@@ -249,7 +243,7 @@ def servo_session(design, trajectory: Trajectory, duration: float, *, port: str 
             sample()
             rest = None
         cost = conn.step_cost() if conn.step_cost is not None else None
-    return Session(report, trajectory, truth, seen[0], conn.watchdog, conn.started, held[0], cost, rest, extra)
+    return Session(report, trajectory, truth, seen[0], conn.watchdog, conn.started, held[0], cost, rest, extra, kind)
 
 
 def session_series(session: Session, limits, field: str, expected: str, lag: float = 0.0):

@@ -1,4 +1,5 @@
-"""Drive one turn: ``mode`` × ``backend`` → :class:`~spherestep.drive.result.DriveResult`.
+"""A turn prepared once (:class:`Turn`) and its three runs on the simulated motor; how each mode is chosen and driven
+on each backend is :mod:`.modes` (:func:`~.modes.drive_turn`, one lookup in its registry).
 
 The turn is ``angle`` rad about the fixed-frame ``axis`` from the stepper state nearest the identity (the
 simulated motor; on a port or the emulated motor the rotor is taken to be at the identity).
@@ -34,11 +35,8 @@ import numpy as np
 from .. import checks, so3
 from ..errors import InputError, bad_value
 from .result import DriveResult, RampedDetails, ServoDetails, SettledDetails
-from .judgement import RELAY_TOLERANCE, SERVO_TOLERANCE
+from .judgement import MODE_TOLERANCE, SERVO_TOLERANCE
 
-MODES = ("servo", "ramped", "settled")
-BACKENDS = ("simulated", "emulated", "port")
-SENSORS = ("ideal", "hall", "imu")
 TOLERANCE = SERVO_TOLERANCE  # rad: a servo ending farther than this from the turn's end did not make it (judgement)
 FIXED_SERVO_TIME = 3.0  # s for a full turn, where the fastest-turn planner refuses the model (module docstring)
 SETTLE = 0.5  # s the servo runs beyond its trajectory
@@ -78,15 +76,55 @@ def choose_model(design, model=None, limits=None) -> Chosen:
     return Chosen(model, limits, f"{type(model).__name__} (given)")
 
 
+PLANNERS = ("auto", "iron", "geometric", "potential")
+
+
+def relay_planner(design, planner: str = "auto", model=None) -> str:
+    """``planner`` resolved: ``"auto"`` is ``"iron"`` where the rotor feels a detent — a ``model`` that declares
+    ``has_bias`` (the iron model), or without a model an iron-cored design — and ``"geometric"`` otherwise (air)."""
+    if planner not in PLANNERS:
+        raise bad_value("planner", f"one of {', '.join(PLANNERS)}", planner)
+    if planner == "auto":
+        iron = design.coil.core == "iron" if model is None else bool(model.has_bias)
+        return "iron" if iron else "geometric"
+    return planner
+
+
+def relay_tuning(design, model, planner: str):
+    """The relay rotor a plan of ``planner`` runs with: :func:`spherestep.dynamics.iron_tuning` for the iron
+    planner, :func:`spherestep.dynamics.tune` otherwise."""
+    from ..dynamics import iron_tuning, tune
+
+    return iron_tuning(design, model) if planner == "iron" else tune(design, model)
+
+
+def relay_plan(design, axis, angle: float, steps: int | None = None, planner: str = "auto", model=None, *,
+               limits=None, tuning=None, **options):
+    """:func:`spherestep.commutation.turn` by ``planner`` (:func:`relay_planner`: ``"auto"`` the iron-aware one on
+    a detent) with the defaults the commutation room cannot reach: for the iron planner the design's own model and
+    limits (:func:`spherestep.magnetics.design_model`) unless ``model`` is given, and :func:`relay_tuning`'s rotor
+    unless ``tuning`` is; ``options`` (``plants``, ``plant_tol``, ``thermal``, ``rate``) go to ``turn``."""
+    from ..commutation import turn
+
+    planner = relay_planner(design, planner, model)
+    if planner == "iron":
+        if model is None:
+            from ..magnetics import design_model
+
+            own = design_model(design)
+            model, limits = own.model, own.limits if limits is None else limits
+        tuning = relay_tuning(design, model, planner) if tuning is None else tuning
+    return turn(design, axis, angle, steps, planner, model, limits=limits, tuning=tuning, **options)
+
+
 class Turn:
-    """A turn prepared once and driven any number of ways (:func:`drive_turn`, :func:`~.compare.compare_drives`):
+    """A turn prepared once and driven any number of ways (:func:`~.modes.drive_turn`, :func:`~.compare.compare_drives`):
     the design, the unit ``axis``, ``angle`` (rad), the ``chosen`` model; the geometric ``plan`` and the relay
     ``tuning`` are made on first use."""
 
     def __init__(self, design, axis, angle: float, chosen: Chosen, tolerance: float | None = None,
                  progress: Callable[[str], None] | None = None, planner: str = "auto"):
         from ..commutation import turn_targets
-        from .many_turns import relay_planner
 
         self.design, self.chosen = design, chosen
         self.planner = relay_planner(design, planner, chosen.model)
@@ -103,31 +141,26 @@ class Turn:
     @property
     def plan(self):
         """The relay plan of the turn (:func:`spherestep.commutation.turn`) by ``planner``: the iron-aware one on
-        an iron-cored design, the geometric one on air (:func:`~.many_turns.relay_planner`)."""
+        an iron-cored design, the geometric one on air (:func:`relay_planner`; :func:`relay_plan`)."""
         if self._plan is None:
-            from ..commutation import turn
-
             self.say(f"commutating: the {self.planner} relay plan")
-            self._plan = turn(self.design, self.axis, self.angle, planner=self.planner, model=self.chosen.model,
-                              limits=self.chosen.limits, tuning=self.tuning if self.planner == "iron" else None)
+            self._plan = relay_plan(self.design, self.axis, self.angle, planner=self.planner,
+                                    model=self.chosen.model, limits=self.chosen.limits,
+                                    tuning=self.tuning if self.planner == "iron" else None)
         return self._plan
 
     @property
     def tuning(self):
-        """The relay rotor's damping, dwell and time step on this model (:func:`~.many_turns.relay_tuning`)."""
+        """The relay rotor's damping, dwell and time step on this model (:func:`relay_tuning`)."""
         if self._tuning is None:
-            from .many_turns import relay_tuning
-
             self.say("tuning the relay rotor's damping and dwell on the model's wells")
             self._tuning = relay_tuning(self.design, self.chosen.model, self.planner)
         return self._tuning
 
     def tolerance(self, mode: str) -> float:
         """The tolerance (rad) ``mode``'s result is judged by: the one given, else the mode's own
-        (:mod:`~spherestep.drive.judgement`: 0.05° for the servo, 0.5° for relay steps)."""
-        if self.given is not None:
-            return self.given
-        return SERVO_TOLERANCE if mode == "servo" else RELAY_TOLERANCE
+        (:data:`~spherestep.drive.judgement.MODE_TOLERANCE`: 0.05° for the servo, 0.5° for relay steps)."""
+        return MODE_TOLERANCE[mode] if self.given is None else self.given
 
     def result(self, mode: str, backend: str, times, orientations, targets, sensor_error, currents, power,
                time: float, note: str, final_error: float, max_tracking_error: float, details) -> DriveResult:
@@ -248,44 +281,6 @@ def _sensor(design, kind: str, noise: float, start, seed: int):
     return ImuSensor(design, 1.0 / CONTROL_RATE, seed=seed)
 
 
-def check_options(mode: str, backend: str, *, duration=None, sensor: str = "ideal", sensor_noise: float = 0.0,
-                  port=None, rate=None) -> None:
-    """Refuse options that do not apply to ``mode`` and ``backend`` (InputError naming the option)."""
-    if mode not in MODES:
-        raise bad_value("mode", f"one of {', '.join(MODES)}", mode)
-    if backend not in BACKENDS:
-        raise bad_value("backend", f"one of {', '.join(BACKENDS)}", backend)
-    if duration is not None:
-        if mode != "servo":
-            raise bad_value("duration", "given only for the servo (relay modes run at their own pace)", duration)
-        checks.positive(duration, "duration", "a positive time in seconds")
-    checks.non_negative(sensor_noise, "sensor_noise", "a non-negative angle in radians")
-    if sensor not in SENSORS:
-        raise bad_value("sensor", f"one of {', '.join(SENSORS)}", sensor)
-    if sensor != "ideal" and sensor_noise:
-        raise bad_value("sensor_noise", "0 with the hall and imu sensors (their noise is the part's own)",
-                        sensor_noise)
-    if mode != "servo" and (sensor != "ideal" or sensor_noise):
-        raise bad_value("sensor", "ideal and no sensor_noise unless mode='servo' (relay modes run open loop)",
-                        sensor)
-    if backend != "simulated":
-        if mode != "servo":
-            raise bad_value("mode", "servo on an emulated motor or a port (relay plans run with spherestep run)",
-                            mode)
-        if sensor != "ideal" or sensor_noise:
-            raise bad_value("sensor", "ideal and no sensor_noise on an emulated motor or a port (the loop reads the "
-                            "stator's magnetometer array)", sensor)
-    if backend == "port" and not port:
-        raise bad_value("port", "the coil controller's serial device with backend='port'", port)
-    if backend != "port" and port is not None:
-        raise bad_value("port", "left out unless backend='port'", port)
-    if rate is not None:
-        if backend == "simulated":
-            raise bad_value("rate", "left out on the simulated motor (its loop runs at 1 kHz); a loop rate for the "
-                            "emulated motor or a port", rate)
-        checks.positive(rate, "rate", "a positive loop rate in Hz")
-
-
 _LAST_BOUND: dict = {}
 
 
@@ -321,68 +316,3 @@ def check_duration(design, axis, angle: float, chosen: Chosen, duration: float, 
                         f"the {chosen.label} model (the fastest the coils' limits allow){why}; give a longer time or "
                         f"leave it out for the fastest turn", duration)
     return bound
-
-
-def drive_turn(design, axis, angle_rad: float, *, mode: str = "servo", backend: str = "simulated", model=None,
-               limits=None, duration: float | None = None, sensor: str = "ideal", sensor_noise: float = 0.0,
-               port: str | None = None, rate: float | None = None, tolerance: float | None = None, seed: int = 0,
-               rates=None, log=None, progress: Callable[[str], None] | None = None,
-               firmware: str = "python", end: str = "hold", hold: float | None = None,
-               plant_error=None) -> DriveResult:
-    """Drive a turn of ``angle_rad`` about ``axis`` (fixed frame) in ``mode`` on ``backend`` (module docstring).
-
-    ``model``/``limits``: default the design's own (:func:`spherestep.magnetics.design_model`). ``duration`` (s):
-    the servo's time (default the fastest turn). ``sensor`` (simulated servo): ``"ideal"`` (the true orientation
-    turned by noise of σ ``sensor_noise`` rad), ``"hall"`` (the stator's magnetometer array and its estimator,
-    the coils' field subtracted at a 1 % current error) or ``"imu"`` (gyro, accelerometer and magnetometer in the
-    rotor). ``port`` (backend ``"port"``) the serial device; ``rate`` the loop rate (Hz) on an emulated motor or
-    a port (default :data:`spherestep.hardware.LOOP_RATE`, 500); ``log`` the loop's per-cycle CSV there.
-    ``rates``: the ramped cruise rates tried. ``firmware`` (backend ``"emulated"``): the device behind the line,
-    ``"python"`` or ``"qemu"`` (:func:`~spherestep.drive.session.servo_session`; its rate then defaults to
-    :data:`~spherestep.drive.session.QEMU_RATE`).
-    ``end`` (emulated motor or port): ``"hold"`` or ``"park"``, how the move ends before the coils go off
-    and ``hold`` s it is held (default 0.5; :func:`~spherestep.drive.hardware.drive_on_hardware`: hold is judged
-    where the servo holds the rotor, park where it rests in the predicted well with the coils off).
-    ``tolerance`` (rad): a result is :attr:`~DriveResult.ok` only within it (default the mode's own,
-    :mod:`~spherestep.drive.judgement`). ``progress(text)`` hears each stage.
-    ``plant_error`` (backend ``"emulated"``): a :class:`~spherestep.drive.PlantError`, the emulated motor as built
-    (its torque plant from the design's own model, its rotor and its sensors), whatever model the servo runs on.
-    """
-    check_options(mode, backend, duration=duration, sensor=sensor, sensor_noise=sensor_noise, port=port, rate=rate)
-    if firmware != "python" and backend != "emulated":
-        raise bad_value("firmware", "python unless backend='emulated' (the firmware in QEMU drives the emulated "
-                        "motor)", firmware)
-    if hold is not None and backend == "simulated":
-        raise bad_value("hold", "left out on the simulated motor (its coils never go off)", hold)
-    if end != "hold" and backend == "simulated":
-        raise bad_value("end", "hold on the simulated motor (park ends a move on an emulated motor or a port, "
-                        "where the coils go off)", end)
-    chosen = choose_model(design, model, limits)
-    if plant_error is not None and backend != "emulated":
-        raise bad_value("plant_error", "left out unless backend='emulated' (the emulated motor as built)", plant_error)
-    if backend != "simulated":
-        from ..hardware import LOOP_RATE
-        from .hardware import drive_on_hardware
-        from .session import QEMU_RATE
-
-        default = QEMU_RATE if firmware == "qemu" else LOOP_RATE
-        options = {}
-        if plant_error is not None:
-            from ..magnetics import design_model
-            from ..sensing import default_array
-
-            options = {"plant": plant_error.plant(design_model(design).model),
-                       "plant_rotor": plant_error.rotor(design),
-                       "sensor_errors": plant_error.sensor_errors(default_array(design, 8))}
-        return drive_on_hardware(design, axis, angle_rad, chosen, duration=duration, port=port,
-                                 emulate=backend == "emulated", rate=default if rate is None else rate, log=log,
-                                 tolerance=SERVO_TOLERANCE if tolerance is None else tolerance, progress=progress,
-                                 firmware=firmware, end=end, hold=hold, **options)
-    job = Turn(design, axis, angle_rad, chosen, tolerance, progress)
-    if duration is not None:
-        check_duration(design, job.axis, job.angle, chosen, duration, start=job.start)
-    if mode == "settled":
-        return job.settled()
-    if mode == "ramped":
-        return job.ramped(rates)
-    return job.servo(duration, sensor=sensor, sensor_noise=sensor_noise, seed=seed)

@@ -20,8 +20,7 @@ from .. import so3
 from ..commutation.geometric import DEFAULT_CANDIDATES, next_state
 from ..errors import bad_value
 from ..motor import coil_currents
-from .rotor import Rotor
-from .simulate import Integrator
+from .rotor import Integrator, Rotor
 from ..commutation.trajectory import check_targets
 from .._fast.threads import single_blas_thread
 

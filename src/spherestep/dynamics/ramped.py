@@ -30,8 +30,8 @@ from ..electrics import DriveLimits
 from ..errors import bad_value
 from ..motor import coil_currents
 from .._fast.threads import single_blas_thread
-from .rotor import Rotor
-from .simulate import EXECUTED_TOL, Integrator
+from .rotor import Integrator, Rotor
+from .simulate import EXECUTED_TOL
 
 RAMP_STEPS = 8
 START_RATE = 2.0  # steps/s

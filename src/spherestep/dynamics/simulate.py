@@ -16,8 +16,7 @@ import numpy as np
 from .. import checks, so3
 from ..errors import bad_value
 from ..motor import coil_currents
-from ..statics import is_torque_model
-from .rotor import YOSHIDA, Rotor
+from .rotor import Integrator, Rotor
 from .._fast.threads import single_blas_thread
 
 EXECUTED_TOL = math.radians(0.5)
@@ -108,52 +107,6 @@ class Simulation:
 
             write_text(path, text)
         return text
-
-
-class Integrator:
-    """Integrates one rotor under ``model`` (``torque``/``energy`` of ``(R, currents)``) with time step ``dt``.
-
-    A :class:`~spherestep.statics.TorqueModel` whose ``packed_terms`` are compiled (the potential, the magnets'
-    map, the iron model) runs the same scheme compiled (:func:`spherestep._fast.integrate.integrate`, equal to
-    :meth:`Rotor.step` to rounding, ``tests/test_fast_path.py``); any other model (one answering ``None``, or a
-    plain object with ``torque`` and ``energy``), or ``compiled=False`` (the reference), runs :meth:`Rotor.step`
-    with batched ``(1, 3, 3)`` calls."""
-
-    def __init__(self, model, rotor: Rotor, dt: float, compiled: bool = True):
-        dt = checks.positive(dt, "dt", "a positive time step in seconds")
-        self.model, self.rotor, self.dt, self.compiled = model, rotor, dt, bool(compiled)
-
-    def run(self, R: np.ndarray, w: np.ndarray, currents: np.ndarray, duration: float, record_every: int = 1):
-        """Integrate for ``duration`` s from ``(R, ω)``; returns ``(R, ω, times, Rs, ωs, energies)``, the
-        trajectory sampled every ``record_every`` steps (times relative to the start)."""
-        steps = max(1, int(round(duration / self.dt)))
-        compiled = self.compiled and is_torque_model(self.model)
-        packed = self.model.packed_terms(currents) if compiled else None
-        if packed is not None:  # the same scheme compiled (spherestep._fast.integrate)
-            from .._fast.integrate import integrate
-
-            count = steps // record_every + (steps % record_every != 0)
-            Rs, ws = np.empty((count, 3, 3)), np.empty((count, 3))
-            rotor = self.rotor
-            R, w = integrate(*packed[:2], np.array(R, dtype=float), np.array(w, dtype=float), *packed[2:7],
-                             rotor.inertia, rotor.damping, rotor.friction, self.dt, steps, record_every,
-                             np.array(YOSHIDA), Rs, ws)
-            times = self.dt * np.r_[np.arange(record_every, steps + 1, record_every), steps][:count]
-            energy = self.rotor.kinetic_energy(ws) + self.model.energy(Rs, np.broadcast_to(currents, (count, len(currents))))
-            return R, w, times, Rs, ws, energy
-        torque = lambda Rb: self.model.torque(Rb, currents[None])  # noqa: E731
-        R, w = R[None], w[None]
-        times, Rs, ws = [], [], []
-        tau = None
-        for n in range(1, steps + 1):
-            R, w, tau = self.rotor.step(R, w, torque, self.dt, tau)
-            if n % record_every == 0 or n == steps:
-                times.append(n * self.dt)
-                Rs.append(R[0])
-                ws.append(w[0])
-        Rs, ws = np.array(Rs), np.array(ws)
-        energy = self.rotor.kinetic_energy(ws) + self.model.energy(Rs, np.broadcast_to(currents, (len(Rs), len(currents))))
-        return R[0], w[0], np.array(times), Rs, ws, energy
 
 
 @single_blas_thread

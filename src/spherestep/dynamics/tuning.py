@@ -25,12 +25,13 @@ from .. import checks
 from ..errors import bad_value
 from ..motor import coil_currents
 from ..statics import equilibrium, finite_difference_hessian
-from .rotor import Rotor
+from .rotor import Integrator, Rotor
 from .._fast.threads import single_blas_thread
 
 FD_STEP = 1e-4  # rad, central differences of the torque
 DECAY = 8.0  # dwell in units of the slowest decay time
 SOFT_QUANTILE = 0.1  # which of the sampled wells' softest stiffness sets the damping
+IRON_DWELL = 4.0  # an iron relay step's dwell, in units of tune's (which covers the well, not the transit)
 
 
 @dataclass(frozen=True)
@@ -43,6 +44,27 @@ class Tuning:
     stiffness: float
     omega: float
     dt: float
+
+    def released(self, model, R: np.ndarray, currents: np.ndarray, trap=None) -> np.ndarray:
+        """Where this rotor, released at rest at ``R`` under ``currents``, is at the end of one ``dwell`` at step
+        ``dt`` (:class:`~.rotor.Integrator`). ``trap`` ``(R_min, radius, bound)``: on a model with compiled
+        terms the integration stops once the rotor is trapped in that well —
+        :func:`spherestep._fast.settle.settle`: within ``radius`` of ``R_min`` with ``½ I|ω|² + E(R) − E(R_min) ≤
+        bound``; damping and friction only take energy away, so it stays there (the iron planner's settling check,
+        :mod:`spherestep.commutation.iron_planner`)."""
+        steps = max(1, int(round(self.dwell / self.dt)))
+        packed = model.packed_terms(currents) if trap is not None else None
+        if packed is None:
+            return Integrator(model, self.rotor, self.dt).run(np.array(R, dtype=float), np.zeros(3), currents,
+                                                              self.dwell, record_every=steps)[0]
+        from .._fast.settle import settle
+        from .rotor import YOSHIDA
+
+        R_min, radius, bound = trap
+        rotor = self.rotor
+        return settle(*packed[:2], np.array(R, dtype=float), *packed[2:7], rotor.inertia, rotor.damping,
+                      rotor.friction, self.dt, steps, np.array(YOSHIDA), np.ascontiguousarray(R_min), radius,
+                      bound)[0]
 
 
 def stiffness(model, R: np.ndarray, currents: np.ndarray) -> np.ndarray:
@@ -74,3 +96,14 @@ def tune(design, model, zeta: float = 1.0, samples: int = 40, seed: int = 0) -> 
     dwell = DECAY / rate
     omega_max = math.sqrt(max(float(np.quantile(eig[:, -1], 0.9)), k) / base.inertia)
     return Tuning(rotor, dwell, k, omega, min(0.25 / omega_max, dwell / 50))
+
+
+def iron_tuning(design, model) -> Tuning:
+    """The relay rotor for iron plans (:func:`spherestep.commutation.plan_iron`): :func:`tune`'s damping and time
+    step, its dwell × :data:`IRON_DWELL` (its dwell is eight decay times of the softest well; on the iron the
+    transit through the detent's flat stretches takes longer: the prototype's misses on the tuned dwell all land
+    at four times it)."""
+    from dataclasses import replace
+
+    base = tune(design, model)
+    return replace(base, dwell=IRON_DWELL * base.dwell)

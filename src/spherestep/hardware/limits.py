@@ -42,11 +42,15 @@ class ThermalLimits:
         checks.number(self.max_duty, "max_duty", low=0.0, high=1.0, low_open=True, expected="a fraction in (0, 1]")
         checks.positive(self.window, "window", "a positive number of seconds")
 
+    def guard(self, tolerance: float = 1e-9) -> ThermalGuard:
+        """A fresh :class:`ThermalGuard` of these limits (nothing on yet)."""
+        return ThermalGuard(self, tolerance)
+
     def check_plan(self, plan, rate: float) -> None:
         """Raise :class:`ThermalLimitError` naming the first step and coil that a run at ``rate`` Hz would
         overheat; step ``i`` is driven from ``i / rate`` to ``(i + 1) / rate`` and all coils are off after."""
         rate = checks.positive(rate, "rate", "a positive step rate in Hz, such as 10")
-        guard = ThermalGuard(self)
+        guard = self.guard()
         period = 1.0 / rate
         for i, step in enumerate(plan.steps):
             guard.check(step.coils, i * period, period, f"step {step.index}")
@@ -90,6 +94,15 @@ class ThermalGuard:
                     f"coil {coil} would be on for {used:.3f} s of the {lim.window:g} s before the end of {where} "
                     f"(duty {used / lim.window:.3f}), over max_duty = {lim.max_duty:g}; use a plan that "
                     "rests the coil or a larger max_duty if the coil's rating allows")
+
+    def allows(self, coils: Iterable[int], t: float, duration: float) -> bool:
+        """Whether holding ``coils`` from ``t`` for ``duration`` s keeps every limit (:meth:`check` without the
+        error)."""
+        try:
+            self.check(coils, t, duration, "a candidate")
+        except ThermalLimitError:
+            return False
+        return True
 
     def record(self, coils: Iterable[int], t: float) -> None:
         """Note that exactly ``coils`` are on from time ``t``; forget spans older than one window."""

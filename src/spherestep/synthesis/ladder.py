@@ -16,6 +16,10 @@ returns one row per core the spec allows, stopping a row at the first rung it fa
    a bang-bang time estimate ``2 √(θ I / τ)`` for the stated turn (an objective at the median torque; the prune
    uses the largest sampled torque, so it only drops designs that are clearly too slow).
 
+4. ``relays`` (relay specs, seconds): :func:`relay_rung`, the settled relay plan of the stated turn and the many-turn
+   verdict (run serially by :class:`~.run.Ladder` or on Dask by :func:`~.tasks.relay_part`; it lives here, with
+   the other rungs, so the run and its tasks do not import each other).
+
 The costly rung, full simulation, is :mod:`.verify`, for the finalists only.
 
 **Iron and cost.** An iron core whose magnet, coil and gap geometry and ampere-turns equal the prototype's reuses the
@@ -437,3 +441,53 @@ def baseline_layout(spec) -> dict | None:
             "stator_level": stator.refine or 0, "cap_deg": round(math.degrees(stator.cap_half_angle), 9),
             "core": (doc.coil.core if doc.coil is not None else None) or "iron",
             "sphere_diameter": doc.dimensions.sphere_diameter, "remanence": float(doc.remanence)}
+
+
+def relay_rung(candidate: Candidate, row: dict, spec, design=None) -> None:
+    """The ladder's relay rung, for relay specs: the settled relay plan of the stated turn (30° about z without
+    one) on the design's own model, simulated as :func:`spherestep.drive.drive_turn` (``mode="settled"``) does
+    (the same plan, tuning and :func:`spherestep.dynamics.simulate`), keeping each step's landing error; prunes the
+    row unless every step lands within 0.5° of the plan and the plan's most coils at once draw at most the supply's
+    power, then unless at least 95 % of 20 seeded random turns of 15-360° execute as well
+    (:func:`spherestep.drive.many_turns`, stopping once that is out of reach). The plan is the design's relay
+    planner's (the iron-aware one on iron). ``design``: the row's design as the cheap rungs built it (its stepper
+    states already found), else built again. Records ``relay_worst_deg`` (the worst landing error),
+    ``relay_peak_W`` and ``relay_turns_fraction``."""
+    from ..drive import many_turns
+    from ..drive.turn import Turn, choose_model
+    from ..dynamics import simulate
+
+    start = time.perf_counter()
+    design = build(candidate, row["core"], spec) if design is None else design
+    axis = spec.speed.axis.vector if spec.speed is not None else np.array([0.0, 0.0, 1.0])
+    angle = spec.speed.turn if spec.speed is not None else math.radians(30.0)
+    try:
+        job = Turn(design, axis, angle, choose_model(design))
+        plan, tuning = job.plan, job.tuning
+        sim = simulate(design, plan, job.chosen.model, dwell=tuning.dwell, rotor=tuning.rotor, dt=tuning.dt)
+    except Exception as exc:  # noqa: BLE001 (a plan that cannot be made is recorded)
+        row.update(stage="relays", status="pruned", reason=f"no relay plan: {type(exc).__name__}: {exc}")
+        return
+    errors = np.asarray(sim.step_errors[1:], dtype=float)  # the steps, not the start
+    on_plan = int(np.count_nonzero(errors <= sim.tolerance))
+    limits = job.chosen.limits
+    peak = max(len(s.coils) for s in plan.steps) * limits.relay_power
+    row.update(relay_steps=len(errors), relay_steps_on_plan=on_plan, relay_executed=bool(sim.executed),
+               relay_worst_deg=math.degrees(float(errors.max())) if len(errors) else 0.0, relay_peak_W=peak)
+    if not sim.executed:
+        row.update(stage="relays", status="pruned", reason=f"settled relay plan: {on_plan} of {len(errors)} steps "
+                   f"within 0.5° of the plan (the worst {row['relay_worst_deg']:.3g}° off)")
+    elif peak > spec.supply.power * (1 + 1e-9):
+        row.update(stage="relays", status="pruned", reason=f"the relay plan energises coils drawing {peak:.3g} W at "
+                   f"once, over the supply's {spec.supply.power:.3g} W")
+    else:
+        row["stage"] = "relays"
+        try:
+            many = many_turns(design, stop_early=True)  # the spec's turn passed above: 20 random ones now
+        except Exception as exc:  # noqa: BLE001 (a verdict that cannot be reached is recorded)
+            row.update(status="pruned", reason=f"many turns: {type(exc).__name__}: {exc}")
+        else:
+            row["relay_turns_fraction"] = many.fraction
+            if not many.steps:
+                row.update(status="pruned", reason=f"many turns: {many.line()}")
+    row["seconds"] = row.get("seconds", 0.0) + time.perf_counter() - start

@@ -28,7 +28,7 @@ from .eta import (ALIGNMENT_SECONDS, BUILD_SECONDS, REPORT_SECONDS, REPORT_STATE
 from .answer import _answer, closest_row, nearest_rows
 from .front import Finalist, _json, _missing, choose_finalists, pareto
 from . import tasks
-from .ladder import GRADES, N42, PROTOTYPE, WINDINGS, Candidate, _row, baseline_layout, build, climb
+from .ladder import GRADES, N42, PROTOTYPE, WINDINGS, Candidate, _row, baseline_layout, build, climb, relay_rung
 
 STORE = "results"
 GAP_SCALES = (2.0, 4.0, 8.0)  # the baseline's air gap widened (iron: a table solve each, thorough budget)
@@ -274,56 +274,6 @@ def task_seconds(c: Candidate, spec, costly: bool = False) -> float:
     (:func:`~.eta.relay_rung_seconds`), and :data:`~.eta.SOLVE_SECONDS` for a task that may solve an iron table."""
     seconds = ALIGNMENT_SECONDS * float(pairs(c)) ** 2 * (2.0 if spec.relays else 1.0) + relay_rung_seconds(spec.relays)
     return seconds + (SOLVE_SECONDS if _solves(c, spec, costly) else 0.0)
-
-
-def relay_rung(candidate: Candidate, row: dict, spec, design=None) -> None:
-    """The ladder's relay rung, for relay specs: the settled relay plan of the stated turn (30° about z without
-    one) on the design's own model, simulated as :func:`spherestep.drive.drive_turn` (``mode="settled"``) does
-    (the same plan, tuning and :func:`spherestep.dynamics.simulate`), keeping each step's landing error; prunes the
-    row unless every step lands within 0.5° of the plan and the plan's most coils at once draw at most the supply's
-    power, then unless at least 95 % of 20 seeded random turns of 15-360° execute as well
-    (:func:`spherestep.drive.many_turns`, stopping once that is out of reach). The plan is the design's relay
-    planner's (the iron-aware one on iron). ``design``: the row's design as the cheap rungs built it (its stepper
-    states already found), else built again. Records ``relay_worst_deg`` (the worst landing error),
-    ``relay_peak_W`` and ``relay_turns_fraction``."""
-    from ..drive import many_turns
-    from ..drive.turn import Turn, choose_model
-    from ..dynamics import simulate
-
-    start = time.perf_counter()
-    design = build(candidate, row["core"], spec) if design is None else design
-    axis = spec.speed.axis.vector if spec.speed is not None else np.array([0.0, 0.0, 1.0])
-    angle = spec.speed.turn if spec.speed is not None else math.radians(30.0)
-    try:
-        job = Turn(design, axis, angle, choose_model(design))
-        plan, tuning = job.plan, job.tuning
-        sim = simulate(design, plan, job.chosen.model, dwell=tuning.dwell, rotor=tuning.rotor, dt=tuning.dt)
-    except Exception as exc:  # noqa: BLE001 (a plan that cannot be made is recorded)
-        row.update(stage="relays", status="pruned", reason=f"no relay plan: {type(exc).__name__}: {exc}")
-        return
-    errors = np.asarray(sim.step_errors[1:], dtype=float)  # the steps, not the start
-    on_plan = int(np.count_nonzero(errors <= sim.tolerance))
-    limits = job.chosen.limits
-    peak = max(len(s.coils) for s in plan.steps) * limits.relay_power
-    row.update(relay_steps=len(errors), relay_steps_on_plan=on_plan, relay_executed=bool(sim.executed),
-               relay_worst_deg=math.degrees(float(errors.max())) if len(errors) else 0.0, relay_peak_W=peak)
-    if not sim.executed:
-        row.update(stage="relays", status="pruned", reason=f"settled relay plan: {on_plan} of {len(errors)} steps "
-                   f"within 0.5° of the plan (the worst {row['relay_worst_deg']:.3g}° off)")
-    elif peak > spec.supply.power * (1 + 1e-9):
-        row.update(stage="relays", status="pruned", reason=f"the relay plan energises coils drawing {peak:.3g} W at "
-                   f"once, over the supply's {spec.supply.power:.3g} W")
-    else:
-        row["stage"] = "relays"
-        try:
-            many = many_turns(design, stop_early=True)  # the spec's turn passed above: 20 random ones now
-        except Exception as exc:  # noqa: BLE001 (a verdict that cannot be reached is recorded)
-            row.update(status="pruned", reason=f"many turns: {type(exc).__name__}: {exc}")
-        else:
-            row["relay_turns_fraction"] = many.fraction
-            if not many.steps:
-                row.update(status="pruned", reason=f"many turns: {many.line()}")
-    row["seconds"] = row.get("seconds", 0.0) + time.perf_counter() - start
 
 
 @dataclass(frozen=True)

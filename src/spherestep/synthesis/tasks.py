@@ -6,7 +6,7 @@ For a candidate layout ``c``:
 * ``shared`` — :func:`shared_rungs`: geometry and the stepper states (rungs 1–2, shared by the cores; the states
   are enumerated once); its result, the rows and the built designs, stays on the worker that made it;
 * per core still climbing, ``capability`` — :func:`core_rung`: rung 3 on that core's design;
-* per core, for relay specs, ``relays`` — :func:`relay_part`: the relay rung (:func:`~.run.relay_rung`), run
+* per core, for relay specs, ``relays`` — :func:`relay_part`: the relay rung (:func:`~.ladder.relay_rung`), run
   beside the capability rung rather than after it (it needs only the design and its states). Its result is kept
   only when the capability rung passes the row, so every row is the one the whole ladder in one task gives; the
   price is a relay rung run for a row the capability rung then prunes (relay specs prune there only on
@@ -55,7 +55,7 @@ def core_rung(part, runner, candidate, core: str) -> tuple[dict, float]:
 
 def relay_part(part, runner, candidate, core: str) -> tuple[dict | None, float]:
     """The relay rung's changes to ``core``'s row (None if the shared rungs stopped it) and this task's seconds."""
-    from .run import relay_rung
+    from .ladder import relay_rung
 
     start = time.perf_counter()
     row, design = _row_of(part, core)
