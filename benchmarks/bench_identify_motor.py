@@ -31,7 +31,8 @@ from bench_identification import gain_errors
 
 from spherestep import so3
 from spherestep.control import Trajectory, hold_orientations, torque_error
-from spherestep.drive import Emulated, identify_motor
+from spherestep.drive import Emulated
+from spherestep.drive.identify import identify_motor
 from spherestep.drive.plant import PlantError
 from spherestep.drive.session import servo_session
 from spherestep.magnetics import design_model

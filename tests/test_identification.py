@@ -121,7 +121,11 @@ def test_plant_grammar(design, pairwise):
     rotor = PlantError.parse("inertia=1.3,damping=0.02,friction=0.01").rotor(design)
     assert (rotor.inertia, rotor.damping, rotor.friction) == pytest.approx(
         (1.3 * Rotor.from_design(design).inertia, 0.02, 0.01))
-    for bad in ("x=1", "dead=a", "realistic,seed=1,seed=2", "winding-spread=2", "winding", "coil-offset=-1"):
+    bent = PlantError.parse("saturation=0.7").plant(pairwise)
+    assert bent.knee == 0.7 and np.array_equal(bent.gains, np.ones(pairwise.coil_count))
+    assert PlantError.parse("realistic").saturation is None
+    for bad in ("x=1", "dead=a", "realistic,seed=1,seed=2", "winding-spread=2", "winding", "coil-offset=-1",
+                "saturation=0"):
         with pytest.raises(InputError, match="--plant-error") as err:
             PlantError.parse(bad)
         assert "\n" not in str(err.value)
@@ -247,11 +251,14 @@ def test_a_saturating_plant_is_refused_naming_saturation(design, pairwise):
 
 
 def test_save_load_keeps_the_per_coil_terms(design, pairwise, tmp_path):
-    """The YAML round trip keeps the gains, turns and their σ and the model's torque (1e-10 relative)."""
-    plant = PlantError.parse("winding-spread=0.1,coil-offset=0.5,misplaced=3,seed=4").plant(pairwise)
-    cal = calibrate(design, pairwise, synthetic_holds(plant, 60, seed=5), coupling=False, iterations=1)
+    """The YAML round trip keeps the gains, turns and their σ, the windings' knee and the model's torque (1e-10
+    relative)."""
+    plant = PlantError.parse("winding-spread=0.1,coil-offset=0.5,misplaced=3,saturation=1,seed=4").plant(pairwise)
+    cal = calibrate(design, pairwise, synthetic_holds(plant, 60, seed=5), coupling=False, iterations=1,
+                    saturation=True)
     back = Calibration.load(cal.save(tmp_path / "c.yaml"), design, accept_inconsistent=True)
     assert np.allclose(back.gains, cal.gains, rtol=1e-12) and np.allclose(back.turns, cal.turns, atol=1e-15)
+    assert cal.knee is not None and back.knee == cal.knee and back.model.knee == cal.knee
     assert np.allclose(back.gains_std, cal.gains_std, rtol=1e-12)
     R = so3.random(4, 9)
     c = np.random.default_rng(3).uniform(-1, 1, (4, pairwise.coil_count))
