@@ -17,8 +17,7 @@ model), the fit (tables, per-coil gains and placements, judged on every fifth ho
 
 ``--part saturation`` (or ``all``): the plant with its windings saturating too (``saturation=`` ``--knee``, per unit:
 each winding's torque ``knee tanh(c/knee)``; the holds' currents reach 0.5–0.95 per unit, RMS 0.27), the full fit
-(tables, gains, placements) and its diagnosis (target: refused, naming saturation, the knee found), and the same
-holds' fit with the saturation term (the knee it finds).
+(tables, gains, placements) and its diagnosis (target: refused, naming saturation with the knee its refit finds).
 
 Seeds: ``--tune-seed`` (the one the thresholds were looked at on) and ``--seeds`` (held out). JSON with ``--json``.
 """
@@ -120,13 +119,10 @@ def saturation_row(design, own, spec: str, knee: float, holds_count: int, seed: 
     t2 = time.perf_counter()
     missing = diagnose(design, own.model, holds, cal, gains=True, turns=True) if cal.consistent is False else ()
     t3 = time.perf_counter()
-    bent = calibrate(design, own.model, holds, saturation=True)
     return {"seed": seed, "plant": plant_spec, "holds": len(holds), "collect_s": t1 - t0, "fit_s": t2 - t1,
             "diagnose_s": t3 - t2, "consistent": cal.consistent, "missing": list(missing),
             "named_saturation": any("saturation" in m for m in missing), "verdict": cal.judged,
-            "with_saturation": {"consistent": bent.consistent, "knee": bent.knee, "judged": bent.judged,
-                                "torque_error": torque_error(bent.model, plant)},
-            "torque_error_without": torque_error(cal.model, plant)}
+            "torque_error_before": torque_error(own.model, plant), "torque_error_after": torque_error(cal.model, plant)}
 
 
 def main() -> None:

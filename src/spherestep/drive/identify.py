@@ -17,7 +17,8 @@
    calibration is the one saved and used from then on (the holds already fitted keep the first).
 3. **The rotor**: :func:`spherestep.dynamics.rotor_excitation`'s moves recorded with the servo on the *calibrated*
    model and through the array's calibration (:func:`~spherestep.drive.records.record_moves`), inertia, damping and friction by
-   :func:`spherestep.dynamics.fit_rotor` under the calibrated torque (with the currents' lag), each ± σ.
+   :func:`spherestep.dynamics.fit_rotor` under the calibrated torque (with the currents' lag and the calibrated
+   winding's common factor, whose error would otherwise leak into damping and friction), each ± σ.
 """
 
 from __future__ import annotations
@@ -82,6 +83,6 @@ def identify_motor(design, backend, orientations, *, model=None, limits=None, ga
         records = record_moves(design, moves, model=cal.model, limits=limits, emulate=emulated,
                                port=None if emulated else backend.device, sensor_calibration=array_cal, **options,
                                progress=lambda text, *_: say(f"rotor: {text}"))
-        fit = fit_rotor(cal.model, records, lag=True)
+        fit = fit_rotor(cal.model, records, lag=True, winding=True)
     sensed = None if array_cal is None else {**array_cal.to_dict(), "first_pass": first.to_dict()}
     return replace(cal, rotor=None if fit is None else fit.to_dict(), sensors=sensed), holds
