@@ -8,7 +8,10 @@ damping 0.03 N·m·s/rad, friction 0.01 N·m, per-sensor offsets of 100 µT, the
 * wall time of the whole run (target ≤ 3 min; the load is printed: 2 cores shared);
 * the array: the turn's error ``|log(Q_fit Q_trueᵀ)|`` and the offsets' RMS error, of the first pass (the design's
   wells) and of the second (the calibrated model's wells: the one saved);
-* the sensor-caused orientation error in truth: ``--check-holds`` holds (``servo_session`` on ``Trajectory.hold``
+* the sensor-caused orientation error in truth, statically: the emulated magnetometers (the array as built) set
+  at rest at 30 random orientations (seed + 200), read (20 samples averaged) and solved by the nominal estimator
+  and through the fitted calibration, each error less a perfect array's (targets: ≤ 0.01° after, 0.1° before);
+* in closed loop: ``--check-holds`` holds (``servo_session`` on ``Trajectory.hold``
   for 1.5 s from 0.5° away) on the plant with the *calibrated* torque model, through the array's calibration and
   without it; the truth's distance to the target at the loop's last cycle (targets: ≤ 0.01° after, 0.1° before);
 * the torque error at 200 held-out orientations (``control.torque_error``) before and after, each live coil's gain
@@ -47,6 +50,32 @@ def array_errors(fit: dict, truth) -> dict:
             "offset_rms_error_uT": 1e6 * float(np.sqrt(np.mean((cal.offsets - truth.offsets) ** 2)))}
 
 
+def static_errors(design, own, array, truth, fit: dict, count: int = 30, seed: int = 200) -> dict:
+    """The sensor-caused orientation error (deg) at ``count`` random orientations, read by the emulated array as
+    built (``truth``) set at rest there: the nominal estimator's and the calibrated one's, each less a perfect
+    array's."""
+    from spherestep.drive.connect import emulated_motor
+    from spherestep.sensing import field_model
+
+    def reader(motor):
+        def read(R):
+            motor.R, motor.w[:], motor.alpha[:] = np.asarray(R, dtype=float), 0.0, 0.0
+            return np.mean([motor.sense()[0] for _ in range(20)], axis=0) * array.part.lsb_T
+        return read
+
+    built = reader(emulated_motor(design, own.model, array, drive=own.limits, sensor_errors=truth))
+    perfect = reader(emulated_motor(design, own.model, array, drive=own.limits))
+    nominal = field_model(design, array.positions).estimator(array)
+    calibrated = ArrayCalibration.from_dict(fit).estimator(design, array)
+    before, after = [], []
+    for R in so3.random(count, seed):
+        m, base = built(R), so3.distance(nominal.solve(perfect(R), R).R, R)
+        before.append(math.degrees(so3.distance(nominal.solve(m, R).R, R) - base))
+        after.append(math.degrees(so3.distance(calibrated.solve(m, R).R, R) - base))
+    return {"before_max_deg": max(before), "before_min_deg": min(before), "after_max_deg": max(after),
+            "after_rms_deg": float(np.sqrt(np.mean(np.square(after))))}
+
+
 def check_holds(design, model, limits, error, plant, array_cal, count: int, seed: int) -> list[float]:
     """``count`` holds on the emulated ``plant`` with the servo on ``model`` through ``array_cal`` (None: the
     nominal array): the truth's distance (deg) to the target at the loop's last cycle."""
@@ -63,14 +92,15 @@ def check_holds(design, model, limits, error, plant, array_cal, count: int, seed
     return out
 
 
-def one(design, own, spec: str, holds_count: int, seed: int, check: int) -> dict:
+def one(design, own, spec: str, holds_count: int, seed: int, check: int, rotor_stage: bool = True) -> dict:
     error = PlantError.parse(f"{spec},seed={seed}")
     plant, rotor = error.plant(own.model), error.rotor(design)
     truth = error.sensor_errors(default_array(design, 8))
     load0 = os.getloadavg()[0]
     t0 = time.perf_counter()
     cal, holds = identify_motor(design, Emulated(plant, rotor=rotor, sensor_errors=truth),
-                                hold_orientations(holds_count, seed=seed), model=own.model, limits=own.limits)
+                                hold_orientations(holds_count, seed=seed), model=own.model, limits=own.limits,
+                                rotor=rotor_stage)
     wall = time.perf_counter() - t0
     g = gain_errors(cal.model, plant)
     fit = cal.rotor or {}
@@ -88,6 +118,9 @@ def one(design, own, spec: str, holds_count: int, seed: int, check: int) -> dict
     if cal.sensors:
         row["array_first_pass"] = array_errors(cal.sensors["first_pass"], truth)
         row["array"] = array_errors(cal.sensors, truth)
+        array = default_array(design, 8)
+        row["static_first_pass"] = static_errors(design, own, array, truth, cal.sensors["first_pass"])
+        row["static"] = static_errors(design, own, array, truth, cal.sensors)
     if check:
         array_cal = ArrayCalibration.from_dict(cal.sensors) if cal.sensors else None
         after = check_holds(design, cal.model, own.limits, error, plant, array_cal, check, seed + 100)
@@ -103,13 +136,14 @@ def main() -> None:
     ap.add_argument("--holds", type=int, default=60)
     ap.add_argument("--seeds", type=int, nargs="+", default=[21])
     ap.add_argument("--check-holds", type=int, default=10)
+    ap.add_argument("--no-rotor", action="store_true", help="leave out the rotor's stage (time)")
     ap.add_argument("--json", default=None)
     a = ap.parse_args()
     design = prototype()
     own = design_model(design)
     rows = []
     for seed in a.seeds:
-        row = one(design, own, a.plant_error, a.holds, seed, a.check_holds)
+        row = one(design, own, a.plant_error, a.holds, seed, a.check_holds, not a.no_rotor)
         rows.append(row)
         print(json.dumps({k: v for k, v in row.items() if k != "verdict"}, default=float), flush=True)
     if a.json:
