@@ -118,10 +118,13 @@ def one(design, own, spec: str, holds_count: int, seed: int, check: int, rotor_s
                               (("inertia", "_kg_m2"), ("damping", "_N_m_s"), ("friction", "_N_m")) if f"{k}{u}" in fit}
     if cal.sensors:
         row["array_first_pass"] = array_errors(cal.sensors["first_pass"], exact)
+        row["array_second_pass"] = array_errors(cal.sensors["second_pass"], exact)
         row["array"] = array_errors(cal.sensors, exact)
+        row["array_kept"] = cal.sensors["kept"]
+        row["array_residual_uT"] = {k: 1e6 * cal.sensors[k]["residual_T"] for k in ("first_pass", "second_pass")}
         array = default_array(design, 8)
         row["static_first_pass"] = static_errors(design, own, array, truth, cal.sensors["first_pass"])
-        row["static"] = static_errors(design, own, array, truth, cal.sensors)
+        row["static_second_pass"] = static_errors(design, own, array, truth, cal.sensors["second_pass"])
     if check:
         array_cal = ArrayCalibration.from_dict(cal.sensors) if cal.sensors else None
         after = check_holds(design, cal.model, own.limits, error, plant, array_cal, check, seed + 100)
