@@ -112,6 +112,25 @@ def test_wells_move_with_the_detent_model_and_the_refined_ones_remove_the_bias(s
     assert math.degrees(so3.distance(refined.rotation, err.rotation)) < 0.003
 
 
+def test_the_default_plants_phantom_turn_is_its_moved_wells(setup):
+    """The CLI's default plant (detent ×1.2 against the cores' coupling ×1, no sensor error at all): readings at
+    its rests fitted against the design's wells give a turn of 0.024° and offsets up to 0.55 mT (what the
+    integrated run reported), and a residual of 383 µT per channel; against the plant's own wells the turn is
+    0.0007° and the residual 21 µT — the residual tells the wrong wells (measured; asserted with margins)."""
+    from spherestep.drive.plant import PlantError
+    from spherestep.sensing import refined_wells
+
+    design, own, array, wells = setup
+    plant = PlantError.parse("detent=1.2,winding=0.85").plant(own.model)
+    rests = refined_wells(plant, wells.rotations)
+    read = _reader(emulated_motor(design, plant, array, drive=own.limits), array.part.lsb_T, 20)
+    readings = np.array([read(R) for R in rests])
+    wrong = calibrate_array_absolute(design, array, readings, wells.rotations)
+    right = calibrate_array_absolute(design, array, readings, rests)
+    assert math.degrees(wrong.angle) > 0.015 and wrong.residual_T > 200e-6
+    assert math.degrees(right.angle) < 0.003 and right.residual_T < 50e-6
+
+
 def test_gains_recovered(setup):
     """With per-axis gains of ±2 % the fit with ``gains=True`` recovers each within 0.5 % (exact references)."""
     design, own, array, wells = setup
