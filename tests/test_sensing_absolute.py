@@ -116,7 +116,8 @@ def test_the_default_plants_phantom_turn_is_its_moved_wells(setup):
     """The CLI's default plant (detent ×1.2 against the cores' coupling ×1, no sensor error at all): readings at
     its rests fitted against the design's wells give a turn of 0.024° and offsets up to 0.55 mT (what the
     integrated run reported), and a residual of 383 µT per channel; against the plant's own wells the turn is
-    0.0007° and the residual 21 µT — the residual tells the wrong wells (measured; asserted with margins)."""
+    0.0007° and the residual 21 µT — the residual tells the wrong wells (measured on the wells of seed 0; these
+    are seed 3's, asserted with margins)."""
     from spherestep.drive.plant import PlantError
     from spherestep.sensing import refined_wells
 
