@@ -121,7 +121,11 @@ def test_plant_grammar(design, pairwise):
     rotor = PlantError.parse("inertia=1.3,damping=0.02,friction=0.01").rotor(design)
     assert (rotor.inertia, rotor.damping, rotor.friction) == pytest.approx(
         (1.3 * Rotor.from_design(design).inertia, 0.02, 0.01))
-    for bad in ("x=1", "dead=a", "realistic,seed=1,seed=2", "winding-spread=2", "winding", "coil-offset=-1"):
+    bent = PlantError.parse("saturation=0.7").plant(pairwise)
+    assert bent.knee == 0.7 and np.array_equal(bent.gains, np.ones(pairwise.coil_count))
+    assert PlantError.parse("realistic").saturation is None
+    for bad in ("x=1", "dead=a", "realistic,seed=1,seed=2", "winding-spread=2", "winding", "coil-offset=-1",
+                "saturation=0"):
         with pytest.raises(InputError, match="--plant-error") as err:
             PlantError.parse(bad)
         assert "\n" not in str(err.value)
@@ -162,6 +166,7 @@ def test_a_fit_without_the_gains_is_refused_and_says_so(design, pairwise, tmp_pa
     assert cal.consistent is False, cal.judged
     missing = diagnose(design, pairwise, holds, cal, gains=False, turns=False, coupling=False)
     assert any("per-coil gain spread" in m and "4" in m for m in missing), missing
+    assert not any("saturation" in m for m in missing), missing
     cal = replace(cal, missing=missing)
     folder = tmp_path / "motor"
     folder.mkdir()
@@ -177,12 +182,83 @@ def test_a_fit_without_the_gains_is_refused_and_says_so(design, pairwise, tmp_pa
     assert "calibrated" in design_model(design, calibration=path, accept_inconsistent=True).label
 
 
+def test_saturation_bends_the_winding_and_its_residual_grows_as_the_cube(design, pairwise):
+    """PerCoil's knee: the torque is the base's at ``k ⊙ knee tanh(c/knee)`` (1e-12), ``torque_matrix`` at ``c``
+    is ``K diag(k sech²(c/knee))`` (central differences, 1e-6 relative); and the signature diagnose relies on: at
+    a fixed pose, the saturating plant's residual against the linear model grows as |c|³ (log-slope 3 ± 0.05 over
+    currents ×0.05…×0.2), the per-coil spread's as |c| (slope 1 ± 1e-6)."""
+    N = pairwise.coil_count
+    rng = np.random.default_rng(2)
+    R = so3.random(3, 5)
+    c = rng.uniform(-1, 1, (3, N))
+    c[:, list(pairwise.failed)] = 0.0
+    g = rng.uniform(0.8, 1.2, N)
+    plant = PerCoil(pairwise, g, knee=0.7)
+    assert not plant.affine_in_currents
+    assert np.allclose(plant.torque(R, c), pairwise.torque(R, g * 0.7 * np.tanh(c / 0.7)), rtol=0, atol=1e-12)
+    from spherestep.statics import TorqueModelBase
+
+    fd = TorqueModelBase.torque_matrix(plant, R, c)
+    assert np.abs(plant.torque_matrix(R, c) - fd).max() <= 1e-6 * np.abs(fd).max()
+    spread = PlantError.parse("winding-spread=0.2,seed=3").plant(pairwise)
+    saturating = PlantError.parse("saturation=0.7").plant(pairwise)
+    scales = np.array([0.05, 0.1, 0.2])
+    for model, slope, tol in ((saturating, 3.0, 0.05), (spread, 1.0, 1e-6)):
+        r = [np.linalg.norm(model.torque(R[0], s * c[0]) - pairwise.torque(R[0], s * c[0])) for s in scales]
+        assert np.polyfit(np.log(scales), np.log(r), 1)[0] == pytest.approx(slope, abs=tol)
+
+
+def test_the_emulated_motor_feels_the_saturation(design):
+    """The emulated motor applies the plant's ``winding_currents``: one coil driven from rest, the rotor's first
+    acceleration times its inertia is ``b + K_k σ(ī_k)`` with ``σ = knee tanh(·/knee)``, ``ī_k`` read off the
+    linear plant's run with the same duty (1e-6 relative: K taken at the start)."""
+    from spherestep.drive.connect import emulated_motor
+    from spherestep.sensing import default_array
+
+    own = design_model(design)
+    rotor = Rotor(Rotor.from_design(design).inertia)
+    k, knee = 6, 0.05
+    taus = []
+    for plant, duty in ((own.model, 0.0), (own.model, 1.0), (PerCoil(own.model, knee=knee), 1.0)):
+        motor = emulated_motor(design, plant, default_array(design, 8), drive=own.limits, rotor=rotor)
+        d = np.zeros(plant.coil_count)
+        d[k] = duty
+        motor.drive(d, True)
+        motor.advance_to(motor.torque_refresh)
+        taus.append(rotor.inertia * motor.alpha)
+    b, lin, sat = taus
+    K = own.model.torque_matrix(np.eye(3))[:, k]  # the rotor barely moved: the same K to ~1e-9
+    mean = float((lin - b) @ K / (K @ K))
+    assert 0.05 < mean < 1.0  # about 0.12 per unit after 2 ms: σ bends it by ~1.5x
+    want = knee * np.tanh(mean / knee) * K
+    assert np.abs(sat - b - want).max() <= 1e-6 * np.abs(want).max()
+
+
+def test_a_saturating_plant_is_refused_naming_saturation(design, pairwise):
+    """A plant whose windings saturate (knee 1 per unit) is not explained by the full fit (gains, placements):
+    refused, and the diagnosis names saturation with its knee (within 5 %), not the per-coil spread; with a ±10 %
+    spread as well, the fit without per-coil terms is diagnosed as both."""
+    for spec, gains, want in (("saturation=1", True, ["saturation"]),
+                              ("winding-spread=0.1,saturation=1", False, ["saturation", "per-coil gain spread"])):
+        plant = PlantError.parse(spec + ",seed=7").plant(pairwise)
+        holds = synthetic_holds(plant, 150, seed=2)
+        cal = calibrate(design, pairwise, holds, coupling=False, gains=gains, turns=gains)
+        assert cal.consistent is False, cal.judged
+        missing = diagnose(design, pairwise, holds, cal, gains=gains, turns=gains, coupling=False)
+        assert [m.split(" (")[0].replace("saturation of the windings", "saturation") for m in missing] == want
+        knee = float(missing[0].split("knee ")[1].split()[0])
+        assert knee == pytest.approx(1.0, rel=0.05)
+
+
 def test_save_load_keeps_the_per_coil_terms(design, pairwise, tmp_path):
-    """The YAML round trip keeps the gains, turns and their σ and the model's torque (1e-10 relative)."""
-    plant = PlantError.parse("winding-spread=0.1,coil-offset=0.5,misplaced=3,seed=4").plant(pairwise)
-    cal = calibrate(design, pairwise, synthetic_holds(plant, 60, seed=5), coupling=False, iterations=1)
+    """The YAML round trip keeps the gains, turns and their σ, the windings' knee and the model's torque (1e-10
+    relative)."""
+    plant = PlantError.parse("winding-spread=0.1,coil-offset=0.5,misplaced=3,saturation=1,seed=4").plant(pairwise)
+    cal = calibrate(design, pairwise, synthetic_holds(plant, 60, seed=5), coupling=False, iterations=1,
+                    saturation=True)
     back = Calibration.load(cal.save(tmp_path / "c.yaml"), design, accept_inconsistent=True)
     assert np.allclose(back.gains, cal.gains, rtol=1e-12) and np.allclose(back.turns, cal.turns, atol=1e-15)
+    assert cal.knee is not None and back.knee == cal.knee and back.model.knee == cal.knee
     assert np.allclose(back.gains_std, cal.gains_std, rtol=1e-12)
     R = so3.random(4, 9)
     c = np.random.default_rng(3).uniform(-1, 1, (4, pairwise.coil_count))

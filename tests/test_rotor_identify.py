@@ -12,6 +12,7 @@ from spherestep.dynamics import Rotor
 from spherestep.dynamics.identify import fit_rotor, rotor_excitation
 from spherestep.errors import InputError
 from spherestep.magnetics import design_model
+from spherestep.magnetics.percoil import PerCoil
 
 
 @pytest.fixture(scope="module")
@@ -37,7 +38,9 @@ def test_simulated_servo_recovers_the_rotor(proto, own, plant_rotor):
     """The simulated servo (fourth-order integrator, exact dissipation flows) on the ×1.3 rotor with damping and
     friction, the controller believing the design's rotor: the fit recovers each within 1 % (measured ~1e-4), a
     current lag of zero (the simulation's currents are the period's means), and the moves it did not fit have
-    the same residual as those it did."""
+    the same residual as those it did; with a model whose winding is 3 % strong, the damping or the friction leaks
+    by more than 20 % (the friction +69 %, measured) unless ``winding=True`` fits the factor (then 1/1.03 within
+    0.2 %, the rotor within 2 %)."""
     moves = rotor_excitation(seed=11, repeats=1, speeds=(1.0, 2.5, 5.0, 1.5))
     series = record_moves(proto, moves, plant_rotor=plant_rotor)
     fit = fit_rotor(own.model, series[:3], lag=True)
@@ -49,6 +52,15 @@ def test_simulated_servo_recovers_the_rotor(proto, own, plant_rotor):
     assert fit.residual(own.model, series[3:]) < 5 * fit.sigma
     wrong = Rotor(plant_rotor.inertia / 1.3, 0.0, 0.0)  # the design's rotor does not explain the moves
     assert replace(fit, inertia=wrong.inertia, damping=0.0, friction=0.0).residual(own.model, series[3:]) > 20 * fit.sigma
+    # a model whose winding is 3 % strong (its detent right): damping and friction leak unless its factor is fitted
+    strong = PerCoil(own.model, np.full(own.model.coil_count, 1.03))
+    leaky = fit_rotor(strong, series[:3], lag=True)
+    assert max(abs(leaky.damping / plant_rotor.damping - 1), abs(leaky.friction / plant_rotor.friction - 1)) > 0.2
+    fixed = fit_rotor(strong, series[:3], lag=True, winding=True)
+    assert fixed.winding_scale == pytest.approx(1 / 1.03, rel=2e-3)
+    for value, true in zip((fixed.inertia, fixed.damping, fixed.friction), (plant_rotor.inertia, plant_rotor.damping,
+                                                                             plant_rotor.friction)):
+        assert value == pytest.approx(true, rel=0.02)
 
 
 @pytest.mark.slow

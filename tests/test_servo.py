@@ -188,6 +188,9 @@ class SpringDetent:
     def packed_terms(self, currents):
         return None  # no compiled form
 
+    def winding_currents(self, currents):
+        return currents  # linear coils
+
     def energy(self, R, currents):
         v = so3.log(R)
         return 0.5 * self.k * np.sum(v * v, -1) - np.sum((np.asarray(currents) @ self.K.T) * v, -1)

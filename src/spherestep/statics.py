@@ -27,12 +27,16 @@ model offers, so that no caller probes it:
 * ``affine_in_currents``: ``True`` when those packed terms' coefficients are affine in each coil's own current
   (``C(c) = C(0) + Σ_k c_k ∂C/∂c_k``, the same parameters and signs at every ``c``): the servo law's cache then
   evaluates ``K(R)`` and the bias in one compiled call from ``C(0)`` and ``C(1) − C(0)``
-  (:class:`spherestep.control.ModelCache`); ``False`` (the default) for a model without packed terms.
+  (:class:`spherestep.control.ModelCache`); ``False`` (the default) for a model without packed terms;
+* ``winding_currents(c)``: the currents as the windings' torque sees them, so that ``τ(R, c) = τ(R, 0) +
+  K(R) winding_currents(c)`` with ``K = torque_matrix(R)`` at zero current: ``c`` itself (the default) for a
+  linear winding, bent for a saturating one (:class:`~spherestep.magnetics.percoil.PerCoil`'s ``knee``). The
+  emulated motor applies it to the mean current of each rotor step.
 
 :class:`TorqueModelBase` supplies what a model need not write itself: the combined ``evaluate`` (energy, torque
 and Hessian in one call), the Hessian by central differences of the torque, ``torque_matrix`` by central
 differences in the currents, the current check, and the cautious declarations ``has_bias = True``,
-``packed_terms(c) = None`` and ``affine_in_currents = False``.
+``packed_terms(c) = None``, ``affine_in_currents = False`` and ``winding_currents(c) = c``.
 
 Equilibria
 ----------
@@ -101,6 +105,8 @@ class TorqueModel(Protocol):
 
     def packed_terms(self, currents) -> Packed | None: ...
 
+    def winding_currents(self, currents) -> np.ndarray: ...
+
 
 def as_currents(currents, coil_count: int, failed: tuple[int, ...] = (), name: str = "currents") -> np.ndarray:
     """The one input contract for coil currents (:func:`spherestep.checks.currents`)."""
@@ -122,6 +128,10 @@ class TorqueModelBase:
     def packed_terms(self, currents) -> Packed | None:
         """The energy as compiled zonal terms for ``currents (..., N)``; ``None``: this model has none."""
         return None
+
+    def winding_currents(self, currents) -> np.ndarray:
+        """The currents as the windings' torque sees them (module docstring): ``currents`` (linear windings)."""
+        return currents
 
     def as_currents(self, currents, name: str = "currents") -> np.ndarray:
         """``currents`` checked against this model (:func:`as_currents`)."""

@@ -68,8 +68,9 @@ def calibrate(
     error: str = typer.Option(DEFAULT_ERROR, "--plant-error",
                               help="With --emulate: how the emulated motor differs from its design: detent=F, "
                                    "winding=F, winding-spread=F, dead=I[+J], coil-offset=DEG, misplaced=K, "
-                                   "inertia=F, damping=NMS, friction=NM, sensor-offset=UT, sensor-bias=DEG, seed=N, "
-                                   "or 'realistic' (docs/control.md)."),
+                                   "inertia=F, damping=NMS, friction=NM, saturation=F (each winding's torque F tanh(c/F): a "
+                                   "term no fit carries, refused by name), sensor-offset=UT, sensor-bias=DEG, "
+                                   "seed=N, or 'realistic' (docs/control.md)."),
     without: str = typer.Option(None, "--without", help="Leave out of the run (comma-separated): gains, placements "
                                                         "(the per-coil terms), sensors (the detent wells' "
                                                         "array calibration; never on a port), rotor (its "

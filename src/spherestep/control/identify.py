@@ -42,7 +42,8 @@ from ..errors import bad_value
 from ..magnetics.calibrated import Calibration, Moved, scaled_coupling
 from .calibration import Holds, regression
 
-PRIOR = {"scale": 0.3, "node": 0.3, "curvature": 0.1, "coupling": 1.0, "gain": 0.3, "turn": math.radians(1.0)}
+PRIOR = {"scale": 0.3, "node": 0.3, "curvature": 0.1, "coupling": 1.0, "gain": 0.3, "turn": math.radians(1.0),
+         "bend": 3.0}
 ENVELOPE_DEG = 5.0  # the envelope of a table: the largest |τ| within this many degrees of a node
 UNSEEN = 0.5  # a parameter is not seen when its posterior variance exceeds this fraction of its prior's
 SIGMA_FLOOR = 1e-6  # of the peak detent: the least noise assumed
@@ -144,25 +145,45 @@ class _Layout:
     gains: slice
     turns: slice
     coupling: slice
+    bend: slice
     size: int
 
 
-def _layout(scales: bool, gains: bool, turns: bool, fit_gain: bool, nf: int, live: int) -> _Layout:
+def _layout(scales: bool, gains: bool, turns: bool, fit_gain: bool, nf: int, live: int, bend: bool) -> _Layout:
     sizes = [(2 if not gains else 1) if scales else 0, nf, nf, live if gains else 0, 2 * live if turns else 0,
-             1 if fit_gain else 0]
+             1 if fit_gain else 0, 1 if bend else 0]
     edges = np.concatenate([[0], np.cumsum(sizes)])
     sl = [slice(int(edges[i]), int(edges[i + 1])) for i in range(len(sizes))]
     return _Layout(*sl, int(edges[-1]))
 
 
+def bent_currents(c: np.ndarray, u: float) -> tuple[np.ndarray, np.ndarray]:
+    """``(σ, ∂σ/∂u)``: the saturating winding's current ``σ(c) = tanh(c √u) / √u`` (the knee ``1/√u``,
+    :class:`~spherestep.magnetics.percoil.PerCoil`) and its derivative in the bend ``u = 1/knee² ≥ 0``; the series
+    ``c − u c³/3 + 2u² c⁵/15`` (and its derivative) where ``|c| √u < 0.05`` (the two agree to 1e-9 there)."""
+    q = math.sqrt(max(u, 0.0))
+    z = c * q
+    small = np.abs(z) < 0.05
+    series = c - u * c ** 3 / 3.0 + 2.0 * u * u * c ** 5 / 15.0
+    dseries = -c ** 3 / 3.0 + 4.0 * u * c ** 5 / 15.0
+    if q == 0.0:
+        return series, dseries
+    th = np.tanh(z)
+    sig = np.where(small, series, th / q)
+    dsig = np.where(small, dseries, (c * (1.0 - th * th) / q - th / (q * q)) / (2.0 * q))
+    return sig, dsig
+
+
 def calibrate(design, model, holds: Holds, *, prior: dict | None = None, scales: bool = True,
-              coupling: bool | None = None, gains: bool = True, turns: bool = True, held_out: bool = True,
-              iterations: int = ITERATIONS) -> Calibration:
+              coupling: bool | None = None, gains: bool = True, turns: bool = True, saturation: bool = False,
+              held_out: bool = True, iterations: int = ITERATIONS) -> Calibration:
     """Fit the iron ``model`` (an :class:`~spherestep.magnetics.IronTorqueMap`, the controller's) to ``holds``
     (:func:`spherestep.drive.collect_holds`) and judge it on the held-out holds (module docstring).
     ``prior`` overrides :data:`PRIOR`'s standard deviations; ``scales=False`` fits the shape corrections alone;
     ``coupling`` whether to fit the cores' coupling gain (default only for a pairwise model); ``gains``/``turns``
-    each coil's gain/placement; ``held_out=False`` fits every hold (no verdict)."""
+    each coil's gain/placement; ``saturation`` the windings' knee too (one bend ``u = 1/knee²`` shared by every
+    winding, ``σ(c) = tanh(c √u)/√u`` in place of ``c``, kept ≥ 0: :func:`diagnose` asks for it to name a saturating
+    motor); ``held_out=False`` fits every hold (no verdict)."""
     from ..magnetics import IronTorqueMap, iron_model
 
     if not isinstance(model, IronTorqueMap):
@@ -206,7 +227,7 @@ def calibrate(design, model, holds: Holds, *, prior: dict | None = None, scales:
     fi = np.nonzero(free)[0]
     nf = len(fi)
     ed, el = _envelope(nodes, d0), _envelope(nodes, l0)
-    lay = _layout(scales, gains, turns, fit_gain, nf, len(live))
+    lay = _layout(scales, gains, turns, fit_gain, nf, len(live), saturation)
     # the prior's precision P = LᵀL
     P = np.zeros((lay.size, lay.size))
     P[lay.scales, lay.scales] = np.eye(lay.scales.stop - lay.scales.start) / p["scale"] ** 2
@@ -216,6 +237,7 @@ def calibrate(design, model, holds: Holds, *, prior: dict | None = None, scales:
     P[lay.gains, lay.gains] = np.eye(lay.gains.stop - lay.gains.start) / p["gain"] ** 2
     P[lay.turns, lay.turns] = np.eye(lay.turns.stop - lay.turns.start) / p["turn"] ** 2
     P[lay.coupling, lay.coupling] = np.eye(lay.coupling.stop - lay.coupling.start) / p["coupling"] ** 2
+    P[lay.bend, lay.bend] = np.eye(lay.bend.stop - lay.bend.start) / p["bend"] ** 2
     L = np.linalg.cholesky(P + 1e-12 * np.eye(lay.size)).T
     T = tangents(coils0)
 
@@ -238,7 +260,8 @@ def calibrate(design, model, holds: Holds, *, prior: dict | None = None, scales:
     def linearise(x):
         det, win, k, t, g = unpack(x)
         coils = np.einsum("kab,kb->ka", so3.exp(t), coils0)
-        ck = c * k
+        cs, dcs = bent_currents(c, float(x[lay.bend][0])) if saturation else (c, None)
+        ck = cs * k
         m = replace(lin, coils=coils)
         Ad, Al = regression(replace(model, detent=replace(model.detent, coils=coils), linear=m, coupling=None),
                             R, ck, w, eq, E)
@@ -248,7 +271,7 @@ def calibrate(design, model, holds: Holds, *, prior: dict | None = None, scales:
         cols += [Ad[:, :, m_] * ed[m_] for m_ in fi] + [Al[:, :, m_] * el[m_] for m_ in fi]
         F = Ad @ det + Al @ win + g * offset
         if gains or turns:
-            Dk, Wk, dD, dW = coil_torques(nodes, det, win, poles, pol, coils, R, c, w, eq, E,
+            Dk, Wk, dD, dW = coil_torques(nodes, det, win, poles, pol, coils, R, cs, w, eq, E,
                                           T if turns else None)
         if gains:
             cols += [Wk[:, :, j] for j in live]
@@ -257,6 +280,9 @@ def calibrate(design, model, holds: Holds, *, prior: dict | None = None, scales:
             cols += [diff[:, :, j, b] for j in live for b in range(2)]
         if fit_gain:
             cols += [offset]
+        if saturation:
+            cols += [regression(replace(model, detent=replace(model.detent, coils=coils), linear=m, coupling=None),
+                                R, dcs * k, w, eq, E)[1] @ win]
         return np.stack(cols, axis=-1).reshape(3 * E, -1), F.reshape(-1)
 
     y = holds.rhs.reshape(-1)
@@ -277,6 +303,7 @@ def calibrate(design, model, holds: Holds, *, prior: dict | None = None, scales:
             res = r[rows] - X[rows] @ step
             sigma = max(float(np.sqrt(np.sum(res ** 2) / max(rows.sum() - dof, 1.0))), floor)
         x = x + step
+        x[lay.bend] = np.maximum(x[lay.bend], 0.0)  # a winding that saturates, never one that grows
         if it < iterations - 1:
             X, F = linearise(x)
     after = r - X @ step  # the residual at the final x (to first order in the last step)
@@ -356,7 +383,9 @@ def _result(design, model, holds, v) -> Calibration:
         cross = None  # a pairwise model whose data show no coupling stays pairwise
     tables = IronTorqueMap.from_tables(design, model.coil, nodes, det, win, level=model.linear.meshing,
                                        coupling=None if cross is None else scaled_coupling(cross, g))
-    fitted = PerCoil(tables, k, t) if (v["gains"] or v["turns"]) else tables
+    bend = float(x[lay.bend][0]) if v["saturation"] else 0.0
+    knee = 1.0 / math.sqrt(bend) if bend > 0.0 else None
+    fitted = PerCoil(tables, k, t, knee) if (v["gains"] or v["turns"] or knee) else tables
     rows, test, before, after = v["rows"], v["test"], v["before"], v["after"]
     judged = verdict(holds, test, after.reshape(-1, 3), fitted)
     return Calibration(fitted, nodes.copy(), det, win, std[:n], std[n:], d0.copy(), l0.copy(),
@@ -365,7 +394,7 @@ def _result(design, model, holds, v) -> Calibration:
                        v["sigma"], len(holds), int(np.sum(~test)), tuple(moved), tuple(unseen),
                        cross is not None, holds.backend, coupling_gain=g, coupling_std=coupling_std,
                        design_fingerprint=design.fingerprint, gains=k, gains_std=gain_std, turns=t,
-                       turns_std=turn_std, judged=judged)
+                       turns_std=turn_std, judged=judged, knee=knee)
 
 
 def verdict(holds: Holds, test: np.ndarray, residual: np.ndarray, model) -> dict:
@@ -399,37 +428,43 @@ def verdict(holds: Holds, test: np.ndarray, residual: np.ndarray, model) -> dict
 
 
 def diagnose(design, model, holds: Holds, cal: Calibration, *, gains: bool, turns: bool, **options) -> tuple[str, ...]:
-    """The terms an inconsistent ``cal`` lacks, by comparing fits: each per-coil term the fit left out
-    (``gains``/``turns`` False) is fitted in turn and named when that fit is consistent or halves the held-out
-    holds' residual (a dead coil named as such; neither alone: both together); with none to add, the held-out figures say which side
-    disagrees — moves alone: the rotor's inertia, damping or friction; holds: the sensors' offsets or a
-    saturation (terms no table or gain can take). ``options`` go to :func:`calibrate`."""
-    j = cal.judged
-    names = []
-    left = [t for t, on in (("gains", gains), ("turns", turns)) if not on]
+    """The terms an inconsistent ``cal`` lacks, by comparing fits (forward selection): each term the fit left out
+    — a per-coil term (``gains``/``turns`` False) or the windings' saturation (``calibrate(saturation=True)``: one
+    bend shared by every winding, which the per-coil gains cannot take: their torque grows linearly in the
+    current, a saturated winding's falls below it as ``c³``) — is added in turn, keeping the one that leaves the
+    smallest held-out residual, until a refit is consistent; those terms are named (a dead coil as such,
+    saturation with its knee). No set consistent: the first term, if it halved the held-out holds' residual.
+    Nothing helps: the held-out figures say which side disagrees — moves alone: the rotor's inertia, damping or
+    friction; holds: the sensors' offsets. ``options`` go to :func:`calibrate`."""
+    left = [t for t, on in (("gains", gains), ("turns", turns)) if not on] + ["saturation"]
 
-    def helps(refit) -> bool:
-        return bool(refit.consistent) or refit.judged["hold_rms"] < 0.5 * j["hold_rms"]
+    def refit(terms):
+        return calibrate(design, model, holds, gains=gains or "gains" in terms, turns=turns or "turns" in terms,
+                         saturation="saturation" in terms, **options)
 
-    def name(term, refit) -> str:
+    def name(term, fit) -> str:
         if term == "turns":
             return "coil placement"
-        dead = refit.dead_coils()
+        if term == "saturation":
+            knee = f"knee {fit.knee:.2f} per unit current" if fit.knee else "no knee found"
+            return f"saturation of the windings ({knee}: their torque falls below linear as |c|³)"
+        dead = fit.dead_coils()
         return "per-coil gain spread" + (f" (dead coil{'s' if len(dead) > 1 else ''} {', '.join(map(str, dead))})"
                                          if dead else "")
 
-    for term in left:
-        refit = calibrate(design, model, holds, gains=gains or term == "gains", turns=turns or term == "turns",
-                          **options)
-        if helps(refit):
-            names.append(name(term, refit))
-    if not names and len(left) > 1:  # neither alone: both together
-        refit = calibrate(design, model, holds, gains=True, turns=True, **options)
-        if helps(refit):
-            names = [name(term, refit) for term in left]
-    if names:
-        return tuple(names)
-    holds_ok = j["hold_rms"] <= HOLD_FACTOR * j["hold_noise"]
-    if holds_ok:
+    chosen: list[str] = []
+    first = None
+    while left:
+        fits = {t: refit(chosen + [t]) for t in left}
+        best = min(left, key=lambda t: fits[t].judged["hold_rms"])
+        chosen.append(best)
+        left.remove(best)
+        first = first or fits[best]
+        if fits[best].consistent:
+            return tuple(name(t, fits[best]) for t in chosen)
+    j = cal.judged
+    if first.judged["hold_rms"] < 0.5 * j["hold_rms"]:
+        return (name(chosen[0], first),)
+    if j["hold_rms"] <= HOLD_FACTOR * j["hold_noise"]:
         return ("the rotor's inertia, damping or friction (the held-out moves disagree, the holds agree)",)
-    return ("a sensor offset or saturation (the held-out holds disagree with every per-coil term fitted)",)
+    return ("a sensor offset (the held-out holds disagree with every per-coil and saturation term fitted)",)

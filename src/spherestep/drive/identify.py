@@ -11,9 +11,15 @@
 2. **Holds** read through that calibration (:func:`~spherestep.drive.collect_holds`), and the torque model's fit
    (:func:`spherestep.control.calibrate`: tables, per-coil gains and placements, coupling gain), judged on held-out
    holds; an inconsistent fit is diagnosed (:func:`spherestep.control.identify.diagnose`).
+   **The array again**: the wells are absolute only as far as the detent model is (misplaced coils, or a detent
+   stronger than the cores' coupling, move them by up to 0.19° on the prototype), so the same readings are fitted
+   again against the wells of the *calibrated* model (:func:`~spherestep.sensing.refined_wells`), and the pass
+   whose references explain the readings better (the smaller residual, same parameters) is saved and used from
+   then on (the holds already fitted keep the first).
 3. **The rotor**: :func:`spherestep.dynamics.rotor_excitation`'s moves recorded with the servo on the *calibrated*
-   model (:func:`~spherestep.drive.records.record_moves`), inertia, damping and friction by
-   :func:`spherestep.dynamics.fit_rotor` under the calibrated torque (with the currents' lag), each ± σ.
+   model and through the array's calibration (:func:`~spherestep.drive.records.record_moves`), inertia, damping and friction by
+   :func:`spherestep.dynamics.fit_rotor` under the calibrated torque (with the currents' lag and the calibrated
+   winding's common factor, whose error would otherwise leak into damping and friction), each ± σ.
 """
 
 from __future__ import annotations
@@ -35,7 +41,7 @@ def identify_motor(design, backend, orientations, *, model=None, limits=None, ga
     from ..control.identify import diagnose
     from ..dynamics import fit_rotor, rotor_excitation
     from ..magnetics import design_model
-    from ..sensing import calibrate_array_absolute, default_array, detent_wells
+    from ..sensing import calibrate_array_absolute, default_array, detent_wells, refined_wells
     from .records import record_moves
     from .wells import well_readings
 
@@ -67,12 +73,20 @@ def identify_motor(design, backend, orientations, *, model=None, limits=None, ga
     if cal.consistent is False:
         say("the fit does not explain its held-out holds: comparing fits to name what is missing")
         cal = replace(cal, missing=diagnose(design, model, holds, cal, gains=gains, turns=turns))
+    first = None
+    if array_cal is not None:
+        say("sensors: the array again, against the calibrated model's wells")
+        first = array_cal
+        second = calibrate_array_absolute(design, array, got.readings, refined_wells(cal.model, got.references))
+        array_cal = second if second.residual_T < first.residual_T else first  # the wells that explain the readings
     fit = None
     if rotor:
         moves = rotor_excitation(holds.orientations[-1])
         records = record_moves(design, moves, model=cal.model, limits=limits, emulate=emulated,
-                               port=None if emulated else backend.device, **options,
+                               port=None if emulated else backend.device, sensor_calibration=array_cal, **options,
                                progress=lambda text, *_: say(f"rotor: {text}"))
-        fit = fit_rotor(cal.model, records, lag=True)
-    return replace(cal, rotor=None if fit is None else fit.to_dict(),
-                   sensors=None if array_cal is None else array_cal.to_dict()), holds
+        fit = fit_rotor(cal.model, records, lag=True, winding=True)
+    sensed = None if array_cal is None else {**array_cal.to_dict(), "first_pass": first.to_dict(),
+                                             "second_pass": second.to_dict(), "kept": "second" if array_cal is second
+                                             else "first"}
+    return replace(cal, rotor=None if fit is None else fit.to_dict(), sensors=sensed), holds

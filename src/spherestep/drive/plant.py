@@ -13,13 +13,16 @@ of ``key=value`` (or the word ``realistic``, optionally followed by overrides: `
 ``inertia=F``          the rotor's inertia ×F
 ``damping=NMS``        the rotor's viscous damping, N·m·s/rad (default the emulator's 0.01)
 ``friction=NM``        the rotor's Coulomb (castor) friction, N·m
+``saturation=F``       the cores' flux limit: each winding's torque as ``F tanh(c / F)`` of its current ``c``
+                       (per unit of the nominal current; :class:`~spherestep.magnetics.percoil.PerCoil`'s
+                       ``knee``), a term no calibration fits: it must be refused, naming saturation
 ``sensor-offset=UT``   each Hall sensor's offset, normal with σ UT µT per axis
 ``sensor-bias=DEG``    the sensor array turned by DEG about a fixed (random) axis
 ``seed=N``             the seed of every random draw above (default 0)
 =====================  ============================================================================================
 
 ``realistic`` is :data:`REALISTIC`: per-coil spread ±20 %, two coils misplaced by 1°, inertia ×1.3, damping
-0.03 N·m·s/rad, friction 0.01 N·m, per-sensor offsets of 100 µT and the array turned by 0.1°.
+0.03 N·m·s/rad, friction 0.01 N·m, per-sensor offsets of 100 µT and the array turned by 0.1° (linear windings).
 
 The torque terms build a :class:`~spherestep.magnetics.percoil.PerCoil` plant around the (scaled) model
 (:func:`~spherestep.magnetics.mismatch.scaled_model`), the rotor terms a :class:`~spherestep.dynamics.Rotor`
@@ -39,14 +42,16 @@ from ..errors import bad_value
 REALISTIC = ("winding-spread=0.2,coil-offset=1,misplaced=2,inertia=1.3,damping=0.03,friction=0.01,"
              "sensor-offset=100,sensor-bias=0.1")
 EXPECTED = ("comma-separated key=value among detent=F, winding=F, winding-spread=F, dead=I[+J], coil-offset=DEG, "
-            "misplaced=K, inertia=F, damping=NMS, friction=NM, sensor-offset=UT, sensor-bias=DEG, seed=N, or "
+            "misplaced=K, inertia=F, damping=NMS, friction=NM, saturation=F, sensor-offset=UT, sensor-bias=DEG, seed=N, "
+            "or "
             "'realistic' (e.g. realistic,seed=3 or winding-spread=0.2,dead=4)")
 # key -> (field, kind, low, high): the value's range (inclusive)
 KEYS = {"detent": ("detent", float, 0.0, 100.0), "winding": ("winding", float, 1e-6, 100.0),
         "winding-spread": ("winding_spread", float, 0.0, 0.99), "dead": ("dead", "coils", 0, 10 ** 6),
         "coil-offset": ("coil_offset", float, 0.0, 10.0), "misplaced": ("misplaced", int, 1, 10 ** 6),
         "inertia": ("inertia", float, 0.1, 10.0), "damping": ("damping", float, 0.0, 10.0),
-        "friction": ("friction", float, 0.0, 10.0), "sensor-offset": ("sensor_offset", float, 0.0, 1e5),
+        "friction": ("friction", float, 0.0, 10.0), "saturation": ("saturation", float, 0.01, 100.0),
+        "sensor-offset": ("sensor_offset", float, 0.0, 1e5),
         "sensor-bias": ("sensor_bias", float, 0.0, 10.0), "seed": ("seed", int, 0, 2 ** 32 - 1)}
 
 
@@ -55,7 +60,8 @@ class PlantError:
     """How the emulated motor differs from its design (module docstring): table factors ``detent``,
     ``winding``; ``winding_spread`` (each gain in 1 ± it), ``dead`` coil indices, ``coil_offset`` (degrees) on
     ``misplaced`` coils (None: all); ``inertia`` (a factor), ``damping`` N·m·s/rad (None: the emulator's),
-    ``friction`` N·m; ``sensor_offset`` µT, ``sensor_bias`` degrees; ``seed``."""
+    ``friction`` N·m; ``saturation`` the windings' knee (per unit; None: linear); ``sensor_offset`` µT,
+    ``sensor_bias`` degrees; ``seed``."""
 
     detent: float = 1.0
     winding: float = 1.0
@@ -66,6 +72,7 @@ class PlantError:
     inertia: float = 1.0
     damping: float | None = None
     friction: float = 0.0
+    saturation: float | None = None
     sensor_offset: float = 0.0
     sensor_bias: float = 0.0
     seed: int = 0
@@ -134,15 +141,16 @@ class PlantError:
     @property
     def torque_terms(self) -> bool:
         return bool(self.winding_spread or self.dead or self.coil_offset or self.detent != 1.0
-                    or self.winding != 1.0)
+                    or self.winding != 1.0 or self.saturation is not None)
 
     @property
     def sensor_terms(self) -> bool:
         return bool(self.sensor_offset or self.sensor_bias)
 
     def plant(self, model, name: str = "--plant-error"):
-        """The torque model the emulated rotor obeys: ``model``'s detent ×``detent``, then per-coil gains and
-        turns (:class:`~spherestep.magnetics.percoil.PerCoil`); ``model`` itself when nothing differs."""
+        """The torque model the emulated rotor obeys: ``model``'s detent ×``detent``, then per-coil gains, turns
+        and the windings' knee (:class:`~spherestep.magnetics.percoil.PerCoil`); ``model`` itself when nothing
+        differs."""
         from ..magnetics import IronTorqueMap
         from ..magnetics.mismatch import scaled_model
         from ..magnetics.percoil import PerCoil
@@ -154,7 +162,7 @@ class PlantError:
                             type(model).__name__)
         base = scaled_model(model, detent=self.detent) if self.detent != 1.0 else model
         coils = model.linear.coils if isinstance(model, IronTorqueMap) else np.zeros((model.coil_count, 3))
-        return PerCoil(base, self.gains(model.coil_count, name), self.turns(coils, name))
+        return PerCoil(base, self.gains(model.coil_count, name), self.turns(coils, name), self.saturation)
 
     def rotor(self, design):
         """The emulated rotor: the design's inertia ×``inertia``, ``damping`` (default the emulator's) and

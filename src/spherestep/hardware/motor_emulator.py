@@ -207,15 +207,16 @@ class EmulatedMotor:
         self.t += h
 
     def sync(self) -> None:
-        """Bring the rotor up to the coils' time: one :meth:`Rotor.step` under ``b(R_mid) + K(R_mid) ī`` (``ī`` the
-        mean current since the last sync, ``R_mid`` the orientation predicted for the middle of the interval; ``K``
-        and ``b`` from :attr:`torque_cache`)."""
+        """Bring the rotor up to the coils' time: one :meth:`Rotor.step` under ``b(R_mid) + K(R_mid) σ(ī)`` (``ī``
+        the mean current since the last sync, ``σ`` the plant's ``winding_currents``: ``ī`` itself unless its
+        windings saturate; ``R_mid`` the orientation predicted for the middle of the interval; ``K`` and ``b``
+        from :attr:`torque_cache`)."""
         h = self.t - self._rotor_t
         if h <= 0:
             return
         mid = so3.exp(0.5 * h * self.w) @ self.R
         K, b = self.torque_cache.at(mid, slope=True)  # first order about the anchor (module docstring)
-        tau = (b + K @ self.drive_limits.per_unit(self._charge / h))[None]
+        tau = (b + K @ self.model.winding_currents(self.drive_limits.per_unit(self._charge / h)))[None]
         R, w, _ = self.rotor.step(self.R[None], self.w[None], lambda _R: tau, h, tau)
         self.alpha = (w[0] - self.w) / h
         self.R, self.w = R[0], w[0]

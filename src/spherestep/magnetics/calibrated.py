@@ -56,7 +56,8 @@ class Calibration:
     ``coupling`` whether the fitted model has the cores' coupling, ``coupling_gain`` ± ``coupling_std`` its
     gain against the design's coupling (1: as modelled; 0: none); ``backend``; ``label``; per coil ``gains`` ±
     ``gains_std`` and field ``turns (N, 3)`` rad ± ``turns_std`` (:mod:`spherestep.magnetics.percoil`; None: not
-    fitted); ``judged`` the held-out verdict's figures (N·m), ``missing`` the terms a diagnosis named, ``rotor``
+    fitted); ``knee`` the windings' saturation knee (per unit; None: linear or not fitted — only a fit asked
+    for it fits it); ``judged`` the held-out verdict's figures (N·m), ``missing`` the terms a diagnosis named, ``rotor``
     the rotor's identified terms and ``sensors`` the array's (when identified: ``RotorFit.to_dict``,
     ``ArrayCalibration.to_dict``)."""
 
@@ -92,6 +93,7 @@ class Calibration:
     missing: tuple[str, ...] = ()
     rotor: dict | None = None
     sensors: dict | None = None
+    knee: float | None = None
 
     @property
     def consistent(self) -> bool | None:
@@ -188,7 +190,7 @@ class Calibration:
                 "gains_std": None if self.gains_std is None else [float(x) for x in self.gains_std],
                 "turns_deg": None if self.turns is None else np.degrees(self.turns).tolist(),
                 "turns_std_deg": None if self.turns_std is None else np.degrees(self.turns_std).tolist(),
-                "dead_coils": self.dead_coils(), "reversed_coils": self.reversed_coils(),
+                "knee": self.knee, "dead_coils": self.dead_coils(), "reversed_coils": self.reversed_coils(),
                 "held_out": {k: (None if isinstance(v, float) and not math.isfinite(v) else v)
                              for k, v in self.judged.items()},
                 "missing": list(self.missing), "rotor": self.rotor, "sensors": self.sensors}
@@ -233,6 +235,7 @@ class Calibration:
             coil = {k: None if data.get(k) is None else np.asarray(data[k], dtype=float)
                     for k in ("gains", "gains_std", "turns_deg", "turns_std_deg")}
             judged = {k: (math.nan if v is None else v) for k, v in dict(data.get("held_out") or {}).items()}
+            knee = None if data.get("knee") is None else float(data["knee"])
         except (OSError, yaml.YAMLError, KeyError, TypeError, ValueError) as exc:
             raise bad_value("calibration", "a calibration file written by spherestep calibrate",
                             f"{path} ({type(exc).__name__}: {exc})") from None
@@ -254,10 +257,10 @@ class Calibration:
         cross = scaled_coupling(iron_model(design, coupling=True).coupling, gain) if coupling else None
         model = IronTorqueMap.from_tables(design, design.coil, nodes, det, win, coupling=cross)
         turns = None if coil["turns_deg"] is None else np.radians(coil["turns_deg"]).reshape(-1, 3)
-        if coil["gains"] is not None or turns is not None:
+        if coil["gains"] is not None or turns is not None or knee is not None:
             from .percoil import PerCoil
 
-            model = PerCoil(model, coil["gains"], turns)
+            model = PerCoil(model, coil["gains"], turns, knee)
         return cls(model, nodes, det, win, *arrays, float(data["scale_detent"]), float(data["scale_winding"]),
                    tuple(float(x) for x in data["scale_std"]), float(data["residual_before_Nm"]),
                    float(data["residual_after_Nm"]), float(data["sigma_Nm"]), int(data["holds"]),
@@ -265,7 +268,7 @@ class Calibration:
                    str(data["backend"]), str(data.get("label", "calibrated")), gain,
                    float(data.get("coupling_std", 0.0)), design.fingerprint, coil["gains"], coil["gains_std"], turns,
                    None if coil["turns_std_deg"] is None else np.radians(coil["turns_std_deg"]), judged,
-                   tuple(data.get("missing") or ()), data.get("rotor"), data.get("sensors"))
+                   tuple(data.get("missing") or ()), data.get("rotor"), data.get("sensors"), knee)
 
 
 def calibration_beside(design_path, design=None, accept_inconsistent: bool = False) -> Path | None:

@@ -13,7 +13,7 @@
 * :mod:`.readings`: simulated readings (magpylib, noise, saturation, LSB, current-sense error).
 * :mod:`.estimate`: :class:`Estimator` (Gauss–Newton / Levenberg–Marquardt on SO(3), global start).
 * :mod:`.calibration`: :func:`calibrate` (positions, gains, offsets from readings at unknown poses).
-* :mod:`.absolute`: :func:`detent_wells`, :func:`calibrate_array_absolute` → :class:`ArrayCalibration` (offsets,
+* :mod:`.absolute`: :func:`detent_wells`, :func:`refined_wells`, :func:`calibrate_array_absolute` → :class:`ArrayCalibration` (offsets,
   gains and the array's turn against the detent wells, orientations known absolutely; its ``estimator``).
 * :mod:`.sensor_errors`: :class:`SensorErrors` (an array as built: per-sensor offsets and gains, the array turned).
 * :mod:`.symmetry`: :func:`symmetry_group`, :func:`marked_design`.
@@ -25,7 +25,7 @@
   :class:`IdealSensor` (and the IMU sensors above) implement it.
 """
 
-from .absolute import ArrayCalibration, CalibratedEstimator, Wells, calibrate_array_absolute, detent_wells
+from .absolute import ArrayCalibration, CalibratedEstimator, Wells, calibrate_array_absolute, detent_wells, refined_wells
 from .array import SensorArray, candidate_positions, coil_collisions, fibonacci_directions, radial_frames
 from .calibration import Calibration, calibrate, field_gradient
 from .estimate import Estimate, Estimator, super_fibonacci
@@ -42,7 +42,7 @@ from .sensor import HallSensor, IdealSensor, NoisySensor, OrientationSensor, Sam
 from .symmetry import MarkerEffect, marked_design, marker_effect, symmetry_group
 
 __all__ = [
-    "ArrayCalibration", "CalibratedEstimator", "Wells", "calibrate_array_absolute", "detent_wells", "Accuracy", "BMI270_BMM150", "Calibration", "CoilField", "CoreField", "IronCoilField", "IronFieldTable",
+    "ArrayCalibration", "CalibratedEstimator", "Wells", "calibrate_array_absolute", "detent_wells", "refined_wells", "Accuracy", "BMI270_BMM150", "Calibration", "CoilField", "CoreField", "IronCoilField", "IronFieldTable",
     "core_response", "iron_fields", "Estimate", "Estimator", "FieldModel", "FieldTable", "FusedSensor", "HallSensor",
     "IdealSensor", "Imu", "ImuPart", "ImuSensor", "KnownField", "MagnetometerPart", "MarkerEffect", "Mekf", "NoisySensor",
     "OrientationSensor", "Placement", "SampledSensor", "SensorErrors",

@@ -96,6 +96,23 @@ def detent_wells(model, count: int = 12, *, starts: int = 400, seed=0) -> Wells:
     return Wells(eq.rotation[kept].copy(), eq.stiffness[kept].copy())
 
 
+def refined_wells(model, references) -> np.ndarray:
+    """The wells ``references (K, 3, 3)`` (found on another model) as ``model`` has them: each descended at zero
+    current from its reference (:func:`~spherestep.statics.equilibrium`), ``(K, 3, 3)``. The wells are absolute
+    only as far as the detent model is: on the prototype, two coils misplaced by 1° move them by 0.05–0.19° and a
+    detent 20 % stronger than its cores' coupling by 0.07°, so the array is calibrated again against the wells of
+    the *calibrated* torque model (:func:`spherestep.drive.identify_motor`). InputError when a descent fails or
+    ends more than 1° away (another well)."""
+    from ..statics import equilibrium
+
+    W = so3.as_rotations(references, "references").reshape(-1, 3, 3)
+    eq = equilibrium(model, W, np.zeros(model.coil_count))
+    far = so3.distance(eq.rotation, W) > WELL_SEPARATION
+    if not np.all(eq.converged & eq.is_minimum) or np.any(far):
+        raise bad_value("model", "a model whose wells lie within 1° of the references", "a descent that left its well")
+    return eq.rotation.copy()
+
+
 @dataclass(frozen=True)
 class ArrayCalibration:
     """The array identified (module doc): ``offsets (S, 3)`` T and ``gains (S, 3)`` (sensor frame), the array's turn
