@@ -79,6 +79,25 @@ def submit(client, runner, candidate, priority: float, retries: int = 2) -> list
     return futures
 
 
+def timings(spec, candidate, results: list) -> list[dict]:
+    """One record per task of ``candidate`` from its per-core results (as :func:`merge` reads them): ``kind``
+    (``shared``, ``capability`` or ``relays``), ``core`` (None for the shared rungs) and ``seconds`` inside the
+    task; the shared rungs' seconds are a core row's less its own task's (the row carries both)."""
+    import json
+    from dataclasses import asdict
+
+    cores = list(spec.cores)
+    rungs, relays = results[:len(cores)], results[len(cores):]
+    params = json.dumps(asdict(candidate), sort_keys=True)
+    shared = min(float(row["seconds"]) - took for row, took in rungs)
+    out = [{"params": params, "kind": "shared", "core": None, "seconds": shared}]
+    out += [{"params": params, "kind": "capability", "core": core, "seconds": float(took)}
+            for core, (_, took) in zip(cores, rungs)]
+    out += [{"params": params, "kind": "relays", "core": core, "seconds": float(took)}
+            for core, (_, took) in zip(cores, relays)]
+    return out
+
+
 def merge(spec, results: list) -> tuple[list[dict], float]:
     """The rows of one layout from its per-core results (:func:`submit`'s futures but the first, in order) and the
     summed seconds of its tasks (the shared rungs counted once)."""
