@@ -1,6 +1,8 @@
 """The ladder cut into tasks (issue 40 §6, :mod:`spherestep.synthesis.tasks`): the shared rungs, then per core the
 capability and the relay rung side by side, give exactly the rows of the whole ladder in one task."""
 
+import json
+from dataclasses import asdict
 from pathlib import Path
 
 import pytest
@@ -56,3 +58,18 @@ def test_merge_keeps_the_relay_rung_only_for_rows_the_capability_rung_passes():
     assert rows[0] == ok | relay | {"seconds": 8.0}  # the shared 2 s, its capability 1 s, its relay rung 5 s
     assert rows[1] == pruned  # the capability rung's prune stands; its relay rung's work is dropped
     assert total == pytest.approx(2.0 + 1.0 + 2.0 + 5.0 + 6.0)
+
+
+def test_timings_name_each_task_and_sum_to_the_merged_total():
+    spec = load_spec(EXAMPLES / "paper-task.yaml")
+    c = Candidate("truncated-icosahedron", 0, "truncated-cuboctahedron", 0, 80.0, 0.3)
+    ok = {"core": "air", "status": "ok", "stage": "capability", "seconds": 3.0}
+    pruned = {"core": "iron", "status": "pruned", "stage": "capability", "seconds": 4.0}
+    results = [(dict(ok), 1.0), (dict(pruned), 2.0), ({}, 5.0), ({}, 6.0)]
+    timed = tasks.timings(spec, c, results)
+    _, total = tasks.merge(spec, results)
+    assert [(t["kind"], t["core"], t["seconds"]) for t in timed] == [
+        ("shared", None, 2.0), ("capability", "air", 1.0), ("capability", "iron", 2.0), ("relays", "air", 5.0),
+        ("relays", "iron", 6.0)]
+    assert sum(t["seconds"] for t in timed) == pytest.approx(total)
+    assert {t["params"] for t in timed} == {json.dumps(asdict(c), sort_keys=True)}
