@@ -73,3 +73,16 @@ def test_timings_name_each_task_and_sum_to_the_merged_total():
         ("relays", "iron", 6.0)]
     assert sum(t["seconds"] for t in timed) == pytest.approx(total)
     assert {t["params"] for t in timed} == {json.dumps(asdict(c), sort_keys=True)}
+
+
+def test_merge_leaves_the_results_as_the_tasks_returned_them():
+    """The search logs the timings after merging: merging must not add the relay rung's seconds to the row the
+    shared rungs' seconds are read from (a one-core relay spec, whose row passes the capability rung)."""
+    spec = load_spec(EXAMPLES / "prototype-relays-iron.yaml")
+    assert spec.relays and list(spec.cores) == ["iron"]
+    c = Candidate("truncated-icosahedron", 1, "truncated-cuboctahedron", 1, 80.0, 0.3048)
+    results = [({"core": "iron", "status": "ok", "stage": "capability", "seconds": 3.0}, 1.0),
+               ({"stage": "relays", "status": "pruned", "relay_steps": 7}, 5.0)]
+    rows, total = tasks.merge(spec, results)
+    assert rows[0]["seconds"] == 8.0 and results[0][0]["seconds"] == 3.0 and total == pytest.approx(8.0)
+    assert [t["seconds"] for t in tasks.timings(spec, c, results)] == [2.0, 1.0, 5.0]

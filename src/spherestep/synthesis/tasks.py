@@ -106,6 +106,7 @@ def merge(spec, results: list) -> tuple[list[dict], float]:
     rows, total = [], 0.0
     shared = min(float(row["seconds"]) - took for row, took in rungs)
     for k, (row, took) in enumerate(rungs):
+        row = dict(row)  # the results stay as the tasks returned them (timings reads them too)
         total += took
         if relays:
             changes, relay_took = relays[k]
