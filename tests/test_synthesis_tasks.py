@@ -86,3 +86,29 @@ def test_merge_leaves_the_results_as_the_tasks_returned_them():
     rows, total = tasks.merge(spec, results)
     assert rows[0]["seconds"] == 8.0 and results[0][0]["seconds"] == 3.0 and total == pytest.approx(8.0)
     assert [t["seconds"] for t in tasks.timings(spec, c, results)] == [2.0, 1.0, 5.0]
+
+
+def test_the_shared_task_solves_an_iron_table_once_for_both_rungs(monkeypatch):
+    """A layout whose iron tables are not stored has them solved by its shared task (its capability and relay
+    tasks then read them from the disk cache instead of solving them side by side); one whose tables are stored
+    does not. The solve is a stand-in here (a real one takes minutes)."""
+    import time as clock
+
+    from spherestep import magnetics
+
+    calls = []
+
+    def solve(design, *args, **kwargs):
+        calls.append(design)
+        clock.sleep(0.05)
+
+    monkeypatch.setattr(magnetics, "design_model", solve)
+    spec = load_spec(EXAMPLES / "prototype-relays-iron.yaml")
+    runner = Ladder(spec, False, None, True)  # the normal budget's: the baseline's wider gaps may solve
+    base = dict(rotor="truncated-icosahedron", rotor_level=0, stator="truncated-cuboctahedron", stator_level=0,
+                cap_deg=60.0, sphere_diameter=0.3048, samples=100, capability_samples=8)
+    rows, designs = tasks.shared_rungs(runner, Candidate(**base, gap_scale=2.0))
+    assert rows[0].get("status") is None and calls == [designs["iron"]]
+    assert rows[0]["seconds"] >= 0.05
+    tasks.shared_rungs(runner, Candidate(**base))  # the prototype's gap: the stored tables, scaled
+    assert len(calls) == 1

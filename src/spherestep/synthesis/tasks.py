@@ -4,7 +4,8 @@ and rung after them, so a long layout's work spreads over workers.
 For a candidate layout ``c``:
 
 * ``shared`` — :func:`shared_rungs`: geometry and the stepper states (rungs 1–2, shared by the cores; the states
-  are enumerated once); its result, the rows and the built designs, stays on the worker that made it;
+  are enumerated once), and an iron table solve if the layout needs one; its result, the rows and the built
+  designs, stays on the worker that made it;
 * per core still climbing, ``capability`` — :func:`core_rung`: rung 3 on that core's design;
 * per core, for relay specs, ``relays`` — :func:`relay_part`: the relay rung (:func:`~.run.relay_rung`), run
   beside the capability rung rather than after it (it needs only the design and its states). Its result is kept
@@ -28,10 +29,25 @@ AHEAD = 1e18  # priority added to a layout's per-core tasks: above every shared 
 
 def shared_rungs(runner, candidate):
     """Rungs 1–2 of ``candidate`` (:func:`~.ladder.climb` through the states): ``(rows, designs)``, the designs
-    of the cores still climbing (their stepper states found)."""
-    from .ladder import climb
+    of the cores still climbing (their stepper states found). An iron design still climbing whose tables are not
+    stored has them solved here, once (cached on disk, :mod:`spherestep.magnetics`), rather than by its capability
+    and relay tasks side by side, each the same minutes; the rows' seconds count the solve."""
+    from .ladder import climb, iron_is_stored
 
-    return climb(candidate, runner.spec, runner.may_solve(candidate), runner.baseline, through="states")
+    start = time.perf_counter()
+    rows, designs = climb(candidate, runner.spec, runner.may_solve(candidate), runner.baseline, through="states")
+    iron = designs.get("iron")
+    if iron is not None and not iron_is_stored(iron):
+        from .. import magnetics
+
+        try:
+            magnetics.design_model(iron)
+        except Exception:  # noqa: BLE001 (the capability rung meets the same error and records it)
+            pass
+        took = time.perf_counter() - start
+        for row in rows:
+            row["seconds"] = took
+    return rows, designs
 
 
 def _row_of(part, core: str) -> tuple[dict, object]:
