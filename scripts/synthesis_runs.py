@@ -2,10 +2,13 @@
 
 Run: ``python scripts/synthesis_runs.py NAME SPEC --folder DIR [--commit SHA]``, where ``DIR/NAME`` is the search's
 ``--out`` folder and beside it ``NAME.time`` (``/usr/bin/time -v`` of the command), ``NAME.load`` (lines ``epoch
-load1 load5 load15``, sampled during the run), ``NAME.log`` (its console) and ``NAME.info`` (``start … commit …``).
+load1 load5 load15``, sampled during the run), ``NAME.log`` (its console) and ``NAME.info`` (``start … commit …``);
+a search interrupted and resumed with ``--resume`` has its earlier segments' files as ``NAME-partK.*`` (their wall
+and CPU times are summed; the ladder's wall is theirs plus the last segment's until its verification began).
 
-Kept: every ladder task's layout, kind, core and seconds (from ``DIR/NAME/tasks.jsonl``, rounded to 0.1 ms; their
-sum is ``sum_seconds``), the wall and CPU times, the load, the outcome counts, the relay rung's numbers (rows that
+Kept: every ladder task's layout, kind, core and seconds (from ``DIR/NAME/tasks.jsonl``, the shared rungs' as
+:func:`corrected`, rounded to 0.1 ms; their sum is ``sum_seconds``), each stored row's layout, core, stage and
+seconds (its chain, as the search records it), the wall and CPU times, the load, the outcome counts, the relay rung's numbers (rows that
 reached it, landed the spec's turn, passed the many-turn verdict) and the winner's or closest row; derived with
 :mod:`spherestep.synthesis.schedule`: the 16-worker bound, list schedules and the 2-worker efficiency (the tasks'
 summed seconds over twice the ladder's wall time). Not kept: the Dask logs and the whole results table.
@@ -55,6 +58,22 @@ def _stages(log: Path) -> dict:
     return out
 
 
+def corrected(records: list[dict], table) -> list[dict]:
+    """``records`` with each layout's shared-rung seconds recomputed from its stored rows: a row's ``seconds`` is
+    the shared rungs', its capability task's and, when the relay rung's result was merged (its ``stage`` is
+    ``relays``), its relay task's. (Runs before ccd4415 logged the shared seconds after the merge had added the
+    relay rung's to the row they are read from.)"""
+    own = {(r["params"], r["kind"], r["core"]): float(r["seconds"]) for r in records}
+    shared: dict[str, float] = {}
+    for row in table.itertuples():
+        if (row.params, "shared", None) not in own:
+            continue
+        rest = own[(row.params, "capability", row.core)] + (own.get((row.params, "relays", row.core), 0.0)
+                                                            if row.stage == "relays" else 0.0)
+        shared[row.params] = min(shared.get(row.params, math.inf), float(row.seconds) - rest)
+    return [dict(r, seconds=shared[r["params"]]) if r["kind"] == "shared" else r for r in records]
+
+
 def _clean(value):
     if isinstance(value, float) and not math.isfinite(value):
         return None
@@ -65,7 +84,8 @@ def _clean(value):
 
 def store_run(name: str, spec_path: str, folder: Path, commit: str | None, budget: str = "normal") -> dict:
     out = folder / name
-    records = schedule.read_tasks(out / TASKS)
+    table = pd.read_parquet(out / STORE).drop_duplicates("key", keep="last")
+    records = corrected(schedule.read_tasks(out / TASKS), table)
     layouts = list(dict.fromkeys(r["params"] for r in records))
     index = {p: n for n, p in enumerate(layouts)}
     tasks = [[index[r["params"]], r["kind"], r["core"], round(float(r["seconds"]), 4)] for r in records]
@@ -75,8 +95,10 @@ def store_run(name: str, spec_path: str, folder: Path, commit: str | None, budge
     ladder = Ladder(spec, plan.allow_costly, None, plan.costly_neighbourhood)
     cands = [Candidate(**json.loads(p)) for p in layouts]
     order = [p for _, p in sorted(zip((-cost_estimate(c, spec, ladder.may_solve(c)) for c in cands), layouts))]
-    table = pd.read_parquet(out / STORE).drop_duplicates("key", keep="last")
-    result = json.loads((out / "synthesis.json").read_text())
+    answer = out / "synthesis.json"  # absent when the search was stopped before its answer
+    result = json.loads(answer.read_text()) if answer.exists() else {"winner": None, "finalists": [], "statement":
+                                                                     "stopped during the ladder: no answer"}
+    counts = {f"{stage}:{status}": int(n) for (stage, status), n in table.groupby(["stage", "status"]).size().items()}
     relay = table[table["relay_steps"].notna()]
     turns = relay[relay["relay_turns_fraction"].notna()]
     winner = result["winner"]
@@ -84,20 +106,26 @@ def store_run(name: str, spec_path: str, folder: Path, commit: str | None, budge
     if not len(shown):  # none passed: the closest row (the answer's), else the nearest by change
         steps = table["relay_steps_on_plan"].fillna(-1) / table["relay_steps"].fillna(1).clip(lower=1)
         shown = table.loc[[steps.idxmax()]]
+    segments = [f.name[:-len(".info")] for f in sorted(folder.glob(f"{name}-part*.info"))] + [name]
+    times = [_time(folder / f"{seg}.time") for seg in segments]
+    infos = [(folder / f"{seg}.info").read_text() for seg in segments]
     stages = _stages(folder / f"{name}.log")
-    ladder_wall = stages.get("verification", stages.get("writing"))
-    loads = [float(line.split()[1]) for line in (folder / f"{name}.load").read_text().splitlines() if line.strip()]
-    info = (folder / f"{name}.info").read_text()
+    last = stages.get("verification", stages.get("writing"))
+    ladder_wall = sum(t["wall_s"] for t in times) if last is None else sum(t["wall_s"] for t in times[:-1]) + last
+    loads = [float(line.split()[1]) for seg in segments
+             for line in (folder / f"{seg}.load").read_text().splitlines() if line.strip()]
     total = sum(t[3] for t in tasks)
     kinds = {k: round(sum(t[3] for t in tasks if t[1] == k), 4) for k in schedule.KINDS}
     per = schedule.layouts(rounded)
     return {
-        "spec": spec_path, "budget": budget, "workers": 2, "commit": commit or re.search(r"commit (\S+)", info).group(1),
-        "started": re.search(r"start (\S+)", info).group(1), "ended": re.search(r"end (\S+)", info).group(1),
-        **_time(folder / f"{name}.time"),
+        "spec": spec_path, "budget": budget, "workers": 2,
+        "segments": [{"commit": commit or re.search(r"commit (\S+)", info).group(1),
+                      "started": re.search(r"start (\S+)", info).group(1),
+                      "ended": re.search(r"end (\S+)", info).group(1), **t} for info, t in zip(infos, times)],
+        **{k: round(sum(t[k] for t in times), 2) for k in ("wall_s", "user_s", "system_s")},
         "load": {"samples": len(loads), "min": min(loads), "median": statistics.median(loads), "max": max(loads)},
         "stages_s": stages, "ladder_wall_s": ladder_wall,
-        "candidates": result["candidates"], "counts": result["counts"], "statement": result["statement"],
+        "finished": answer.exists(), "candidates": int(len(table)), "counts": counts, "statement": result["statement"],
         "winner": winner, "finalists": len(result["finalists"]),
         "relay_rung": {"reached": int(len(relay)), "spec_turn_executed": int(relay["relay_executed"].fillna(False).sum()),
                        "many_turns_checked": int(len(turns)),
@@ -110,9 +138,11 @@ def store_run(name: str, spec_path: str, folder: Path, commit: str | None, budge
         "bound_16": round(schedule.bound(rounded, 16), 3),
         "list_16_longest_first": round(schedule.speedup(rounded, 16), 3),
         "list_16_search_order": round(schedule.speedup(rounded, 16, order), 3),
-        "efficiency_2": None if not ladder_wall else round(total / (2 * ladder_wall), 3),
+        "efficiency_2": round(total / (2 * ladder_wall), 3),
         "fields": FIELDS, "layouts": [[json.loads(p)[f] for f in FIELDS] for p in layouts],
         "order": [index[p] for p in order], "tasks": tasks,
+        "rows": [[index[r.params], r.core, r.stage, round(float(r.seconds), 4)] for r in table.itertuples()
+                 if r.params in index],
     }
 
 
@@ -122,11 +152,12 @@ def main() -> None:
     parser.add_argument("spec")
     parser.add_argument("--folder", required=True, type=Path)
     parser.add_argument("--commit")
+    parser.add_argument("--data", type=Path, default=OUT, help="the JSON file the run is stored in")
     args = parser.parse_args()
-    runs = json.loads(OUT.read_text()) if OUT.exists() else {}
+    runs = json.loads(args.data.read_text()) if args.data.exists() else {}
     runs[args.name] = store_run(args.name, args.spec, args.folder, args.commit)
     text = json.dumps(runs, indent=None, separators=(",", ":"))
-    OUT.write_text(text.replace('],[', '],\n[').replace('},"', '},\n"') + "\n")
+    args.data.write_text(text.replace('],[', '],\n[').replace('},"', '},\n"') + "\n")
     r = runs[args.name]
     print(f"{args.name}: {len(r['layouts'])} layouts, {len(r['tasks'])} tasks, Σt {r['sum_seconds']:.1f} s, "
           f"longest path {r['longest_path_s']:.1f} s, bound on 16 {r['bound_16']:.2f}x, list schedule "
