@@ -86,7 +86,12 @@ def from_results(folder: str, spec_path: str, budget: str) -> None:
     from spherestep.synthesis import BUDGETS
     from spherestep.synthesis.run import TASKS
 
-    records = schedule.read_tasks(Path(folder) / TASKS)
+    import pandas as pd
+
+    from spherestep.synthesis.run import STORE
+
+    table = pd.read_parquet(Path(folder) / STORE).drop_duplicates("key", keep="last")
+    records = schedule.corrected(schedule.read_tasks(Path(folder) / TASKS), table)
     spec = load_spec(spec_path)
     plan = BUDGETS[budget]
     ladder = Ladder(spec, plan.allow_costly, None, plan.costly_neighbourhood)

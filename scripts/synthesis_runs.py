@@ -7,7 +7,7 @@ a search interrupted and resumed with ``--resume`` has its earlier segments' fil
 and CPU times are summed; the ladder's wall is theirs plus the last segment's until its verification began).
 
 Kept: every ladder task's layout, kind, core and seconds (from ``DIR/NAME/tasks.jsonl``, the shared rungs' as
-:func:`corrected`, rounded to 0.1 ms; their sum is ``sum_seconds``), each stored row's layout, core, stage and
+:func:`~spherestep.synthesis.schedule.corrected`, rounded to 0.1 ms; their sum is ``sum_seconds``), each stored row's layout, core, stage and
 seconds (its chain, as the search records it), the wall and CPU times, the load, the outcome counts, the relay rung's numbers (rows that
 reached it, landed the spec's turn, passed the many-turn verdict) and the winner's or closest row; derived with
 :mod:`spherestep.synthesis.schedule`: the 16-worker bound, list schedules and the 2-worker efficiency (the tasks'
@@ -58,22 +58,6 @@ def _stages(log: Path) -> dict:
     return out
 
 
-def corrected(records: list[dict], table) -> list[dict]:
-    """``records`` with each layout's shared-rung seconds recomputed from its stored rows: a row's ``seconds`` is
-    the shared rungs', its capability task's and, when the relay rung's result was merged (its ``stage`` is
-    ``relays``), its relay task's. (Runs before ccd4415 logged the shared seconds after the merge had added the
-    relay rung's to the row they are read from.)"""
-    own = {(r["params"], r["kind"], r["core"]): float(r["seconds"]) for r in records}
-    shared: dict[str, float] = {}
-    for row in table.itertuples():
-        if (row.params, "shared", None) not in own:
-            continue
-        rest = own[(row.params, "capability", row.core)] + (own.get((row.params, "relays", row.core), 0.0)
-                                                            if row.stage == "relays" else 0.0)
-        shared[row.params] = min(shared.get(row.params, math.inf), float(row.seconds) - rest)
-    return [dict(r, seconds=shared[r["params"]]) if r["kind"] == "shared" else r for r in records]
-
-
 def _clean(value):
     if isinstance(value, float) and not math.isfinite(value):
         return None
@@ -85,7 +69,7 @@ def _clean(value):
 def store_run(name: str, spec_path: str, folder: Path, commit: str | None, budget: str = "normal") -> dict:
     out = folder / name
     table = pd.read_parquet(out / STORE).drop_duplicates("key", keep="last")
-    records = corrected(schedule.read_tasks(out / TASKS), table)
+    records = schedule.corrected(schedule.read_tasks(out / TASKS), table)
     layouts = list(dict.fromkeys(r["params"] for r in records))
     index = {p: n for n, p in enumerate(layouts)}
     tasks = [[index[r["params"]], r["kind"], r["core"], round(float(r["seconds"]), 4)] for r in records]

@@ -57,3 +57,21 @@ def test_read_tasks_skips_a_cut_last_line_and_keeps_a_resumed_layouts_last(tmp_p
     path.write_text('{"params": "b", "ki\n' + json.dumps(lines[0]) + "\n")
     with pytest.raises(json.JSONDecodeError):
         schedule.read_tasks(path)
+
+
+def test_corrected_recomputes_the_shared_seconds_from_the_stored_rows():
+    """A row's seconds are its shared rungs', its capability task's and (merged, stage "relays") its relay
+    task's: the logged shared seconds of runs before ccd4415 carried the relay task's too, and are recomputed."""
+    import pandas as pd
+
+    records = [dict(params="a", kind="shared", core=None, seconds=2.0 + 5.0),  # logged with the relay rung's 5 s
+               dict(params="a", kind="capability", core="iron", seconds=1.0),
+               dict(params="a", kind="relays", core="iron", seconds=5.0),
+               dict(params="b", kind="shared", core=None, seconds=3.0),
+               dict(params="b", kind="capability", core="iron", seconds=0.5),
+               dict(params="b", kind="relays", core="iron", seconds=4.0)]
+    table = pd.DataFrame([dict(params="a", core="iron", stage="relays", seconds=8.0),  # 2 + 1 + 5
+                          dict(params="b", core="iron", stage="capability", seconds=3.5)])  # pruned: 3 + 0.5
+    fixed = schedule.corrected(records, table)
+    assert [r["seconds"] for r in fixed if r["kind"] == "shared"] == [2.0, 3.0]
+    assert [r for r in fixed if r["kind"] != "shared"] == [r for r in records if r["kind"] != "shared"]

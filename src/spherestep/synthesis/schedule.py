@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import heapq
 import json
+import math
 from collections import defaultdict
 from pathlib import Path
 
@@ -34,6 +35,22 @@ def read_tasks(path) -> list[dict]:
     for r in records:
         last.setdefault(r["params"], {})[(r["kind"], r["core"])] = r
     return [r for layout in last.values() for r in layout.values()]
+
+
+def corrected(records: list[dict], table) -> list[dict]:
+    """``records`` with each layout's shared-rung seconds recomputed from its stored rows: a row's ``seconds`` is
+    the shared rungs', its capability task's and, when the relay rung's result was merged (its ``stage`` is
+    ``relays``), its relay task's. (Runs before ccd4415 logged the shared seconds after the merge had added the
+    relay rung's to the row they are read from.)"""
+    own = {(r["params"], r["kind"], r["core"]): float(r["seconds"]) for r in records}
+    shared: dict[str, float] = {}
+    for row in table.itertuples():
+        if (row.params, "shared", None) not in own:
+            continue
+        rest = own[(row.params, "capability", row.core)] + (own.get((row.params, "relays", row.core), 0.0)
+                                                            if row.stage == "relays" else 0.0)
+        shared[row.params] = min(shared.get(row.params, math.inf), float(row.seconds) - rest)
+    return [dict(r, seconds=shared.get(r["params"], r["seconds"])) if r["kind"] == "shared" else r for r in records]
 
 
 def layouts(records: list[dict]) -> dict[str, dict]:
