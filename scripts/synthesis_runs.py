@@ -4,14 +4,16 @@ Run: ``python scripts/synthesis_runs.py NAME SPEC --folder DIR [--commit SHA]``,
 ``--out`` folder and beside it ``NAME.time`` (``/usr/bin/time -v`` of the command), ``NAME.load`` (lines ``epoch
 load1 load5 load15``, sampled during the run), ``NAME.log`` (its console) and ``NAME.info`` (``start … commit …``);
 a search interrupted and resumed with ``--resume`` has its earlier segments' files as ``NAME-partK.*`` (their wall
-and CPU times are summed; the ladder's wall is theirs plus the last segment's until its verification began).
+and CPU times are summed; the ladder's wall is theirs plus the last segment's until its finalists stage began).
 
 Kept: every ladder task's layout, kind, core and seconds (from ``DIR/NAME/tasks.jsonl``, the shared rungs' as
 :func:`~spherestep.synthesis.schedule.corrected`, rounded to 0.1 ms; their sum is ``sum_seconds``), each stored row's layout, core, stage and
 seconds (its chain, as the search records it), the wall and CPU times, the load, the outcome counts, the relay rung's numbers (rows that
 reached it, landed the spec's turn, passed the many-turn verdict) and the winner's or closest row; derived with
 :mod:`spherestep.synthesis.schedule`: the 16-worker bound, list schedules and the 2-worker efficiency (the tasks'
-summed seconds over twice the ladder's wall time). Not kept: the Dask logs and the whole results table.
+summed seconds over twice the ladder's wall time), and the bound without the layouts that solved an iron table
+(``solving_layouts``: a one-off per part size, cached on disk, so a search on a warm cache has them as ordinary
+tasks). Not kept: the Dask logs and the whole results table.
 """
 
 from __future__ import annotations
@@ -27,7 +29,7 @@ from pathlib import Path
 import pandas as pd
 
 from spherestep.synthesis import BUDGETS, Candidate, Ladder, load_spec, schedule
-from spherestep.synthesis.run import STORE, TASKS, cost_estimate
+from spherestep.synthesis.run import STORE, TASKS, _solves, cost_estimate
 
 ROOT = Path(__file__).resolve().parents[1]
 OUT = ROOT / "data" / "synthesis_normal_runs.json"
@@ -49,10 +51,11 @@ def _time(path: Path) -> dict:
 
 
 def _stages(log: Path) -> dict:
-    """The elapsed seconds at which each stage's first progress line appeared."""
+    """The elapsed seconds at which each stage's first progress line appeared (``stage 2 of 4, finalists: …
+    (2756 s)``)."""
     out = {}
     for line in log.read_text().splitlines():
-        m = re.match(r"spherestep: (ladder|round \d+|verification|writing)\b.*\((\d+) s\)$", line)
+        m = re.match(r"spherestep: stage \d+ of \d+, ([a-z ]+):.*\((\d+) s\)$", line)
         if m and m.group(1) not in out:
             out[m.group(1)] = int(m.group(2))
     return out
@@ -86,21 +89,24 @@ def store_run(name: str, spec_path: str, folder: Path, commit: str | None, budge
     relay = table[table["relay_steps"].notna()]
     turns = relay[relay["relay_turns_fraction"].notna()]
     winner = result["winner"]
-    shown = table[table["key"] == winner] if winner else table.iloc[0:0]
-    if not len(shown):  # none passed: the closest row (the answer's), else the nearest by change
+    named = winner or (result["finalists"][0]["key"] if result["finalists"] else None)  # else the closest finalist
+    shown = table[table["key"] == named] if named else table.iloc[0:0]
+    if not len(shown):  # stopped before its finalists: the row whose settled plan landed most of its steps
         steps = table["relay_steps_on_plan"].fillna(-1) / table["relay_steps"].fillna(1).clip(lower=1)
         shown = table.loc[[steps.idxmax()]]
     segments = [f.name[:-len(".info")] for f in sorted(folder.glob(f"{name}-part*.info"))] + [name]
     times = [_time(folder / f"{seg}.time") for seg in segments]
     infos = [(folder / f"{seg}.info").read_text() for seg in segments]
     stages = _stages(folder / f"{name}.log")
-    last = stages.get("verification", stages.get("writing"))
+    last = stages.get("finalists", stages.get("verification"))
     ladder_wall = sum(t["wall_s"] for t in times) if last is None else sum(t["wall_s"] for t in times[:-1]) + last
     loads = [float(line.split()[1]) for seg in segments
              for line in (folder / f"{seg}.load").read_text().splitlines() if line.strip()]
     total = sum(t[3] for t in tasks)
     kinds = {k: round(sum(t[3] for t in tasks if t[1] == k), 4) for k in schedule.KINDS}
     per = schedule.layouts(rounded)
+    solving = [n for n, c in enumerate(cands) if _solves(c, spec, ladder.may_solve(c))]
+    warm = [r for r in rounded if index[r["params"]] not in solving]
     return {
         "spec": spec_path, "budget": budget, "workers": 2,
         "segments": [{"commit": commit or re.search(r"commit (\S+)", info).group(1),
@@ -122,6 +128,8 @@ def store_run(name: str, spec_path: str, folder: Path, commit: str | None, budge
         "bound_16": round(schedule.bound(rounded, 16), 3),
         "list_16_longest_first": round(schedule.speedup(rounded, 16), 3),
         "list_16_search_order": round(schedule.speedup(rounded, 16, order), 3),
+        "solving_layouts": solving, "bound_16_without_solving": round(schedule.bound(warm, 16), 3),
+        "longest_path_without_solving_s": round(max(v["path"] for v in schedule.layouts(warm).values()), 4),
         "efficiency_2": round(total / (2 * ladder_wall), 3),
         "fields": FIELDS, "layouts": [[json.loads(p)[f] for f in FIELDS] for p in layouts],
         "order": [index[p] for p in order], "tasks": tasks,
