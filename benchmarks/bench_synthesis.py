@@ -1,8 +1,8 @@
 """Synthesis throughput: candidates through the ladder per second on local Dask clusters of 1 and 2 worker processes
 (and 2 threads in one process), the speed-up, and what the tasks' sizes allow on more workers; measured in one run.
 
-Run: ``.venv/bin/python benchmarks/bench_synthesis.py [--quick]``, or ``--results DIR`` for the tasks of a finished
-search (its results store: the time of each task, in ``seconds``).
+Run: ``.venv/bin/python benchmarks/bench_synthesis.py [--quick]``, or ``--results DIR --spec SPEC`` for the tasks
+of a finished search (its task log ``DIR/tasks.jsonl``: each task's kind and seconds).
 
 The work: the camera-gimbal spec (examples/specs/camera-gimbal.yaml: air cores, a 45° cone, 60-mm ball) over 24
 layouts — the truncated icosahedron and the icosidodecahedron, unrefined, on the truncated cuboctahedron, the
@@ -12,13 +12,10 @@ Each cluster is started once and warmed up (every worker imports spherestep and 
 timed repeats. "Busy workers" is the time inside the tasks, summed, over the wall time.
 
 **16 workers.** Issue 29 asks for ≥ 12× on 16 local workers; this machine has 2 cores, so that cannot be measured
-here. What can be said from the measured task times (1 worker process, the first repeat's): a layout is cut into
-tasks (:mod:`spherestep.synthesis.tasks`: the shared rungs, then per core the capability and the relay rung side by
-side), so with ``n`` workers the wall time is at least ``max(Σt / n, max c)`` for ``c`` a layout's critical path
-(its shared rungs, then its longest per-core task), and the speed-up is at most ``Σt / max(Σt / n, max c)``; and a
-greedy list schedule of whole layouts (each task, in submission order, to the worker free first —
-what Dask does with one task per worker) shows what an order achieves: the grid's order against the search's,
-longest first by :func:`spherestep.synthesis.run.cost_estimate`. Both are printed for 16 workers.
+here. What can be said from the measured task times (1 worker process, the first repeat's; or a stored search's)
+is :mod:`spherestep.synthesis.schedule`'s: the bound ``Σt / max(Σt / n, max c)`` for ``c`` a layout's critical
+path (its shared rungs, then its longest per-core task), and greedy list schedules of the tasks, longest path
+first and in the search's order (:func:`spherestep.synthesis.run.cost_estimate`). All are printed for 16 workers.
 """
 
 from __future__ import annotations
@@ -33,7 +30,7 @@ from pathlib import Path
 
 from distributed import Client, LocalCluster, as_completed
 
-from spherestep.synthesis import Candidate, Ladder, load_spec, tasks
+from spherestep.synthesis import Candidate, Ladder, load_spec, schedule, tasks
 from spherestep.synthesis.run import cost_estimate
 
 SPEC = Path(__file__).resolve().parents[1] / "examples" / "specs" / "camera-gimbal.yaml"
@@ -44,70 +41,66 @@ LAYOUTS = [Candidate(r, 0, s, sl, cap, 0.060, samples=400, capability_samples=32
 WARM_UP = Candidate("icosidodecahedron", 0, "truncated-octahedron", 0, 60.0, 0.060, samples=50, capability_samples=8)
 
 
-def run(client: Client, ladder: Ladder, layouts: list) -> tuple[float, list[float], list[float]]:
+def run(client: Client, ladder: Ladder, layouts: list) -> tuple[float, list[dict]]:
     """Wall time of one pass over ``layouts`` (cut into tasks and submitted as the search does,
-    :mod:`spherestep.synthesis.tasks`, longest first by the estimate), each layout's summed task seconds and its
-    critical path (the shared rungs, then the longest of its per-core tasks), in the order of ``layouts``."""
+    :mod:`spherestep.synthesis.tasks`, longest first by the estimate) and its task records
+    (:func:`spherestep.synthesis.tasks.timings`)."""
     start = time.perf_counter()
     cost = [cost_estimate(c, ladder.spec, ladder.may_solve(c)) for c in layouts]
     parts = [tasks.submit(client, ladder, c, k) for c, k in zip(layouts, cost)]
     owner = {f: n for n, fs in enumerate(parts) for f in fs[1:]}
     left = [len(fs) - 1 for fs in parts]
-    inside, chain = [0.0] * len(layouts), [0.0] * len(layouts)
+    records: list[dict] = []
     for future in as_completed(list(owner)):
         n = owner[future]
         left[n] -= 1
-        if left[n]:
-            continue
-        results = [f.result() for f in parts[n][1:]]
-        row, took = results[0]  # a core's row carries the shared rungs' seconds and its own task's
-        chain[n] = float(row["seconds"]) - took + max(t for _, t in results)
-        _, inside[n] = tasks.merge(ladder.spec, results)
-    return time.perf_counter() - start, inside, chain
+        if not left[n]:
+            records += tasks.timings(ladder.spec, layouts[n], [f.result() for f in parts[n][1:]])
+    return time.perf_counter() - start, records
 
 
-def list_schedule(times: list[float], workers: int) -> float:
-    """Makespan (s) of ``times`` in this order, each task to the worker free first."""
-    free = [0.0] * workers
-    for t in times:
-        k = free.index(min(free))
-        free[k] += t
-    return max(free)
-
-
-def scaling(times: list[float], estimates: list[float], workers: int = 16, chains: list[float] | None = None) -> str:
-    """The bound and the list schedules on ``workers`` for layouts of summed task ``times`` (grid order) with cost
-    ``estimates``; ``chains`` their critical paths (default: the times, a layout in one task)."""
-    total, longest = sum(times), max(times if chains is None else chains)
-    bound = total / max(total / workers, longest)
-    grid = total / list_schedule(times, workers)
-    order = sorted(range(len(times)), key=lambda n: -estimates[n])
-    first = total / list_schedule([times[n] for n in order], workers)
-    top = sorted(times, reverse=True)[:5]
-    paths = "" if chains is None else f", longest critical path {longest:.1f} s"
-    return (f"{len(times)} layouts: Σt = {total:.1f} s, longest {', '.join(f'{t:.1f}' for t in top)} s{paths}; on {workers} "
-            f"workers the bound Σt / max(Σt/{workers}, max t) = {bound:.1f}x; a list schedule in grid order "
-            f"{grid:.1f}x, longest first by the estimate {first:.1f}x")
+def scaling(records: list[dict], estimate=None, workers: int = 16) -> str:
+    """The bound and the list schedules on ``workers`` (:mod:`spherestep.synthesis.schedule`) of task
+    ``records``: longest critical path first, and in the order of ``estimate(params)`` (the search's)."""
+    per = schedule.layouts(records)
+    total = sum(v["total"] for v in per.values())
+    kinds = {k: sum(r["seconds"] for r in records if r["kind"] == k) for k in schedule.KINDS}
+    paths = sorted((v["path"] for v in per.values()), reverse=True)[:5]
+    text = (f"{len(per)} layouts, {len(records)} tasks: Σt = {total:.1f} s ("
+            + ", ".join(f"{k} {v:.1f}" for k, v in kinds.items() if v) + f"), longest task "
+            f"{max(r['seconds'] for r in records):.1f} s, longest critical paths {', '.join(f'{t:.1f}' for t in paths)}"
+            f" s; on {workers} workers the bound Σt / max(Σt/{workers}, max path) = "
+            f"{schedule.bound(records, workers):.1f}x, a list schedule longest path first "
+            f"{schedule.speedup(records, workers):.1f}x")
+    if estimate is not None:
+        order = sorted(per, key=lambda p: -estimate(p))
+        text += f", in the search's order (its estimate) {schedule.speedup(records, workers, order):.1f}x"
+    return text
 
 
 def from_results(folder: str, spec_path: str, budget: str) -> None:
-    """The scaling of a finished search's tasks (its store, ``DIR/results``: one row per core; a task's time is the
-    longest of its rows', the cheap rungs counted in each) for the spec at ``spec_path`` and ``budget``."""
+    """The scaling of a finished search's tasks (its log ``DIR/tasks.jsonl``, :data:`~spherestep.synthesis.run.TASKS`)
+    for the spec at ``spec_path`` and ``budget``."""
     import json
+
+    from spherestep.synthesis import BUDGETS
+    from spherestep.synthesis.run import TASKS
 
     import pandas as pd
 
-    from spherestep.synthesis import BUDGETS
+    from spherestep.synthesis.run import STORE
 
-    table = pd.read_parquet(Path(folder) / "results").drop_duplicates("key", keep="last")  # the search's store
+    table = pd.read_parquet(Path(folder) / STORE).drop_duplicates("key", keep="last")
+    records = schedule.corrected(schedule.read_tasks(Path(folder) / TASKS), table)
     spec = load_spec(spec_path)
-    tasks = table.groupby("params", sort=False)["seconds"].max()
-    times = tasks.tolist()
     plan = BUDGETS[budget]
     ladder = Ladder(spec, plan.allow_costly, None, plan.costly_neighbourhood)
-    estimates = [cost_estimate(Candidate(**json.loads(p)), spec, ladder.may_solve(Candidate(**json.loads(p))))
-                 for p in tasks.index]
-    print(f"{folder}: {scaling(times, estimates)}")
+
+    def estimate(params: str) -> float:
+        c = Candidate(**json.loads(params))
+        return cost_estimate(c, spec, ladder.may_solve(c))
+
+    print(f"{folder}: {scaling(records, estimate)}")
 
 
 def main() -> None:
@@ -128,7 +121,7 @@ def main() -> None:
           f"{os.getloadavg()[0]:.1f}")
     print(f"# work: {len(LAYOUTS)} layouts of the camera-gimbal spec; median of {repeats} repeats")
     print(f"{'cluster':<22} {'designs/s':>9} {'busy workers':>12}  repeats (designs/s)")
-    medians, measured, chains = {}, [], []
+    medians, measured = {}, []
     for label, kwargs in (("1 worker process", dict(n_workers=1, processes=True)),
                           ("2 worker processes", dict(n_workers=2, processes=True)),
                           ("2 threads, 1 process", dict(n_workers=1, threads_per_worker=2, processes=False))):
@@ -140,11 +133,11 @@ def main() -> None:
             with Client(cluster) as client:
                 client.run(ladder, WARM_UP)
                 for _ in range(repeats):
-                    wall, inside, chain = run(client, ladder, LAYOUTS)
+                    wall, records = run(client, ladder, LAYOUTS)
                     rates.append(len(LAYOUTS) / wall)
-                    busy.append(sum(inside) / wall)
+                    busy.append(sum(r["seconds"] for r in records) / wall)
                     if label == "1 worker process" and not measured:
-                        measured, chains = inside, chain
+                        measured = records
         finally:
             cluster.close()
         medians[label] = statistics.median(rates)
@@ -154,9 +147,8 @@ def main() -> None:
     threads = medians["2 threads, 1 process"] / medians["1 worker process"]
     print(f"speed-up with 2 worker processes: {ratio:.2f}x (efficiency {ratio / 2:.0%}); with 2 threads: "
           f"{threads:.2f}x (load average at end {os.getloadavg()[0]:.1f})")
-    estimates = [cost_estimate(c, spec, ladder.may_solve(c)) for c in LAYOUTS]
     print(f"16 workers (not measurable on {os.cpu_count()} cores), from the 1-worker task times: "
-          f"{scaling(measured, estimates, chains=chains)}")
+          f"{scaling(measured)}")
 
 
 if __name__ == "__main__":

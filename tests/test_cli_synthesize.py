@@ -94,11 +94,17 @@ def test_synthesize_on_a_real_cluster_then_resume(cluster, tmp_path):
     assert "Traceback" not in first.stderr
     table = _table(out)
     assert len(table) == 4 and any(row[1] == "ok" for row in table), table  # the quick budget's 4 layouts
+    from spherestep.synthesis import schedule
+
+    log = (out / "tasks.jsonl").read_text()  # each task's kind and seconds, for the critical-path bound
+    per = schedule.layouts(schedule.read_tasks(out / "tasks.jsonl"))
+    assert len(per) == 4 and all(v["shared"] > 0 and len(v["parts"]) == 1 for v in per.values()), per
     again = subprocess.run(_spherestep("synthesize", str(SPEC), "--out", str(out), "--scheduler", cluster, "--json",
                                        "--resume"), env=_env(), capture_output=True, text=True, timeout=1800,
                            cwd=tmp_path)
     assert again.returncode == 0, again.stderr[-3000:]
     assert _table(out) == table
+    assert (out / "tasks.jsonl").read_text() == log  # nothing ran again
 
 
 def _alive(pid: int) -> bool:

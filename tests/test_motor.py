@@ -385,3 +385,31 @@ def test_prototype_headline_numbers(proto, proto_metrics):
     states = proto.states().rotations
     brute = np.concatenate([so3.distance(R[i:i + 20, None], states[None]).min(axis=1) for i in range(0, 300, 20)])
     assert math.degrees(np.median(brute)) == pytest.approx(math.degrees(m.resolution_median_rad), abs=0.25)
+
+
+
+@pytest.mark.parametrize("rotor, level, cap", [("truncated-icosahedron", 0, 60.0), ("icosidodecahedron", 0, 60.0),
+                                               ("rhombicuboctahedron", 1, 70.0)])
+def test_components_of_the_state_graph_against_all_pairs(rotor, level, cap):
+    """The state graph's components (the nearest-neighbour pass, else all pairs) against a union-find over every
+    pair within the radius, on layouts with one component and with hundreds, and at a radius that splits one."""
+    from pathlib import Path
+
+    from spherestep.synthesis import Candidate, load_spec
+    from spherestep.synthesis.ladder import build
+
+    spec = load_spec(Path(__file__).resolve().parents[1] / "examples" / "specs" / "prototype-relays-iron.yaml")
+    design = build(Candidate(rotor, 0, "truncated-cuboctahedron", level, cap, 0.3048), "iron", spec)
+    states = design.states()
+    for radius in (design.max_step, 0.3 * design.max_step):
+        parent = list(range(len(states)))
+
+        def find(a):
+            while parent[a] != a:
+                parent[a] = parent[parent[a]]
+                a = parent[a]
+            return a
+
+        for a, b in states.neighbour_pairs(radius):
+            parent[find(int(a))] = find(int(b))
+        assert states.components(radius) == len({find(a) for a in range(len(states))})

@@ -16,8 +16,6 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.sparse import coo_matrix
-from scipy.sparse.csgraph import connected_components
 
 from .. import so3
 from ..motor import Coverage
@@ -73,13 +71,9 @@ def equilibrium_metrics(design, model, *, max_coils: int = DEFAULT_MAX_COILS, sa
     minima = StepperStates(R[keep], states.pairs[:0], np.zeros(len(keep) + 1, dtype=np.int64), design.polarity,
                            design.state_tol)
     dist = minima.nearest(so3.random(samples, np.random.default_rng(seed)))[0][:, 0]
-    pairs = minima.neighbour_pairs(design.max_step)
-    graph = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(len(keep),) * 2)
-    components = int(connected_components(graph, directed=False)[0])
+    components = minima.components(design.max_step)
     offset = so3.distance(R[keep], states.rotations[keep])
-    same = minima.neighbour_pairs(DISTINCT)
-    same = coo_matrix((np.ones(len(same)), (same[:, 0], same[:, 1])), shape=(len(keep),) * 2)
-    distinct = int(connected_components(same, directed=False)[0])
+    distinct = minima.components(DISTINCT)
     return EquilibriumMetrics(states=len(states), minima=len(keep), distinct=distinct, samples=samples,
                               max_step_rad=design.max_step, resolution_median_rad=float(np.median(dist)),
                               resolution_p95_rad=float(np.quantile(dist, 0.95)), resolution_max_rad=float(dist.max()),

@@ -15,8 +15,6 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.sparse import coo_matrix
-from scipy.sparse.csgraph import connected_components
 
 from .. import so3
 from ..units import result_dict
@@ -152,9 +150,7 @@ def design_metrics(design, samples: int = 20_000, seed: int = 0, escape: bool = 
                              escape_violations=() if escape else None)
     dist, _ = states.nearest(so3.random(samples, rng))
     dist = dist[:, 0]
-    pairs = states.neighbour_pairs(design.max_step)
-    graph = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(len(states),) * 2)
-    components, _ = connected_components(graph, directed=False)
+    components = states.components(design.max_step)
     return DesignMetrics(
         states=len(states), samples=samples, max_step_rad=design.max_step,
         resolution_median_rad=float(np.median(dist)),

@@ -25,6 +25,7 @@ from ..sphere import NearestPointGrid, tolerant_ranks
 
 CHUNK = 2048
 MAX_REFITS = 6
+NEAREST = 16  # neighbours per state in StepperStates.components' first pass
 
 
 def _pair_frames(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -178,6 +179,30 @@ class StepperStates:
         keep = (i < n) & ((j < n) | (i < j - n))
         pairs = np.stack([i[keep], j[keep] % n], axis=1)
         return np.sort(pairs, axis=1)
+
+    def components(self, radius: float) -> int:
+        """Connected components of the graph joining the states within Park distance ``radius`` (the state
+        graph). First pass: each state to its :data:`NEAREST` nearest within ``radius``, a subgraph of the state
+        graph, so if it is connected so is the graph (the count is 1, exactly); otherwise the components of all
+        pairs (:meth:`neighbour_pairs`). The first pass costs ~``n·NEAREST`` pairs where the graph may hold ~100×
+        more (the states' step graph: ~40 s of a 300 000-state layout's 73 s)."""
+        from scipy.sparse import coo_matrix
+        from scipy.sparse.csgraph import connected_components
+
+        n = len(self)
+        if n <= 1:
+            return n
+        tree, _ = self._tree
+        q = to_quaternion(self.rotations)
+        _, idx = tree.query(q, k=min(NEAREST + 1, 2 * n), distance_upper_bound=float(chord_of_park(radius)))
+        found = idx < 2 * n  # a missing neighbour is reported as index 2n
+        a = np.broadcast_to(np.arange(n)[:, None], idx.shape)[found]
+        graph = coo_matrix((np.ones(len(a)), (a, idx[found] % n)), shape=(n, n))
+        if connected_components(graph, directed=False)[0] == 1:
+            return 1
+        pairs = self.neighbour_pairs(radius)
+        graph = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(n, n))
+        return int(connected_components(graph, directed=False)[0])
 
 
 def held_pairs(R: np.ndarray, u: np.ndarray, v: np.ndarray, tol: float,

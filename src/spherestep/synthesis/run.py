@@ -31,6 +31,7 @@ from . import tasks
 from .ladder import GRADES, N42, PROTOTYPE, WINDINGS, Candidate, _row, baseline_layout, build, climb, relay_rung
 
 STORE = "results"
+TASKS = "tasks.jsonl"  # one line per ladder task: its layout, kind, core and seconds (tasks.timings)
 GAP_SCALES = (2.0, 4.0, 8.0)  # the baseline's air gap widened (iron: a table solve each, thorough budget)
 
 
@@ -338,9 +339,10 @@ def synthesize(spec, out, *, budget: str = "quick", scheduler: str | None = None
     return _search(spec, plan, out, store, client, todo, base, seed, started, say)
 
 
-def _climb(client, runner, spec, store, todo, say, bar: Progress, stage: str, passed: list, finalists: int) -> None:
+def _climb(client, runner, spec, store, todo, say, bar: Progress, stage: str, passed: list, finalists: int,
+           log: Path | None = None) -> None:
     """Evaluate the candidates of ``todo`` that ``store`` lacks on ``client`` as the progress ``bar``'s ``stage``;
-    rows stream into ``store``. ``passed`` collects the measured seconds of the rows that pass, from which the
+    rows stream into ``store``, and each task's time into the lines of ``log`` (:func:`_log_tasks`). ``passed`` collects the measured seconds of the rows that pass, from which the
     later stages are estimated (:func:`~.eta.after_ladder`, for ``finalists`` finalists)."""
     from distributed import as_completed
 
@@ -358,7 +360,13 @@ def _climb(client, runner, spec, store, todo, say, bar: Progress, stage: str, pa
     bar.begin(stage, list(work.values()), slots=slots)
     what = f"geometry → states → capability{' → relays' if spec.relays else ''}"
     batch: list = []
+    timed: list = []
     last = time.perf_counter()
+
+    def flush():
+        store.append(batch)
+        _log_tasks(log, timed)
+
     try:
         for future in as_completed(list(waiting)):
             c = waiting[future]
@@ -369,7 +377,9 @@ def _climb(client, runner, spec, store, todo, say, bar: Progress, stage: str, pa
             took = None
             failed = next((f for f in fs[1:] if f.status != "finished"), None)
             if failed is None:
-                rows, took = tasks.merge(spec, [f.result() for f in fs[1:]])
+                results = [f.result() for f in fs[1:]]
+                rows, took = tasks.merge(spec, results)
+                timed.extend(dict(t, stage=stage) for t in tasks.timings(spec, c, results))
                 batch.extend(rows)  # its seconds pace the ETA unless it stopped at geometry or may solve
                 if all(r.get("stage") == "geometry" for r in rows) or _solves(c, spec, runner.may_solve(c)):
                     took = None
@@ -385,10 +395,19 @@ def _climb(client, runner, spec, store, todo, say, bar: Progress, stage: str, pa
             bar.advance(work[c], took)
             say(bar.line(what), done=bar.done, total=bar.total)
             if len(batch) >= 32 or time.perf_counter() - last > 15:
-                store.append(batch)
-                batch, last = [], time.perf_counter()
+                flush()
+                batch, timed, last = [], [], time.perf_counter()
     finally:
-        store.append(batch)
+        flush()
+
+
+def _log_tasks(log: Path | None, timed: list[dict]) -> None:
+    """Append ``timed`` (:func:`~.tasks.timings` records) to ``log`` as JSON lines, written in one call after the
+    rows they belong to are stored; a reader skips a last line cut short by an interrupt."""
+    if log is None or not timed:
+        return
+    with open(log, "a", encoding="utf-8") as handle:
+        handle.write("".join(json.dumps(t, sort_keys=True) + "\n" for t in timed))
 
 
 def _search(spec, plan: Budget, out: Path, store, client, todo, base, seed, started, say) -> SynthesisResult:
@@ -400,7 +419,7 @@ def _search(spec, plan: Budget, out: Path, store, client, todo, base, seed, star
     passed: list = []  # the measured seconds of the rows that pass the cheap rungs
     for later, seconds in after_ladder(passed, plan.finalists, _slots(client)).items():
         bar.expect(later, seconds)
-    _climb(client, runner, spec, store, todo, say, bar, "ladder", passed, plan.finalists)
+    _climb(client, runner, spec, store, todo, say, bar, "ladder", passed, plan.finalists, out / TASKS)
     todo = list(todo)
     keys = {c.key(spec.digest, core) for c in todo for core in spec.cores}
     table = store.read()
@@ -415,7 +434,8 @@ def _search(spec, plan: Budget, out: Path, store, client, todo, base, seed, star
         if not more:
             break
         say(f"round {n + 1}: none passed; {len(more)} layouts one change from the {len(seeds)} closest")
-        _climb(client, runner, spec, store, more, say, bar, f"round {n + 1}", passed, plan.finalists)
+        _climb(client, runner, spec, store, more, say, bar, f"round {n + 1}", passed, plan.finalists,
+               out / TASKS)
         todo += more
         keys |= {c.key(spec.digest, core) for c in more for core in spec.cores}
         table = store.read()

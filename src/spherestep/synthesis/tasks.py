@@ -4,7 +4,8 @@ and rung after them, so a long layout's work spreads over workers.
 For a candidate layout ``c``:
 
 * ``shared`` — :func:`shared_rungs`: geometry and the stepper states (rungs 1–2, shared by the cores; the states
-  are enumerated once); its result, the rows and the built designs, stays on the worker that made it;
+  are enumerated once), and an iron table solve if the layout needs one; its result, the rows and the built
+  designs, stays on the worker that made it;
 * per core still climbing, ``capability`` — :func:`core_rung`: rung 3 on that core's design;
 * per core, for relay specs, ``relays`` — :func:`relay_part`: the relay rung (:func:`~.ladder.relay_rung`), run
   beside the capability rung rather than after it (it needs only the design and its states). Its result is kept
@@ -28,10 +29,25 @@ AHEAD = 1e18  # priority added to a layout's per-core tasks: above every shared 
 
 def shared_rungs(runner, candidate):
     """Rungs 1–2 of ``candidate`` (:func:`~.ladder.climb` through the states): ``(rows, designs)``, the designs
-    of the cores still climbing (their stepper states found)."""
-    from .ladder import climb
+    of the cores still climbing (their stepper states found). An iron design still climbing whose tables are not
+    stored has them solved here, once (cached on disk, :mod:`spherestep.magnetics`), rather than by its capability
+    and relay tasks side by side, each the same minutes; the rows' seconds count the solve."""
+    from .ladder import climb, iron_is_stored
 
-    return climb(candidate, runner.spec, runner.may_solve(candidate), runner.baseline, through="states")
+    start = time.perf_counter()
+    rows, designs = climb(candidate, runner.spec, runner.may_solve(candidate), runner.baseline, through="states")
+    iron = designs.get("iron")
+    if iron is not None and not iron_is_stored(iron):
+        from .. import magnetics
+
+        try:
+            magnetics.design_model(iron)
+        except Exception:  # noqa: BLE001 (the capability rung meets the same error and records it)
+            pass
+        took = time.perf_counter() - start
+        for row in rows:
+            row["seconds"] = took
+    return rows, designs
 
 
 def _row_of(part, core: str) -> tuple[dict, object]:
@@ -79,6 +95,25 @@ def submit(client, runner, candidate, priority: float, retries: int = 2) -> list
     return futures
 
 
+def timings(spec, candidate, results: list) -> list[dict]:
+    """One record per task of ``candidate`` from its per-core results (as :func:`merge` reads them): ``kind``
+    (``shared``, ``capability`` or ``relays``), ``core`` (None for the shared rungs) and ``seconds`` inside the
+    task; the shared rungs' seconds are a core row's less its own task's (the row carries both)."""
+    import json
+    from dataclasses import asdict
+
+    cores = list(spec.cores)
+    rungs, relays = results[:len(cores)], results[len(cores):]
+    params = json.dumps(asdict(candidate), sort_keys=True)
+    shared = min(float(row["seconds"]) - took for row, took in rungs)
+    out = [{"params": params, "kind": "shared", "core": None, "seconds": shared}]
+    out += [{"params": params, "kind": "capability", "core": core, "seconds": float(took)}
+            for core, (_, took) in zip(cores, rungs)]
+    out += [{"params": params, "kind": "relays", "core": core, "seconds": float(took)}
+            for core, (_, took) in zip(cores, relays)]
+    return out
+
+
 def merge(spec, results: list) -> tuple[list[dict], float]:
     """The rows of one layout from its per-core results (:func:`submit`'s futures but the first, in order) and the
     summed seconds of its tasks (the shared rungs counted once)."""
@@ -87,6 +122,7 @@ def merge(spec, results: list) -> tuple[list[dict], float]:
     rows, total = [], 0.0
     shared = min(float(row["seconds"]) - took for row, took in rungs)
     for k, (row, took) in enumerate(rungs):
+        row = dict(row)  # the results stay as the tasks returned them (timings reads them too)
         total += took
         if relays:
             changes, relay_took = relays[k]
