@@ -287,6 +287,7 @@ def check_options(mode: str, backend: str, *, duration=None, sensor: str = "idea
 
 
 _LAST_BOUND: dict = {}
+_LAST_VOLTAGE: dict = {}
 
 
 def check_duration(design, axis, angle: float, chosen: Chosen, duration: float, name: str = "duration", *,
@@ -320,7 +321,36 @@ def check_duration(design, axis, angle: float, chosen: Chosen, duration: float, 
         raise bad_value(name, f"at least the bang-bang bound {bound:.3g} s for this {math.degrees(angle):g}° turn on "
                         f"the {chosen.label} model (the fastest the coils' limits allow){why}; give a longer time or "
                         f"leave it out for the fastest turn", duration)
+    check_voltage(design, n, angle, chosen, duration, name, start)
     return bound
+
+
+def check_voltage(design, axis, angle: float, chosen: Chosen, duration: float, name: str, start) -> None:
+    """Refuse (InputError naming ``name``) a servo time whose triangle profile asks, somewhere on the path, a torque
+    the coils give at rest but not at that speed within the supply against their back-EMF
+    (:func:`spherestep.control.voltage_shortfall`), naming the shortest triangle time that the supply allows
+    (:func:`spherestep.control.triangle_time`)."""
+    from ..control import triangle_time, voltage_shortfall
+    from ..dynamics import Rotor
+
+    key = (id(chosen.model), chosen.limits, np.asarray(start).tobytes(), np.asarray(axis).tobytes(), float(angle),
+           float(duration))
+    if _LAST_VOLTAGE.get("key") != key:  # the CLI checks before its work, drive_turn again: one evaluation
+        inertia = Rotor.from_design(design).inertia
+        short = voltage_shortfall(chosen.model, start, axis, angle, inertia, duration, chosen.limits)
+        fastest = None if short is None else triangle_time(chosen.model, start, axis, angle, inertia, duration,
+                                                            chosen.limits)
+        _LAST_VOLTAGE.update(key=key, short=short, fastest=fastest)
+    short, fastest = _LAST_VOLTAGE["short"], _LAST_VOLTAGE["fastest"]
+    if short is None:
+        return
+    s, speed, need, (lo, hi) = short
+    least = f"at least {fastest:.3g} s" if math.isfinite(fastest) else "a longer time"
+    raise bad_value(name, f"{least} for this {math.degrees(angle):g}° turn on the {chosen.label} model: in "
+                    f"{duration:g} s the turn passes {math.degrees(s):.0f}° at {speed:.2g} rad/s, where the coils' "
+                    f"back-EMF leaves the {chosen.limits.supply_voltage:g} V supply {lo:.3g} to {hi:.3g} N·m of the "
+                    f"{need:.3g} N·m it needs; give that time or leave it out for the fastest turn the planner "
+                    f"finds within the supply", duration)
 
 
 def drive_turn(design, axis, angle_rad: float, *, mode: str = "servo", backend: str = "simulated", model=None,
