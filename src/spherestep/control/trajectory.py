@@ -249,19 +249,20 @@ def path_capability(model, start, axis, angle: float, limits: DriveLimits | None
 
 
 def plan_turn(model, start, axis, angle: float, inertia: float, limits: DriveLimits | None = None, *,
-              margin: float | None = None, damping: float = 0.0, speed: float | None = None, samples: int = 48
-              ) -> Trajectory:
+              margin: float | None = None, damping: float = 0.0, speed: float | None = None, samples: int = 48,
+              headroom: float | None = None) -> Trajectory:
     """The fastest rest-to-rest turn whose feed-forward torque ``I α + b ω − b(R)`` the coils give within
     ``margin`` (default :data:`~spherestep.control.time_optimal.TURN_MARGIN`, 0.9; ``MARGIN`` for a plan robust
     to a model error of ~15 %) of their limits all along the path, on any core (the iron's detent included): the
     turn about ``axis`` itself, or a detour through waypoints where the coils cannot hold against the detent
     (:func:`spherestep.control.time_optimal.fastest_turn`, whose :class:`FastestTurn` says which path and what
-    was tried; at least ``samples`` grid pieces, ``speed`` caps ``|ω|``). Raises an ``InputError`` naming
-    ``axis`` when no path tried is feasible."""
+    was tried; at least ``samples`` grid pieces, ``speed`` caps ``|ω|``, ``headroom`` the share of each coil's
+    back-EMF kept off the feed-forward's voltage, default ``HEADROOM``). Raises an ``InputError`` naming ``axis``
+    when no path tried is feasible."""
     from .time_optimal import fastest_turn
 
     return fastest_turn(model, start, axis, angle, inertia, limits, margin=margin, damping=damping, speed=speed,
-                        pieces=checks.count(samples, "samples", 2)).trajectory
+                        pieces=checks.count(samples, "samples", 2), headroom=headroom).trajectory
 
 
 def plan_trapezoid(model, start, axis, angle: float, inertia: float, limits: DriveLimits | None = None, *,

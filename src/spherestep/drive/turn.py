@@ -188,9 +188,9 @@ class Turn:
                            s.arrival_time if pull.run is not None else math.inf, note, s.final_error,
                            s.max_tracking_error, details)
 
-    def servo_trajectory(self, start, duration: float | None, rotor):
-        """``(trajectory, kind, note)``: the fastest turn, the given ``duration``, or the fixed time where the
-        planner refuses the model (module docstring)."""
+    def servo_trajectory(self, start, duration: float | None, rotor, headroom: float | None = None):
+        """``(trajectory, kind, note)``: the fastest turn (``headroom`` of :func:`~spherestep.control.plan_turn`),
+        the given ``duration``, or the fixed time where the planner refuses the model (module docstring)."""
         from ..control import Trajectory, plan_turn
 
         n, angle = self.axis, self.angle
@@ -199,7 +199,7 @@ class Turn:
         self.say("planning the fastest turn within the guaranteed torque")
         try:
             return plan_turn(self.chosen.model, start, n, angle, rotor.inertia, self.chosen.limits,
-                             damping=rotor.damping), "fastest", ""
+                             damping=rotor.damping, headroom=headroom), "fastest", ""
         except InputError as exc:
             T = fixed_servo_time(angle)
             return (Trajectory.turn(start, n, angle, 4.0 * abs(angle) / T ** 2), "fixed",
