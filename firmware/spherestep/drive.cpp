@@ -143,13 +143,15 @@ void CurrentDevice::step(uint32_t nowUs) {
     const double e = setpoint_[k] - amps[k];
     integral_[k] = clampAbs(integral_[k] + ki_ * e, dmax);
     duty_[k] = clampAbs(kp_ * e + integral_[k] + emf_[k] / loop_.supply, dmax);  // PI plus the back-EMF fed forward
-    const bool offLaw = told && fabs(amps[k] - expected_[k]) > FOLLOW_A + FOLLOW_REL * fabs(expected_[k]);
+    // the reading off its setpoint (the loop is not doing its job), and off the law too: a reading at its
+    // setpoint is never judged by an estimate that may be wrong
+    const bool off = fabs(e) > FOLLOW_A + FOLLOW_REL * fabs(setpoint_[k]);
+    const bool offLaw = told && off && fabs(amps[k] - expected_[k]) > FOLLOW_A + FOLLOW_REL * fabs(expected_[k]);
     follow_[k] = offLaw ? follow_[k] + 1 : 0;
     // the held reading: off its setpoint, unmoved while the loop's own duty swept (whatever the back-EMF)
     const double loopDuty = duty_[k] - emf_[k] / loop_.supply;
     const double band = FOLLOW_A + FOLLOW_REL * fabs(ref_[k]);
-    const bool held = !fresh_ && fabs(amps[k] - ref_[k]) <= band &&
-                      fabs(setpoint_[k] - amps[k]) > FOLLOW_A + FOLLOW_REL * fabs(setpoint_[k]);
+    const bool held = !fresh_ && off && fabs(amps[k] - ref_[k]) <= band;
     low_[k] = held && low_[k] < loopDuty ? low_[k] : loopDuty;
     high_[k] = held && high_[k] > loopDuty ? high_[k] : loopDuty;
     const bool swept = held && (fabs(duty_[k]) >= dmax || fabs(integral_[k]) >= dmax) &&
