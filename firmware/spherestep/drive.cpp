@@ -143,10 +143,11 @@ void CurrentDevice::step(uint32_t nowUs) {
     const double e = setpoint_[k] - amps[k];
     integral_[k] = clampAbs(integral_[k] + ki_ * e, dmax);
     duty_[k] = clampAbs(kp_ * e + integral_[k] + emf_[k] / loop_.supply, dmax);  // PI plus the back-EMF fed forward
-    // the reading off its setpoint (the loop is not doing its job), and off the law too: a reading at its
-    // setpoint is never judged by an estimate that may be wrong
+    // the reading off its setpoint (the loop is not doing its job); an idle coil (under 50 mA) at its setpoint is
+    // never judged by the law, whose estimate may be wrong
     const bool off = fabs(e) > FOLLOW_A + FOLLOW_REL * fabs(setpoint_[k]);
-    const bool offLaw = told && off && fabs(amps[k] - expected_[k]) > FOLLOW_A + FOLLOW_REL * fabs(expected_[k]);
+    const bool judged = off || (ma[k] < 0 ? -ma[k] : ma[k]) >= 50;
+    const bool offLaw = told && judged && fabs(amps[k] - expected_[k]) > FOLLOW_A + FOLLOW_REL * fabs(expected_[k]);
     follow_[k] = offLaw ? follow_[k] + 1 : 0;
     // the held reading: off its setpoint, unmoved while the loop's own duty swept (whatever the back-EMF)
     const double loopDuty = duty_[k] - emf_[k] / loop_.supply;

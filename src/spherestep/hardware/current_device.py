@@ -17,8 +17,8 @@ loop per coil and writes the PWM duties to a :class:`Bridges` plant, and checks 
   - the coil's own law, only while the host's back-EMF estimate is fresh (the last ``DRIVE`` carried it and is
     under ``EMF_MS`` = 20 ms old: alone, an estimate cannot fill the window): each step the device predicts
     ``î ← a î + (1 − a)(d V − e) / R`` with ``a = e^{−R h / L}`` (the coil's L/R; ``î`` starts at the reading
-    when driving starts or the estimate turns fresh); a reading off it by more than ``tol(î)`` and off its setpoint by more than ``tol(i_set)`` for 20 ms
-    trips (a coil at its setpoint is doing its job, whatever an estimate that may be wrong predicts);
+    when driving starts or the estimate turns fresh); a reading off it by more than ``tol(î)`` for 20 ms trips, unless under 50 mA and within
+    ``tol(i_set)`` of its setpoint (an idle coil doing its job, whatever an estimate that may be wrong predicts);
   - the held reading, always (whatever the back-EMF): the reading within ``tol(i_ref)`` of where it was, more
     than ``tol(i_set)`` off its setpoint, the loop's own duty ``d − e/V`` swept by ``SWEEP · tol(i_ref) · R / V``
     since, and the loop at its limit (duty or integral at ``±max_duty``): 20 ms of that trips. A healthy coil's
@@ -242,8 +242,9 @@ class CurrentDevice:
         self.integral = np.clip(self.integral + self.ki * e, -dmax, dmax)
         self.duty = np.clip(self.kp * e + self.integral + self._feed, -dmax, dmax)
         off = np.abs(e) > self._setpoint_tol  # the reading off its setpoint: the loop is not doing its job
-        if told:  # off the law too: a reading at its setpoint is never judged by an estimate that may be wrong
-            off_law = off & (np.abs(i - self.expected) > FOLLOW_A + FOLLOW_REL * np.abs(self.expected))
+        if told:  # an idle coil (under 50 mA) at its setpoint is never judged by an estimate that may be wrong
+            off_law = (off | (np.abs(ma) >= 50)) & \
+                (np.abs(i - self.expected) > FOLLOW_A + FOLLOW_REL * np.abs(self.expected))
             self._follow = np.where(off_law, self._follow + 1, 0)
         else:
             self._follow[:] = 0
