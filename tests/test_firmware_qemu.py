@@ -160,6 +160,7 @@ def test_missing_tools_are_named_with_how_to_install_them(monkeypatch, tmp_path)
 
 
 FAULT_AT = 0.4  # s of device time
+RATE = 60.0  # Hz: a DRIVE, with its back-EMF estimate, every 16.7 ms, within the 20 ms it stays fresh
 
 
 @pytest.fixture(scope="module")
@@ -175,14 +176,14 @@ def rig():
 
 
 def session(rig, duration, **options):
-    """A hold of the start pose at 50 Hz on the air model with the firmware in QEMU (a 29-coil DRIVE takes 3-15
+    """A hold of the start pose at 60 Hz (RATE) on the air model with the firmware in QEMU (a 29-coil DRIVE takes 3-15
     ms through QEMU's UART on this machine), watchdog 250 ms as in tests/test_hardware_servo.py."""
     from spherestep.drive import servo_session
 
     options.setdefault("watchdog_ms", 250)
     options.setdefault("max_late", 0.2)
     return servo_session(rig["design"], Trajectory.hold(np.eye(3)), duration, emulate=True, sensors=rig["sensors"],
-                         model=rig["model"], drive=rig["drive"], rate=50.0, firmware="qemu", **options)
+                         model=rig["model"], drive=rig["drive"], rate=RATE, firmware="qemu", **options)
 
 
 @pytest.fixture

@@ -86,7 +86,13 @@ void CurrentDevice::allOff() {
     duty_[k] = 0.0;
     expected_[k] = 0.0;
     follow_[k] = 0;
+    ref_[k] = 0.0;
+    low_[k] = 0.0;
+    high_[k] = 0.0;
+    held_[k] = 0;
   }
+  told_ = false;
+  emfUs_ = 0;
   fresh_ = true;
   enable_ = 0;
   polarity_ = 0;
@@ -126,21 +132,39 @@ void CurrentDevice::step(uint32_t nowUs) {
     if (heat_[k] > 1.0) return trip("HEAT", k);
   }
   const double dmax = limits_.maxDuty;
+  const bool told = told_ && (uint32_t)(nowUs - emfUs_) < EMF_MS * 1000u;
   for (uint8_t k = 0; k < coils_; ++k) {
     // the coil's law: the duty driven over the last period less the back-EMF, through the coil's L/R (from the
-    // reading at the start)
+    // reading at the start, and again once a fresh estimate arrives)
     const double a = coilDecay_;
-    expected_[k] = fresh_ ? amps[k]
-                          : a * expected_[k] + (1.0 - a) * (duty_[k] * loop_.supply - emf_[k]) / limits_.resistance;
+    expected_[k] = (fresh_ || !told)
+                       ? amps[k]
+                       : a * expected_[k] + (1.0 - a) * (duty_[k] * loop_.supply - emf_[k]) / limits_.resistance;
     const double e = setpoint_[k] - amps[k];
     integral_[k] = clampAbs(integral_[k] + ki_ * e, dmax);
     duty_[k] = clampAbs(kp_ * e + integral_[k] + emf_[k] / loop_.supply, dmax);  // PI plus the back-EMF fed forward
-    const bool offLaw = fabs(amps[k] - expected_[k]) > FOLLOW_A + FOLLOW_REL * fabs(expected_[k]);
+    // the reading off its setpoint (the loop is not doing its job); an idle coil (under 50 mA) at its setpoint is
+    // never judged by the law, whose estimate may be wrong
+    const bool off = fabs(e) > FOLLOW_A + FOLLOW_REL * fabs(setpoint_[k]);
+    const bool judged = off || (ma[k] < 0 ? -ma[k] : ma[k]) >= 50;
+    const bool offLaw = told && judged && fabs(amps[k] - expected_[k]) > FOLLOW_A + FOLLOW_REL * fabs(expected_[k]);
     follow_[k] = offLaw ? follow_[k] + 1 : 0;
+    // the held reading: off its setpoint, unmoved while the loop's own duty swept (whatever the back-EMF)
+    const double loopDuty = duty_[k] - emf_[k] / loop_.supply;
+    const double band = FOLLOW_A + FOLLOW_REL * fabs(ref_[k]);
+    const bool held = !fresh_ && off && fabs(amps[k] - ref_[k]) <= band;
+    low_[k] = held && low_[k] < loopDuty ? low_[k] : loopDuty;
+    high_[k] = held && high_[k] > loopDuty ? high_[k] : loopDuty;
+    const bool swept = held && (fabs(duty_[k]) >= dmax || fabs(integral_[k]) >= dmax) &&
+                       (high_[k] - low_[k]) * loop_.supply > SWEEP * band * limits_.resistance;
+    held_[k] = swept ? held_[k] + 1 : 0;
+    if (!held) ref_[k] = amps[k];
   }
   fresh_ = false;
   for (uint8_t k = 0; k < coils_; ++k) {
-    if (follow_[k] >= followSteps_) return trip((ma[k] < 0 ? -ma[k] : ma[k]) < 50 ? "OPEN" : "STUCK", k);
+    if (follow_[k] >= followSteps_ || held_[k] >= followSteps_) {
+      return trip((ma[k] < 0 ? -ma[k] : ma[k]) < 50 ? "OPEN" : "STUCK", k);
+    }
   }
   enabled_ = true;
   bridges_.drive(duty_, true);
@@ -309,6 +333,10 @@ size_t CurrentDevice::process(uint32_t nowUs, char* reply) {
     if (!isDrive && nargs != 0) return nak(reply, s, "ARGS");
     if (version_ != DRIVE_VERSION) return nak(reply, s, version_ == 1 ? "VERB" : refusal);
     if (isDrive && !setMa(ma, nargs == 2 ? emfCv : 0)) return nak(reply, s, "LIMIT");
+    if (isDrive) {
+      told_ = nargs == 2;
+      emfUs_ = nowUs;
+    }
     lastValidUs_ = nowUs;
     return state(verb, s, nowUs, reply);
   }

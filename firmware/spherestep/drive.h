@@ -27,6 +27,8 @@ const uint8_t CRC_STORM = 8;     // damaged frames in a row that trip a session
 const uint32_t FOLLOW_MS = 20;   // a reading off the coil's law (FOLLOW_A + FOLLOW_REL |i_expected|) this long: trip
 const double FOLLOW_A = 0.05;    // A: the absolute part of that tolerance (sense noise and offset)
 const double FOLLOW_REL = 0.1;   // the relative part (the winding's R with temperature, the back-EMF)
+const uint32_t EMF_MS = FOLLOW_MS;  // a back-EMF estimate is fresh this long after its DRIVE
+const double SWEEP = 2.0;        // held reading: the loop's duty swept SWEEP tolerances' worth of current (x R/V)
 
 // Limits in SI (A, W, Ω, s), enforced on the device (hardware/limits.py CurrentLimits).
 struct Limits {
@@ -112,6 +114,12 @@ class CurrentDevice {
   double heat_[MAX_COILS];
   double expected_[MAX_COILS];  // A: the current the coil's law predicts from the duties driven
   uint32_t follow_[MAX_COILS];
+  double ref_[MAX_COILS];   // A: the reading the held-reading rule compares with
+  double low_[MAX_COILS];   // the loop's duty d - e/V, lowest and highest since the reading was ref_
+  double high_[MAX_COILS];
+  uint32_t held_[MAX_COILS];  // steps held since the sweep passed SWEEP tolerances
+  bool told_;       // a back-EMF estimate came with the last DRIVE
+  uint32_t emfUs_;  // when it came
   bool fresh_;  // the next driving step starts expected_ at the reading (the bridges were asleep)
   uint64_t enable_;
   uint64_t polarity_;

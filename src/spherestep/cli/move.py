@@ -50,8 +50,9 @@ def move(
                                                                       "frame."),
     angle: float = typer.Option(..., "--angle", callback=ANGLE, help="Rotation angle in degrees."),
     time: float = typer.Option(None, "--time", callback=number("s", 0, 3600, low_open=True, what="the turn's time"),
-                               help="Servo only: the turn's time in seconds, at least the bang-bang bound (default "
-                                    "--fastest)."),
+                               help="Servo only: the turn's time in seconds (a triangle profile), at least the bang-bang "
+                                    "bound and short of nothing the supply cannot give against the back-EMF (refused "
+                                    "naming the shortest time it can; default --fastest)."),
     fastest: bool = typer.Option(False, "--fastest", help="The fastest turn the drive guarantees (the default)."),
     mode: str = typer.Option("servo", "--mode", callback=_check_mode,
                              help="servo (continuous currents), ramped (relay steps at the pull-out rate) or "
@@ -113,7 +114,8 @@ def move(
     With --port DEV (or --emulate) the servo runs on the coil controller over its serial link (or on the emulated
     motor behind a pseudo-terminal) with live status, its log streamed to OUT/servo-log.csv; exit status 1 when a
     fault ended the run (every coil is off either way) or it missed the tolerance.
-    Example: [bold]spherestep move --axis 1,0.5,2 --angle 360 --time 2.4 --emulate[/bold]
+    Example: [bold]spherestep move --axis 1,0.5,2 --angle 360 --emulate[/bold] (the fastest turn the planner finds
+    within the supply, back-EMF included; a --time the supply cannot follow is refused, naming the shortest it can)
     With --emulate --firmware qemu the device is the firmware itself, run in QEMU.
     """
 

@@ -27,7 +27,7 @@ from .controller import GeometricPD, Observer
 from .servo import ModelCache, ServoCommand, ServoLaw
 from .time_optimal import FastestTurn, fastest_time, fastest_turn
 from .trajectory import (Segment, TimeLaw, Trajectory, bang_bang_time, path_capability, plan_through, plan_trapezoid,
-                         plan_turn)
+                         plan_turn, triangle_time, voltage_shortfall)
 
 __getattr__, _lazy_dir, _lazy_all = lazy_names(__name__, {"calibration": (
     "Calibration", "Holds", "calibration_beside", "hold_orientations", "torque_error"), "identify": ("calibrate",)})
@@ -37,7 +37,7 @@ __all__ = _lazy_all + [  # noqa: PLE0605  (the one list of names)
            "plan_trapezoid",
            "bang_bang_time", "path_capability", "plan_through", "plan_turn", "available_torque", "feasible_support", "figure_capability",
            "torque_capability", "allocate", "allocate_matrix", "allocate_relay", "closest_reachable",
-           "least_power_box"]
+           "least_power_box", "triangle_time", "voltage_shortfall"]
 
 
 def __dir__():

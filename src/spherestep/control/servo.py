@@ -220,7 +220,9 @@ class ServoCommand:
     A); ``torque (3,)`` N·m that they promise at the estimate, ``b + K c``; ``requested (3,)`` the feedback's
     ``τ* − d̂``; ``reachable`` whether it was within the limits; ``estimate (3, 3)`` and ``velocity (3,)`` rad/s,
     the observer's ``(R̂, ω̂)`` the command was computed from; ``disturbance (3,)`` N·m its ``d̂`` (already
-    subtracted from ``requested``: the torque the plant is estimated to add to the model's)."""
+    subtracted from ``requested``: the torque the plant is estimated to add to the model's); ``emf (N,)`` V each
+    coil's back-EMF ``e_k = K_k(R)·ω / I_n`` at the state the currents were allocated for (the voltage box's,
+    sent to a device that takes it: its current loop feeds it forward and its coil's-law check expects it)."""
 
     currents: np.ndarray
     torque: np.ndarray
@@ -229,6 +231,7 @@ class ServoCommand:
     estimate: np.ndarray
     velocity: np.ndarray
     disturbance: np.ndarray
+    emf: np.ndarray
 
 
 class ServoLaw:
@@ -363,7 +366,7 @@ class ServoLaw:
         alloc = self._allocate(tau, R, self.cache.has_bias and float(wd @ wd) < SLOPE_SPEED * SLOPE_SPEED, w)
         self._promised.append(alloc.torque)
         currents = self._emphasised(alloc.currents) if self._emphasis else alloc.currents
-        return ServoCommand(currents, alloc.torque, tau, alloc.reachable, obs.R, obs.w, obs.d)
+        return ServoCommand(currents, alloc.torque, tau, alloc.reachable, obs.R, obs.w, obs.d, self._volts)
 
     def _emphasised(self, c: np.ndarray) -> np.ndarray:
         """Step 6 of the module: the setpoint ``c' = c + β/(1 − β) (c − c'_prev)`` whose first-order response from
@@ -401,6 +404,7 @@ class ServoLaw:
             b = b * kb
             K = K * kk
         bounds = emf = None
+        self._volts = self.limits.back_emf(w @ K)  # e_k = K_k·ω / I_n (V), the coils' back-EMF this period
         if self.supply:  # the supply's power Σ R i² + Σ e_k i_k ≤ P at the estimated motion
             emf = (w * self._emf) @ K
         if self.voltage:

@@ -249,19 +249,20 @@ def path_capability(model, start, axis, angle: float, limits: DriveLimits | None
 
 
 def plan_turn(model, start, axis, angle: float, inertia: float, limits: DriveLimits | None = None, *,
-              margin: float | None = None, damping: float = 0.0, speed: float | None = None, samples: int = 48
-              ) -> Trajectory:
+              margin: float | None = None, damping: float = 0.0, speed: float | None = None, samples: int = 48,
+              headroom: float | None = None) -> Trajectory:
     """The fastest rest-to-rest turn whose feed-forward torque ``I α + b ω − b(R)`` the coils give within
     ``margin`` (default :data:`~spherestep.control.time_optimal.TURN_MARGIN`, 0.9; ``MARGIN`` for a plan robust
     to a model error of ~15 %) of their limits all along the path, on any core (the iron's detent included): the
     turn about ``axis`` itself, or a detour through waypoints where the coils cannot hold against the detent
     (:func:`spherestep.control.time_optimal.fastest_turn`, whose :class:`FastestTurn` says which path and what
-    was tried; at least ``samples`` grid pieces, ``speed`` caps ``|ω|``). Raises an ``InputError`` naming
-    ``axis`` when no path tried is feasible."""
+    was tried; at least ``samples`` grid pieces, ``speed`` caps ``|ω|``, ``headroom`` the share of each coil's
+    back-EMF kept off the feed-forward's voltage, default ``HEADROOM``). Raises an ``InputError`` naming ``axis``
+    when no path tried is feasible."""
     from .time_optimal import fastest_turn
 
     return fastest_turn(model, start, axis, angle, inertia, limits, margin=margin, damping=damping, speed=speed,
-                        pieces=checks.count(samples, "samples", 2)).trajectory
+                        pieces=checks.count(samples, "samples", 2), headroom=headroom).trajectory
 
 
 def plan_trapezoid(model, start, axis, angle: float, inertia: float, limits: DriveLimits | None = None, *,
@@ -325,3 +326,54 @@ def bang_bang_time(model, start, axis, angle: float, inertia: float, limits: Dri
 
     return fastest_time(model, start, axis, angle, inertia, limits, damping=damping,
                         pieces=checks.count(samples, "samples", 2))
+
+
+def voltage_shortfall(model, start, axis, angle: float, inertia: float, duration: float,
+                      limits: DriveLimits | None = None, samples: int = 72):
+    """Where the triangle turn of ``duration`` (s) (acceleration ``4θ/T²``, peak ``2θ/T``) asks a torque that the
+    coils give at rest but not at its speed: the first ``(s rad, ṡ rad/s, I s̈ N·m, (y₋, y₊) N·m)`` of ``samples``
+    points along ``exp(s n) R₀`` where ``I s̈`` is outside the range the coils give at every speed up to ``ṡ``
+    within the supply against their back-EMF (:func:`~spherestep.control.time_optimal.reachable_interval`) and
+    inside the range at rest; ``None`` where the back-EMF allows the whole profile. (A torque the coils cannot give
+    even at rest — the iron's detent across the path — is not the supply's limit; the planner detours there.)"""
+    from .time_optimal import reachable_interval
+
+    limits = DriveLimits() if limits is None else limits
+    n = checks.axis(axis)
+    theta = abs(float(angle))
+    T = checks.positive(duration, "duration")
+    a = 4.0 * theta / T ** 2
+    s = np.linspace(0.0, theta, samples)
+    speed = np.sqrt(2.0 * a * np.minimum(s, theta - s))
+    need = np.where(s < theta / 2, inertia * a, -inertia * a)
+    R = so3.exp(s[:, None] * n * math.copysign(1.0, angle)) @ so3.as_rotations(start, "start")
+    d = n * math.copysign(1.0, angle)
+    K = np.asarray(model.torque_matrix(R), dtype=float)
+    b = np.asarray(model.torque(R, np.zeros((len(R), model.coil_count))), dtype=float)
+    lo0, hi0 = reachable_interval(K, b, d, limits, failed=model.failed)
+    for m in np.flatnonzero((lo0 <= need) & (need <= hi0)):
+        lo, hi = reachable_interval(K[m:m + 1], b[m:m + 1], d, limits, failed=model.failed, speed=float(speed[m]))
+        if not lo[0] <= need[m] <= hi[0]:
+            return float(s[m]), float(speed[m]), float(need[m]), (float(lo[0]), float(hi[0]))
+    return None
+
+
+def triangle_time(model, start, axis, angle: float, inertia: float, duration: float,
+                  limits: DriveLimits | None = None, *, tolerance: float = 0.05, samples: int = 72) -> float:
+    """The shortest triangle-turn time (s, within ``tolerance``) from ``duration`` up that
+    :func:`voltage_shortfall` allows: ``duration`` itself if it does, else bisection between the last time it
+    refused and the first of ``duration · 1.5^k`` it allows (``inf`` past 16× ``duration``)."""
+    def ok(T: float) -> bool:
+        return voltage_shortfall(model, start, axis, angle, inertia, T, limits, samples) is None
+
+    if ok(duration):
+        return float(duration)
+    low, high = float(duration), float(duration) * 1.5
+    while not ok(high):
+        low, high = high, high * 1.5
+        if high > 16 * duration:
+            return math.inf
+    while high - low > tolerance:
+        mid = 0.5 * (low + high)
+        low, high = (low, mid) if ok(mid) else (mid, high)
+    return high

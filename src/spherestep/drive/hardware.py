@@ -39,6 +39,12 @@ from .result import HardwareDetails
 STATUS_EVERY = 0.25  # s between progress lines from the loop
 ENDS = ("hold", "park")
 PARK_TIME = 0.5  # s: the move from the turn's end into the detent well it parks in
+# the share of each coil's back-EMF the fastest plan keeps off its voltage on a device (control.time_optimal's
+# HEADROOM is 0.08 for the simulation): the device's PI loop needs room beyond the feed-forward to slew through
+# L di/dt a period late; measured in lockstep at 500 Hz on the demo's iron turn with the emulated back-EMF
+# (docs/hardware.md): 0.08 → 0.449° max tracking (arrival 1.518 s), 0.16 → 0.298° (1.680 s), 0.2 → 0.244°
+# (1.790 s), 0.24 → 0.237° (1.848 s); held out at 0.2: 0.229° and 0.209° (0.332° and 0.765° at 0.08)
+DEVICE_HEADROOM = 0.2
 
 
 def drive_on_hardware(job, *, duration: float | None, port: str | None, emulate: bool, rate: float, log=None,
@@ -58,7 +64,7 @@ def drive_on_hardware(job, *, duration: float | None, port: str | None, emulate:
     hold = SETTLE if hold is None else checks.positive(hold, "hold", "a positive time in seconds")
     design, chosen, progress, tolerance = job.design, job.chosen, job.say, job.tolerance("servo")
     rotor = Rotor.from_design(design)
-    traj, kind, note = job.servo_trajectory(job.start, duration, rotor)
+    traj, kind, note = job.servo_trajectory(job.start, duration, rotor, headroom=DEVICE_HEADROOM)
     turn_end = traj.end
     if end == "park":
         job.say("finding the detent well to park in: the model's unpowered minimum near the turn's end")

@@ -221,9 +221,9 @@ class Turn:
                            s.arrival_time if pull.run is not None else math.inf, note, s.final_error,
                            s.max_tracking_error, details)
 
-    def servo_trajectory(self, start, duration: float | None, rotor):
-        """``(trajectory, kind, note)``: the fastest turn, the given ``duration``, or the fixed time where the
-        planner refuses the model (module docstring)."""
+    def servo_trajectory(self, start, duration: float | None, rotor, headroom: float | None = None):
+        """``(trajectory, kind, note)``: the fastest turn (``headroom`` of :func:`~spherestep.control.plan_turn`),
+        the given ``duration``, or the fixed time where the planner refuses the model (module docstring)."""
         from ..control import Trajectory, plan_turn
 
         n, angle = self.axis, self.angle
@@ -232,7 +232,7 @@ class Turn:
         self.say("planning the fastest turn within the guaranteed torque")
         try:
             return plan_turn(self.chosen.model, start, n, angle, rotor.inertia, self.chosen.limits,
-                             damping=rotor.damping), "fastest", ""
+                             damping=rotor.damping, headroom=headroom), "fastest", ""
         except InputError as exc:
             T = fixed_servo_time(angle)
             return (Trajectory.turn(start, n, angle, 4.0 * abs(angle) / T ** 2), "fixed",
@@ -282,6 +282,7 @@ def _sensor(design, kind: str, noise: float, start, seed: int):
 
 
 _LAST_BOUND: dict = {}
+_LAST_VOLTAGE: dict = {}
 
 
 def check_duration(design, axis, angle: float, chosen: Chosen, duration: float, name: str = "duration", *,
@@ -315,4 +316,33 @@ def check_duration(design, axis, angle: float, chosen: Chosen, duration: float, 
         raise bad_value(name, f"at least the bang-bang bound {bound:.3g} s for this {math.degrees(angle):g}° turn on "
                         f"the {chosen.label} model (the fastest the coils' limits allow){why}; give a longer time or "
                         f"leave it out for the fastest turn", duration)
+    check_voltage(design, n, angle, chosen, duration, name, start)
     return bound
+
+
+def check_voltage(design, axis, angle: float, chosen: Chosen, duration: float, name: str, start) -> None:
+    """Refuse (InputError naming ``name``) a servo time whose triangle profile asks, somewhere on the path, a torque
+    the coils give at rest but not at that speed within the supply against their back-EMF
+    (:func:`spherestep.control.voltage_shortfall`), naming the shortest triangle time that the supply allows
+    (:func:`spherestep.control.triangle_time`)."""
+    from ..control import triangle_time, voltage_shortfall
+    from ..dynamics import Rotor
+
+    key = (id(chosen.model), chosen.limits, np.asarray(start).tobytes(), np.asarray(axis).tobytes(), float(angle),
+           float(duration))
+    if _LAST_VOLTAGE.get("key") != key:  # the CLI checks before its work, drive_turn again: one evaluation
+        inertia = Rotor.from_design(design).inertia
+        short = voltage_shortfall(chosen.model, start, axis, angle, inertia, duration, chosen.limits)
+        fastest = None if short is None else triangle_time(chosen.model, start, axis, angle, inertia, duration,
+                                                            chosen.limits)
+        _LAST_VOLTAGE.update(key=key, short=short, fastest=fastest)
+    short, fastest = _LAST_VOLTAGE["short"], _LAST_VOLTAGE["fastest"]
+    if short is None:
+        return
+    s, speed, need, (lo, hi) = short
+    least = f"at least {fastest:.3g} s" if math.isfinite(fastest) else "a longer time"
+    raise bad_value(name, f"{least} for this {math.degrees(angle):g}° turn on the {chosen.label} model: in "
+                    f"{duration:g} s the turn passes {math.degrees(s):.0f}° at {speed:.2g} rad/s, where the coils' "
+                    f"back-EMF leaves the {chosen.limits.supply_voltage:g} V supply {lo:.3g} to {hi:.3g} N·m of the "
+                    f"{need:.3g} N·m it needs; give that time or leave it out for the fastest turn the planner "
+                    f"finds within the supply", duration)

@@ -10,13 +10,22 @@ loop per coil and writes the PWM duties to a :class:`Bridges` plant, and checks 
 
 * over-current: a measured ``|i| > trip_ratio · max_current`` → trip ``OVER``;
 * heating: the I²t model (:func:`~spherestep.hardware.limits.heating_step`) of any coil above 1 → ``HEAT``;
-* the coil's own law: each step the device predicts the current from the duties it drove and the back-EMF the
-  host last sent, ``î ← a î + (1 − a)(d V − e) / R`` with ``a = e^{−R h / L}`` (the coil's L/R; ``î`` starts at the reading when driving starts); a
-  reading off that prediction by ``|i − î| > 50 mA + 0.1 |î|`` for 20 ms → ``OPEN`` when ``|i| < 50 mA`` (no
-  current: an open coil, or a sense stuck at zero), else ``STUCK`` (a bridge shorted to the supply, a frozen
-  sense the PI loop winds its duty away from). A coil at its DC limit (full duty, ``i = d V / R``, the reading
-  steady for as long as the host asks more) agrees with its law and runs on; a frozen reading equal to the
-  coil's true steady current cannot be told from a quiet sense and is harmless until the demand moves;
+* a coil that does not follow its drive, by two rules with the tolerance ``tol(x) = 50 mA + 0.1 |x|`` and 20 ms
+  (→ ``OPEN`` when ``|i| < 50 mA``: an open coil, a sense stuck at zero; else ``STUCK``: a bridge shorted to the
+  supply, a frozen sense the PI loop winds its duty away from):
+
+  - the coil's own law, only while the host's back-EMF estimate is fresh (the last ``DRIVE`` carried it and is
+    under ``EMF_MS`` = 20 ms old: alone, an estimate cannot fill the window): each step the device predicts
+    ``î ← a î + (1 − a)(d V − e) / R`` with ``a = e^{−R h / L}`` (the coil's L/R; ``î`` starts at the reading
+    when driving starts or the estimate turns fresh); a reading off it by more than ``tol(î)`` for 20 ms trips, unless under 50 mA and within
+    ``tol(i_set)`` of its setpoint (an idle coil doing its job, whatever an estimate that may be wrong predicts);
+  - the held reading, always (whatever the back-EMF): the reading within ``tol(i_ref)`` of where it was, more
+    than ``tol(i_set)`` off its setpoint, the loop's own duty ``d − e/V`` swept by ``SWEEP · tol(i_ref) · R / V``
+    since, and the loop at its limit (duty or integral at ``±max_duty``): 20 ms of that trips. A healthy coil's
+    current answers such a sweep unless the back-EMF moved with the duty; a back-EMF faster than the loop moves
+    the reading once the loop is at its limit. A coil at its DC limit (full duty, ``i = (d V − e)/R``, steady
+    for as long as the host asks more) never swept and runs on; a moving rotor under a silent host runs on;
+    a sense frozen at the setpoint, where the loop never winds, is harmless until the demand moves;
 * 8 damaged frames in a row during a session → ``CRCS``; no accepted command for the watchdog period → ``WDOG``.
 
 A trip switches every bridge off (duty 0, drivers asleep, supply cut), ends the session and is answered to
@@ -24,7 +33,8 @@ every later command but ``HELLO``/``OFF``. ``OFF`` (and ``HELLO``) leave the bri
 until the next ``DRIVE`` (or ``SET``): the loops and the monitors run only while driving. The PI loop cancels the coil's pole: ``duty = k_p ε + Σ k_i ε + e/V``,
 ``k_p = ω_c L / V``, ``k_i = k_p (R / L) h`` (anti-windup: the sum is clamped to ``±max_duty``), so the
 closed loop is first order with bandwidth ``ω_c`` when ``L``, ``R`` are right; ``e/V`` is the back-EMF's
-feed-forward (``e`` per coil from ``DRIVE``'s second block, V; 0 without it, after ``SET``, ``OFF`` or a trip). Both implementations pass
+feed-forward (``e`` per coil from ``DRIVE``'s second block, V, kept until the next ``DRIVE``; 0 without it,
+after ``SET``, ``OFF`` or a trip). Both implementations pass
 ``firmware/test/vectors2.txt`` with integer mA and µs, so they answer byte for byte alike.
 
 The relay board (:meth:`CurrentDevice.relay_board`, no bridges) has ``relays`` channels (1–64) that ``SET``
@@ -56,6 +66,8 @@ CRC_STORM = 8  # damaged frames in a row that trip a session
 FOLLOW_MS = 20  # a reading off the coil's law (FOLLOW_A + FOLLOW_REL |î|) this long → trip
 FOLLOW_A = 0.05  # A: the absolute part of the tolerance (sense noise and offset)
 FOLLOW_REL = 0.1  # the relative part (the winding's R with temperature, the back-EMF)
+EMF_MS = FOLLOW_MS  # a back-EMF estimate is fresh this long after its DRIVE (alone it cannot fill a window)
+SWEEP = 2  # the held-reading rule: the loop's duty swept SWEEP tolerances' worth of current (× R/V) → watch
 
 
 class Bridges(Protocol):
@@ -126,6 +138,11 @@ class CurrentDevice:
         self.expected = np.zeros(coils)  # A: î, the current the coil's law predicts from the duties driven
         self._fresh = True  # the next driving step starts î at the reading (the bridges were asleep)
         self._follow = np.zeros(coils, dtype=np.int64)
+        self.emf_us: int | None = None  # µs: when the last back-EMF estimate arrived (None: none this drive)
+        self._ref = np.zeros(coils)  # A: the reading the held-reading rule compares with
+        self._low = np.zeros(coils)  # the loop's duty d − e/V, lowest and highest since the reading was _ref
+        self._high = np.zeros(coils)
+        self._held = np.zeros(coils, dtype=np.int64)  # steps held since the sweep passed SWEEP tolerances
         self.supply, self.inductance = float(supply), float(inductance)
         self.version = 0  # 0: no session, 1: relay session, 2: current session
         self.enable = self.polarity = 0  # relay-mode masks
@@ -155,9 +172,13 @@ class CurrentDevice:
         self.driving = False
         self.setpoint[:] = 0.0
         self.emf[:] = 0.0
+        self._feed = np.zeros(len(self.emf))
+        self._setpoint_tol = np.full(len(self.emf), FOLLOW_A)
+        self.emf_us = None
         self.integral[:] = 0.0
         self.duty[:] = 0.0
         self._follow[:] = 0
+        self._held[:] = 0
         self._fresh = True
         self._set_enable(0)
         self._set_polarity(0)
@@ -210,21 +231,42 @@ class CurrentDevice:
         hot = np.flatnonzero(self.heat > 1.0)
         if len(hot):
             return self._trip("HEAT", int(hot[0]), now_us)
-        if self._fresh:
+        told = self.emf_us is not None and ((now_us - self.emf_us) & 0xFFFFFFFF) < EMF_MS * 1000
+        if self._fresh or not told:  # the law starts again at the reading once a fresh estimate arrives
             self.expected = i.copy()
         else:  # the duties driven over the last period less the back-EMF, through the coil's L/R
             a = self.coil_decay
             self.expected = a * self.expected + (1.0 - a) * (self.duty * self.supply - self.emf) / lim.resistance
-        self._fresh = False
         e = self.setpoint - i
         dmax = lim.max_duty
         self.integral = np.clip(self.integral + self.ki * e, -dmax, dmax)
-        self.duty = np.clip(self.kp * e + self.integral + self.emf / self.supply, -dmax, dmax)
-        off_law = np.abs(i - self.expected) > FOLLOW_A + FOLLOW_REL * np.abs(self.expected)
-        self._follow = np.where(off_law, self._follow + 1, 0)
-        lost = np.flatnonzero(self._follow >= self.follow_steps)
-        if len(lost):
-            k = int(lost[0])
+        self.duty = np.clip(self.kp * e + self.integral + self._feed, -dmax, dmax)
+        off = np.abs(e) > self._setpoint_tol  # the reading off its setpoint: the loop is not doing its job
+        if told:  # an idle coil (under 50 mA) at its setpoint is never judged by an estimate that may be wrong
+            off_law = (off | (np.abs(ma) >= 50)) & \
+                (np.abs(i - self.expected) > FOLLOW_A + FOLLOW_REL * np.abs(self.expected))
+            self._follow = np.where(off_law, self._follow + 1, 0)
+        else:
+            self._follow[:] = 0
+        # the held reading: off its setpoint, unmoved while the loop's own duty swept (whatever the back-EMF)
+        loop = self.duty - self._feed
+        held = None
+        if not self._fresh and off.any():
+            band = FOLLOW_A + FOLLOW_REL * np.abs(self._ref)
+            held = off & (np.abs(i - self._ref) <= band)
+        self._fresh = False
+        if held is None or not held.any():  # every coil follows or sits at its setpoint: the rule starts again
+            self._ref, self._low, self._high = i, loop, loop
+            self._held[:] = 0
+        else:
+            self._low = np.where(held, np.minimum(self._low, loop), loop)
+            self._high = np.where(held, np.maximum(self._high, loop), loop)
+            swept = held & ((np.abs(self.duty) >= dmax) | (np.abs(self.integral) >= dmax)) & \
+                ((self._high - self._low) * self.supply > SWEEP * band * lim.resistance)
+            self._held = np.where(swept, self._held + 1, 0)
+            self._ref = np.where(held, self._ref, i)
+        if (told and self._follow.max() >= self.follow_steps) or self._held.max() >= self.follow_steps:
+            k = int(np.flatnonzero((self._follow >= self.follow_steps) | (self._held >= self.follow_steps))[0])
             return self._trip("OPEN" if abs(ma[k]) < 50 else "STUCK", k, now_us)
         self.bridges.drive(self.duty.copy(), True)
 
@@ -322,6 +364,8 @@ class CurrentDevice:
                 return nak("VERB") if self.version == 1 else refused()
             if block is not None and not self._set(block, emf):
                 return nak("LIMIT")
+            if block is not None:
+                self.emf_us = now_us if len(args) == 2 else None
             return accepted(*self._state(now_us))
         return nak("VERB")
 
@@ -337,5 +381,7 @@ class CurrentDevice:
             return False
         self.setpoint = np.array(amps)
         self.emf = from_centivolts(np.zeros(self.coils) if emf_cv is None else emf_cv)  # each float(c) / 100
+        self._feed = self.emf / self.supply  # the duty fed forward
+        self._setpoint_tol = FOLLOW_A + FOLLOW_REL * np.abs(self.setpoint)  # off the setpoint by more: "off"
         self.driving = True
         return True

@@ -3,11 +3,14 @@
 
 :class:`EmulatedMotor` is the device's :class:`~spherestep.hardware.current_device.Bridges`:
 
-* Coils: ``L di/dt = d V − R i`` per coil (``R``, ``L``, ``V`` of a :class:`spherestep.electrics.DriveLimits`),
-  solved exactly over each control period with the duty ``d`` held (``i ← a i + (1 − a) d V / R``,
-  ``a = e^{−R h / L}``: :func:`spherestep.electrics.rl_step`, the simulation's coil model too; the back-EMF of the
-  turning rotor is neglected here). Asleep (``enabled`` False) the bridges'
-  diodes return the current to the supply, ``L di/dt = −V sign(i) − R i``, until it is zero. The sense reads
+* Coils: ``L di/dt = d V − R i − e`` per coil (``R``, ``L``, ``V`` of a :class:`spherestep.electrics.DriveLimits`),
+  solved exactly over each control period with the duty ``d`` and the back-EMF ``e`` held (``i ← a i + (1 − a)
+  (d V − e)/R``, ``a = e^{−R h / L}``: :func:`spherestep.electrics.rl_step`, the simulation's coil model too).
+  ``e_k = K_k(R)·ω / I_n`` (:meth:`~spherestep.electrics.DriveLimits.back_emf`) of the rotor's true ``ω`` and
+  the plant's ``K`` at the last rotor step (so ``Σ e_k i_k`` is the power the coils give the rotor). Asleep
+  (``enabled`` False) the bridges' diodes return the current to the supply, ``L di/dt = −V sign(i) − R i − e``,
+  until it is zero (a back-EMF above the supply, which would drive a current through the diodes, is not
+  modelled: a coil at rest stays at zero). The sense reads
   ``round(1000 (i + noise))`` mA, ``current_noise`` A RMS.
 * Rotor: a :class:`spherestep.dynamics.Rotor` (passed in) under the torque model's ``b(R) + K(R) ī`` (currents per unit of
   the nominal current; ``b`` the bias, zero for the air-core magnets), one step per ``torque_refresh`` s (2 ms: the
@@ -122,6 +125,7 @@ class EmulatedMotor:
         self.enabled = False
         self._rotor_t = 0.0
         self._charge = np.zeros(n)
+        self.emf = np.zeros(n)  # V: each coil's back-EMF at the last rotor step
         self.alpha = np.zeros(3)
         self.torque_cache = torque_cache
         self._struck: dict[str, int] = {}
@@ -195,9 +199,9 @@ class EmulatedMotor:
             v = self.duty * e.supply_voltage
             if stuck is not None:
                 v[stuck] = e.supply_voltage
-            i1 = rl_step(i0, v, 0.0, e.resistance, e.inductance, h)[0]
+            i1 = rl_step(i0, v, self.emf, e.resistance, e.inductance, h)[0]
         else:
-            i1 = rl_step(i0, -np.sign(i0) * e.supply_voltage, 0.0, e.resistance, e.inductance, h)[0]
+            i1 = rl_step(i0, -np.sign(i0) * e.supply_voltage, self.emf, e.resistance, e.inductance, h)[0]
             i1 = np.where(np.sign(i1) != np.sign(i0), 0.0, i1)  # the diodes stop at zero
         opened = self._fault("open_coil")
         if opened is not None:
@@ -220,6 +224,7 @@ class EmulatedMotor:
         R, w, _ = self.rotor.step(self.R[None], self.w[None], lambda _R: tau, h, tau)
         self.alpha = (w[0] - self.w) / h
         self.R, self.w = R[0], w[0]
+        self.emf = self.drive_limits.back_emf(self.w @ K)  # e_k = K_k·ω / I_n for the coils' next steps
         self._charge = np.zeros_like(self.i)
         self._rotor_t = self.t
 

@@ -13,7 +13,11 @@ with two callables:
   ``law.amperes(c)`` A; the estimate and the angular velocity ``ω̂`` (rad/s, fixed frame) logged and shown are
   its observer's, and ``prior`` is the observer's prediction for ``t``, ``exp((t − t̂) ω̂) R̂``.
 
-A first ``READ`` primes the estimate and the currents; then cycle ``k`` starts at ``t_0 + k / rate``: ``DRIVE`` the currents computed in cycle ``k − 1`` and receive the
+A first ``READ`` primes the estimate and the currents; then cycle ``k`` starts at ``t_0 + k / rate``: ``DRIVE`` the currents computed in cycle ``k − 1`` (with each coil's back-EMF, ``ServoCommand.emf``, to a device that takes it,
+unless the reading they were computed from was answered more than a nominal period, ``1/rate``, after its
+``DRIVE``: an estimate from a reading that old may be volts off, and the device's coil's-law check would take it
+for a fault; without one the device judges by the rule that holds whatever the back-EMF, docs/protocol.md) and
+receive the
 state, check it (a stale magnetometer, a saturated one → ``SENSOR``), estimate, control, check the currents
 against the :class:`~spherestep.hardware.limits.CurrentLimits`, then wait for the next start. A cycle that
 starts more than one period late misses deadlines (counted; the ticks that passed are skipped, not caught up
@@ -294,7 +298,7 @@ def run_servo(link: Link, estimate, law, *, duration: float, rate: float = LOOP_
         start_us = state.time_us
         report.device_start = start_us * 1e-6 if device_time else None
         cmd = law.step(0.0, estimate(state, law.predicted(0.0)))
-        currents = law.amperes(cmd.currents)
+        currents, emf = law.amperes(cmd.currents), cmd.emf
         limits.check_setpoints(currents)
         t0 = clock()
         t = 0.0
@@ -344,9 +348,11 @@ def run_servo(link: Link, estimate, law, *, duration: float, rate: float = LOOP_
             # clock, and not twice in a row: a silent link is the link's to diagnose, with its own timeout)
             within = None if not wall or unanswered else max(start + (1.0 - RESERVE) * period - clock(),
                                                               RESERVE * period)
-            state = link.drive(currents, within=within)
+            sent = clock()
+            state = link.drive(currents, emf=emf, within=within)
             now = clock()
             unanswered = state is None
+            stale = unanswered or now - sent > 1.0 / rate  # an estimate from a reading this old may be volts off
             if unanswered:  # a late reading: the law runs on its own prediction for this cycle
                 report.late_readings += 1
                 t += now - read_at
@@ -357,7 +363,7 @@ def run_servo(link: Link, estimate, law, *, duration: float, rate: float = LOOP_
                 cmd = law.step(t, estimate(state, law.predicted(t)))
             read_at = now
             R, w = cmd.estimate, cmd.velocity
-            currents = law.amperes(cmd.currents)
+            currents, emf = law.amperes(cmd.currents), None if stale else cmd.emf
             limits.check_setpoints(currents)
             report.times.append(t)
             report.reference_times.append(paced.tau(t))
