@@ -58,16 +58,18 @@ def gain_errors(model, plant, count: int = 50, seed: int = 4) -> np.ndarray:
     return out
 
 
-def true_holds(design, model, limits, error, plant, count: int, seed: int) -> list[float]:
-    """``count`` holds on the emulated ``plant`` with the servo on ``model``: errors (deg) in truth."""
+def true_holds(design, model, limits, error, plant, count: int, seed: int, array_cal=None) -> list[float]:
+    """``count`` holds on the emulated ``plant`` with the servo on ``model``, reading the array through
+    ``array_cal`` (None: the nominal array): the truth's distance (deg) to the target at the loop's last cycle."""
     rng = np.random.default_rng(seed)
+    array = default_array(design, 8)
     out = []
     for target in so3.random(count, rng):
         axis = rng.standard_normal(3)
         start = so3.exp(math.radians(0.5) * axis / np.linalg.norm(axis)) @ target
         s = servo_session(design, Trajectory.hold(target), 1.5, emulate=True, lockstep=True, model=model,
                           drive=limits, R0=start, plant=plant, plant_rotor=error.rotor(design),
-                          sensor_errors=error.sensor_errors(default_array(design, 8)))
+                          sensor_errors=error.sensor_errors(array), sensor_calibration=array_cal)
         out.append(math.degrees(s.final_error()))
     return out
 

@@ -30,14 +30,13 @@ import os
 import time
 
 import numpy as np
-from bench_identification import gain_errors
+from bench_identification import gain_errors, true_holds
 
 from spherestep import so3
-from spherestep.control import Trajectory, hold_orientations, torque_error
+from spherestep.control import hold_orientations, torque_error
 from spherestep.drive import Emulated
 from spherestep.drive.identify import identify_motor
 from spherestep.drive.plant import PlantError
-from spherestep.drive.session import servo_session
 from spherestep.magnetics import design_model
 from spherestep.motor import prototype
 from spherestep.sensing import ArrayCalibration, SensorErrors, default_array
@@ -76,22 +75,6 @@ def static_errors(design, own, array, truth, fit: dict, count: int = 30, seed: i
             "after_rms_deg": float(np.sqrt(np.mean(np.square(after))))}
 
 
-def check_holds(design, model, limits, error, plant, array_cal, count: int, seed: int) -> list[float]:
-    """``count`` holds on the emulated ``plant`` with the servo on ``model`` through ``array_cal`` (None: the
-    nominal array): the truth's distance (deg) to the target at the loop's last cycle."""
-    rng = np.random.default_rng(seed)
-    array = default_array(design, 8)
-    out = []
-    for target in so3.random(count, rng):
-        axis = rng.standard_normal(3)
-        start = so3.exp(math.radians(0.5) * axis / np.linalg.norm(axis)) @ target
-        s = servo_session(design, Trajectory.hold(target), 1.5, emulate=True, lockstep=True, model=model,
-                          drive=limits, R0=start, plant=plant, plant_rotor=error.rotor(design),
-                          sensor_errors=error.sensor_errors(array), sensor_calibration=array_cal)
-        out.append(math.degrees(s.final_error()))
-    return out
-
-
 def one(design, own, spec: str, holds_count: int, seed: int, check: int, rotor_stage: bool = True) -> dict:
     error = PlantError.parse(f"{spec},seed={seed}")
     plant, rotor = error.plant(own.model), error.rotor(design)
@@ -127,8 +110,8 @@ def one(design, own, spec: str, holds_count: int, seed: int, check: int, rotor_s
         row["static_second_pass"] = static_errors(design, own, array, truth, cal.sensors["second_pass"])
     if check:
         array_cal = ArrayCalibration.from_dict(cal.sensors) if cal.sensors else None
-        after = check_holds(design, cal.model, own.limits, error, plant, array_cal, check, seed + 100)
-        before = check_holds(design, cal.model, own.limits, error, plant, None, check, seed + 100)
+        after = true_holds(design, cal.model, own.limits, error, plant, check, seed + 100, array_cal)
+        before = true_holds(design, cal.model, own.limits, error, plant, check, seed + 100)
         row.update(holds_truth_after_deg=after, holds_truth_uncalibrated_sensors_deg=before,
                    holds_within_0_05=int(sum(e <= 0.05 for e in after)))
     return row
