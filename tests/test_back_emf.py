@@ -66,7 +66,7 @@ def test_fastest_iron_turn_in_lockstep_ends_well_with_the_host_estimate(monkeypa
     follows the emulated coils' true back-EMF (the observer's ω and the law's K against the rotor's ω and the
     plant's K): peak above 10 V, RMS error under 15 % of the RMS."""
     from spherestep.drive.hardware import drive_on_hardware
-    from spherestep.drive.turn import choose_model
+    from spherestep.drive.turn import Turn, choose_model
     from spherestep.motor import prototype
 
     pairs = []
@@ -79,8 +79,8 @@ def test_fastest_iron_turn_in_lockstep_ends_well_with_the_host_estimate(monkeypa
 
     monkeypatch.setattr(current_device.CurrentDevice, "step", recording)
     design = prototype()
-    r = drive_on_hardware(design, (1.0, 0.5, 2.0), 2 * math.pi, choose_model(design), duration=None, port=None,
-                          emulate=True, rate=500.0, tolerance=math.radians(0.05), lockstep=True)
+    job = Turn(design, (1.0, 0.5, 2.0), 2 * math.pi, choose_model(design), math.radians(0.05))
+    r = drive_on_hardware(job, duration=None, port=None, emulate=True, rate=500.0, lockstep=True)
     assert r.details.outcome == "done", r.details.message
     sent, true = (np.array(x) for x in zip(*pairs))
     assert np.abs(true).max() > 10.0
