@@ -12,6 +12,8 @@ from .common import console, input_file, number, print_json
 from .progress import progress
 from .signals import Terminated, interrupt_of, sigterm_as_interrupt, told
 
+TABLE_WIDTH = 220  # columns of the finalists' table when stdout is not a terminal
+
 
 @app.command()
 def synthesize(
@@ -64,6 +66,7 @@ def synthesize(
     if as_json:
         print_json(result.to_dict())
         return
+    from rich.console import Console
     from rich.table import Table
 
     view = Table(title=f"finalists for {spec_value.name} ({budget} budget, {len(result.table)} candidates, "
@@ -78,6 +81,8 @@ def synthesize(
                      f"{f.row['rotor_poles']}/{f.row['coils']}", "yes" if v.met else
                      "no: " + ", ".join(c.name for c in v.checks if not c.met), "—" if b is None else b.name,
                      Path(f.path).name)
-    console.print(view)
+    # a pipe or a log has no width to keep to: the whole rows (at the common console's 120 columns the verdicts and
+    # counts were cut to "6…")
+    (console if console.is_terminal else Console(width=TABLE_WIDTH)).print(view)
     console.print(result.statement)
     console.print(f"wrote {len(result.written)} files to {out}/ (report.html, pareto.png, finalists/)")
